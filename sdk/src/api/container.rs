@@ -1,0 +1,83 @@
+//! Task containers: where the engine schedules a frame's tasks, on any thread (one container per
+//! thread; they are `Send`). Scheduling validates each task at once. A built container is
+//! emptied and can be reused next frame; a container whose build failed keeps its tasks, so a
+//! frame refused for lack of a working set can be built again later.
+use super::context::Shared;
+use super::handles::{GeometryHandle, InstanceHandle};
+use super::tasks::*;
+use super::validate;
+use crate::error::Result;
+use std::sync::Arc;
+
+#[derive(Debug, Clone)]
+pub(crate) enum Task {
+    Geometry(GeometryTask),
+    Instance(InstanceTask),
+    BvhBuild(BvhBuildTask),
+    AmbientOcclusion(TraceAmbientOcclusionTask),
+}
+
+pub struct TaskContainer {
+    pub(crate) shared: Arc<Shared>,
+    pub(crate) tasks: Vec<Task>,
+}
+
+impl TaskContainer {
+    pub fn schedule_geometry(&mut self, task: &GeometryTask) -> Result<()> {
+        self.shared.check_geometry_alive(task.handle)?;
+        validate::geometry_input(&self.shared.device.raw, &task.input)?;
+        self.tasks.push(Task::Geometry(*task));
+        Ok(())
+    }
+
+    pub fn schedule_instance(&mut self, task: &InstanceTask) -> Result<()> {
+        self.shared.check_instance_alive(task.handle)?;
+        if task.operation != InstanceOperation::Remove {
+            self.shared.check_geometry_alive(task.input.geometry)?;
+            validate::transform("InstanceInput.transform", &task.input.transform)?;
+            if task.input.initial_tile_color.iter().any(|c| !c.is_finite()) {
+                return Err(crate::Error::invalid("InstanceInput.initial_tile_color", "is not finite"));
+            }
+        }
+        self.tasks.push(Task::Instance(*task));
+        Ok(())
+    }
+
+    pub fn schedule_bvh_build(&mut self, task: &BvhBuildTask) -> Result<()> {
+        self.tasks.push(Task::BvhBuild(*task));
+        Ok(())
+    }
+
+    pub fn schedule_ambient_occlusion(&mut self, task: &TraceAmbientOcclusionTask) -> Result<()> {
+        validate::ambient_occlusion(task)?;
+        self.tasks.push(Task::AmbientOcclusion(*task));
+        Ok(())
+    }
+
+    pub fn len(&self) -> usize {
+        self.tasks.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.tasks.is_empty()
+    }
+
+    /// Drops every scheduled task.
+    pub fn clear(&mut self) {
+        self.tasks.clear();
+    }
+}
+
+impl std::fmt::Debug for TaskContainer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("TaskContainer").field("tasks", &self.tasks.len()).finish()
+    }
+}
+
+// Handles are only compared here; re-exported for the container's users.
+#[allow(unused)]
+fn _assert_send() {
+    fn send<T: Send>() {}
+    send::<TaskContainer>();
+    let _ = (GeometryHandle::NULL, InstanceHandle::NULL);
+}

@@ -1,0 +1,820 @@
+//! `ExecuteContext`: the SDK's state for one engine device.
+//!
+//! It never begins, ends, submits or waits on a command buffer and owns no queue: the engine
+//! records our work into its own command buffer with `build_gpu_task`, submits it where it
+//! likes and hands the ticket back when its fence says the GPU is done. Everything the GPU may
+//! still use is freed only after the tickets that could use it have come back.
+use super::container::{Task, TaskContainer};
+use super::handles::{GeometryHandle, InstanceHandle, Registry};
+use super::settings::InitSettings;
+use super::tasks::*;
+use super::ticket::{CompletedTask, GpuTicket, TaskKind, TaskTiming};
+use crate::error::{Error, HandleProblem, Result};
+use crate::gpu::deferred::{self, DeferredFrees, Garbage};
+use crate::gpu::device::{Device, DeviceDesc};
+use crate::gpu::memory::{self, Buffer, Memory, MemoryKind, ResourceAllocations};
+use crate::gpu::sync::{self, Hazards};
+use crate::gpu::upload::UploadRing;
+use crate::passes::{self, ao::AoPass, Recording};
+use crate::scene::blas::{self, BuildJob};
+use crate::scene::geometry::{self, BlasState, GeometryLayout, GeometryRecord};
+use crate::scene::instance::{self, InstanceRecord, Placement};
+use crate::scene::tlas::{self, Tlas};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+use parking_lot::Mutex;
+use std::collections::VecDeque;
+use std::sync::atomic::{AtomicBool, AtomicU16, Ordering};
+use std::sync::Arc;
+
+static NEXT_CONTEXT_ID: AtomicU16 = AtomicU16::new(1);
+
+/// The SDK context. `Send + Sync`: containers may be filled on many threads; builds are
+/// serialised by one mutex.
+pub struct ExecuteContext {
+    shared: Arc<Shared>,
+}
+
+pub(crate) struct Shared {
+    pub id: u16,
+    pub device: Device,
+    pub memory: Memory,
+    state: Mutex<State>,
+    bench_floor: AtomicBool,
+    warned_inline: AtomicBool,
+}
+
+struct WorkingSet {
+    in_flight: Option<u64>,
+    ring: UploadRing,
+    scratch: Option<Buffer>,
+    timestamps: vk::QueryPool,
+    timestamp_slots: u32,
+    timed: Vec<(TaskKind, u32)>,
+    compaction_pool: vk::QueryPool,
+    compaction_slots: u32,
+    compactions: Vec<(GeometryHandle, u64)>,
+    tlas: Tlas,
+}
+
+struct State {
+    geometries: Registry<GeometryHandle, GeometryRecord>,
+    instances: Registry<InstanceHandle, InstanceRecord>,
+    /// Geometries waiting for a (re)build, oldest first. Entries of destroyed geometries are
+    /// skipped when popped.
+    build_queue: VecDeque<GeometryHandle>,
+    /// Updated deformable geometries to refit at the next BVH build (not throttled: refits are
+    /// cheap and a skinned mesh must follow its animation every frame).
+    refit_queue: Vec<GeometryHandle>,
+    /// Static BLASes whose compacted size came back; compacted at the next BVH build.
+    compaction_ready: Vec<GeometryHandle>,
+    /// TLAS records of every registered instance whose BLAS is ready.
+    snapshot: Vec<vk::AccelerationStructureInstanceKHR>,
+    snapshot_version: u64,
+    snapshot_dirty: bool,
+    working_sets: Vec<WorkingSet>,
+    deferred: DeferredFrees,
+    next_serial: u64,
+    ao: Option<AoPass>,
+    sampler: vk::Sampler,
+}
+
+impl State {
+    fn in_flight(&self) -> impl Iterator<Item = u64> + '_ {
+        self.working_sets.iter().filter_map(|w| w.in_flight)
+    }
+    fn last_issued(&self) -> u64 {
+        self.next_serial - 1
+    }
+}
+
+impl ExecuteContext {
+    /// Creates the context from the engine's device. Fails with
+    /// `Error::MissingDeviceSupport` naming every missing extension or feature.
+    pub fn new(desc: &DeviceDesc<'_>, settings: &InitSettings) -> Result<ExecuteContext> {
+        if !(1..=16).contains(&settings.supported_working_sets) {
+            return Err(Error::invalid("InitSettings.supported_working_sets", "must be in 1..=16"));
+        }
+        if settings.max_timed_tasks == 0 || settings.max_timed_tasks > 4096 {
+            return Err(Error::invalid("InitSettings.max_timed_tasks", "must be in 1..=4096"));
+        }
+        let device = Device::new(desc)?;
+        let memory = Memory::new(desc.instance, desc.device, desc.physical_device)?;
+        let id = NEXT_CONTEXT_ID.fetch_add(1, Ordering::Relaxed).max(1);
+        // From here on, partially created objects are released by State's Drop via Shared.
+        let sampler_info = vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::NEAREST)
+            .min_filter(vk::Filter::NEAREST)
+            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE);
+        let sampler = unsafe { device.raw.create_sampler(&sampler_info, None) }.map_err(Error::vk("vkCreateSampler"))?;
+        let shared = Arc::new(Shared {
+            id,
+            device,
+            memory,
+            state: Mutex::new(State {
+                geometries: Registry::new(id),
+                instances: Registry::new(id),
+                build_queue: VecDeque::new(),
+                refit_queue: Vec::new(),
+                compaction_ready: Vec::new(),
+                snapshot: Vec::new(),
+                snapshot_version: 1,
+                snapshot_dirty: false,
+                working_sets: Vec::new(),
+                deferred: DeferredFrees::default(),
+                next_serial: 1,
+                ao: None,
+                sampler,
+            }),
+            bench_floor: AtomicBool::new(false),
+            warned_inline: AtomicBool::new(false),
+        });
+        {
+            let mut st = shared.state.lock();
+            st.ao = Some(AoPass::new(&shared.device, &shared.memory, sampler)?);
+            for _ in 0..settings.supported_working_sets {
+                let ws = shared.new_working_set(settings)?;
+                st.working_sets.push(ws);
+            }
+        }
+        log::info!(
+            "hybrid-rt context on {} ({} working sets, ray queries {})",
+            shared.device.device_name,
+            settings.supported_working_sets,
+            if shared.device.ray_query { "on" } else { "off" }
+        );
+        Ok(ExecuteContext { shared })
+    }
+
+    pub fn device_name(&self) -> &str {
+        &self.shared.device.device_name
+    }
+
+    /// Whether `use_inline_rt` takes effect on this device (VK_KHR_ray_query enabled).
+    pub fn supports_inline_rt(&self) -> bool {
+        self.shared.device.ray_query
+    }
+
+    pub fn create_geometry_handles(&self, count: usize) -> Vec<GeometryHandle> {
+        let mut st = self.shared.state.lock();
+        (0..count).map(|_| st.geometries.insert(GeometryRecord::new())).collect()
+    }
+
+    pub fn create_instance_handles(&self, count: usize) -> Vec<InstanceHandle> {
+        let mut st = self.shared.state.lock();
+        (0..count).map(|_| st.instances.insert(InstanceRecord { placement: None })).collect()
+    }
+
+    /// Destroys geometries. All-or-nothing: if any handle is invalid or still used by a
+    /// registered instance, nothing is destroyed. GPU memory is freed once the tickets in
+    /// flight now have come back.
+    pub fn destroy_geometry_handles(&self, handles: &[GeometryHandle]) -> Result<()> {
+        let mut st = self.shared.state.lock();
+        for (i, h) in handles.iter().enumerate() {
+            let g = st.geometries.get(*h)?;
+            if g.instance_refs > 0 {
+                return Err(Error::GeometryInUse { raw: h.0, instances: g.instance_refs });
+            }
+            if handles[..i].contains(h) {
+                return Err(Error::InvalidHandle { kind: GeometryHandle::KIND, raw: h.0, problem: HandleProblem::Destroyed });
+            }
+        }
+        let serial = st.last_issued();
+        for h in handles {
+            let g = st.geometries.remove(*h)?;
+            retire_geometry(&mut st.deferred, serial, g);
+        }
+        Ok(())
+    }
+
+    /// Destroys instances (all-or-nothing). They leave the TLAS at the next build.
+    pub fn destroy_instance_handles(&self, handles: &[InstanceHandle]) -> Result<()> {
+        let mut st = self.shared.state.lock();
+        for (i, h) in handles.iter().enumerate() {
+            st.instances.check(*h)?;
+            if handles[..i].contains(h) {
+                return Err(Error::InvalidHandle { kind: InstanceHandle::KIND, raw: h.0, problem: HandleProblem::Destroyed });
+            }
+        }
+        for h in handles {
+            let rec = st.instances.remove(*h)?;
+            st.unplace(rec.placement);
+        }
+        Ok(())
+    }
+
+    /// Destroys every instance (level unload).
+    pub fn destroy_all_instance_handles(&self) {
+        let mut st = self.shared.state.lock();
+        let all: Vec<InstanceHandle> = st.instances.iter().map(|(h, _)| h).collect();
+        for h in all {
+            if let Ok(rec) = st.instances.remove(h) {
+                st.unplace(rec.placement);
+            }
+        }
+    }
+
+    pub fn create_task_container(&self) -> TaskContainer {
+        TaskContainer { shared: self.shared.clone(), tasks: Vec::new() }
+    }
+
+    /// BLAS builds waiting for a `BvhBuildTask` (registered geometries not built yet, and
+    /// rebuilds of updated static geometries).
+    pub fn pending_blas_builds(&self) -> usize {
+        let st = self.shared.state.lock();
+        st.build_queue.iter().filter(|h| st.geometries.get(**h).is_ok()).count()
+    }
+
+    /// Instances in the TLAS as of the last build.
+    pub fn tlas_instance_count(&self) -> usize {
+        self.shared.state.lock().snapshot.len()
+    }
+
+    pub fn resource_allocations(&self) -> ResourceAllocations {
+        self.shared.memory.allocations()
+    }
+
+    /// Tickets built and not yet handed back.
+    pub fn tickets_in_flight(&self) -> Vec<u64> {
+        self.shared.state.lock().in_flight().collect()
+    }
+
+    /// Frees every deferred GPU resource now. Only when no ticket is in flight (a level load
+    /// after the engine waited for its queue idle): otherwise `Error::TicketsInFlight`.
+    pub fn release_device_resources_immediately(&self) -> Result<()> {
+        let mut st = self.shared.state.lock();
+        let serials: Vec<u64> = st.in_flight().collect();
+        if !serials.is_empty() {
+            return Err(Error::TicketsInFlight { serials });
+        }
+        let st = &mut *st;
+        st.deferred.collect(&self.shared.device, &self.shared.memory, None);
+        Ok(())
+    }
+
+    /// Bench only: trace AO with empty hit/miss shaders (the bare-ray floor).
+    #[doc(hidden)]
+    pub fn set_bench_floor_mode(&self, on: bool) {
+        self.shared.bench_floor.store(on, Ordering::Relaxed);
+    }
+
+    /// Records every task of `container` into `cmd`, which the engine has begun and will end,
+    /// submit and wait for itself. On success the container is emptied and a ticket returned.
+    /// On error nothing usable was recorded, no state changed, and the container keeps its
+    /// tasks. (A Vulkan error in the middle of recording leaves `cmd` partly recorded: reset
+    /// it.)
+    pub fn build_gpu_task(&self, container: &mut TaskContainer, cmd: vk::CommandBuffer) -> Result<GpuTicket> {
+        if !Arc::ptr_eq(&container.shared, &self.shared) {
+            return Err(Error::ForeignContainer);
+        }
+        if cmd == vk::CommandBuffer::null() {
+            return Err(Error::invalid("build_gpu_task command buffer", "is null"));
+        }
+        let mut guard = self.shared.state.lock();
+        let st = &mut *guard;
+        let ws_index = st.working_sets.iter().position(|w| w.in_flight.is_none()).ok_or(Error::WorkingSetsExhausted {
+            in_flight: st.working_sets.len() as u32,
+        })?;
+        validate_handles(st, &container.tasks)?;
+        let oldest = st.in_flight().min();
+        st.deferred.collect(&self.shared.device, &self.shared.memory, oldest);
+
+        let serial = st.next_serial;
+        self.shared.record(st, ws_index, serial, &container.tasks, cmd)?;
+        st.next_serial += 1;
+        st.working_sets[ws_index].in_flight = Some(serial);
+        container.tasks.clear();
+        Ok(GpuTicket { ctx: self.shared.id, serial })
+    }
+
+    /// Hands a ticket back once the GPU has finished its command buffer: returns its working
+    /// set to the pool, frees what only it still used, and reports per-task GPU times.
+    pub fn mark_gpu_task_completed(&self, ticket: GpuTicket) -> Result<CompletedTask> {
+        let mut guard = self.shared.state.lock();
+        let st = &mut *guard;
+        let unknown = Error::UnknownTicket { serial: ticket.serial };
+        if ticket.ctx != self.shared.id {
+            return Err(unknown);
+        }
+        let ws_index = st.working_sets.iter().position(|w| w.in_flight == Some(ticket.serial)).ok_or(unknown)?;
+        let d = &self.shared.device;
+        let ws = &mut st.working_sets[ws_index];
+        let mut done = CompletedTask { serial: ticket.serial, timings: Vec::new() };
+        if let (Some(period), false) = (d.timestamp_period_ns, ws.timed.is_empty()) {
+            let mut stamps = vec![0u64; ws.timed.len() * 2];
+            match unsafe { d.raw.get_query_pool_results(ws.timestamps, 0, &mut stamps, vk::QueryResultFlags::TYPE_64) } {
+                Ok(()) => {
+                    for (i, (kind, task_index)) in ws.timed.iter().enumerate() {
+                        let ticks = stamps[2 * i + 1].saturating_sub(stamps[2 * i]);
+                        done.timings.push(TaskTiming { kind: *kind, task_index: *task_index, gpu_ms: ticks as f64 * period * 1e-6 });
+                    }
+                }
+                Err(e) => log::warn!("ticket {}: timestamps unavailable ({e:?}); was it really complete?", ticket.serial),
+            }
+        }
+        if !ws.compactions.is_empty() {
+            let mut sizes = vec![0u64; ws.compactions.len()];
+            let r = unsafe { d.raw.get_query_pool_results(ws.compaction_pool, 0, &mut sizes, vk::QueryResultFlags::TYPE_64) };
+            let compactions = std::mem::take(&mut ws.compactions);
+            if r.is_ok() {
+                for ((h, build_id), size) in compactions.into_iter().zip(sizes) {
+                    if let Ok(g) = st.geometries.get_mut(h) {
+                        if g.build_id == build_id && size > 0 {
+                            g.compacted_size = Some(size);
+                            st.compaction_ready.push(h);
+                        }
+                    }
+                }
+            }
+        }
+        let ws = &mut st.working_sets[ws_index];
+        ws.in_flight = None;
+        ws.timed.clear();
+        let oldest = st.in_flight().min();
+        st.deferred.collect(d, &self.shared.memory, oldest);
+        Ok(done)
+    }
+}
+
+/// Checks handle states in task order (a register earlier in the container counts), before
+/// anything is recorded.
+fn validate_handles(st: &State, tasks: &[Task]) -> Result<()> {
+    use std::collections::HashMap;
+    let mut geometry_registered: HashMap<GeometryHandle, bool> = HashMap::new();
+    let mut instance_registered: HashMap<InstanceHandle, bool> = HashMap::new();
+    let problem = |kind, raw, problem| Err(Error::InvalidHandle { kind, raw, problem });
+    for task in tasks {
+        match task {
+            Task::Geometry(t) => {
+                let g = st.geometries.get(t.handle)?;
+                let registered = *geometry_registered.entry(t.handle).or_insert(g.registered());
+                match t.operation {
+                    TaskOperation::Register if registered => {
+                        return problem(GeometryHandle::KIND, t.handle.0, HandleProblem::AlreadyRegistered)
+                    }
+                    TaskOperation::Update if !registered => {
+                        return problem(GeometryHandle::KIND, t.handle.0, HandleProblem::NotRegistered)
+                    }
+                    TaskOperation::Update => {
+                        if let Some(old) = g.layout.filter(|l| l.allow_update) {
+                            let new = GeometryLayout::of(&t.input);
+                            if !t.input.allow_update
+                                || new.primitive_count != old.primitive_count
+                                || new.vertex_count != old.vertex_count
+                                || new.index_type != old.index_type
+                            {
+                                return Err(Error::invalid(
+                                    "GeometryTask.input",
+                                    "an update of an allow_update geometry must keep allow_update and its vertex, index and triangle counts (the BLAS is refitted)",
+                                ));
+                            }
+                        }
+                    }
+                    _ => {}
+                }
+                geometry_registered.insert(t.handle, true);
+            }
+            Task::Instance(t) => {
+                let rec = st.instances.get(t.handle)?;
+                let registered = *instance_registered.entry(t.handle).or_insert(rec.placement.is_some());
+                match t.operation {
+                    InstanceOperation::Register if registered => {
+                        return problem(InstanceHandle::KIND, t.handle.0, HandleProblem::AlreadyRegistered)
+                    }
+                    InstanceOperation::Update | InstanceOperation::Remove if !registered => {
+                        return problem(InstanceHandle::KIND, t.handle.0, HandleProblem::NotRegistered)
+                    }
+                    _ => {}
+                }
+                if t.operation != InstanceOperation::Remove {
+                    let g = st.geometries.get(t.input.geometry)?;
+                    if !*geometry_registered.get(&t.input.geometry).unwrap_or(&g.registered()) {
+                        return problem(GeometryHandle::KIND, t.input.geometry.0, HandleProblem::NotRegistered);
+                    }
+                }
+                instance_registered.insert(t.handle, t.operation != InstanceOperation::Remove);
+            }
+            Task::BvhBuild(_) | Task::AmbientOcclusion(_) => {}
+        }
+    }
+    Ok(())
+}
+
+fn retire_geometry(deferred: &mut DeferredFrees, serial: u64, g: GeometryRecord) {
+    if let Some(c) = g.copy {
+        deferred.retire(serial, Garbage::Buffer(c));
+    }
+    if let Some(b) = g.blas {
+        deferred.retire(serial, Garbage::AccelerationStructure(b.accel, b.buffer));
+    }
+}
+
+impl State {
+    /// Bookkeeping when an instance leaves the scene.
+    fn unplace(&mut self, placement: Option<Placement>) {
+        if let Some(p) = placement {
+            if let Ok(g) = self.geometries.get_mut(p.geometry) {
+                g.instance_refs = g.instance_refs.saturating_sub(1);
+            }
+            self.snapshot_dirty = true;
+        }
+    }
+
+    fn rebuild_snapshot(&mut self) {
+        let mut records = Vec::with_capacity(self.instances.len());
+        for (h, rec) in self.instances.iter() {
+            let Some(p) = rec.placement else { continue };
+            let Ok(g) = self.geometries.get(p.geometry) else { continue };
+            if let (BlasState::Ready, Some(b)) = (g.state, g.blas.as_ref()) {
+                let index = self.instances.index_of(h).unwrap_or(0);
+                records.push(instance::tlas_record(&p, index, b.address));
+            }
+        }
+        self.snapshot = records;
+        self.snapshot_version += 1;
+        self.snapshot_dirty = false;
+    }
+}
+
+impl Shared {
+    pub(crate) fn check_geometry_alive(&self, h: GeometryHandle) -> Result<()> {
+        self.state.lock().geometries.check(h).map(|_| ())
+    }
+
+    pub(crate) fn check_instance_alive(&self, h: InstanceHandle) -> Result<()> {
+        self.state.lock().instances.check(h).map(|_| ())
+    }
+
+    fn new_working_set(&self, settings: &InitSettings) -> Result<WorkingSet> {
+        let d = &self.device.raw;
+        let slots = settings.max_timed_tasks * 2;
+        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(slots);
+        let timestamps = unsafe { d.create_query_pool(&info, None) }.map_err(Error::vk("vkCreateQueryPool"))?;
+        let ring = match UploadRing::new(&self.memory, settings.upload_ring_bytes.max(4096)) {
+            Ok(r) => r,
+            Err(e) => {
+                unsafe { d.destroy_query_pool(timestamps, None) };
+                return Err(e);
+            }
+        };
+        Ok(WorkingSet {
+            in_flight: None,
+            ring,
+            scratch: None,
+            timestamps,
+            timestamp_slots: slots,
+            timed: Vec::new(),
+            compaction_pool: vk::QueryPool::null(),
+            compaction_slots: 0,
+            compactions: Vec::new(),
+            tlas: Tlas { accel: None, version: 0 },
+        })
+    }
+
+    /// Records one container. Handles were validated; errors here are Vulkan/memory failures.
+    fn record(&self, st: &mut State, ws_index: usize, serial: u64, tasks: &[Task], cmd: vk::CommandBuffer) -> Result<()> {
+        let device = &self.device;
+        let d = &device.raw;
+        let mut hazards = Hazards::default();
+        let timestamp_slots = st.working_sets[ws_index].timestamp_slots;
+        let timing = device.timestamp_period_ns.is_some();
+        st.working_sets[ws_index].ring.reset();
+        unsafe { d.cmd_reset_query_pool(cmd, st.working_sets[ws_index].timestamps, 0, timestamp_slots) };
+        st.working_sets[ws_index].timed.clear();
+        let mut next_stamp = 0u32;
+        let mut stamp = |st: &mut State, kind: TaskKind, index: u32, begin: bool| {
+            if !timing {
+                return;
+            }
+            let ws = &mut st.working_sets[ws_index];
+            if begin {
+                if next_stamp + 2 > timestamp_slots {
+                    return;
+                }
+                ws.timed.push((kind, index));
+            } else if ws.timed.last() != Some(&(kind, index)) {
+                return;
+            }
+            unsafe { d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, ws.timestamps, next_stamp) };
+            next_stamp += 1;
+        };
+
+        // ---- BVH work: copies, builds, refits, compactions, TLAS.
+        let first_bvh = tasks
+            .iter()
+            .position(|t| matches!(t, Task::Geometry(_) | Task::Instance(_) | Task::BvhBuild(_)))
+            .map(|i| i as u32);
+        let has_render = tasks.iter().any(|t| matches!(t, Task::AmbientOcclusion(_)));
+        if let Some(i) = first_bvh {
+            stamp(st, TaskKind::Bvh, i, true);
+        }
+        self.apply_scene_tasks(st, tasks, cmd, serial, &mut hazards)?;
+        let max_builds: Option<u32> = tasks
+            .iter()
+            .filter_map(|t| if let Task::BvhBuild(b) = t { Some(b.max_blas_build_count) } else { None })
+            .reduce(|a, b| a.saturating_add(b));
+        if let Some(max_builds) = max_builds {
+            self.record_blas_work(st, ws_index, serial, max_builds, cmd, &mut hazards)?;
+        }
+        if max_builds.is_some() || has_render {
+            if st.snapshot_dirty {
+                st.rebuild_snapshot();
+            }
+            self.record_tlas(st, ws_index, cmd, &mut hazards)?;
+        }
+        if let Some(i) = first_bvh {
+            stamp(st, TaskKind::Bvh, i, false);
+        }
+
+        // ---- Render tasks, in scheduled order.
+        let floor = self.bench_floor.load(Ordering::Relaxed);
+        let ao_count = tasks.iter().filter(|t| matches!(t, Task::AmbientOcclusion(_))).count() as u64;
+        self.ensure_ring(st, ws_index, ao_count * (passes::ao::UPLOAD_BYTES + device.ubo_alignment))?;
+        for (i, task) in tasks.iter().enumerate() {
+            let Task::AmbientOcclusion(t) = task else { continue };
+            stamp(st, TaskKind::AmbientOcclusion, i as u32, true);
+            let inline = t.common.use_inline_rt && device.ray_query;
+            if t.common.use_inline_rt && !device.ray_query && !self.warned_inline.swap(true, Ordering::Relaxed) {
+                log::warn!("use_inline_rt: the device has no VK_KHR_ray_query enabled; using the ray-tracing pipeline");
+            }
+            let ws = &mut st.working_sets[ws_index];
+            let tlas = ws.tlas.accel.as_ref().map(|a| a.accel).unwrap_or_default();
+            let mut r = Recording { device, cmd, ring: &mut ws.ring, hazards: &mut hazards, tlas, seed: serial as u32 };
+            st.ao.as_ref().expect("created in new").record(&mut r, t, inline, floor);
+            stamp(st, TaskKind::AmbientOcclusion, i as u32, false);
+        }
+        Ok(())
+    }
+
+    /// Applies geometry and instance tasks to the registries and records the geometry copies.
+    fn apply_scene_tasks(&self, st: &mut State, tasks: &[Task], cmd: vk::CommandBuffer, serial: u64, hazards: &mut Hazards) -> Result<()> {
+        let d = &self.device.raw;
+        let mut copies_declared = false;
+        for task in tasks {
+            match task {
+                Task::Geometry(t) => {
+                    if !copies_declared {
+                        hazards.write(d, cmd, sync::TRANSFER_WRITE);
+                        copies_declared = true;
+                    }
+                    let layout = GeometryLayout::of(&t.input);
+                    let copy = geometry::record_copy(d, &self.memory, cmd, &t.input, &layout)?;
+                    let g = st.geometries.get_mut(t.handle)?;
+                    if let Some(old) = g.copy.replace(copy) {
+                        st.deferred.retire(serial, Garbage::Buffer(old));
+                    }
+                    let g = st.geometries.get_mut(t.handle)?;
+                    g.layout = Some(layout);
+                    g.input = t.input;
+                    let refit = t.operation == TaskOperation::Update && layout.allow_update && g.blas.is_some();
+                    if refit {
+                        g.needs_refit = true;
+                        st.refit_queue.push(t.handle);
+                    } else {
+                        g.build_id += 1;
+                        g.compacted_size = None;
+                        if g.blas.is_none() {
+                            g.state = BlasState::Queued;
+                        }
+                        if !st.build_queue.contains(&t.handle) {
+                            st.build_queue.push_back(t.handle);
+                        }
+                    }
+                }
+                Task::Instance(t) => {
+                    let old = st.instances.get(t.handle)?.placement;
+                    st.unplace(old);
+                    let placement = (t.operation != InstanceOperation::Remove).then(|| Placement {
+                        geometry: t.input.geometry,
+                        transform: t.input.transform,
+                        mask: t.input.mask.0,
+                        initial_tile_color: t.input.initial_tile_color,
+                    });
+                    if let Some(p) = placement {
+                        st.geometries.get_mut(p.geometry)?.instance_refs += 1;
+                    }
+                    st.instances.get_mut(t.handle)?.placement = placement;
+                    st.snapshot_dirty = true;
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// Compactions, throttled BLAS builds and refits, in one batch where possible.
+    fn record_blas_work(
+        &self,
+        st: &mut State,
+        ws_index: usize,
+        serial: u64,
+        max_builds: u32,
+        cmd: vk::CommandBuffer,
+        hazards: &mut Hazards,
+    ) -> Result<()> {
+        let device = &self.device;
+        let d = &device.raw;
+
+        // Compactions of BLASes built in earlier tickets.
+        let ready = std::mem::take(&mut st.compaction_ready);
+        let mut declared = false;
+        for h in ready {
+            let Ok(g) = st.geometries.get_mut(h) else { continue };
+            let (Some(size), Some(_)) = (g.compacted_size.take(), g.blas.as_ref()) else { continue };
+            let compact = blas::create(device, &self.memory, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, size, MemoryKind::Blas)?;
+            if !declared {
+                hazards.read_write(d, cmd, sync::AS_COPY, sync::AS_COPY);
+                declared = true;
+            }
+            let old = g.blas.replace(compact).expect("checked");
+            let info = vk::CopyAccelerationStructureInfoKHR::default()
+                .src(old.accel)
+                .dst(g.blas.as_ref().expect("set").accel)
+                .mode(vk::CopyAccelerationStructureModeKHR::COMPACT);
+            unsafe { device.accel.cmd_copy_acceleration_structure(cmd, &info) };
+            st.deferred.retire(serial, Garbage::AccelerationStructure(old.accel, old.buffer));
+            st.snapshot_dirty = true;
+        }
+
+        // Plan the batch: refits first (not throttled), then up to max_builds queued builds.
+        let mut jobs: Vec<BuildJob> = Vec::new();
+        let mut compaction_candidates: Vec<(GeometryHandle, u64, vk::AccelerationStructureKHR)> = Vec::new();
+        let mut scratch_total = 0u64;
+        let align = device.scratch_alignment;
+        let refits = std::mem::take(&mut st.refit_queue);
+        for h in refits {
+            let Ok(g) = st.geometries.get_mut(h) else { continue };
+            if !g.needs_refit {
+                continue;
+            }
+            g.needs_refit = false;
+            let (Some(layout), Some(copy), Some(b)) = (g.layout, g.copy.as_ref(), g.blas.as_ref()) else { continue };
+            let geometry = blas::triangles(copy.address, &layout);
+            let flags = blas::flags(&layout);
+            let sizes = blas::build_sizes(device, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, flags, &geometry, layout.primitive_count);
+            jobs.push(BuildJob { geometry, flags, refit: true, dst: b.accel, primitive_count: layout.primitive_count, scratch_offset: scratch_total });
+            scratch_total += sizes.update_scratch_size.div_ceil(align) * align;
+        }
+        let mut built = 0;
+        while built < max_builds {
+            let Some(h) = st.build_queue.pop_front() else { break };
+            let Ok(g) = st.geometries.get_mut(h) else { continue };
+            let (Some(layout), Some(copy)) = (g.layout, g.copy.as_ref()) else { continue };
+            let geometry = blas::triangles(copy.address, &layout);
+            let flags = blas::flags(&layout);
+            let sizes = blas::build_sizes(device, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, flags, &geometry, layout.primitive_count);
+            let fresh = blas::create(device, &self.memory, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, sizes.acceleration_structure_size, MemoryKind::Blas)?;
+            let dst = fresh.accel;
+            if let Some(old) = g.blas.replace(fresh) {
+                st.deferred.retire(serial, Garbage::AccelerationStructure(old.accel, old.buffer));
+            }
+            let g = st.geometries.get_mut(h)?;
+            g.state = BlasState::Ready;
+            g.needs_refit = false;
+            if !layout.allow_update {
+                compaction_candidates.push((h, g.build_id, dst));
+            }
+            jobs.push(BuildJob { geometry, flags, refit: false, dst, primitive_count: layout.primitive_count, scratch_offset: scratch_total });
+            scratch_total += sizes.build_scratch_size.div_ceil(align) * align;
+            st.snapshot_dirty = true;
+            built += 1;
+        }
+        if jobs.is_empty() {
+            return Ok(());
+        }
+        self.ensure_scratch(st, ws_index, scratch_total)?;
+        hazards.read_write(d, cmd, sync::AS_BUILD_READ, sync::AS_BUILD_WRITE);
+        let ws = &mut st.working_sets[ws_index];
+        blas::record_batch(device, cmd, ws.scratch.as_ref().expect("ensured"), &jobs);
+
+        // Ask for compacted sizes; read back when this ticket completes.
+        if !compaction_candidates.is_empty() {
+            let n = compaction_candidates.len() as u32;
+            if ws.compaction_slots < n {
+                if ws.compaction_pool != vk::QueryPool::null() {
+                    unsafe { d.destroy_query_pool(ws.compaction_pool, None) };
+                }
+                let slots = n.max(16).next_power_of_two();
+                let info = vk::QueryPoolCreateInfo::default()
+                    .query_type(vk::QueryType::ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR)
+                    .query_count(slots);
+                ws.compaction_pool = unsafe { d.create_query_pool(&info, None) }.map_err(Error::vk("vkCreateQueryPool"))?;
+                ws.compaction_slots = slots;
+            }
+            hazards.read(d, cmd, sync::AS_BUILD_READ);
+            let accels: Vec<_> = compaction_candidates.iter().map(|c| c.2).collect();
+            unsafe {
+                d.cmd_reset_query_pool(cmd, ws.compaction_pool, 0, n);
+                device.accel.cmd_write_acceleration_structures_properties(
+                    cmd,
+                    &accels,
+                    vk::QueryType::ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR,
+                    ws.compaction_pool,
+                    0,
+                );
+            }
+            ws.compactions = compaction_candidates.iter().map(|c| (c.0, c.1)).collect();
+        }
+        Ok(())
+    }
+
+    /// Rebuilds this working set's TLAS when the snapshot changed since it last did.
+    fn record_tlas(&self, st: &mut State, ws_index: usize, cmd: vk::CommandBuffer, hazards: &mut Hazards) -> Result<()> {
+        let device = &self.device;
+        let version = st.snapshot_version;
+        if st.working_sets[ws_index].tlas.version == version {
+            return Ok(());
+        }
+        let count = st.snapshot.len() as u32;
+        let sizes = tlas::sizes(device, count);
+        self.ensure_scratch(st, ws_index, sizes.build_scratch_size)?;
+        self.ensure_ring(st, ws_index, st.snapshot.len() as u64 * 64 + 256)?;
+        let ws = &mut st.working_sets[ws_index];
+        ws.tlas.ensure_storage(device, &self.memory, sizes.acceleration_structure_size)?;
+        let upload = ws.ring.push(instance::instance_bytes(&st.snapshot), 16);
+        hazards.read_write(&device.raw, cmd, sync::AS_BUILD_READ, sync::AS_BUILD_WRITE);
+        ws.tlas.record_build(device, cmd, upload, count, ws.scratch.as_ref().expect("ensured"));
+        ws.tlas.version = version;
+        Ok(())
+    }
+
+    /// The working set is idle (its ticket came back), so a too-small scratch buffer can be
+    /// replaced at once. Within one recording, scratch is only reused after a barrier.
+    fn ensure_scratch(&self, st: &mut State, ws_index: usize, bytes: u64) -> Result<()> {
+        let ws = &mut st.working_sets[ws_index];
+        // Scratch written earlier in this recording may still be in use by the GPU when a
+        // larger one replaces it, so the old one goes through deferred destruction.
+        let serial = st.next_serial;
+        let deferred = &mut st.deferred;
+        memory::ensure_capacity(
+            &mut ws.scratch,
+            bytes + self.device.scratch_alignment,
+            |size| {
+                self.memory.create_buffer(
+                    "build scratch",
+                    size,
+                    vk::BufferUsageFlags::STORAGE_BUFFER,
+                    MemoryLocation::GpuOnly,
+                    MemoryKind::BuildScratch,
+                )
+            },
+            |old| deferred.retire(serial, Garbage::Buffer(old)),
+        )
+    }
+
+    /// Grows the ring so `more` bytes fit after what this recording already wrote. Data
+    /// already pushed stays valid: the old ring is retired, not freed, until this ticket is back.
+    fn ensure_ring(&self, st: &mut State, ws_index: usize, more: u64) -> Result<()> {
+        let ws = &mut st.working_sets[ws_index];
+        if ws.ring.remaining() >= more {
+            return Ok(());
+        }
+        let size = (ws.ring.capacity() + more).max(ws.ring.capacity() * 3 / 2);
+        let fresh = UploadRing::new(&self.memory, size)?;
+        let old = std::mem::replace(&mut ws.ring, fresh);
+        st.deferred.retire(st.next_serial, Garbage::Buffer(old.buffer));
+        Ok(())
+    }
+}
+
+impl Drop for Shared {
+    /// The engine drops the context after the GPU finished every ticket (as for any Vulkan
+    /// object it destroys); nothing here waits.
+    fn drop(&mut self) {
+        let st = self.state.get_mut();
+        let device = &self.device;
+        let memory = &self.memory;
+        st.deferred.collect(device, memory, None);
+        let geometries: Vec<GeometryHandle> = st.geometries.iter().map(|(h, _)| h).collect();
+        for h in geometries {
+            if let Ok(g) = st.geometries.remove(h) {
+                if let Some(c) = g.copy {
+                    deferred::destroy(device, memory, Garbage::Buffer(c));
+                }
+                if let Some(b) = g.blas {
+                    deferred::destroy(device, memory, Garbage::AccelerationStructure(b.accel, b.buffer));
+                }
+            }
+        }
+        for mut ws in st.working_sets.drain(..) {
+            ws.tlas.destroy(device, memory);
+            memory.destroy_buffer(ws.ring.buffer);
+            if let Some(s) = ws.scratch.take() {
+                memory.destroy_buffer(s);
+            }
+            unsafe {
+                device.raw.destroy_query_pool(ws.timestamps, None);
+                if ws.compaction_pool != vk::QueryPool::null() {
+                    device.raw.destroy_query_pool(ws.compaction_pool, None);
+                }
+            }
+        }
+        if let Some(ao) = st.ao.take() {
+            ao.destroy(device, memory);
+        }
+        unsafe { device.raw.destroy_sampler(st.sampler, None) };
+        memory.shutdown();
+    }
+}

@@ -1,0 +1,24 @@
+//! Context-wide settings.
+
+/// Settings fixed when the context is created.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct InitSettings {
+    /// How many tickets may be in flight at once (default 2: one frame recording while one
+    /// runs). Each working set owns its upload ring, query pools, build scratch and TLAS, so
+    /// in-flight frames never share mutable GPU memory. Range 1..=16.
+    pub supported_working_sets: u32,
+    /// Initial size of each working set's upload ring in bytes (default 1 MiB). It grows when a
+    /// frame needs more (64 bytes per TLAS instance plus 256 per render task), so this only
+    /// avoids early reallocations.
+    pub upload_ring_bytes: u64,
+    /// Timestamp slots per working set (default 64: 31 timed tasks per ticket plus the BVH
+    /// work). Tasks past the limit run untimed.
+    pub max_timed_tasks: u32,
+}
+
+impl Default for InitSettings {
+    fn default() -> Self {
+        InitSettings { supported_working_sets: 2, upload_ring_bytes: 1 << 20, max_timed_tasks: 64 }
+    }
+}

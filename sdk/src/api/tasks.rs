@@ -1,0 +1,417 @@
+//! Task structs: plain data with documented defaults. The C ABI mirrors each field for field.
+//!
+//! Compared with Kickstart RT: the camera is given once as `world_to_view` + `view_to_clip`
+//! (the SDK derives the inverses, so they cannot disagree); normals may be in world or view
+//! space; every image input carries its format and extent so a wrong one is an error at
+//! schedule time, not a garbage image.
+use super::handles::{GeometryHandle, InstanceHandle};
+use ash::vk;
+use glam::{Affine3A, Mat4};
+
+// ---------------------------------------------------------------- BVH tasks
+
+/// Register creates the BLAS input; Update replaces it (refit for `allow_update` geometry,
+/// otherwise a throttled rebuild).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum TaskOperation {
+    #[default]
+    Register = 0,
+    Update = 1,
+}
+
+/// A vertex buffer of the engine's. The SDK copies `count` vertices out of it while the ticket
+/// that registers (or updates) the geometry runs, so it must have TRANSFER_SRC usage and stay
+/// alive until that ticket comes back; after that the engine may free it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct VertexBufferInput {
+    pub buffer: vk::Buffer,
+    /// Byte offset of the first vertex's position.
+    pub offset: u64,
+    /// Bytes between vertices (>= 12, a multiple of 4). Default 12.
+    pub stride: u64,
+    pub count: u32,
+    /// Position format: R32G32B32_SFLOAT (default) or R32G32B32A32_SFLOAT.
+    pub format: vk::Format,
+}
+
+impl Default for VertexBufferInput {
+    fn default() -> Self {
+        VertexBufferInput {
+            buffer: vk::Buffer::null(),
+            offset: 0,
+            stride: 12,
+            count: 0,
+            format: vk::Format::R32G32B32_SFLOAT,
+        }
+    }
+}
+
+/// An index buffer of the engine's (same lifetime and usage rules as the vertex buffer).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct IndexBufferInput {
+    /// Null for non-indexed triangles (every three vertices make one).
+    pub buffer: vk::Buffer,
+    pub offset: u64,
+    /// Number of indices (a multiple of 3).
+    pub count: u32,
+    /// R32_UINT (default) or R16_UINT.
+    pub format: vk::Format,
+}
+
+impl Default for IndexBufferInput {
+    fn default() -> Self {
+        IndexBufferInput { buffer: vk::Buffer::null(), offset: 0, count: 0, format: vk::Format::R32_UINT }
+    }
+}
+
+/// How the direct-lighting cache lays out its samples on this geometry (used by the cache).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum SurfelType {
+    /// Vertex, edge and face samples shared between neighbouring triangles: bilinear lookups
+    /// are continuous across edges. The default, as in Kickstart RT.
+    #[default]
+    MeshColors = 0,
+    /// One warped-barycentric square tile per triangle.
+    Tiles = 1,
+}
+
+/// Direct-lighting cache resolution for a geometry.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct SurfelSettings {
+    pub surfel_type: SurfelType,
+    /// World units per cache sample along a triangle edge. Default 1.0.
+    pub tile_unit_length: f32,
+    /// Most samples along one edge. Default 64.
+    pub tile_resolution_limit: u32,
+}
+
+impl Default for SurfelSettings {
+    fn default() -> Self {
+        SurfelSettings { surfel_type: SurfelType::MeshColors, tile_unit_length: 1.0, tile_resolution_limit: 64 }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[repr(C)]
+pub struct GeometryInput {
+    pub vertices: VertexBufferInput,
+    pub indices: IndexBufferInput,
+    /// Deforming/skinned meshes: later updates refit the BLAS in place (same triangle count)
+    /// instead of queueing a rebuild. Such BLASes are not compacted. Default false.
+    pub allow_update: bool,
+    pub surfels: SurfelSettings,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct GeometryTask {
+    pub handle: GeometryHandle,
+    pub operation: TaskOperation,
+    pub input: GeometryInput,
+}
+
+/// Which rays see an instance (bits of the TLAS instance mask). Combine with `|`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(transparent)]
+pub struct InstanceInclusionMask(pub u8);
+
+impl InstanceInclusionMask {
+    pub const NONE: Self = Self(0);
+    pub const REFLECTIONS: Self = Self(1 << 0);
+    pub const DIFFUSE_GI: Self = Self(1 << 1);
+    pub const AMBIENT_OCCLUSION: Self = Self(1 << 2);
+    pub const SHADOWS: Self = Self(1 << 3);
+    pub const LIGHT_INJECTION: Self = Self(1 << 4);
+    pub const ALL: Self = Self(0x1f);
+
+    pub fn contains(self, other: Self) -> bool {
+        self.0 & other.0 == other.0
+    }
+}
+
+impl std::ops::BitOr for InstanceInclusionMask {
+    type Output = Self;
+    fn bitor(self, rhs: Self) -> Self {
+        Self(self.0 | rhs.0)
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum InstanceOperation {
+    #[default]
+    Register = 0,
+    Update = 1,
+    /// Takes the instance out of the TLAS; the handle stays alive and may be registered again.
+    Remove = 2,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InstanceInput {
+    pub geometry: GeometryHandle,
+    /// Object to world. Must be finite.
+    pub transform: Affine3A,
+    /// Default: visible to every ray type.
+    pub mask: InstanceInclusionMask,
+    /// Colour a new direct-lighting cache starts with (used by the cache). Default black.
+    pub initial_tile_color: [f32; 3],
+}
+
+impl Default for InstanceInput {
+    fn default() -> Self {
+        InstanceInput {
+            geometry: GeometryHandle::NULL,
+            transform: Affine3A::IDENTITY,
+            mask: InstanceInclusionMask::ALL,
+            initial_tile_color: [0.0; 3],
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct InstanceTask {
+    pub handle: InstanceHandle,
+    pub operation: InstanceOperation,
+    pub input: InstanceInput,
+}
+
+/// Builds pending BLASes (at most `max_blas_build_count`, oldest first, so a level load spreads
+/// over frames), refits updated deformable ones, and rebuilds the TLAS from every registered
+/// instance whose BLAS is ready. Instances still waiting for their BLAS stay out of the TLAS.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(C)]
+pub struct BvhBuildTask {
+    /// Default 4 (Kickstart RT's default). 0 builds none this frame.
+    pub max_blas_build_count: u32,
+}
+
+impl Default for BvhBuildTask {
+    fn default() -> Self {
+        BvhBuildTask { max_blas_build_count: 4 }
+    }
+}
+
+// ---------------------------------------------------------------- render task inputs
+
+/// An engine image the SDK reads or writes. The SDK binds `view` as given and never changes the
+/// image's layout: `layout` is the layout it is in while the ticket runs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct ImageInput {
+    pub image: vk::Image,
+    pub view: vk::ImageView,
+    /// Format of the view.
+    pub format: vk::Format,
+    pub width: u32,
+    pub height: u32,
+    /// Inputs: SHADER_READ_ONLY_OPTIMAL (default), GENERAL, DEPTH_READ_ONLY_OPTIMAL,
+    /// DEPTH_STENCIL_READ_ONLY_OPTIMAL or READ_ONLY_OPTIMAL; the image needs SAMPLED usage.
+    /// Outputs: GENERAL, with STORAGE usage.
+    pub layout: vk::ImageLayout,
+}
+
+impl Default for ImageInput {
+    fn default() -> Self {
+        ImageInput {
+            image: vk::Image::null(),
+            view: vk::ImageView::null(),
+            format: vk::Format::UNDEFINED,
+            width: 0,
+            height: 0,
+            layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum DepthType {
+    /// R holds the hardware depth (after the viewport transform), as rasterized. Default.
+    #[default]
+    ClipSpace = 0,
+    /// RGB holds the world-space position.
+    WorldPosition = 1,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct DepthInput {
+    pub image: ImageInput,
+    pub depth_type: DepthType,
+}
+
+impl Default for DepthInput {
+    fn default() -> Self {
+        DepthInput { image: ImageInput::default(), depth_type: DepthType::ClipSpace }
+    }
+}
+
+/// The six normal encodings of the integration guide.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum NormalType {
+    /// RGB = xyz.
+    RgbVector = 0,
+    /// RGB = xyz * 0.5 + 0.5. Default.
+    #[default]
+    RgbNormalizedVector = 1,
+    /// RG = octahedral encoding in [-1, 1].
+    RgOctahedron = 2,
+    /// BA = octahedral encoding in [-1, 1].
+    BaOctahedron = 3,
+    /// RG = octahedral encoding * 0.5 + 0.5.
+    RgNormalizedOctahedron = 4,
+    /// BA = octahedral encoding * 0.5 + 0.5.
+    BaNormalizedOctahedron = 5,
+}
+
+impl NormalType {
+    /// Channels the encoding reads (a format must have at least this many).
+    pub fn channels_needed(self) -> u32 {
+        match self {
+            NormalType::RgbVector | NormalType::RgbNormalizedVector => 3,
+            NormalType::RgOctahedron | NormalType::RgNormalizedOctahedron => 2,
+            NormalType::BaOctahedron | NormalType::BaNormalizedOctahedron => 4,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum NormalSpace {
+    /// Default.
+    #[default]
+    World = 0,
+    View = 1,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[repr(C)]
+pub struct NormalInput {
+    pub image: ImageInput,
+    pub normal_type: NormalType,
+    pub space: NormalSpace,
+}
+
+/// The pixel rectangle of the images that the task reads and writes.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[repr(C)]
+pub struct Viewport {
+    pub x: u32,
+    pub y: u32,
+    pub width: u32,
+    pub height: u32,
+    /// The rasterizer's viewport depth range (default 0..1 when both are 0).
+    pub min_depth: f32,
+    pub max_depth: f32,
+}
+
+impl Viewport {
+    pub fn full(width: u32, height: u32) -> Viewport {
+        Viewport { x: 0, y: 0, width, height, min_depth: 0.0, max_depth: 1.0 }
+    }
+}
+
+/// The camera the G-buffer was rendered with. The SDK derives the inverses itself.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct Camera {
+    pub world_to_view: Mat4,
+    /// Vulkan clip space: y down, depth 0..1 (standard or reversed, finite or infinite far).
+    pub view_to_clip: Mat4,
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Camera { world_to_view: Mat4::IDENTITY, view_to_clip: Mat4::IDENTITY }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum RayOffsetType {
+    Disabled = 0,
+    /// Offset in the position's own float precision (Ray Tracing Gems ch. 6).
+    WorldPosition = 1,
+    /// Offset growing with the distance to the camera. Default: it needs no tuning for the
+    /// usual camera ranges; with `Disabled`, rays from a rasterized G-buffer hit their own
+    /// surface (the guide's "zero reflections in part of the image").
+    #[default]
+    CameraDistance = 2,
+}
+
+/// How secondary rays leave the G-buffer surface. Parameter defaults are the guide's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct RayOffset {
+    pub offset_type: RayOffsetType,
+    /// WorldPosition: below this magnitude a float offset is used, above it an integer one.
+    pub world_threshold: f32,
+    pub world_float_scale: f32,
+    pub world_int_scale: f32,
+    /// CameraDistance: offset = constant + linear * d + quadratic * d².
+    pub cam_constant: f32,
+    pub cam_linear: f32,
+    pub cam_quadratic: f32,
+}
+
+impl Default for RayOffset {
+    fn default() -> Self {
+        RayOffset {
+            offset_type: RayOffsetType::CameraDistance,
+            world_threshold: 1.0 / 32.0,
+            world_float_scale: 1.0 / 65536.0,
+            world_int_scale: 256.0,
+            cam_constant: 0.00174,
+            cam_linear: -0.0001547,
+            cam_quadratic: 0.0000996,
+        }
+    }
+}
+
+/// Inputs every trace task shares.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct TraceCommon {
+    pub depth: DepthInput,
+    pub normals: NormalInput,
+    pub viewport: Viewport,
+    pub camera: Camera,
+    pub ray_offset: RayOffset,
+    /// Trace with inline ray queries (a compute shader) when the device has them; otherwise
+    /// (e.g. NVIDIA's Vulkan driver today) the ray-tracing pipeline is used and a warning is
+    /// logged once. Both give the same image. Default false.
+    pub use_inline_rt: bool,
+}
+
+/// Ray-traced ambient occlusion. Output: visibility in [0, 1] (1 = unoccluded) written to
+/// every channel of `output` (RGB = AO, A = 1) inside the viewport.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TraceAmbientOcclusionTask {
+    pub common: TraceCommon,
+    /// GENERAL layout, STORAGE usage; R8_UNORM, R16_SFLOAT, R32_SFLOAT, R16G16B16A16_SFLOAT,
+    /// R32G32B32A32_SFLOAT or R8G8B8A8_UNORM.
+    pub output: ImageInput,
+    /// World-space length of AO rays. Default 1.0.
+    pub ray_length: f32,
+    /// Rays per pixel, 1..=64. Default 1 (denoise it) — use more for a clean raw image.
+    pub rays_per_pixel: u32,
+    /// A hit at distance t counts (t / ray_length)^power of a miss: near occluders darken more
+    /// than far ones. Larger powers approach binary AO. > 0. Default 1.0.
+    pub falloff_power: f32,
+}
+
+impl Default for TraceAmbientOcclusionTask {
+    fn default() -> Self {
+        TraceAmbientOcclusionTask {
+            common: TraceCommon::default(),
+            output: ImageInput { layout: vk::ImageLayout::GENERAL, ..Default::default() },
+            ray_length: 1.0,
+            rays_per_pixel: 1,
+            falloff_power: 1.0,
+        }
+    }
+}

@@ -1,0 +1,63 @@
+//! Tickets and the timings a completed ticket reports.
+
+/// Proof that a container was recorded into a command buffer. Hand it back with
+/// `ExecuteContext::mark_gpu_task_completed` once the GPU has finished that command buffer.
+/// Move-only: in Rust a ticket cannot be returned twice.
+#[must_use = "a ticket must be handed back with mark_gpu_task_completed, or its working set stays busy"]
+#[derive(Debug, PartialEq, Eq, Hash)]
+pub struct GpuTicket {
+    pub(crate) ctx: u16,
+    pub(crate) serial: u64,
+}
+
+impl GpuTicket {
+    /// Increases by one per built container.
+    pub fn serial(&self) -> u64 {
+        self.serial
+    }
+
+    /// The ticket as one integer (for FFI or storing beside a fence).
+    pub fn into_raw(self) -> u64 {
+        ((self.ctx as u64) << 48) | (self.serial & 0xffff_ffff_ffff)
+    }
+
+    /// Rebuilds a ticket from `into_raw`. A forged or already-returned value is refused by
+    /// `mark_gpu_task_completed` with `Error::UnknownTicket`.
+    pub fn from_raw(raw: u64) -> GpuTicket {
+        GpuTicket { ctx: (raw >> 48) as u16, serial: raw & 0xffff_ffff_ffff }
+    }
+}
+
+/// Which kind of work a timing covers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u32)]
+pub enum TaskKind {
+    /// Geometry copies, BLAS builds/refits/compactions and the TLAS build of the ticket.
+    Bvh = 0,
+    AmbientOcclusion = 1,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct TaskTiming {
+    pub kind: TaskKind,
+    /// Position of the task in its container (for Bvh: the first BVH task).
+    pub task_index: u32,
+    /// GPU time between the timestamps around the task, in milliseconds.
+    pub gpu_ms: f64,
+}
+
+/// What a completed ticket reports.
+#[derive(Debug, Clone, Default)]
+pub struct CompletedTask {
+    pub serial: u64,
+    /// Per-task GPU times. Empty when the device cannot time compute work.
+    pub timings: Vec<TaskTiming>,
+}
+
+impl CompletedTask {
+    /// Sum of the times of the tasks of `kind`.
+    pub fn gpu_ms(&self, kind: TaskKind) -> f64 {
+        self.timings.iter().filter(|t| t.kind == kind).map(|t| t.gpu_ms).sum()
+    }
+}

@@ -1,0 +1,224 @@
+//! Input checks run when a task is scheduled, so a mistake is reported at the call that made
+//! it, with the field's name. Handle *states* (registered or not) are checked again when the
+//! container is built, since handles can be destroyed in between.
+use super::tasks::*;
+use crate::error::{Error, Result};
+use crate::scene::geometry::{check_region, GeometryLayout};
+use ash::vk;
+use glam::{Affine3A, Mat4};
+
+pub(crate) fn geometry_input(device: &ash::Device, input: &GeometryInput) -> Result<()> {
+    let v = &input.vertices;
+    if v.buffer == vk::Buffer::null() {
+        return Err(Error::invalid("GeometryInput.vertices.buffer", "is null"));
+    }
+    let position_bytes = match v.format {
+        vk::Format::R32G32B32_SFLOAT => 12,
+        vk::Format::R32G32B32A32_SFLOAT => 16,
+        f => {
+            return Err(Error::UnsupportedFormat {
+                what: "GeometryInput.vertices.format",
+                format: f,
+                expected: "R32G32B32_SFLOAT or R32G32B32A32_SFLOAT",
+            })
+        }
+    };
+    if v.count == 0 {
+        return Err(Error::invalid("GeometryInput.vertices.count", "is 0"));
+    }
+    if v.stride < position_bytes || v.stride % 4 != 0 {
+        return Err(Error::invalid(
+            "GeometryInput.vertices.stride",
+            format!("{} must be a multiple of 4 and at least {position_bytes}", v.stride),
+        ));
+    }
+    let i = &input.indices;
+    let indexed = i.buffer != vk::Buffer::null();
+    if indexed {
+        if !matches!(i.format, vk::Format::R32_UINT | vk::Format::R16_UINT) {
+            return Err(Error::UnsupportedFormat {
+                what: "GeometryInput.indices.format",
+                format: i.format,
+                expected: "R32_UINT or R16_UINT",
+            });
+        }
+        if i.count == 0 || i.count % 3 != 0 {
+            return Err(Error::invalid("GeometryInput.indices.count", format!("{} is not a positive multiple of 3", i.count)));
+        }
+    } else if v.count < 3 || v.count % 3 != 0 {
+        return Err(Error::invalid(
+            "GeometryInput.vertices.count",
+            format!("{} is not a positive multiple of 3 (non-indexed triangles)", v.count),
+        ));
+    }
+    let t = &input.surfels;
+    if !(t.tile_unit_length.is_finite() && t.tile_unit_length > 0.0) {
+        return Err(Error::invalid("SurfelSettings.tile_unit_length", "must be finite and > 0"));
+    }
+    if t.tile_resolution_limit == 0 {
+        return Err(Error::invalid("SurfelSettings.tile_resolution_limit", "is 0"));
+    }
+    let layout = GeometryLayout::of(input);
+    check_region(device, "GeometryInput.vertices", v.buffer, v.offset, layout.vertex_bytes)?;
+    if indexed {
+        check_region(device, "GeometryInput.indices", i.buffer, i.offset, layout.index_size() * i.count as u64)?;
+    }
+    Ok(())
+}
+
+pub(crate) fn transform(what: &'static str, t: &Affine3A) -> Result<()> {
+    if !t.is_finite() || t.matrix3.determinant() == 0.0 {
+        return Err(Error::InvalidTransform { what });
+    }
+    Ok(())
+}
+
+fn matrix(what: &'static str, m: &Mat4) -> Result<()> {
+    let det = m.determinant();
+    if !m.is_finite() || !det.is_finite() || det == 0.0 || !m.inverse().is_finite() {
+        return Err(Error::InvalidTransform { what });
+    }
+    Ok(())
+}
+
+const INPUT_LAYOUTS: &[vk::ImageLayout] = &[
+    vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+    vk::ImageLayout::GENERAL,
+    vk::ImageLayout::DEPTH_READ_ONLY_OPTIMAL,
+    vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL,
+    vk::ImageLayout::READ_ONLY_OPTIMAL,
+];
+
+fn image(what: &'static str, img: &ImageInput, vp: &Viewport, layouts: &[vk::ImageLayout]) -> Result<()> {
+    if img.image == vk::Image::null() || img.view == vk::ImageView::null() {
+        return Err(Error::invalid(what, "image or view is null"));
+    }
+    if !layouts.contains(&img.layout) {
+        return Err(Error::invalid(what, format!("layout {:?} is not one of {layouts:?}", img.layout)));
+    }
+    if vp.x as u64 + vp.width as u64 > img.width as u64 || vp.y as u64 + vp.height as u64 > img.height as u64 {
+        return Err(Error::invalid(
+            what,
+            format!("{}x{} image does not cover the viewport {:?}", img.width, img.height, (vp.x, vp.y, vp.width, vp.height)),
+        ));
+    }
+    Ok(())
+}
+
+fn format_in(what: &'static str, f: vk::Format, allowed: &[vk::Format], expected: &'static str) -> Result<()> {
+    if allowed.contains(&f) {
+        Ok(())
+    } else {
+        Err(Error::UnsupportedFormat { what, format: f, expected })
+    }
+}
+
+const CLIP_DEPTH_FORMATS: &[vk::Format] = &[
+    vk::Format::D32_SFLOAT,
+    vk::Format::D32_SFLOAT_S8_UINT,
+    vk::Format::D24_UNORM_S8_UINT,
+    vk::Format::X8_D24_UNORM_PACK32,
+    vk::Format::D16_UNORM,
+    vk::Format::R32_SFLOAT,
+    vk::Format::R16_SFLOAT,
+    vk::Format::R16_UNORM,
+];
+const POSITION_FORMATS: &[vk::Format] = &[vk::Format::R32G32B32A32_SFLOAT, vk::Format::R16G16B16A16_SFLOAT];
+const NORMAL_FORMATS_2: &[vk::Format] = &[
+    vk::Format::R8G8_UNORM,
+    vk::Format::R8G8_SNORM,
+    vk::Format::R16G16_UNORM,
+    vk::Format::R16G16_SNORM,
+    vk::Format::R16G16_SFLOAT,
+    vk::Format::R32G32_SFLOAT,
+];
+const NORMAL_FORMATS_3: &[vk::Format] = &[vk::Format::B10G11R11_UFLOAT_PACK32];
+const NORMAL_FORMATS_4: &[vk::Format] = &[
+    vk::Format::R8G8B8A8_UNORM,
+    vk::Format::R8G8B8A8_SNORM,
+    vk::Format::B8G8R8A8_UNORM,
+    vk::Format::A2B10G10R10_UNORM_PACK32,
+    vk::Format::A2R10G10B10_UNORM_PACK32,
+    vk::Format::R16G16B16A16_UNORM,
+    vk::Format::R16G16B16A16_SNORM,
+    vk::Format::R16G16B16A16_SFLOAT,
+    vk::Format::R32G32B32A32_SFLOAT,
+];
+/// Formats a scalar (AO, shadow) output may have.
+pub(crate) const SCALAR_OUTPUT_FORMATS: &[vk::Format] = &[
+    vk::Format::R8_UNORM,
+    vk::Format::R16_UNORM,
+    vk::Format::R16_SFLOAT,
+    vk::Format::R32_SFLOAT,
+    vk::Format::R8G8B8A8_UNORM,
+    vk::Format::R16G16B16A16_SFLOAT,
+    vk::Format::R32G32B32A32_SFLOAT,
+];
+
+fn normal_format_ok(f: vk::Format, needed: u32) -> bool {
+    NORMAL_FORMATS_4.contains(&f)
+        || (needed <= 3 && NORMAL_FORMATS_3.contains(&f))
+        || (needed <= 2 && NORMAL_FORMATS_2.contains(&f))
+}
+
+pub(crate) fn trace_common(c: &TraceCommon) -> Result<()> {
+    let vp = &c.viewport;
+    if vp.width == 0 || vp.height == 0 {
+        return Err(Error::invalid("TraceCommon.viewport", "has zero width or height"));
+    }
+    if !(vp.min_depth.is_finite() && vp.max_depth.is_finite()) {
+        return Err(Error::invalid("TraceCommon.viewport", "depth range is not finite"));
+    }
+    image("TraceCommon.depth.image", &c.depth.image, vp, INPUT_LAYOUTS)?;
+    match c.depth.depth_type {
+        DepthType::ClipSpace => format_in(
+            "TraceCommon.depth.image.format",
+            c.depth.image.format,
+            CLIP_DEPTH_FORMATS,
+            "a depth format or R32/R16 single channel (DepthType::ClipSpace)",
+        )?,
+        DepthType::WorldPosition => format_in(
+            "TraceCommon.depth.image.format",
+            c.depth.image.format,
+            POSITION_FORMATS,
+            "R32G32B32A32_SFLOAT or R16G16B16A16_SFLOAT (DepthType::WorldPosition)",
+        )?,
+    }
+    image("TraceCommon.normals.image", &c.normals.image, vp, INPUT_LAYOUTS)?;
+    if !normal_format_ok(c.normals.image.format, c.normals.normal_type.channels_needed()) {
+        return Err(Error::UnsupportedFormat {
+            what: "TraceCommon.normals.image.format",
+            format: c.normals.image.format,
+            expected: "a colour format with the channels the NormalType reads",
+        });
+    }
+    matrix("TraceCommon.camera.world_to_view", &c.camera.world_to_view)?;
+    matrix("TraceCommon.camera.view_to_clip", &c.camera.view_to_clip)?;
+    matrix("TraceCommon.camera (view_to_clip * world_to_view)", &(c.camera.view_to_clip * c.camera.world_to_view))?;
+    let o = &c.ray_offset;
+    let params = [o.world_threshold, o.world_float_scale, o.world_int_scale, o.cam_constant, o.cam_linear, o.cam_quadratic];
+    if params.iter().any(|p| !p.is_finite()) {
+        return Err(Error::invalid("TraceCommon.ray_offset", "has a non-finite parameter"));
+    }
+    Ok(())
+}
+
+pub(crate) fn output_image(what: &'static str, img: &ImageInput, vp: &Viewport, formats: &[vk::Format]) -> Result<()> {
+    image(what, img, vp, &[vk::ImageLayout::GENERAL])?;
+    format_in(what, img.format, formats, "R8/R16/R32 single channel or an RGBA 8/16/32-bit format")
+}
+
+pub(crate) fn ambient_occlusion(t: &TraceAmbientOcclusionTask) -> Result<()> {
+    trace_common(&t.common)?;
+    output_image("TraceAmbientOcclusionTask.output", &t.output, &t.common.viewport, SCALAR_OUTPUT_FORMATS)?;
+    if !(t.ray_length.is_finite() && t.ray_length > 0.0) {
+        return Err(Error::invalid("TraceAmbientOcclusionTask.ray_length", "must be finite and > 0"));
+    }
+    if !(1..=64).contains(&t.rays_per_pixel) {
+        return Err(Error::invalid("TraceAmbientOcclusionTask.rays_per_pixel", format!("{} is not in 1..=64", t.rays_per_pixel)));
+    }
+    if !(t.falloff_power.is_finite() && t.falloff_power > 0.0) {
+        return Err(Error::invalid("TraceAmbientOcclusionTask.falloff_power", "must be finite and > 0"));
+    }
+    Ok(())
+}

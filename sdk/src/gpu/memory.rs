@@ -1,0 +1,199 @@
+//! Device memory: buffers sub-allocated by gpu-allocator, each tagged with the kind of data it
+//! holds so `ExecuteContext::resource_allocations` can report bytes and counts per kind.
+use crate::error::{Error, Result};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme, Allocator, AllocatorCreateDesc};
+use gpu_allocator::MemoryLocation;
+use parking_lot::Mutex;
+
+/// What a piece of SDK memory holds (the rows of [`ResourceAllocations`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum MemoryKind {
+    /// The SDK's copies of geometry vertices and indices (BLAS build inputs).
+    GeometryCopy = 0,
+    /// Bottom-level acceleration structures.
+    Blas = 1,
+    /// Scratch memory for BLAS/TLAS builds, one per working set.
+    BuildScratch = 2,
+    /// Top-level acceleration structures, one per working set.
+    Tlas = 3,
+    /// Per-working-set upload rings (TLAS instances, task constants).
+    UploadRing = 4,
+    /// Shader binding tables and other fixed pipeline data.
+    Pipeline = 5,
+}
+
+pub const MEMORY_KIND_COUNT: usize = 6;
+
+/// Bytes and counts of live SDK allocations, per kind.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[repr(C)]
+pub struct AllocationCount {
+    pub count: u64,
+    pub bytes: u64,
+}
+
+/// A snapshot of the SDK's device memory use, for budgeting.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[repr(C)]
+pub struct ResourceAllocations {
+    pub geometry_copies: AllocationCount,
+    pub blas: AllocationCount,
+    pub build_scratch: AllocationCount,
+    pub tlas: AllocationCount,
+    pub upload_rings: AllocationCount,
+    pub pipelines: AllocationCount,
+}
+
+impl ResourceAllocations {
+    pub fn total_bytes(&self) -> u64 {
+        [self.geometry_copies, self.blas, self.build_scratch, self.tlas, self.upload_rings, self.pipelines]
+            .iter()
+            .map(|c| c.bytes)
+            .sum()
+    }
+}
+
+pub(crate) struct Buffer {
+    pub raw: vk::Buffer,
+    pub size: u64,
+    pub address: vk::DeviceAddress,
+    pub kind: MemoryKind,
+    allocation: Option<Allocation>,
+}
+
+impl Buffer {
+    /// The mapped bytes of a host-visible buffer.
+    pub fn mapped(&mut self) -> &mut [u8] {
+        self.allocation
+            .as_mut()
+            .and_then(|a| a.mapped_slice_mut())
+            .expect("buffer is host visible")
+    }
+}
+
+pub(crate) struct Memory {
+    device: ash::Device,
+    allocator: Mutex<Option<Allocator>>,
+    counts: Mutex<[AllocationCount; MEMORY_KIND_COUNT]>,
+}
+
+impl Memory {
+    pub fn new(instance: &ash::Instance, device: &ash::Device, pdev: vk::PhysicalDevice) -> Result<Memory> {
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device: pdev,
+            debug_settings: Default::default(),
+            buffer_device_address: true,
+            allocation_sizes: Default::default(),
+        })
+        .map_err(|e| Error::OutOfMemory { what: "allocator", detail: e.to_string() })?;
+        Ok(Memory {
+            device: device.clone(),
+            allocator: Mutex::new(Some(allocator)),
+            counts: Mutex::new([AllocationCount::default(); MEMORY_KIND_COUNT]),
+        })
+    }
+
+    pub fn create_buffer(
+        &self,
+        name: &'static str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+        kind: MemoryKind,
+    ) -> Result<Buffer> {
+        let size = size.max(16);
+        let usage = usage | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
+        let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: valid create info; the buffer is destroyed in `destroy_buffer`.
+        let raw = unsafe { self.device.create_buffer(&info, None) }.map_err(Error::vk("vkCreateBuffer"))?;
+        let requirements = unsafe { self.device.get_buffer_memory_requirements(raw) };
+        let allocation = {
+            let mut guard = self.allocator.lock();
+            let allocator = guard.as_mut().ok_or_else(|| Error::Internal("allocator gone".into()))?;
+            allocator.allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear: true,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+        };
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(e) => {
+                unsafe { self.device.destroy_buffer(raw, None) };
+                return Err(Error::OutOfMemory { what: name, detail: e.to_string() });
+            }
+        };
+        if let Err(e) = unsafe { self.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) } {
+            unsafe { self.device.destroy_buffer(raw, None) };
+            let _ = self.allocator.lock().as_mut().map(|a| a.free(allocation));
+            return Err(Error::Vulkan { call: "vkBindBufferMemory", result: e });
+        }
+        let address = unsafe {
+            self.device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(raw))
+        };
+        let mut counts = self.counts.lock();
+        counts[kind as usize].count += 1;
+        counts[kind as usize].bytes += allocation.size();
+        Ok(Buffer { raw, size, address, kind, allocation: Some(allocation) })
+    }
+
+    pub fn destroy_buffer(&self, mut buffer: Buffer) {
+        if let Some(allocation) = buffer.allocation.take() {
+            let mut counts = self.counts.lock();
+            let c = &mut counts[buffer.kind as usize];
+            c.count = c.count.saturating_sub(1);
+            c.bytes = c.bytes.saturating_sub(allocation.size());
+            drop(counts);
+            if let Some(a) = self.allocator.lock().as_mut() {
+                if let Err(e) = a.free(allocation) {
+                    log::error!("freeing a buffer failed: {e}");
+                }
+            }
+        }
+        // SAFETY: the caller guarantees no pending GPU use (deferred destruction).
+        unsafe { self.device.destroy_buffer(buffer.raw, None) };
+    }
+
+    pub fn allocations(&self) -> ResourceAllocations {
+        let c = *self.counts.lock();
+        ResourceAllocations {
+            geometry_copies: c[MemoryKind::GeometryCopy as usize],
+            blas: c[MemoryKind::Blas as usize],
+            build_scratch: c[MemoryKind::BuildScratch as usize],
+            tlas: c[MemoryKind::Tlas as usize],
+            upload_rings: c[MemoryKind::UploadRing as usize],
+            pipelines: c[MemoryKind::Pipeline as usize],
+        }
+    }
+
+    /// Drops the allocator (its memory blocks) before the device goes away.
+    pub fn shutdown(&self) {
+        self.allocator.lock().take();
+    }
+}
+
+/// A buffer that grows on demand; the old one is handed to `retire` (deferred destruction
+/// when the GPU may still read it, immediate when the owner knows it is idle).
+pub(crate) fn ensure_capacity(
+    slot: &mut Option<Buffer>,
+    needed: u64,
+    make: impl FnOnce(u64) -> Result<Buffer>,
+    retire: impl FnOnce(Buffer),
+) -> Result<()> {
+    if slot.as_ref().is_some_and(|b| b.size >= needed) {
+        return Ok(());
+    }
+    // Grow by 1.5x so a scene that grows a little each frame does not reallocate each frame.
+    let size = slot.as_ref().map_or(needed, |b| needed.max(b.size + b.size / 2));
+    let fresh = make(size)?;
+    if let Some(old) = slot.replace(fresh) {
+        retire(old);
+    }
+    Ok(())
+}

@@ -1,0 +1,215 @@
+//! Pipelines: shader modules from embedded SPIR-V, push-descriptor set layouts, ray-tracing
+//! pipelines with their shader binding table, and compute pipelines.
+use super::device::Device;
+use super::memory::{Buffer, Memory, MemoryKind};
+use crate::error::{Error, Result};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+pub(crate) fn shader_module(device: &ash::Device, spirv: &[u8]) -> Result<vk::ShaderModule> {
+    let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
+        .map_err(|e| Error::Internal(format!("embedded SPIR-V unreadable: {e}")))?;
+    let info = vk::ShaderModuleCreateInfo::default().code(&words);
+    unsafe { device.create_shader_module(&info, None) }.map_err(Error::vk("vkCreateShaderModule"))
+}
+
+/// One binding of a push-descriptor set.
+pub(crate) struct Binding {
+    pub ty: vk::DescriptorType,
+    /// Immutable sampler for COMBINED_IMAGE_SAMPLER bindings.
+    pub sampler: Option<vk::Sampler>,
+}
+
+pub(crate) fn push_set_layout(
+    device: &ash::Device,
+    bindings: &[Binding],
+    stages: vk::ShaderStageFlags,
+) -> Result<vk::DescriptorSetLayout> {
+    let samplers: Vec<[vk::Sampler; 1]> = bindings.iter().map(|b| [b.sampler.unwrap_or_default()]).collect();
+    let vk_bindings: Vec<_> = bindings
+        .iter()
+        .enumerate()
+        .map(|(i, b)| {
+            let mut d = vk::DescriptorSetLayoutBinding::default()
+                .binding(i as u32)
+                .descriptor_type(b.ty)
+                .descriptor_count(1)
+                .stage_flags(stages);
+            if b.sampler.is_some() {
+                d = d.immutable_samplers(&samplers[i]);
+            }
+            d
+        })
+        .collect();
+    let info = vk::DescriptorSetLayoutCreateInfo::default()
+        .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
+        .bindings(&vk_bindings);
+    unsafe { device.create_descriptor_set_layout(&info, None) }.map_err(Error::vk("vkCreateDescriptorSetLayout"))
+}
+
+pub(crate) fn pipeline_layout(device: &ash::Device, set: vk::DescriptorSetLayout) -> Result<vk::PipelineLayout> {
+    let sets = [set];
+    let info = vk::PipelineLayoutCreateInfo::default().set_layouts(&sets);
+    unsafe { device.create_pipeline_layout(&info, None) }.map_err(Error::vk("vkCreatePipelineLayout"))
+}
+
+/// A ray-tracing pipeline: one raygen, miss shaders, closest-hit groups, and its SBT.
+pub(crate) struct RtPipeline {
+    pub pipeline: vk::Pipeline,
+    pub sbt: Buffer,
+    pub raygen: vk::StridedDeviceAddressRegionKHR,
+    pub miss: vk::StridedDeviceAddressRegionKHR,
+    pub hit: vk::StridedDeviceAddressRegionKHR,
+    pub callable: vk::StridedDeviceAddressRegionKHR,
+}
+
+pub(crate) fn rt_pipeline(
+    device: &Device,
+    memory: &Memory,
+    layout: vk::PipelineLayout,
+    raygen: &[u8],
+    misses: &[&[u8]],
+    closest_hits: &[&[u8]],
+) -> Result<RtPipeline> {
+    let d = &device.raw;
+    let mut modules = vec![shader_module(d, raygen)?];
+    for m in misses.iter().chain(closest_hits) {
+        match shader_module(d, m) {
+            Ok(m) => modules.push(m),
+            Err(e) => {
+                modules.iter().for_each(|&m| unsafe { d.destroy_shader_module(m, None) });
+                return Err(e);
+            }
+        }
+    }
+    let entry = c"main";
+    let mut stages = vec![vk::PipelineShaderStageCreateInfo::default()
+        .stage(vk::ShaderStageFlags::RAYGEN_KHR)
+        .module(modules[0])
+        .name(entry)];
+    for i in 0..misses.len() {
+        stages.push(
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::MISS_KHR)
+                .module(modules[1 + i])
+                .name(entry),
+        );
+    }
+    for i in 0..closest_hits.len() {
+        stages.push(
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::CLOSEST_HIT_KHR)
+                .module(modules[1 + misses.len() + i])
+                .name(entry),
+        );
+    }
+    let general = |i: usize| {
+        vk::RayTracingShaderGroupCreateInfoKHR::default()
+            .ty(vk::RayTracingShaderGroupTypeKHR::GENERAL)
+            .general_shader(i as u32)
+            .closest_hit_shader(vk::SHADER_UNUSED_KHR)
+            .any_hit_shader(vk::SHADER_UNUSED_KHR)
+            .intersection_shader(vk::SHADER_UNUSED_KHR)
+    };
+    let mut groups: Vec<_> = (0..1 + misses.len()).map(general).collect();
+    for i in 0..closest_hits.len() {
+        groups.push(
+            vk::RayTracingShaderGroupCreateInfoKHR::default()
+                .ty(vk::RayTracingShaderGroupTypeKHR::TRIANGLES_HIT_GROUP)
+                .general_shader(vk::SHADER_UNUSED_KHR)
+                .closest_hit_shader((1 + misses.len() + i) as u32)
+                .any_hit_shader(vk::SHADER_UNUSED_KHR)
+                .intersection_shader(vk::SHADER_UNUSED_KHR),
+        );
+    }
+    let info = vk::RayTracingPipelineCreateInfoKHR::default()
+        .stages(&stages)
+        .groups(&groups)
+        .max_pipeline_ray_recursion_depth(1)
+        .layout(layout);
+    let result = unsafe {
+        device.rt.create_ray_tracing_pipelines(
+            vk::DeferredOperationKHR::null(),
+            vk::PipelineCache::null(),
+            std::slice::from_ref(&info),
+            None,
+        )
+    };
+    modules.iter().for_each(|&m| unsafe { d.destroy_shader_module(m, None) });
+    let pipeline = result.map_err(|(_, e)| Error::Vulkan { call: "vkCreateRayTracingPipelinesKHR", result: e })?[0];
+
+    // Shader binding table: [raygen | misses | hits], each region aligned to the base alignment.
+    let props = &device.rt_props;
+    let handle_size = props.shader_group_handle_size as u64;
+    let align_up = |v: u64, a: u64| v.div_ceil(a) * a;
+    let stride = align_up(handle_size, props.shader_group_handle_alignment as u64);
+    let base = props.shader_group_base_alignment as u64;
+    let group_count = groups.len();
+    let handles = unsafe {
+        device.rt.get_ray_tracing_shader_group_handles(pipeline, 0, group_count as u32, group_count * handle_size as usize)
+    }
+    .map_err(|e| {
+        unsafe { d.destroy_pipeline(pipeline, None) };
+        Error::Vulkan { call: "vkGetRayTracingShaderGroupHandlesKHR", result: e }
+    })?;
+    let raygen_size = align_up(stride, base);
+    let miss_size = align_up(stride * misses.len() as u64, base);
+    let hit_size = align_up(stride * closest_hits.len() as u64, base);
+    let total = raygen_size + miss_size + hit_size + base;
+    let mut sbt = match memory.create_buffer(
+        "shader binding table",
+        total,
+        vk::BufferUsageFlags::SHADER_BINDING_TABLE_KHR,
+        MemoryLocation::CpuToGpu,
+        MemoryKind::Pipeline,
+    ) {
+        Ok(b) => b,
+        Err(e) => {
+            unsafe { d.destroy_pipeline(pipeline, None) };
+            return Err(e);
+        }
+    };
+    // The buffer's address may not meet the base alignment: start at the first aligned byte.
+    let start = align_up(sbt.address, base) - sbt.address;
+    let bytes = sbt.mapped();
+    let mut put = |group: usize, offset: u64| {
+        let src = &handles[group * handle_size as usize..(group + 1) * handle_size as usize];
+        let o = (start + offset) as usize;
+        bytes[o..o + src.len()].copy_from_slice(src);
+    };
+    put(0, 0);
+    for i in 0..misses.len() {
+        put(1 + i, raygen_size + stride * i as u64);
+    }
+    for i in 0..closest_hits.len() {
+        put(1 + misses.len() + i, raygen_size + miss_size + stride * i as u64);
+    }
+    let addr = sbt.address + start;
+    let region = |offset: u64, stride: u64, size: u64| vk::StridedDeviceAddressRegionKHR {
+        device_address: if size == 0 { 0 } else { addr + offset },
+        stride,
+        size,
+    };
+    Ok(RtPipeline {
+        pipeline,
+        raygen: region(0, raygen_size, raygen_size),
+        miss: region(raygen_size, stride, miss_size),
+        hit: region(raygen_size + miss_size, stride, hit_size),
+        callable: vk::StridedDeviceAddressRegionKHR::default(),
+        sbt,
+    })
+}
+
+pub(crate) fn compute_pipeline(device: &ash::Device, layout: vk::PipelineLayout, spirv: &[u8]) -> Result<vk::Pipeline> {
+    let module = shader_module(device, spirv)?;
+    let stage = vk::PipelineShaderStageCreateInfo::default()
+        .stage(vk::ShaderStageFlags::COMPUTE)
+        .module(module)
+        .name(c"main");
+    let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
+    let result = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) };
+    unsafe { device.destroy_shader_module(module, None) };
+    result
+        .map(|p| p[0])
+        .map_err(|(_, e)| Error::Vulkan { call: "vkCreateComputePipelines", result: e })
+}

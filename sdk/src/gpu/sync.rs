@@ -1,0 +1,101 @@
+//! Barriers derived from what each step declares it reads and writes, so no pass hand-writes
+//! one. The SDK never changes an image layout (inputs and outputs stay in the layouts the
+//! engine gave), so every hazard is a memory hazard and a global `VkMemoryBarrier2` covers
+//! buffers, acceleration structures and images alike.
+use ash::vk;
+
+/// One declared use: the stages and access types of a step.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Use {
+    pub stages: vk::PipelineStageFlags2,
+    pub access: vk::AccessFlags2,
+}
+
+pub(crate) const TRANSFER_WRITE: Use =
+    Use { stages: vk::PipelineStageFlags2::COPY, access: vk::AccessFlags2::TRANSFER_WRITE };
+pub(crate) const AS_BUILD_READ: Use = Use {
+    stages: vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR,
+    access: vk::AccessFlags2::from_raw(
+        vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR.as_raw() | vk::AccessFlags2::SHADER_READ.as_raw(),
+    ),
+};
+pub(crate) const AS_BUILD_WRITE: Use = Use {
+    stages: vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR,
+    access: vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR,
+};
+pub(crate) const AS_COPY: Use = Use {
+    stages: vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_COPY_KHR,
+    access: vk::AccessFlags2::from_raw(
+        vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR.as_raw()
+            | vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR.as_raw(),
+    ),
+};
+
+/// Reads and writes of a trace or compute pass at `stage`.
+pub(crate) fn shader_read(stage: vk::PipelineStageFlags2) -> Use {
+    Use {
+        stages: stage,
+        access: vk::AccessFlags2::SHADER_SAMPLED_READ
+            | vk::AccessFlags2::SHADER_STORAGE_READ
+            | vk::AccessFlags2::UNIFORM_READ
+            | vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR,
+    }
+}
+pub(crate) fn shader_write(stage: vk::PipelineStageFlags2) -> Use {
+    Use { stages: stage, access: vk::AccessFlags2::SHADER_STORAGE_WRITE }
+}
+
+/// Tracks the last write and the reads since, across one recording.
+#[derive(Default)]
+pub(crate) struct Hazards {
+    write: Option<Use>,
+    visible: (vk::PipelineStageFlags2, vk::AccessFlags2),
+    read_stages: vk::PipelineStageFlags2,
+}
+
+impl Hazards {
+    /// Declares that the next commands read with `u`; records a barrier if an earlier write is
+    /// not yet visible to them.
+    pub fn read(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, u: Use) {
+        if let Some(w) = self.write {
+            if !(self.visible.0.contains(u.stages) && self.visible.1.contains(u.access)) {
+                barrier(device, cmd, w, u);
+                self.visible.0 |= u.stages;
+                self.visible.1 |= u.access;
+            }
+        }
+        self.read_stages |= u.stages;
+    }
+
+    /// Declares that the next commands write with `u` (after any reads they also do: declare
+    /// those first). Orders them after the previous write (WAW) and the reads since (WAR).
+    pub fn write(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, u: Use) {
+        let mut src = Use { stages: self.read_stages, access: vk::AccessFlags2::NONE };
+        if let Some(w) = self.write {
+            src.stages |= w.stages;
+            src.access |= w.access;
+        }
+        if !src.stages.is_empty() {
+            barrier(device, cmd, src, u);
+        }
+        self.write = Some(u);
+        self.visible = (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE);
+        self.read_stages = vk::PipelineStageFlags2::NONE;
+    }
+
+    /// A step that reads and writes (a build that reads inputs and writes its result).
+    pub fn read_write(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, r: Use, w: Use) {
+        self.read(device, cmd, r);
+        self.write(device, cmd, w);
+    }
+}
+
+fn barrier(device: &ash::Device, cmd: vk::CommandBuffer, src: Use, dst: Use) {
+    let mb = [vk::MemoryBarrier2::default()
+        .src_stage_mask(src.stages)
+        .src_access_mask(src.access)
+        .dst_stage_mask(dst.stages)
+        .dst_access_mask(dst.access)];
+    // SAFETY: cmd is in the recording state (the engine began it); synchronization2 enabled.
+    unsafe { device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&mb)) };
+}

@@ -1,0 +1,83 @@
+//! GPU twins of the std140 blocks in shaders/include/*.glsl. Each struct here has exactly one
+//! GLSL counterpart; the tests at the bottom pin sizes and offsets.
+use crate::api::tasks::{DepthType, NormalSpace, RayOffsetType, TraceCommon};
+use bytemuck::{Pod, Zeroable};
+
+/// `TraceCommon` in shaders/include/common.glsl.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+pub(crate) struct TraceCommonGpu {
+    pub clip_to_world: [f32; 16],
+    pub view_to_world: [f32; 16],
+    pub viewport: [f32; 4],
+    pub depth_range: [f32; 4],
+    pub modes: [u32; 4],
+    pub offset_world: [f32; 4],
+    pub offset_camera: [f32; 4],
+    pub frame: [u32; 4],
+}
+
+/// `AoConstants` in shaders/include/ao.glsl.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+pub(crate) struct AoConstantsGpu {
+    pub common: TraceCommonGpu,
+    pub params: [f32; 4],
+    pub counts: [u32; 4],
+}
+
+impl TraceCommonGpu {
+    /// `seed` varies per ticket; `mask` selects which instances the rays see.
+    pub fn new(c: &TraceCommon, seed: u32, mask: u8) -> TraceCommonGpu {
+        let view_to_world = c.camera.world_to_view.inverse();
+        let clip_to_world = (c.camera.view_to_clip * c.camera.world_to_view).inverse();
+        let vp = &c.viewport;
+        let (min_d, max_d) =
+            if vp.min_depth == 0.0 && vp.max_depth == 0.0 { (0.0, 1.0) } else { (vp.min_depth, vp.max_depth) };
+        let o = &c.ray_offset;
+        TraceCommonGpu {
+            clip_to_world: clip_to_world.to_cols_array(),
+            view_to_world: view_to_world.to_cols_array(),
+            viewport: [vp.x as f32, vp.y as f32, vp.width as f32, vp.height as f32],
+            depth_range: [min_d, max_d, 0.0, 0.0],
+            modes: [
+                match c.depth.depth_type {
+                    DepthType::ClipSpace => 0,
+                    DepthType::WorldPosition => 1,
+                },
+                c.normals.normal_type as u32,
+                (c.normals.space == NormalSpace::View) as u32,
+                match o.offset_type {
+                    RayOffsetType::Disabled => 0,
+                    RayOffsetType::WorldPosition => 1,
+                    RayOffsetType::CameraDistance => 2,
+                },
+            ],
+            offset_world: [o.world_threshold, o.world_float_scale, o.world_int_scale, 0.0],
+            offset_camera: [o.cam_constant, o.cam_linear, o.cam_quadratic, 0.0],
+            frame: [seed, mask as u32, 0, 0],
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::mem::{offset_of, size_of};
+
+    /// Offsets as std140 lays out the GLSL blocks (mat4 = 64 bytes, vec4/uvec4 = 16).
+    #[test]
+    fn layouts_match_glsl_std140() {
+        assert_eq!(offset_of!(TraceCommonGpu, view_to_world), 64);
+        assert_eq!(offset_of!(TraceCommonGpu, viewport), 128);
+        assert_eq!(offset_of!(TraceCommonGpu, depth_range), 144);
+        assert_eq!(offset_of!(TraceCommonGpu, modes), 160);
+        assert_eq!(offset_of!(TraceCommonGpu, offset_world), 176);
+        assert_eq!(offset_of!(TraceCommonGpu, offset_camera), 192);
+        assert_eq!(offset_of!(TraceCommonGpu, frame), 208);
+        assert_eq!(size_of::<TraceCommonGpu>(), 224);
+        assert_eq!(offset_of!(AoConstantsGpu, params), 224);
+        assert_eq!(offset_of!(AoConstantsGpu, counts), 240);
+        assert_eq!(size_of::<AoConstantsGpu>(), 256);
+    }
+}

@@ -1,0 +1,133 @@
+//! BLAS building: geometry descriptions, sizes, creation, batched build/refit recording and
+//! compaction. Static geometry is built for fast tracing and compacted once the compacted size
+//! has come back with a ticket (no stall: the copy happens in a later frame); deformable
+//! geometry is built for fast refits and never compacted.
+use super::geometry::{Blas, GeometryLayout};
+use crate::error::{Error, Result};
+use crate::gpu::device::Device;
+use crate::gpu::memory::{Buffer, Memory, MemoryKind};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+pub(crate) fn flags(layout: &GeometryLayout) -> vk::BuildAccelerationStructureFlagsKHR {
+    if layout.allow_update {
+        vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_BUILD | vk::BuildAccelerationStructureFlagsKHR::ALLOW_UPDATE
+    } else {
+        vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE
+            | vk::BuildAccelerationStructureFlagsKHR::ALLOW_COMPACTION
+    }
+}
+
+pub(crate) fn triangles(copy_address: vk::DeviceAddress, layout: &GeometryLayout) -> vk::AccelerationStructureGeometryKHR<'static> {
+    let mut tri = vk::AccelerationStructureGeometryTrianglesDataKHR::default()
+        .vertex_format(vk::Format::R32G32B32_SFLOAT)
+        .vertex_data(vk::DeviceOrHostAddressConstKHR { device_address: copy_address })
+        .vertex_stride(layout.vertex_stride)
+        .max_vertex(layout.vertex_count.saturating_sub(1))
+        .index_type(layout.index_type.unwrap_or(vk::IndexType::NONE_KHR));
+    if layout.index_type.is_some() {
+        tri = tri.index_data(vk::DeviceOrHostAddressConstKHR { device_address: copy_address + layout.index_offset });
+    }
+    vk::AccelerationStructureGeometryKHR::default()
+        .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
+        .geometry(vk::AccelerationStructureGeometryDataKHR { triangles: tri })
+        .flags(vk::GeometryFlagsKHR::OPAQUE)
+}
+
+pub(crate) fn build_sizes(
+    device: &Device,
+    ty: vk::AccelerationStructureTypeKHR,
+    flags: vk::BuildAccelerationStructureFlagsKHR,
+    geometry: &vk::AccelerationStructureGeometryKHR<'_>,
+    primitive_count: u32,
+) -> vk::AccelerationStructureBuildSizesInfoKHR<'static> {
+    let geometries = std::slice::from_ref(geometry);
+    let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+        .ty(ty)
+        .flags(flags)
+        .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+        .geometries(geometries);
+    let mut sizes = vk::AccelerationStructureBuildSizesInfoKHR::default();
+    // SAFETY: host query with a well-formed description.
+    unsafe {
+        device.accel.get_acceleration_structure_build_sizes(
+            vk::AccelerationStructureBuildTypeKHR::DEVICE,
+            &info,
+            &[primitive_count],
+            &mut sizes,
+        )
+    };
+    sizes
+}
+
+pub(crate) fn create(
+    device: &Device,
+    memory: &Memory,
+    ty: vk::AccelerationStructureTypeKHR,
+    size: u64,
+    kind: MemoryKind,
+) -> Result<Blas> {
+    let buffer = memory.create_buffer(
+        if ty == vk::AccelerationStructureTypeKHR::TOP_LEVEL { "TLAS" } else { "BLAS" },
+        size,
+        vk::BufferUsageFlags::ACCELERATION_STRUCTURE_STORAGE_KHR,
+        MemoryLocation::GpuOnly,
+        kind,
+    )?;
+    let info = vk::AccelerationStructureCreateInfoKHR::default().buffer(buffer.raw).size(size).ty(ty);
+    let accel = match unsafe { device.accel.create_acceleration_structure(&info, None) } {
+        Ok(a) => a,
+        Err(e) => {
+            memory.destroy_buffer(buffer);
+            return Err(Error::Vulkan { call: "vkCreateAccelerationStructureKHR", result: e });
+        }
+    };
+    let address = unsafe {
+        device
+            .accel
+            .get_acceleration_structure_device_address(&vk::AccelerationStructureDeviceAddressInfoKHR::default().acceleration_structure(accel))
+    };
+    Ok(Blas { accel, buffer, address })
+}
+
+/// One BLAS operation of a batch.
+pub(crate) struct BuildJob {
+    pub geometry: vk::AccelerationStructureGeometryKHR<'static>,
+    pub flags: vk::BuildAccelerationStructureFlagsKHR,
+    pub refit: bool,
+    pub dst: vk::AccelerationStructureKHR,
+    pub primitive_count: u32,
+    pub scratch_offset: u64,
+}
+
+/// Records every job of the batch in one vkCmdBuildAccelerationStructuresKHR, so the driver can
+/// overlap them. Each job has its own scratch region.
+pub(crate) fn record_batch(device: &Device, cmd: vk::CommandBuffer, scratch: &Buffer, jobs: &[BuildJob]) {
+    if jobs.is_empty() {
+        return;
+    }
+    let infos: Vec<_> = jobs
+        .iter()
+        .map(|j| {
+            vk::AccelerationStructureBuildGeometryInfoKHR::default()
+                .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
+                .flags(j.flags)
+                .mode(if j.refit {
+                    vk::BuildAccelerationStructureModeKHR::UPDATE
+                } else {
+                    vk::BuildAccelerationStructureModeKHR::BUILD
+                })
+                .src_acceleration_structure(if j.refit { j.dst } else { vk::AccelerationStructureKHR::null() })
+                .dst_acceleration_structure(j.dst)
+                .geometries(std::slice::from_ref(&j.geometry))
+                .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch.address + j.scratch_offset })
+        })
+        .collect();
+    let ranges: Vec<[vk::AccelerationStructureBuildRangeInfoKHR; 1]> = jobs
+        .iter()
+        .map(|j| [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(j.primitive_count)])
+        .collect();
+    let range_refs: Vec<&[vk::AccelerationStructureBuildRangeInfoKHR]> = ranges.iter().map(|r| &r[..]).collect();
+    // SAFETY: all addresses point into live buffers sized from build-size queries.
+    unsafe { device.accel.cmd_build_acceleration_structures(cmd, &infos, &range_refs) };
+}

@@ -1,0 +1,163 @@
+//! A registered mesh: the SDK's copy of its vertices/indices and its BLAS.
+//!
+//! Why copy: the BLAS of a throttled geometry may be built frames after registration, and a
+//! refit reads the vertices again; copying at registration (one vkCmdCopyBuffer) lets the
+//! engine free or reuse its buffers as soon as the registering ticket is back, and gives the
+//! lighting cache a vertex/index source it owns.
+use crate::api::tasks::GeometryInput;
+use crate::error::{Error, Result};
+use crate::gpu::memory::{Buffer, Memory, MemoryKind};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+/// The layout of the SDK's copy of a geometry: vertices as the engine laid them out (its
+/// stride), then indices.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct GeometryLayout {
+    pub vertex_count: u32,
+    pub vertex_stride: u64,
+    pub vertex_bytes: u64,
+    /// None for non-indexed triangles.
+    pub index_type: Option<vk::IndexType>,
+    pub index_offset: u64,
+    pub index_count: u32,
+    pub primitive_count: u32,
+    pub allow_update: bool,
+}
+
+impl GeometryLayout {
+    pub fn of(input: &GeometryInput) -> GeometryLayout {
+        let v = &input.vertices;
+        let position_bytes = if v.format == vk::Format::R32G32B32A32_SFLOAT { 16 } else { 12 };
+        let vertex_bytes = v.stride * (v.count as u64 - 1) + position_bytes;
+        let indexed = input.indices.buffer != vk::Buffer::null();
+        let index_type = indexed.then(|| {
+            if input.indices.format == vk::Format::R16_UINT { vk::IndexType::UINT16 } else { vk::IndexType::UINT32 }
+        });
+        GeometryLayout {
+            vertex_count: v.count,
+            vertex_stride: v.stride,
+            vertex_bytes,
+            index_type,
+            index_offset: vertex_bytes.div_ceil(4) * 4,
+            index_count: if indexed { input.indices.count } else { 0 },
+            primitive_count: if indexed { input.indices.count / 3 } else { v.count / 3 },
+            allow_update: input.allow_update,
+        }
+    }
+
+    pub fn index_size(&self) -> u64 {
+        match self.index_type {
+            Some(vk::IndexType::UINT16) => 2,
+            Some(_) => 4,
+            None => 0,
+        }
+    }
+
+    pub fn total_bytes(&self) -> u64 {
+        self.index_offset + self.index_size() * self.index_count as u64
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum BlasState {
+    /// Registered, waiting in the build queue.
+    Queued,
+    /// Built (maybe compacted); instances using it go into the TLAS.
+    Ready,
+}
+
+pub(crate) struct Blas {
+    pub accel: vk::AccelerationStructureKHR,
+    pub buffer: Buffer,
+    pub address: vk::DeviceAddress,
+}
+
+pub(crate) struct GeometryRecord {
+    /// None until a register task for it has been built.
+    pub layout: Option<GeometryLayout>,
+    pub copy: Option<Buffer>,
+    pub blas: Option<Blas>,
+    pub state: BlasState,
+    /// Refit at the next BVH build (allow_update geometry that was updated).
+    pub needs_refit: bool,
+    /// Bumped at every (re)build, so a compaction size measured for an older build is ignored.
+    pub build_id: u64,
+    /// Compacted size read back from a completed ticket, waiting for the compaction copy.
+    pub compacted_size: Option<u64>,
+    /// Registered instances that use this geometry.
+    pub instance_refs: usize,
+    pub input: GeometryInput,
+}
+
+impl GeometryRecord {
+    pub fn new() -> GeometryRecord {
+        GeometryRecord {
+            layout: None,
+            copy: None,
+            blas: None,
+            state: BlasState::Queued,
+            needs_refit: false,
+            build_id: 0,
+            compacted_size: None,
+            instance_refs: 0,
+            input: GeometryInput::default(),
+        }
+    }
+
+    pub fn registered(&self) -> bool {
+        self.layout.is_some()
+    }
+}
+
+/// Creates the copy buffer and records the copy of the engine's vertices and indices into it.
+pub(crate) fn record_copy(
+    device: &ash::Device,
+    memory: &Memory,
+    cmd: vk::CommandBuffer,
+    input: &GeometryInput,
+    layout: &GeometryLayout,
+) -> Result<Buffer> {
+    let copy = memory.create_buffer(
+        "geometry copy",
+        layout.total_bytes(),
+        vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR,
+        MemoryLocation::GpuOnly,
+        MemoryKind::GeometryCopy,
+    )?;
+    let v = [vk::BufferCopy { src_offset: input.vertices.offset, dst_offset: 0, size: layout.vertex_bytes }];
+    // SAFETY: regions validated against the buffers' sizes at scheduling.
+    unsafe { device.cmd_copy_buffer(cmd, input.vertices.buffer, copy.raw, &v) };
+    if layout.index_type.is_some() {
+        let i = [vk::BufferCopy {
+            src_offset: input.indices.offset,
+            dst_offset: layout.index_offset,
+            size: layout.index_size() * layout.index_count as u64,
+        }];
+        unsafe { device.cmd_copy_buffer(cmd, input.indices.buffer, copy.raw, &i) };
+    }
+    Ok(copy)
+}
+
+/// The bytes a buffer can hold at most (its memory requirement, which is >= its size). Used to
+/// catch regions that surely overrun an engine buffer; Vulkan offers no exact size query.
+pub(crate) fn buffer_capacity(device: &ash::Device, buffer: vk::Buffer) -> u64 {
+    unsafe { device.get_buffer_memory_requirements(buffer) }.size
+}
+
+pub(crate) fn check_region(
+    device: &ash::Device,
+    what: &'static str,
+    buffer: vk::Buffer,
+    offset: u64,
+    bytes: u64,
+) -> Result<()> {
+    let available = buffer_capacity(device, buffer);
+    let needed = offset.checked_add(bytes).unwrap_or(u64::MAX);
+    if needed > available {
+        return Err(Error::BufferTooSmall { what, needed, available });
+    }
+    Ok(())
+}

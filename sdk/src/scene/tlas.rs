@@ -1,0 +1,70 @@
+//! A working set's TLAS. Each working set owns one so a frame in flight never reads a TLAS the
+//! next frame is rebuilding; it is rebuilt only when the scene snapshot changed since that
+//! working set last built it.
+use super::blas;
+use super::geometry::Blas;
+use crate::error::Result;
+use crate::gpu::device::Device;
+use crate::gpu::memory::{Buffer, Memory, MemoryKind};
+use crate::gpu::upload::Upload;
+use ash::vk;
+
+pub(crate) struct Tlas {
+    pub accel: Option<Blas>,
+    /// Scene snapshot version this TLAS holds (0 = never built).
+    pub version: u64,
+}
+
+pub(crate) fn instances_geometry(instances: Option<Upload>) -> vk::AccelerationStructureGeometryKHR<'static> {
+    let data = vk::AccelerationStructureGeometryInstancesDataKHR::default()
+        .array_of_pointers(false)
+        .data(vk::DeviceOrHostAddressConstKHR { device_address: instances.map_or(0, |u| u.address) });
+    vk::AccelerationStructureGeometryKHR::default()
+        .geometry_type(vk::GeometryTypeKHR::INSTANCES)
+        .geometry(vk::AccelerationStructureGeometryDataKHR { instances: data })
+}
+
+pub(crate) const FLAGS: vk::BuildAccelerationStructureFlagsKHR = vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE;
+
+pub(crate) fn sizes(device: &Device, count: u32) -> vk::AccelerationStructureBuildSizesInfoKHR<'static> {
+    blas::build_sizes(device, vk::AccelerationStructureTypeKHR::TOP_LEVEL, FLAGS, &instances_geometry(None), count)
+}
+
+impl Tlas {
+    /// Makes sure the TLAS storage fits `size` bytes. The working set is idle, so the old one
+    /// can be destroyed at once.
+    pub fn ensure_storage(&mut self, device: &Device, memory: &Memory, size: u64) -> Result<()> {
+        if self.accel.as_ref().is_some_and(|a| a.buffer.size >= size) {
+            return Ok(());
+        }
+        if let Some(old) = self.accel.take() {
+            unsafe { device.accel.destroy_acceleration_structure(old.accel, None) };
+            memory.destroy_buffer(old.buffer);
+        }
+        // Headroom so a slowly growing scene does not recreate the TLAS every frame.
+        let size = size + size / 2;
+        self.accel = Some(blas::create(device, memory, vk::AccelerationStructureTypeKHR::TOP_LEVEL, size, MemoryKind::Tlas)?);
+        Ok(())
+    }
+
+    pub fn record_build(&self, device: &Device, cmd: vk::CommandBuffer, instances: Upload, count: u32, scratch: &Buffer) {
+        let accel = self.accel.as_ref().expect("ensure_storage first");
+        let geometry = instances_geometry(Some(instances));
+        let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
+            .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL)
+            .flags(FLAGS)
+            .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
+            .dst_acceleration_structure(accel.accel)
+            .geometries(std::slice::from_ref(&geometry))
+            .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch.address });
+        let range = [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(count)];
+        unsafe { device.accel.cmd_build_acceleration_structures(cmd, &[info], &[&range[..]]) };
+    }
+
+    pub fn destroy(&mut self, device: &Device, memory: &Memory) {
+        if let Some(a) = self.accel.take() {
+            unsafe { device.accel.destroy_acceleration_structure(a.accel, None) };
+            memory.destroy_buffer(a.buffer);
+        }
+    }
+}

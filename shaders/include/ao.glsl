@@ -1,0 +1,54 @@
+// Ambient occlusion, shared by the ray-tracing pipeline (ao.rgen) and the inline ray-query
+// variant (ao.comp). The includer defines `float hrt_trace_hit_t(vec3 o, vec3 d, float tmax)`
+// returning the closest hit distance or a negative value on a miss, and then calls hrt_ao_main.
+#ifndef HRT_AO_GLSL
+#define HRT_AO_GLSL
+#include "common.glsl"
+
+layout(set = 0, binding = 0) uniform accelerationStructureEXT u_tlas;
+layout(set = 0, binding = 1) uniform sampler2D u_depth;
+layout(set = 0, binding = 2) uniform sampler2D u_normals;
+layout(set = 0, binding = 3) uniform writeonly image2D u_out;
+layout(set = 0, binding = 4, std140) uniform AoConstants {
+    TraceCommon common_;
+    vec4 ao_params;   // ray length, falloff power, unused, unused
+    uvec4 ao_counts;  // rays per pixel, unused...
+} u_c;
+
+float hrt_trace_hit_t(vec3 origin, vec3 dir, float tmax);
+
+// Visibility in [0, 1] (1 = open). A miss counts 1; a hit at distance t counts
+// (t / ray_length)^falloff_power, so near occluders darken more than far ones (distance-
+// weighted AO). Directions are cosine-distributed, so the plain mean estimates the
+// cosine-weighted visibility integral (1/pi) * integral V(w) cos(theta) dw.
+void hrt_ao_main(uvec2 local) {
+    TraceCommon c = u_c.common_;
+    if (any(greaterThanEqual(local, uvec2(c.viewport.zw)))) return;
+    uvec2 pixel = local + uvec2(c.viewport.xy);
+
+    vec4 depth_texel = texelFetch(u_depth, ivec2(pixel), 0);
+    vec3 p;
+    if (!hrt_world_position(c, pixel, depth_texel, p)) {
+        imageStore(u_out, ivec2(pixel), vec4(1.0));
+        return;
+    }
+    vec3 n = hrt_world_normal(c, texelFetch(u_normals, ivec2(pixel), 0));
+    vec3 origin = hrt_offset_ray(c, p, n);
+    mat3 basis = hrt_basis(n);
+
+    float ray_length = u_c.ao_params.x;
+    float power = u_c.ao_params.y;
+    uint rays = u_c.ao_counts.x;
+    uint seed = hrt_pcg(pixel.x ^ hrt_pcg(pixel.y ^ hrt_pcg(c.frame.x)));
+    vec2 shift = vec2(hrt_u01(seed), hrt_u01(hrt_pcg(seed)));
+
+    float visibility = 0.0;
+    for (uint i = 0u; i < rays; ++i) {
+        vec3 dir = basis * hrt_cosine_hemisphere(hrt_r2(i, shift));
+        float t = hrt_trace_hit_t(origin, dir, ray_length);
+        visibility += t < 0.0 ? 1.0 : pow(clamp(t / ray_length, 0.0, 1.0), power);
+    }
+    float ao = visibility / float(rays);
+    imageStore(u_out, ivec2(pixel), vec4(ao, ao, ao, 1.0));
+}
+#endif

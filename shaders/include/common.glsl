@@ -1,0 +1,140 @@
+// Shared helpers for every hybrid-rt pass: random numbers, G-buffer decoding, ray offsets.
+// The constants mirrored here live in sdk/src/passes/constants.rs (a test checks the layout).
+#ifndef HRT_COMMON_GLSL
+#define HRT_COMMON_GLSL
+
+#define HRT_PI 3.14159265358979323846
+
+// DepthType (sdk::api::tasks::DepthType)
+#define HRT_DEPTH_CLIP_SPACE 0u
+#define HRT_DEPTH_WORLD_POSITION 1u
+
+// NormalType (sdk::api::tasks::NormalType), the six encodings of the integration guide.
+#define HRT_NORMAL_RGB_VECTOR 0u
+#define HRT_NORMAL_RGB_NORMALIZED_VECTOR 1u
+#define HRT_NORMAL_RG_OCTAHEDRON 2u
+#define HRT_NORMAL_BA_OCTAHEDRON 3u
+#define HRT_NORMAL_RG_NORMALIZED_OCTAHEDRON 4u
+#define HRT_NORMAL_BA_NORMALIZED_OCTAHEDRON 5u
+
+// RayOffset type
+#define HRT_RAY_OFFSET_DISABLED 0u
+#define HRT_RAY_OFFSET_WORLD_POSITION 1u
+#define HRT_RAY_OFFSET_CAMERA_DISTANCE 2u
+
+// Camera and G-buffer description shared by every trace task (std140, 224 bytes).
+struct TraceCommon {
+    mat4 clip_to_world;   // inverse(view_to_clip * world_to_view)
+    mat4 view_to_world;
+    vec4 viewport;        // x, y, width, height in pixels
+    vec4 depth_range;     // viewport min depth, max depth, unused, unused
+    uvec4 modes;          // depth type, normal type, normals in view space (0/1), ray offset type
+    vec4 offset_world;    // threshold, float scale, int scale, unused
+    vec4 offset_camera;   // constant, linear, quadratic, unused
+    uvec4 frame;          // random seed, TLAS instance mask, unused, unused
+};
+
+// PCG hash (Jarzynski & Olano 2020): good quality, one multiply-add chain per call.
+uint hrt_pcg(uint v) {
+    uint state = v * 747796405u + 2891336453u;
+    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+float hrt_u01(uint bits) { return float(bits >> 8) * (1.0 / 16777216.0); }
+
+// Sample i of the R2 sequence (Roberts 2018), rotated per pixel by `shift` (Cranley-Patterson).
+// A low-discrepancy sequence per pixel gives lower variance than independent samples at the
+// same ray count, while the per-pixel shift keeps neighbouring pixels decorrelated.
+vec2 hrt_r2(uint i, vec2 shift) {
+    const vec2 alpha = vec2(0.7548776662466927, 0.5698402909980532);
+    return fract(shift + alpha * float(i));
+}
+
+vec3 hrt_cosine_hemisphere(vec2 u) {
+    float r = sqrt(u.x);
+    float phi = 2.0 * HRT_PI * u.y;
+    return vec3(r * cos(phi), r * sin(phi), sqrt(max(0.0, 1.0 - u.x)));
+}
+
+// Orthonormal basis around n (Duff et al. 2017, "Building an Orthonormal Basis, Revisited").
+mat3 hrt_basis(vec3 n) {
+    float s = n.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (s + n.z);
+    float b = n.x * n.y * a;
+    vec3 t = vec3(1.0 + s * n.x * n.x * a, s * b, -s * n.x);
+    vec3 bt = vec3(b, s + n.y * n.y * a, -n.y);
+    return mat3(t, bt, n);
+}
+
+vec3 hrt_oct_decode(vec2 e) {
+    vec3 v = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    if (v.z < 0.0) {
+        v.xy = (1.0 - abs(v.yx)) * vec2(v.x >= 0.0 ? 1.0 : -1.0, v.y >= 0.0 ? 1.0 : -1.0);
+    }
+    return normalize(v);
+}
+
+vec3 hrt_decode_normal(vec4 texel, uint normal_type) {
+    switch (normal_type) {
+    case HRT_NORMAL_RGB_VECTOR: return normalize(texel.xyz);
+    case HRT_NORMAL_RGB_NORMALIZED_VECTOR: return normalize(texel.xyz * 2.0 - 1.0);
+    case HRT_NORMAL_RG_OCTAHEDRON: return hrt_oct_decode(texel.xy);
+    case HRT_NORMAL_BA_OCTAHEDRON: return hrt_oct_decode(texel.zw);
+    case HRT_NORMAL_RG_NORMALIZED_OCTAHEDRON: return hrt_oct_decode(texel.xy * 2.0 - 1.0);
+    default: return hrt_oct_decode(texel.zw * 2.0 - 1.0);
+    }
+}
+
+// Pixel centre -> clip space for this viewport (Vulkan: y down, z in [0, 1]).
+vec3 hrt_pixel_to_ndc(TraceCommon c, uvec2 pixel, float depth) {
+    vec2 uv = (vec2(pixel) + 0.5 - c.viewport.xy) / c.viewport.zw;
+    float z = (depth - c.depth_range.x) / max(c.depth_range.y - c.depth_range.x, 1e-20);
+    return vec3(uv * 2.0 - 1.0, z);
+}
+
+// World-space position of the G-buffer sample. Returns false for background pixels (clip
+// depth at the far plane of a standard or reversed projection, or a non-finite position).
+bool hrt_world_position(TraceCommon c, uvec2 pixel, vec4 depth_texel, out vec3 p) {
+    if (c.modes.x == HRT_DEPTH_WORLD_POSITION) {
+        p = depth_texel.xyz;
+        return !(any(isnan(p)) || any(isinf(p)));
+    }
+    vec4 h = c.clip_to_world * vec4(hrt_pixel_to_ndc(c, pixel, depth_texel.x), 1.0);
+    if (abs(h.w) < 1e-30) return false;
+    p = h.xyz / h.w;
+    return !(any(isnan(p)) || any(isinf(p)));
+}
+
+vec3 hrt_world_normal(TraceCommon c, vec4 normal_texel) {
+    vec3 n = hrt_decode_normal(normal_texel, c.modes.y);
+    if (c.modes.z != 0u) n = normalize(mat3(c.view_to_world) * n);
+    return n;
+}
+
+// Moves a ray origin off the surface so the secondary ray does not hit the surface it starts
+// from. World position: Wächter & Binder, "A Fast and Robust Method for Avoiding
+// Self-Intersection" (Ray Tracing Gems ch. 6) — exact in the float's own precision.
+// Camera distance: offset grows with the distance to the camera, as depth precision does.
+vec3 hrt_offset_ray(TraceCommon c, vec3 p, vec3 n) {
+    uint kind = c.modes.w;
+    if (kind == HRT_RAY_OFFSET_WORLD_POSITION) {
+        float threshold = c.offset_world.x, float_scale = c.offset_world.y, int_scale = c.offset_world.z;
+        ivec3 of_i = ivec3(int_scale * n);
+        vec3 p_i = vec3(
+            intBitsToFloat(floatBitsToInt(p.x) + ((p.x < 0.0) ? -of_i.x : of_i.x)),
+            intBitsToFloat(floatBitsToInt(p.y) + ((p.y < 0.0) ? -of_i.y : of_i.y)),
+            intBitsToFloat(floatBitsToInt(p.z) + ((p.z < 0.0) ? -of_i.z : of_i.z)));
+        return vec3(abs(p.x) < threshold ? p.x + float_scale * n.x : p_i.x,
+                    abs(p.y) < threshold ? p.y + float_scale * n.y : p_i.y,
+                    abs(p.z) < threshold ? p.z + float_scale * n.z : p_i.z);
+    }
+    if (kind == HRT_RAY_OFFSET_CAMERA_DISTANCE) {
+        float d = distance(p, c.view_to_world[3].xyz);
+        float off = c.offset_camera.x + c.offset_camera.y * d + c.offset_camera.z * d * d;
+        return p + n * max(off, 0.0);
+    }
+    return p;
+}
+
+#endif

@@ -1,0 +1,467 @@
+//! A minimal headless "engine" for tests, the sample and the bench: it creates the Vulkan
+//! instance and device the way an engine integrating hybrid-rt would (enabling what
+//! `hybrid_rt::REQUIRED_DEVICE_EXTENSIONS` and `DeviceFeatures` ask for), owns a queue and
+//! command buffers, and moves images and buffers between host and GPU.
+//!
+//! The Khronos validation layer is enabled when installed (set HRT_VALIDATION=0 to turn it
+//! off); every error it reports is counted, and `Host::validation_errors` lets a test fail on
+//! it. Device choice: the first device with ray tracing, or the first whose name contains
+//! HRT_DEVICE (e.g. HRT_DEVICE=llvmpipe).
+use ash::{ext, vk};
+use hybrid_rt::{DeviceFeatures, DeviceDesc};
+use std::ffi::{c_void, CStr};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+static VALIDATION_ERRORS: AtomicUsize = AtomicUsize::new(0);
+static VALIDATION_MESSAGES: Mutex<Vec<String>> = Mutex::new(Vec::new());
+
+unsafe extern "system" fn debug_callback(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    _types: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    _user: *mut c_void,
+) -> vk::Bool32 {
+    let msg = if data.is_null() || (*data).p_message.is_null() {
+        String::from("(no message)")
+    } else {
+        CStr::from_ptr((*data).p_message).to_string_lossy().into_owned()
+    };
+    if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
+        VALIDATION_ERRORS.fetch_add(1, Ordering::SeqCst);
+        eprintln!("[vulkan validation error] {msg}");
+        if let Ok(mut m) = VALIDATION_MESSAGES.lock() {
+            m.push(msg);
+        }
+    } else if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING) {
+        log::warn!("[vulkan validation] {msg}");
+    }
+    vk::FALSE
+}
+
+pub struct Host {
+    pub entry: ash::Entry,
+    pub instance: ash::Instance,
+    pub physical_device: vk::PhysicalDevice,
+    pub device: ash::Device,
+    pub queue: vk::Queue,
+    pub queue_family: u32,
+    pub enabled_extensions: Vec<&'static CStr>,
+    pub validation_enabled: bool,
+    pub device_name: String,
+    pool: vk::CommandPool,
+    debug: Option<(ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    memory_props: vk::PhysicalDeviceMemoryProperties,
+}
+
+/// A device-local image with its view.
+pub struct HostImage {
+    pub image: vk::Image,
+    pub view: vk::ImageView,
+    pub memory: vk::DeviceMemory,
+    pub format: vk::Format,
+    pub width: u32,
+    pub height: u32,
+    pub aspect: vk::ImageAspectFlags,
+}
+
+impl HostImage {
+    /// The SDK's description of this image in `layout`.
+    pub fn input(&self, layout: vk::ImageLayout) -> hybrid_rt::ImageInput {
+        hybrid_rt::ImageInput {
+            image: self.image,
+            view: self.view,
+            format: self.format,
+            width: self.width,
+            height: self.height,
+            layout,
+        }
+    }
+}
+
+pub struct HostBuffer {
+    pub buffer: vk::Buffer,
+    pub memory: vk::DeviceMemory,
+    pub size: u64,
+}
+
+pub type HostResult<T> = Result<T, String>;
+
+fn vkerr(what: &'static str) -> impl Fn(vk::Result) -> String {
+    move |e| format!("{what}: {e:?}")
+}
+
+impl Host {
+    pub fn new() -> HostResult<Host> {
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| format!("no Vulkan loader: {e}"))?;
+        let layers = unsafe { entry.enumerate_instance_layer_properties() }.unwrap_or_default();
+        let want_validation = std::env::var("HRT_VALIDATION").map(|v| v != "0").unwrap_or(true);
+        let validation_name = c"VK_LAYER_KHRONOS_validation";
+        let validation_enabled =
+            want_validation && layers.iter().any(|l| l.layer_name_as_c_str() == Ok(validation_name));
+        let exts = unsafe { entry.enumerate_instance_extension_properties(None) }.unwrap_or_default();
+        let has_debug = exts.iter().any(|e| e.extension_name_as_c_str() == Ok(ext::debug_utils::NAME));
+
+        let app = vk::ApplicationInfo::default().application_name(c"hybrid-rt host").api_version(vk::API_VERSION_1_3);
+        let layer_names: Vec<*const i8> = if validation_enabled { vec![validation_name.as_ptr()] } else { vec![] };
+        let ext_names: Vec<*const i8> = if has_debug { vec![ext::debug_utils::NAME.as_ptr()] } else { vec![] };
+        let info = vk::InstanceCreateInfo::default()
+            .application_info(&app)
+            .enabled_layer_names(&layer_names)
+            .enabled_extension_names(&ext_names);
+        let instance = unsafe { entry.create_instance(&info, None) }.map_err(vkerr("vkCreateInstance"))?;
+
+        let debug = if has_debug {
+            let loader = ext::debug_utils::Instance::new(&entry, &instance);
+            let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+                .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING)
+                .message_type(
+                    vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                        | vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+                )
+                .pfn_user_callback(Some(debug_callback));
+            let m = unsafe { loader.create_debug_utils_messenger(&info, None) }.map_err(vkerr("debug messenger"))?;
+            Some((loader, m))
+        } else {
+            None
+        };
+
+        let wanted = std::env::var("HRT_DEVICE").ok();
+        let pdevs = unsafe { instance.enumerate_physical_devices() }.map_err(vkerr("enumerate devices"))?;
+        let mut chosen = None;
+        let mut seen = Vec::new();
+        for pd in pdevs {
+            let props = unsafe { instance.get_physical_device_properties(pd) };
+            let name = props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+            let support = hybrid_rt::query_device_support(&instance, pd);
+            seen.push(format!("{name}: {:?}", support.missing));
+            let name_ok = wanted.as_ref().map_or(true, |w| name.contains(w.as_str()));
+            if support.supported && name_ok {
+                chosen = Some((pd, name, support));
+                break;
+            }
+        }
+        let Some((physical_device, device_name, support)) = chosen else {
+            return Err(format!("no Vulkan device with ray tracing (run scripts/setup.sh); seen: {seen:?}"));
+        };
+
+        let families = unsafe { instance.get_physical_device_queue_family_properties(physical_device) };
+        let queue_family = families
+            .iter()
+            .position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE | vk::QueueFlags::GRAPHICS))
+            .or_else(|| families.iter().position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE)))
+            .ok_or("no compute queue")? as u32;
+        let mut enabled_extensions: Vec<&'static CStr> = hybrid_rt::REQUIRED_DEVICE_EXTENSIONS.to_vec();
+        let disable_rq = std::env::var("HRT_DISABLE_RAY_QUERY").is_ok_and(|v| v != "0");
+        if support.ray_query && !disable_rq {
+            enabled_extensions.extend_from_slice(hybrid_rt::OPTIONAL_DEVICE_EXTENSIONS);
+        }
+        let ext_ptrs: Vec<*const i8> = enabled_extensions.iter().map(|e| e.as_ptr()).collect();
+        let priorities = [1.0f32];
+        let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
+        let mut features = DeviceFeatures::required(support.ray_query && !disable_rq);
+        let info = features.push_to(vk::DeviceCreateInfo::default().queue_create_infos(&queues).enabled_extension_names(&ext_ptrs));
+        let device = unsafe { instance.create_device(physical_device, &info, None) }.map_err(vkerr("vkCreateDevice"))?;
+        let queue = unsafe { device.get_device_queue(queue_family, 0) };
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        let pool = unsafe { device.create_command_pool(&pool_info, None) }.map_err(vkerr("command pool"))?;
+        let memory_props = unsafe { instance.get_physical_device_memory_properties(physical_device) };
+        Ok(Host {
+            entry,
+            instance,
+            physical_device,
+            device,
+            queue,
+            queue_family,
+            enabled_extensions,
+            validation_enabled,
+            device_name,
+            pool,
+            debug,
+            memory_props,
+        })
+    }
+
+    /// What `hybrid_rt::ExecuteContext::new` takes.
+    pub fn device_desc(&self) -> DeviceDesc<'_> {
+        DeviceDesc {
+            entry: &self.entry,
+            instance: &self.instance,
+            physical_device: self.physical_device,
+            device: &self.device,
+            enabled_extensions: &self.enabled_extensions,
+        }
+    }
+
+    /// Validation errors reported so far in this process.
+    pub fn validation_errors() -> usize {
+        VALIDATION_ERRORS.load(Ordering::SeqCst)
+    }
+
+    pub fn validation_messages() -> Vec<String> {
+        VALIDATION_MESSAGES.lock().map(|m| m.clone()).unwrap_or_default()
+    }
+
+    pub fn is_lavapipe(&self) -> bool {
+        self.device_name.contains("llvmpipe")
+    }
+
+    pub fn allocate_command_buffer(&self) -> HostResult<vk::CommandBuffer> {
+        let info = vk::CommandBufferAllocateInfo::default()
+            .command_pool(self.pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        Ok(unsafe { self.device.allocate_command_buffers(&info) }.map_err(vkerr("allocate cmd"))?[0])
+    }
+
+    pub fn begin(&self, cmd: vk::CommandBuffer) -> HostResult<()> {
+        unsafe {
+            self.device.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty()).map_err(vkerr("reset cmd"))?;
+            self.device
+                .begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT))
+                .map_err(vkerr("begin cmd"))
+        }
+    }
+
+    /// Ends, submits and returns a fence to wait on.
+    pub fn submit(&self, cmd: vk::CommandBuffer) -> HostResult<vk::Fence> {
+        unsafe {
+            self.device.end_command_buffer(cmd).map_err(vkerr("end cmd"))?;
+            let fence = self.device.create_fence(&vk::FenceCreateInfo::default(), None).map_err(vkerr("fence"))?;
+            let cmds = [cmd];
+            let submit = vk::SubmitInfo::default().command_buffers(&cmds);
+            self.device.queue_submit(self.queue, &[submit], fence).map_err(vkerr("vkQueueSubmit"))?;
+            Ok(fence)
+        }
+    }
+
+    pub fn wait(&self, fence: vk::Fence) -> HostResult<()> {
+        unsafe {
+            self.device.wait_for_fences(&[fence], true, u64::MAX).map_err(vkerr("wait fence"))?;
+            self.device.destroy_fence(fence, None);
+        }
+        Ok(())
+    }
+
+    /// Records with `f` into a fresh command buffer, submits, and waits.
+    pub fn run<R>(&self, f: impl FnOnce(vk::CommandBuffer) -> R) -> HostResult<R> {
+        let cmd = self.allocate_command_buffer()?;
+        self.begin(cmd)?;
+        let r = f(cmd);
+        let fence = self.submit(cmd)?;
+        self.wait(fence)?;
+        unsafe { self.device.free_command_buffers(self.pool, &[cmd]) };
+        Ok(r)
+    }
+
+    fn memory_type(&self, bits: u32, flags: vk::MemoryPropertyFlags) -> HostResult<u32> {
+        (0..self.memory_props.memory_type_count)
+            .find(|&i| bits & (1 << i) != 0 && self.memory_props.memory_types[i as usize].property_flags.contains(flags))
+            .ok_or_else(|| format!("no memory type {flags:?}"))
+    }
+
+    /// A host-visible buffer holding `data` (vertex/index buffers of the test scenes).
+    pub fn buffer_with_data(&self, data: &[u8], usage: vk::BufferUsageFlags) -> HostResult<HostBuffer> {
+        let b = self.create_buffer(data.len().max(4) as u64, usage, vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT)?;
+        unsafe {
+            let p = self.device.map_memory(b.memory, 0, b.size, vk::MemoryMapFlags::empty()).map_err(vkerr("map"))?;
+            std::ptr::copy_nonoverlapping(data.as_ptr(), p as *mut u8, data.len());
+            self.device.unmap_memory(b.memory);
+        }
+        Ok(b)
+    }
+
+    pub fn create_buffer(&self, size: u64, usage: vk::BufferUsageFlags, flags: vk::MemoryPropertyFlags) -> HostResult<HostBuffer> {
+        unsafe {
+            let info = vk::BufferCreateInfo::default().size(size).usage(usage);
+            let buffer = self.device.create_buffer(&info, None).map_err(vkerr("create buffer"))?;
+            let req = self.device.get_buffer_memory_requirements(buffer);
+            let alloc = vk::MemoryAllocateInfo::default()
+                .allocation_size(req.size)
+                .memory_type_index(self.memory_type(req.memory_type_bits, flags)?);
+            let memory = self.device.allocate_memory(&alloc, None).map_err(vkerr("allocate"))?;
+            self.device.bind_buffer_memory(buffer, memory, 0).map_err(vkerr("bind"))?;
+            Ok(HostBuffer { buffer, memory, size })
+        }
+    }
+
+    pub fn destroy_buffer(&self, b: HostBuffer) {
+        unsafe {
+            self.device.destroy_buffer(b.buffer, None);
+            self.device.free_memory(b.memory, None);
+        }
+    }
+
+    pub fn create_image(&self, format: vk::Format, width: u32, height: u32, usage: vk::ImageUsageFlags) -> HostResult<HostImage> {
+        let aspect = match format {
+            vk::Format::D32_SFLOAT | vk::Format::D16_UNORM | vk::Format::X8_D24_UNORM_PACK32 => vk::ImageAspectFlags::DEPTH,
+            _ => vk::ImageAspectFlags::COLOR,
+        };
+        unsafe {
+            let info = vk::ImageCreateInfo::default()
+                .image_type(vk::ImageType::TYPE_2D)
+                .format(format)
+                .extent(vk::Extent3D { width, height, depth: 1 })
+                .mip_levels(1)
+                .array_layers(1)
+                .samples(vk::SampleCountFlags::TYPE_1)
+                .tiling(vk::ImageTiling::OPTIMAL)
+                .usage(usage | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST);
+            let image = self.device.create_image(&info, None).map_err(vkerr("create image"))?;
+            let req = self.device.get_image_memory_requirements(image);
+            let alloc = vk::MemoryAllocateInfo::default()
+                .allocation_size(req.size)
+                .memory_type_index(self.memory_type(req.memory_type_bits, vk::MemoryPropertyFlags::DEVICE_LOCAL)?);
+            let memory = self.device.allocate_memory(&alloc, None).map_err(vkerr("allocate image"))?;
+            self.device.bind_image_memory(image, memory, 0).map_err(vkerr("bind image"))?;
+            let view_info = vk::ImageViewCreateInfo::default()
+                .image(image)
+                .view_type(vk::ImageViewType::TYPE_2D)
+                .format(format)
+                .subresource_range(range(aspect));
+            let view = self.device.create_image_view(&view_info, None).map_err(vkerr("create view"))?;
+            Ok(HostImage { image, view, memory, format, width, height, aspect })
+        }
+    }
+
+    pub fn destroy_image(&self, img: HostImage) {
+        unsafe {
+            self.device.destroy_image_view(img.view, None);
+            self.device.destroy_image(img.image, None);
+            self.device.free_memory(img.memory, None);
+        }
+    }
+
+    /// Records a layout transition with a full memory dependency (test code: simple > tight).
+    pub fn transition(&self, cmd: vk::CommandBuffer, img: &HostImage, from: vk::ImageLayout, to: vk::ImageLayout) {
+        let b = [vk::ImageMemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
+            .old_layout(from)
+            .new_layout(to)
+            .image(img.image)
+            .subresource_range(range(img.aspect))];
+        unsafe { self.device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&b)) };
+    }
+
+    /// A full memory barrier (what an engine places between its work and the SDK's).
+    pub fn full_barrier(&self, cmd: vk::CommandBuffer) {
+        let b = [vk::MemoryBarrier2::default()
+            .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
+            .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)];
+        unsafe { self.device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&b)) };
+    }
+
+    /// Creates an image holding `texels` (tightly packed, in the format's layout) and leaves it
+    /// in `layout`.
+    pub fn image_with_data(
+        &self,
+        format: vk::Format,
+        width: u32,
+        height: u32,
+        usage: vk::ImageUsageFlags,
+        texels: &[u8],
+        layout: vk::ImageLayout,
+    ) -> HostResult<HostImage> {
+        let img = self.create_image(format, width, height, usage)?;
+        let staging = self.buffer_with_data(texels, vk::BufferUsageFlags::TRANSFER_SRC)?;
+        self.run(|cmd| {
+            self.transition(cmd, &img, vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
+            let region = copy_region(&img);
+            unsafe {
+                self.device.cmd_copy_buffer_to_image(cmd, staging.buffer, img.image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[region])
+            };
+            self.transition(cmd, &img, vk::ImageLayout::TRANSFER_DST_OPTIMAL, layout);
+        })?;
+        self.destroy_buffer(staging);
+        Ok(img)
+    }
+
+    /// An image cleared to zero, in `layout` (outputs: GENERAL).
+    pub fn image_cleared(&self, format: vk::Format, width: u32, height: u32, usage: vk::ImageUsageFlags, layout: vk::ImageLayout) -> HostResult<HostImage> {
+        let bytes = width as usize * height as usize * texel_size(format);
+        self.image_with_data(format, width, height, usage, &vec![0u8; bytes], layout)
+    }
+
+    /// Copies the image (currently in `layout`) back to the host; it is left in `layout`.
+    pub fn read_image(&self, img: &HostImage, layout: vk::ImageLayout) -> HostResult<Vec<u8>> {
+        let size = img.width as u64 * img.height as u64 * texel_size(img.format) as u64;
+        let staging = self.create_buffer(
+            size,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT,
+        )?;
+        self.run(|cmd| {
+            self.transition(cmd, img, layout, vk::ImageLayout::TRANSFER_SRC_OPTIMAL);
+            unsafe {
+                self.device.cmd_copy_image_to_buffer(cmd, img.image, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, staging.buffer, &[copy_region(img)])
+            };
+            self.transition(cmd, img, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, layout);
+        })?;
+        let mut out = vec![0u8; size as usize];
+        unsafe {
+            let p = self.device.map_memory(staging.memory, 0, size, vk::MemoryMapFlags::empty()).map_err(vkerr("map"))?;
+            std::ptr::copy_nonoverlapping(p as *const u8, out.as_mut_ptr(), out.len());
+            self.device.unmap_memory(staging.memory);
+        }
+        self.destroy_buffer(staging);
+        Ok(out)
+    }
+
+    /// Reads an R32_SFLOAT (or the first channel of an RGBA32F) image as floats.
+    pub fn read_image_f32(&self, img: &HostImage, layout: vk::ImageLayout) -> HostResult<Vec<f32>> {
+        let bytes = self.read_image(img, layout)?;
+        let all: Vec<f32> = bytes.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+        let channels = texel_size(img.format) / 4;
+        Ok(all.chunks_exact(channels.max(1)).map(|c| c[0]).collect())
+    }
+}
+
+impl Drop for Host {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            self.device.destroy_command_pool(self.pool, None);
+            self.device.destroy_device(None);
+            if let Some((loader, m)) = self.debug.take() {
+                loader.destroy_debug_utils_messenger(m, None);
+            }
+            self.instance.destroy_instance(None);
+        }
+    }
+}
+
+fn range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange {
+    vk::ImageSubresourceRange { aspect_mask: aspect, base_mip_level: 0, level_count: 1, base_array_layer: 0, layer_count: 1 }
+}
+
+fn copy_region(img: &HostImage) -> vk::BufferImageCopy {
+    vk::BufferImageCopy {
+        buffer_offset: 0,
+        buffer_row_length: 0,
+        buffer_image_height: 0,
+        image_subresource: vk::ImageSubresourceLayers { aspect_mask: img.aspect, mip_level: 0, base_array_layer: 0, layer_count: 1 },
+        image_offset: vk::Offset3D::default(),
+        image_extent: vk::Extent3D { width: img.width, height: img.height, depth: 1 },
+    }
+}
+
+/// Bytes per texel of the formats the tests use.
+pub fn texel_size(format: vk::Format) -> usize {
+    match format {
+        vk::Format::R8_UNORM => 1,
+        vk::Format::R16_SFLOAT | vk::Format::R16_UNORM | vk::Format::D16_UNORM | vk::Format::R8G8_UNORM => 2,
+        vk::Format::R32_SFLOAT | vk::Format::D32_SFLOAT | vk::Format::R8G8B8A8_UNORM | vk::Format::R16G16_SFLOAT
+        | vk::Format::A2B10G10R10_UNORM_PACK32 => 4,
+        vk::Format::R16G16B16A16_SFLOAT | vk::Format::R32G32_SFLOAT => 8,
+        vk::Format::R32G32B32A32_SFLOAT => 16,
+        f => panic!("texel_size: add {f:?}"),
+    }
+}

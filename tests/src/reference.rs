@@ -1,0 +1,443 @@
+//! The CPU reference renderer: triangle scenes, a BVH, G-buffer generation by primary rays,
+//! and reference ambient occlusion. Written for clarity and for exactly the conventions the
+//! SDK documents (Vulkan clip space, cosine-weighted visibility, distance-weighted hits), not
+//! for speed; tests keep images small.
+use glam::{Affine3A, Mat4, Vec3, Vec4};
+
+#[derive(Clone, Debug, Default)]
+pub struct Mesh {
+    pub positions: Vec<Vec3>,
+    pub indices: Vec<u32>,
+}
+
+impl Mesh {
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// An `n`x`n`-cell grid in the XZ plane, centred, facing +Y, `size` wide.
+    pub fn grid(size: f32, n: u32) -> Mesh {
+        let mut m = Mesh::default();
+        for j in 0..=n {
+            for i in 0..=n {
+                let u = i as f32 / n as f32 - 0.5;
+                let v = j as f32 / n as f32 - 0.5;
+                m.positions.push(Vec3::new(u * size, 0.0, v * size));
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let a = j * (n + 1) + i;
+                let (b, c, d) = (a + 1, a + n + 1, a + n + 2);
+                // Counter-clockwise seen from +Y.
+                m.indices.extend_from_slice(&[a, c, b, b, c, d]);
+            }
+        }
+        m
+    }
+
+    pub fn quad(size: f32) -> Mesh {
+        Mesh::grid(size, 1)
+    }
+
+    /// A closed axis-aligned box with outward faces.
+    pub fn cuboid(half: Vec3) -> Mesh {
+        let mut m = Mesh::default();
+        let faces: [(Vec3, Vec3, Vec3); 6] = [
+            (Vec3::X, Vec3::Y, Vec3::Z),
+            (Vec3::NEG_X, Vec3::Z, Vec3::Y),
+            (Vec3::Y, Vec3::Z, Vec3::X),
+            (Vec3::NEG_Y, Vec3::X, Vec3::Z),
+            (Vec3::Z, Vec3::X, Vec3::Y),
+            (Vec3::NEG_Z, Vec3::Y, Vec3::X),
+        ];
+        for (n, u, v) in faces {
+            let base = m.positions.len() as u32;
+            for (su, sv) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                m.positions.push((n + u * su + v * sv) * half);
+            }
+            // Orient each triangle so its normal is n.
+            let (a, b, c) = (m.positions[base as usize], m.positions[base as usize + 1], m.positions[base as usize + 2]);
+            if (b - a).cross(c - a).dot(n) > 0.0 {
+                m.indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+            } else {
+                m.indices.extend_from_slice(&[base, base + 2, base + 1, base, base + 3, base + 2]);
+            }
+        }
+        m
+    }
+
+    /// A UV sphere of `radius` around the origin.
+    pub fn sphere(radius: f32, segments: u32, rings: u32) -> Mesh {
+        let mut m = Mesh::default();
+        for r in 0..=rings {
+            let theta = std::f32::consts::PI * r as f32 / rings as f32;
+            for s in 0..=segments {
+                let phi = 2.0 * std::f32::consts::PI * s as f32 / segments as f32;
+                m.positions.push(radius * Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin()));
+            }
+        }
+        for r in 0..rings {
+            for s in 0..segments {
+                let a = r * (segments + 1) + s;
+                let (b, c, d) = (a + 1, a + segments + 1, a + segments + 2);
+                m.indices.extend_from_slice(&[a, b, c, b, d, c]);
+            }
+        }
+        m
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct SceneInstance {
+    pub mesh: usize,
+    pub transform: Affine3A,
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    pub meshes: Vec<Mesh>,
+    pub instances: Vec<SceneInstance>,
+}
+
+impl Scene {
+    pub fn add_mesh(&mut self, m: Mesh) -> usize {
+        self.meshes.push(m);
+        self.meshes.len() - 1
+    }
+    pub fn add_instance(&mut self, mesh: usize, transform: Affine3A) -> usize {
+        self.instances.push(SceneInstance { mesh, transform });
+        self.instances.len() - 1
+    }
+    pub fn triangle_count(&self) -> usize {
+        self.instances.iter().map(|i| self.meshes[i.mesh].triangle_count()).sum()
+    }
+}
+
+// ---------------------------------------------------------------- BVH
+
+#[derive(Clone, Copy)]
+struct Node {
+    min: Vec3,
+    max: Vec3,
+    /// Leaf: first triangle, count > 0. Inner: left child index, count == 0 (right = left + 1).
+    start: u32,
+    count: u32,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct Hit {
+    pub t: f32,
+    /// Geometric normal (unit), as wound.
+    pub normal: Vec3,
+    pub triangle: u32,
+}
+
+/// World-space triangles of a scene with a BVH over them.
+pub struct Tracer {
+    tris: Vec<[Vec3; 3]>,
+    nodes: Vec<Node>,
+}
+
+impl Tracer {
+    pub fn new(scene: &Scene) -> Tracer {
+        Self::with_instances(scene, |_| true)
+    }
+
+    /// Only the instances `keep` accepts (e.g. those whose BLAS the SDK has built).
+    pub fn with_instances(scene: &Scene, keep: impl Fn(usize) -> bool) -> Tracer {
+        let mut tris = Vec::new();
+        for (i, inst) in scene.instances.iter().enumerate() {
+            if !keep(i) {
+                continue;
+            }
+            let m = &scene.meshes[inst.mesh];
+            for t in m.indices.chunks_exact(3) {
+                tris.push([0, 1, 2].map(|k| inst.transform.transform_point3(m.positions[t[k] as usize])));
+            }
+        }
+        let mut tracer = Tracer { tris, nodes: Vec::new() };
+        tracer.build();
+        tracer
+    }
+
+    fn build(&mut self) {
+        self.nodes.clear();
+        if self.tris.is_empty() {
+            return;
+        }
+        self.nodes.push(Node { min: Vec3::ZERO, max: Vec3::ZERO, start: 0, count: self.tris.len() as u32 });
+        let mut stack = vec![0usize];
+        while let Some(ni) = stack.pop() {
+            let (start, count) = (self.nodes[ni].start as usize, self.nodes[ni].count as usize);
+            let tris = &self.tris[start..start + count];
+            let (mut min, mut max) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+            let (mut cmin, mut cmax) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+            for t in tris {
+                for p in t {
+                    min = min.min(*p);
+                    max = max.max(*p);
+                }
+                let c = (t[0] + t[1] + t[2]) / 3.0;
+                cmin = cmin.min(c);
+                cmax = cmax.max(c);
+            }
+            self.nodes[ni].min = min;
+            self.nodes[ni].max = max;
+            if count <= 4 {
+                continue;
+            }
+            let ext = cmax - cmin;
+            let axis = if ext.x >= ext.y && ext.x >= ext.z { 0 } else if ext.y >= ext.z { 1 } else { 2 };
+            let slice = &mut self.tris[start..start + count];
+            let key = |t: &[Vec3; 3]| (t[0][axis] + t[1][axis] + t[2][axis]) / 3.0;
+            slice.sort_by(|a, b| key(a).total_cmp(&key(b)));
+            let half = count / 2;
+            let left = self.nodes.len();
+            self.nodes.push(Node { min, max, start: start as u32, count: half as u32 });
+            self.nodes.push(Node { min, max, start: (start + half) as u32, count: (count - half) as u32 });
+            self.nodes[ni].start = left as u32;
+            self.nodes[ni].count = 0;
+            stack.push(left);
+            stack.push(left + 1);
+        }
+    }
+
+    /// Closest hit in (tmin, tmax), both faces.
+    pub fn closest_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let inv = dir.recip();
+        let mut best: Option<Hit> = None;
+        let mut t_best = tmax;
+        let mut stack = [0u32; 64];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let n = self.nodes[stack[sp] as usize];
+            let t0 = (n.min - origin) * inv;
+            let t1 = (n.max - origin) * inv;
+            let tnear = t0.min(t1).max_element().max(tmin);
+            let tfar = t0.max(t1).min_element().min(t_best);
+            if tnear > tfar {
+                continue;
+            }
+            if n.count > 0 {
+                for i in n.start..n.start + n.count {
+                    let tri = &self.tris[i as usize];
+                    if let Some(t) = intersect(origin, dir, tri) {
+                        if t > tmin && t < t_best {
+                            t_best = t;
+                            let normal = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize();
+                            best = Some(Hit { t, normal, triangle: i });
+                        }
+                    }
+                }
+            } else {
+                stack[sp] = n.start;
+                stack[sp + 1] = n.start + 1;
+                sp += 2;
+            }
+        }
+        best
+    }
+}
+
+/// Möller–Trumbore.
+fn intersect(o: Vec3, d: Vec3, tri: &[Vec3; 3]) -> Option<f32> {
+    let e1 = tri[1] - tri[0];
+    let e2 = tri[2] - tri[0];
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-12 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let s = o - tri[0];
+    let u = s.dot(p) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let q = s.cross(e1);
+    let v = d.dot(q) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return None;
+    }
+    Some(e2.dot(q) * inv)
+}
+
+// ---------------------------------------------------------------- camera and G-buffer
+
+#[derive(Clone, Copy, Debug)]
+pub struct Camera {
+    pub eye: Vec3,
+    pub target: Vec3,
+    pub up: Vec3,
+    pub fov_y_radians: f32,
+    pub near: f32,
+    pub far: f32,
+}
+
+impl Camera {
+    pub fn look_at(eye: Vec3, target: Vec3) -> Camera {
+        Camera { eye, target, up: Vec3::Y, fov_y_radians: 60f32.to_radians(), near: 0.05, far: 100.0 }
+    }
+
+    pub fn world_to_view(&self) -> Mat4 {
+        Mat4::look_at_rh(self.eye, self.target, self.up)
+    }
+
+    /// Vulkan clip space: y down, depth 0 (near) .. 1 (far).
+    pub fn view_to_clip(&self, aspect: f32) -> Mat4 {
+        let mut p = Mat4::perspective_rh(self.fov_y_radians, aspect, self.near, self.far);
+        p.y_axis.y = -p.y_axis.y;
+        p
+    }
+
+    pub fn sdk_camera(&self, width: u32, height: u32) -> hybrid_rt::Camera {
+        hybrid_rt::Camera { world_to_view: self.world_to_view(), view_to_clip: self.view_to_clip(width as f32 / height as f32) }
+    }
+}
+
+/// What a rasterizer would have produced, by casting one primary ray per pixel centre.
+pub struct GBuffer {
+    pub width: u32,
+    pub height: u32,
+    /// Hardware depth (clip z / w), 1.0 where nothing was hit.
+    pub depth: Vec<f32>,
+    /// World-space unit normal facing the camera; zero where nothing was hit.
+    pub normal: Vec<Vec3>,
+    pub position: Vec<Vec3>,
+    pub hit: Vec<bool>,
+}
+
+impl GBuffer {
+    pub fn render(tracer: &Tracer, camera: &Camera, width: u32, height: u32) -> GBuffer {
+        let view_to_clip = camera.view_to_clip(width as f32 / height as f32);
+        let world_to_clip = view_to_clip * camera.world_to_view();
+        let clip_to_world = world_to_clip.inverse();
+        let n = (width * height) as usize;
+        let mut g = GBuffer {
+            width,
+            height,
+            depth: vec![1.0; n],
+            normal: vec![Vec3::ZERO; n],
+            position: vec![Vec3::ZERO; n],
+            hit: vec![false; n],
+        };
+        for y in 0..height {
+            for x in 0..width {
+                let ndc = Vec3::new((x as f32 + 0.5) / width as f32 * 2.0 - 1.0, (y as f32 + 0.5) / height as f32 * 2.0 - 1.0, 0.5);
+                let p = clip_to_world * ndc.extend(1.0);
+                let dir = (p.truncate() / p.w - camera.eye).normalize();
+                let i = (y * width + x) as usize;
+                if let Some(h) = tracer.closest_hit(camera.eye, dir, 0.0, f32::MAX) {
+                    let pos = camera.eye + dir * h.t;
+                    let c: Vec4 = world_to_clip * pos.extend(1.0);
+                    g.depth[i] = c.z / c.w;
+                    g.normal[i] = if h.normal.dot(dir) > 0.0 { -h.normal } else { h.normal };
+                    g.position[i] = pos;
+                    g.hit[i] = true;
+                }
+            }
+        }
+        g
+    }
+
+    /// Depth texels as R32_SFLOAT bytes.
+    pub fn depth_bytes(&self) -> Vec<u8> {
+        bytemuck::cast_slice(&self.depth).to_vec()
+    }
+
+    /// Normals as R32G32B32A32_SFLOAT bytes (NormalType::RgbVector).
+    pub fn normal_bytes_rgba32f(&self) -> Vec<u8> {
+        let v: Vec<[f32; 4]> = self.normal.iter().map(|n| [n.x, n.y, n.z, 0.0]).collect();
+        bytemuck::cast_slice(&v).to_vec()
+    }
+
+    /// World positions as R32G32B32A32_SFLOAT bytes (DepthType::WorldPosition); background
+    /// pixels hold NaN.
+    pub fn position_bytes_rgba32f(&self) -> Vec<u8> {
+        let v: Vec<[f32; 4]> = self
+            .position
+            .iter()
+            .zip(&self.hit)
+            .map(|(p, h)| if *h { [p.x, p.y, p.z, 1.0] } else { [f32::NAN; 4] })
+            .collect();
+        bytemuck::cast_slice(&v).to_vec()
+    }
+}
+
+// ---------------------------------------------------------------- AO
+
+/// Reference parameters, matching `hybrid_rt::TraceAmbientOcclusionTask`.
+#[derive(Clone, Copy, Debug)]
+pub struct AoParams {
+    pub ray_length: f32,
+    pub falloff_power: f32,
+    pub ray_offset: hybrid_rt::RayOffset,
+}
+
+/// SplitMix64: a small, good generator for the reference's sample points.
+pub struct Rng(u64);
+impl Rng {
+    pub fn new(seed: u64) -> Rng {
+        Rng(seed)
+    }
+    pub fn next_f32(&mut self) -> f32 {
+        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
+        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+pub fn offset_origin(p: Vec3, n: Vec3, eye: Vec3, o: &hybrid_rt::RayOffset) -> Vec3 {
+    match o.offset_type {
+        hybrid_rt::RayOffsetType::CameraDistance => {
+            let d = p.distance(eye);
+            p + n * (o.cam_constant + o.cam_linear * d + o.cam_quadratic * d * d).max(0.0)
+        }
+        // World-position offsets are a few ULPs: the reference ignores them.
+        _ => p,
+    }
+}
+
+/// Orthonormal basis around n (any rotation about n is as good for a reference).
+fn basis(n: Vec3) -> (Vec3, Vec3) {
+    let t = if n.x.abs() > 0.9 { Vec3::Y } else { Vec3::X };
+    let t = (t - n * n.dot(t)).normalize();
+    (t, n.cross(t))
+}
+
+/// Reference AO at one surface point with `strata`² stratified cosine samples.
+pub fn ao_at(tracer: &Tracer, p: Vec3, n: Vec3, eye: Vec3, params: &AoParams, strata: u32, rng: &mut Rng) -> f32 {
+    let origin = offset_origin(p, n, eye, &params.ray_offset);
+    let (t, b) = basis(n);
+    let mut sum = 0.0;
+    for sy in 0..strata {
+        for sx in 0..strata {
+            let u1 = (sx as f32 + rng.next_f32()) / strata as f32;
+            let u2 = (sy as f32 + rng.next_f32()) / strata as f32;
+            let r = u1.sqrt();
+            let phi = 2.0 * std::f32::consts::PI * u2;
+            let local = Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u1).max(0.0).sqrt());
+            let dir = (t * local.x + b * local.y + n * local.z).normalize();
+            sum += match tracer.closest_hit(origin, dir, 0.0, params.ray_length) {
+                None => 1.0,
+                Some(h) => (h.t / params.ray_length).clamp(0.0, 1.0).powf(params.falloff_power),
+            };
+        }
+    }
+    sum / (strata * strata) as f32
+}
+
+/// Reference AO image (1.0 on background pixels).
+pub fn reference_ao(tracer: &Tracer, g: &GBuffer, eye: Vec3, params: &AoParams, strata: u32) -> Vec<f32> {
+    let mut rng = Rng::new(0x5eed);
+    (0..g.depth.len())
+        .map(|i| if g.hit[i] { ao_at(tracer, g.position[i], g.normal[i], eye, params, strata, &mut rng) } else { 1.0 })
+        .collect()
+}

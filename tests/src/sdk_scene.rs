@@ -1,0 +1,123 @@
+//! Glue between reference scenes and the SDK: vertex/index buffers in engine memory, handle
+//! registration, G-buffer images, and one-frame submission, as an engine would do it.
+use crate::host::{Host, HostBuffer, HostImage, HostResult};
+use crate::reference::{Camera, GBuffer, Scene};
+use ash::vk;
+use hybrid_rt::*;
+
+/// A reference scene registered with the SDK. Engine-side buffers are kept until `destroy`.
+pub struct SceneOnGpu {
+    pub geometries: Vec<GeometryHandle>,
+    pub instances: Vec<InstanceHandle>,
+    pub buffers: Vec<(HostBuffer, HostBuffer)>,
+}
+
+impl SceneOnGpu {
+    /// Creates handles and schedules register tasks for every mesh and instance of `scene`.
+    pub fn register(host: &Host, ctx: &ExecuteContext, container: &mut TaskContainer, scene: &Scene) -> HostResult<SceneOnGpu> {
+        let geometries = ctx.create_geometry_handles(scene.meshes.len());
+        let mut buffers = Vec::new();
+        for (mesh, &handle) in scene.meshes.iter().zip(&geometries) {
+            let usage = vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::VERTEX_BUFFER;
+            let vb = host.buffer_with_data(bytemuck::cast_slice(&mesh.positions), usage)?;
+            let ib = host.buffer_with_data(bytemuck::cast_slice(&mesh.indices), usage | vk::BufferUsageFlags::INDEX_BUFFER)?;
+            let input = GeometryInput {
+                vertices: VertexBufferInput { buffer: vb.buffer, count: mesh.positions.len() as u32, ..Default::default() },
+                indices: IndexBufferInput { buffer: ib.buffer, count: mesh.indices.len() as u32, ..Default::default() },
+                ..Default::default()
+            };
+            container
+                .schedule_geometry(&GeometryTask { handle, operation: TaskOperation::Register, input })
+                .map_err(|e| e.to_string())?;
+            buffers.push((vb, ib));
+        }
+        let instances = ctx.create_instance_handles(scene.instances.len());
+        for (inst, &handle) in scene.instances.iter().zip(&instances) {
+            let input = InstanceInput { geometry: geometries[inst.mesh], transform: inst.transform, ..Default::default() };
+            container
+                .schedule_instance(&InstanceTask { handle, operation: InstanceOperation::Register, input })
+                .map_err(|e| e.to_string())?;
+        }
+        Ok(SceneOnGpu { geometries, instances, buffers })
+    }
+
+    pub fn destroy(self, host: &Host) {
+        for (v, i) in self.buffers {
+            host.destroy_buffer(v);
+            host.destroy_buffer(i);
+        }
+    }
+}
+
+/// Depth, normals and an AO output image for a reference G-buffer.
+pub struct GBufferImages {
+    pub depth: HostImage,
+    pub normals: HostImage,
+    pub output: HostImage,
+    pub width: u32,
+    pub height: u32,
+}
+
+pub const READ: vk::ImageLayout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+
+impl GBufferImages {
+    pub fn upload(host: &Host, g: &GBuffer) -> HostResult<GBufferImages> {
+        let sampled = vk::ImageUsageFlags::SAMPLED;
+        let depth = host.image_with_data(vk::Format::R32_SFLOAT, g.width, g.height, sampled, &g.depth_bytes(), READ)?;
+        let normals =
+            host.image_with_data(vk::Format::R32G32B32A32_SFLOAT, g.width, g.height, sampled, &g.normal_bytes_rgba32f(), READ)?;
+        let output = host.image_cleared(vk::Format::R32_SFLOAT, g.width, g.height, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL)?;
+        Ok(GBufferImages { depth, normals, output, width: g.width, height: g.height })
+    }
+
+    pub fn trace_common(&self, camera: &Camera) -> TraceCommon {
+        TraceCommon {
+            depth: DepthInput { image: self.depth.input(READ), depth_type: DepthType::ClipSpace },
+            normals: NormalInput { image: self.normals.input(READ), normal_type: NormalType::RgbVector, space: NormalSpace::World },
+            viewport: Viewport::full(self.width, self.height),
+            camera: camera.sdk_camera(self.width, self.height),
+            ..Default::default()
+        }
+    }
+
+    pub fn ao_task(&self, camera: &Camera, ray_length: f32, rays_per_pixel: u32) -> TraceAmbientOcclusionTask {
+        TraceAmbientOcclusionTask {
+            common: self.trace_common(camera),
+            output: self.output.input(vk::ImageLayout::GENERAL),
+            ray_length,
+            rays_per_pixel,
+            ..Default::default()
+        }
+    }
+
+    pub fn read_output(&self, host: &Host) -> HostResult<Vec<f32>> {
+        host.read_image_f32(&self.output, vk::ImageLayout::GENERAL)
+    }
+
+    pub fn destroy(self, host: &Host) {
+        host.destroy_image(self.depth);
+        host.destroy_image(self.normals);
+        host.destroy_image(self.output);
+    }
+}
+
+/// Records `container` into a fresh command buffer, submits, waits, and hands the ticket back.
+pub fn run_frame(host: &Host, ctx: &ExecuteContext, container: &mut TaskContainer) -> Result<CompletedTask, String> {
+    let cmd = host.allocate_command_buffer()?;
+    host.begin(cmd)?;
+    host.full_barrier(cmd);
+    let ticket = match ctx.build_gpu_task(container, cmd) {
+        Ok(t) => t,
+        Err(e) => {
+            // Leave the command buffer submittable-free: end it and drop it.
+            unsafe {
+                let _ = host.device.end_command_buffer(cmd);
+            }
+            return Err(e.to_string());
+        }
+    };
+    host.full_barrier(cmd);
+    let fence = host.submit(cmd)?;
+    host.wait(fence)?;
+    ctx.mark_gpu_task_completed(ticket).map_err(|e| e.to_string())
+}
