@@ -23,8 +23,10 @@ pub(crate) const AS_BUILD_WRITE: Use = Use {
     stages: vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR,
     access: vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR,
 };
+/// Acceleration-structure copies (compaction). They run in the build stage: the dedicated
+/// copy stage needs VK_KHR_ray_tracing_maintenance1, which not every driver has.
 pub(crate) const AS_COPY: Use = Use {
-    stages: vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_COPY_KHR,
+    stages: vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR,
     access: vk::AccessFlags2::from_raw(
         vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR.as_raw()
             | vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR.as_raw(),

@@ -1,0 +1,286 @@
+//! BVH tasks seen through rendered AO: the BLAS throttle, moving instances, refits,
+//! compaction, and deferred destruction.
+mod common;
+use ash::vk;
+use common::*;
+use glam::{Affine3A, Vec3};
+use hybrid_rt::{BvhBuildTask, Error, GeometryInput, GeometryTask, IndexBufferInput, InitSettings, InstanceInput, InstanceOperation, InstanceTask, RayOffset, TaskOperation, VertexBufferInput};
+use hybrid_rt_testkit::host::Host;
+use hybrid_rt_testkit::reference::*;
+use hybrid_rt_testkit::sdk_scene::*;
+use hybrid_rt_testkit::stats;
+
+const W: u32 = 96;
+const H: u32 = 64;
+const RAYS: u32 = 16;
+
+/// Ground pixels in a ring around the base of a unit box centred at `c` (in XZ).
+fn ring(g: &GBuffer, c: Vec3) -> Vec<bool> {
+    (0..g.depth.len())
+        .map(|i| {
+            let p = g.position[i];
+            let d = (p - c).truncate().abs(); // x, y, z -> x, y
+            let dx = (p.x - c.x).abs();
+            let dz = (p.z - c.z).abs();
+            let _ = d;
+            g.hit[i] && p.y.abs() < 1e-3 && dx.max(dz) > 0.52 && dx.max(dz) < 0.85
+        })
+        .collect()
+}
+
+struct Boxes {
+    ground: Scene,
+    boxes: Scene,
+    centres: Vec<Vec3>,
+    camera: Camera,
+}
+
+/// Ten unit boxes on a 5x2 grid. The ground is only in the G-buffer (the engine's
+/// rasterizer saw it); the SDK's TLAS holds the boxes, so AO on the ground shows exactly which
+/// boxes are in the TLAS.
+fn boxes(n: usize) -> Boxes {
+    let mut boxes = Scene::default();
+    let mut centres = Vec::new();
+    for i in 0..n {
+        let m = boxes.add_mesh(Mesh::cuboid(Vec3::splat(0.5)));
+        let c = Vec3::new(-6.0 + 3.0 * (i % 5) as f32, 0.5, if i < 5 { -1.6 } else { 1.6 });
+        boxes.add_instance(m, Affine3A::from_translation(c));
+        centres.push(Vec3::new(c.x, 0.0, c.z));
+    }
+    let mut ground = boxes.clone();
+    let plane = ground.add_mesh(Mesh::grid(40.0, 2));
+    ground.add_instance(plane, Affine3A::IDENTITY);
+    let camera = Camera::look_at(Vec3::new(0.0, 12.0, 0.01), Vec3::ZERO);
+    Boxes { ground, boxes, centres, camera }
+}
+
+fn params() -> AoParams {
+    AoParams { ray_length: 1.0, falloff_power: 1.0, ray_offset: RayOffset::default() }
+}
+
+/// Checks, box by box, that the ring around each box is occluded exactly when `in_tlas(i)`.
+fn check_rings(gpu: &[f32], g: &GBuffer, b: &Boxes, in_tlas: impl Fn(usize) -> bool, what: &str) {
+    let tracer = Tracer::with_instances(&b.boxes, &in_tlas);
+    for (i, c) in b.centres.iter().enumerate() {
+        let mask = ring(g, *c);
+        let n = mask.iter().filter(|m| **m).count();
+        assert!(n >= 20, "ring {i} has {n} pixels");
+        let reference: Vec<f32> = (0..g.depth.len())
+            .map(|p| if mask[p] { ao_at(&tracer, g.position[p], g.normal[p], b.camera.eye, &params(), 8, &mut Rng::new(p as u64)) } else { 1.0 })
+            .collect();
+        let gpu_mean = stats::masked_mean(gpu, &mask);
+        let ref_mean = stats::masked_mean(&reference, &mask);
+        let tol = 4.0 * stats::sample_sigma(RAYS, 64) / (n as f32).sqrt() + 0.01;
+        assert!((gpu_mean - ref_mean).abs() <= tol, "{what}: box {i}: GPU ring AO {gpu_mean:.4} vs reference {ref_mean:.4} (tol {tol:.4})");
+        if in_tlas(i) {
+            assert!(ref_mean < 0.9, "{what}: box {i} should occlude its ring ({ref_mean})");
+        } else {
+            assert!(gpu_mean > 0.9999, "{what}: box {i} is not in the TLAS yet, ring AO {gpu_mean}");
+        }
+    }
+}
+
+#[test]
+fn blas_throttle_brings_instances_in_over_frames() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let b = boxes(10);
+    let g = GBuffer::render(&Tracer::new(&b.ground), &b.camera, W, H);
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let mut frame = ctx.create_task_container();
+    let gpu_scene = SceneOnGpu::register(&host, &ctx, &mut frame, &b.boxes).unwrap();
+    for (k, expected) in [3usize, 6, 9, 10].into_iter().enumerate() {
+        frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 3 }).unwrap();
+        frame.schedule_ambient_occlusion(&images.ao_task(&b.camera, 1.0, RAYS)).unwrap();
+        run_frame(&host, &ctx, &mut frame).unwrap();
+        assert_eq!(ctx.tlas_instance_count(), expected, "build {k}");
+        assert_eq!(ctx.pending_blas_builds(), 10 - expected);
+        let gpu = images.read_output(&host).unwrap();
+        check_rings(&gpu, &g, &b, |i| i < expected, &format!("build {k}"));
+    }
+    images.destroy(&host);
+    gpu_scene.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+}
+
+#[test]
+fn moving_an_instance_moves_its_occlusion() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let mut b = boxes(2);
+    let g = GBuffer::render(&Tracer::new(&b.ground), &b.camera, W, H);
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let mut frame = ctx.create_task_container();
+    let gpu_scene = SceneOnGpu::register(&host, &ctx, &mut frame, &b.boxes).unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    frame.schedule_ambient_occlusion(&images.ao_task(&b.camera, 1.0, RAYS)).unwrap();
+    run_frame(&host, &ctx, &mut frame).unwrap();
+    check_rings(&images.read_output(&host).unwrap(), &g, &b, |_| true, "before the move");
+
+    // Move box 0 far away (off the ground the camera sees); box 1 stays.
+    let far = Affine3A::from_translation(Vec3::new(0.0, 50.0, 0.0));
+    frame
+        .schedule_instance(&InstanceTask {
+            handle: gpu_scene.instances[0],
+            operation: InstanceOperation::Update,
+            input: InstanceInput { geometry: gpu_scene.geometries[0], transform: far, ..Default::default() },
+        })
+        .unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    frame.schedule_ambient_occlusion(&images.ao_task(&b.camera, 1.0, RAYS)).unwrap();
+    run_frame(&host, &ctx, &mut frame).unwrap();
+    b.boxes.instances[0].transform = far;
+    check_rings(&images.read_output(&host).unwrap(), &g, &b, |i| i == 1, "after the move");
+    images.destroy(&host);
+    gpu_scene.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+}
+
+/// A deformable (allow_update) quad is refitted in place when its vertices change.
+#[test]
+fn updating_a_deformable_geometry_refits_its_blas() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let mut ground = Scene::default();
+    let plane = ground.add_mesh(Mesh::grid(10.0, 2));
+    ground.add_instance(plane, Affine3A::IDENTITY);
+    let camera = Camera::look_at(Vec3::new(0.0, 6.0, 0.01), Vec3::ZERO);
+    let g = GBuffer::render(&Tracer::new(&ground), &camera, W, H);
+    let images = GBufferImages::upload(&host, &g).unwrap();
+
+    // A ceiling quad (facing down) that first hangs 0.15 above the ground, then is lifted
+    // out of AO range: same vertex count, new positions.
+    let ceiling = |h: f32| {
+        let mut m = Mesh::grid(3.0, 1);
+        m.positions.iter_mut().for_each(|p| p.y = h);
+        m
+    };
+    let usage = vk::BufferUsageFlags::TRANSFER_SRC;
+    let low = ceiling(0.15);
+    let vb_low = host.buffer_with_data(bytemuck::cast_slice(&low.positions), usage).unwrap();
+    let ib = host.buffer_with_data(bytemuck::cast_slice(&low.indices), usage).unwrap();
+    let input = |vb: vk::Buffer| GeometryInput {
+        vertices: VertexBufferInput { buffer: vb, count: 4, ..Default::default() },
+        indices: IndexBufferInput { buffer: ib.buffer, count: 6, ..Default::default() },
+        allow_update: true,
+        ..Default::default()
+    };
+    let geo = ctx.create_geometry_handles(1)[0];
+    let inst = ctx.create_instance_handles(1)[0];
+    let mut frame = ctx.create_task_container();
+    frame.schedule_geometry(&GeometryTask { handle: geo, operation: TaskOperation::Register, input: input(vb_low.buffer) }).unwrap();
+    frame
+        .schedule_instance(&InstanceTask { handle: inst, operation: InstanceOperation::Register, input: InstanceInput { geometry: geo, ..Default::default() } })
+        .unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    frame.schedule_ambient_occlusion(&images.ao_task(&camera, 1.0, RAYS)).unwrap();
+    run_frame(&host, &ctx, &mut frame).unwrap();
+    let under: Vec<bool> = g.position.iter().map(|p| p.x.abs() < 1.0 && p.z.abs() < 1.0).collect();
+    let before = stats::masked_mean(&images.read_output(&host).unwrap(), &under);
+    let tracer_low = {
+        let mut s = Scene::default();
+        let m = s.add_mesh(low.clone());
+        s.add_instance(m, Affine3A::IDENTITY);
+        Tracer::new(&s)
+    };
+    let ref_before = stats::masked_mean(&reference_ao(&tracer_low, &g, camera.eye, &params(), 8), &under);
+    let n = under.iter().filter(|m| **m).count() as f32;
+    let tol = 4.0 * stats::sample_sigma(RAYS, 64) / n.sqrt() + 0.01;
+    assert!((before - ref_before).abs() < tol, "low ceiling: GPU {before} vs reference {ref_before}");
+    assert!(before < 0.7, "low ceiling occludes: {before} (reference {ref_before})");
+
+    let high = ceiling(3.0);
+    let vb_high = host.buffer_with_data(bytemuck::cast_slice(&high.positions), usage).unwrap();
+    frame.schedule_geometry(&GeometryTask { handle: geo, operation: TaskOperation::Update, input: input(vb_high.buffer) }).unwrap();
+    frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 0 }).unwrap();
+    frame.schedule_ambient_occlusion(&images.ao_task(&camera, 1.0, RAYS)).unwrap();
+    run_frame(&host, &ctx, &mut frame).unwrap();
+    let after = stats::masked_mean(&images.read_output(&host).unwrap(), &under);
+    assert!(after > 0.9999, "the refitted ceiling is out of AO range: {after}");
+    assert_eq!(ctx.pending_blas_builds(), 0, "a refit is not a queued rebuild");
+
+    // Changing the triangle count of an updatable geometry is refused at build time.
+    let tri = host.buffer_with_data(bytemuck::cast_slice(&high.positions[..3]), usage).unwrap();
+    frame
+        .schedule_geometry(&GeometryTask {
+            handle: geo,
+            operation: TaskOperation::Update,
+            input: GeometryInput { vertices: VertexBufferInput { buffer: tri.buffer, count: 3, ..Default::default() }, allow_update: true, ..Default::default() },
+        })
+        .unwrap();
+    assert!(matches!(run_frame(&host, &ctx, &mut frame), Err(e) if e.contains("refitted")));
+    frame.clear();
+
+    for b in [vb_low, vb_high, ib, tri] {
+        host.destroy_buffer(b);
+    }
+    images.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+}
+
+/// Static BLASes are compacted a frame after their build (no stall), and tracing still works.
+#[test]
+fn static_blases_are_compacted() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let b = boxes(4);
+    let g = GBuffer::render(&Tracer::new(&b.ground), &b.camera, W, H);
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let mut frame = ctx.create_task_container();
+    let gpu_scene = SceneOnGpu::register(&host, &ctx, &mut frame, &b.boxes).unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    run_frame(&host, &ctx, &mut frame).unwrap();
+    let built = ctx.resource_allocations().blas;
+    assert_eq!(built.count, 4);
+    // Next build: compaction copies; the originals are freed when that ticket is back.
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    frame.schedule_ambient_occlusion(&images.ao_task(&b.camera, 1.0, RAYS)).unwrap();
+    run_frame(&host, &ctx, &mut frame).unwrap();
+    let compacted = ctx.resource_allocations().blas;
+    eprintln!("BLAS bytes: built {} -> compacted {}", built.bytes, compacted.bytes);
+    assert_eq!(compacted.count, 4, "originals freed once the compacting ticket is back");
+    assert!(compacted.bytes <= built.bytes);
+    check_rings(&images.read_output(&host).unwrap(), &g, &b, |_| true, "after compaction");
+    images.destroy(&host);
+    gpu_scene.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+}
+
+/// Destroying handles while a ticket that uses them is in flight defers the frees.
+#[test]
+fn destruction_is_deferred_until_tickets_return() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let b = boxes(2);
+    let g = GBuffer::render(&Tracer::new(&b.ground), &b.camera, W, H);
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let mut frame = ctx.create_task_container();
+    let gpu_scene = SceneOnGpu::register(&host, &ctx, &mut frame, &b.boxes).unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    run_frame(&host, &ctx, &mut frame).unwrap();
+
+    frame.schedule_ambient_occlusion(&images.ao_task(&b.camera, 1.0, RAYS)).unwrap();
+    let cmd = host.allocate_command_buffer().unwrap();
+    host.begin(cmd).unwrap();
+    let ticket = ctx.build_gpu_task(&mut frame, cmd).unwrap();
+    // The AO recorded above still reads both BLASes: destroying now must not free them.
+    assert!(matches!(ctx.destroy_geometry_handles(&gpu_scene.geometries), Err(Error::GeometryInUse { .. })));
+    ctx.destroy_instance_handles(&gpu_scene.instances).unwrap();
+    ctx.destroy_geometry_handles(&gpu_scene.geometries).unwrap();
+    let during = ctx.resource_allocations();
+    assert_eq!(during.blas.count, 2, "BLASes live while the ticket is out");
+    assert!(matches!(ctx.release_device_resources_immediately(), Err(Error::TicketsInFlight { .. })));
+    let fence = host.submit(cmd).unwrap();
+    host.wait(fence).unwrap();
+    ctx.mark_gpu_task_completed(ticket).unwrap();
+    let after = ctx.resource_allocations();
+    assert_eq!(after.blas.count, 0);
+    assert_eq!(after.geometry_copies.count, 0);
+    // The frame's AO saw both boxes.
+    check_rings(&images.read_output(&host).unwrap(), &g, &b, |_| true, "in-flight frame");
+    ctx.release_device_resources_immediately().unwrap();
+    images.destroy(&host);
+    gpu_scene.destroy(&host);
+    drop(ctx);
+    let _ = Host::validation_errors;
+    assert_no_validation_errors();
+}
