@@ -27,7 +27,7 @@ struct TraceCommon {
     mat4 clip_to_world;   // inverse(view_to_clip * world_to_view)
     mat4 view_to_world;
     vec4 viewport;        // x, y, width, height in pixels
-    vec4 depth_range;     // viewport min depth, max depth, unused, unused
+    vec4 depth_range;     // viewport min depth, max depth, background depth texel, unused
     uvec4 modes;          // depth type, normal type, normals in view space (0/1), ray offset type
     vec4 offset_world;    // threshold, float scale, int scale, unused
     vec4 offset_camera;   // constant, linear, quadratic, unused
@@ -100,6 +100,8 @@ bool hrt_world_position(TraceCommon c, uvec2 pixel, vec4 depth_texel, out vec3 p
         p = depth_texel.xyz;
         return !(any(isnan(p)) || any(isinf(p)));
     }
+    // Nothing was rasterized here: the depth buffer still holds its clear value (far plane).
+    if (depth_texel.x == c.depth_range.z) return false;
     vec4 h = c.clip_to_world * vec4(hrt_pixel_to_ndc(c, pixel, depth_texel.x), 1.0);
     if (abs(h.w) < 1e-30) return false;
     p = h.xyz / h.w;

@@ -79,3 +79,231 @@ fn sphere_on_plane_matches_reference() {
     drop(ctx);
     assert_no_validation_errors();
 }
+
+fn oct_encode(n: Vec3) -> glam::Vec2 {
+    let p = n.truncate() / (n.x.abs() + n.y.abs() + n.z.abs());
+    if n.z >= 0.0 {
+        p
+    } else {
+        let s = glam::Vec2::new(if p.x >= 0.0 { 1.0 } else { -1.0 }, if p.y >= 0.0 { 1.0 } else { -1.0 });
+        (glam::Vec2::ONE - glam::Vec2::new(p.y.abs(), p.x.abs())) * s
+    }
+}
+
+/// Every depth and normal encoding, and the inline ray-query path, give the same AO as the
+/// baseline (R32 clip depth, world-space RGB normals). All variants run in one container, so
+/// they use the same random numbers: differences come only from decoding round-off, which
+/// can flip a ray that grazes an edge.
+#[test]
+fn encodings_and_inline_rt_give_the_same_image() {
+    use ash::vk;
+    use hybrid_rt::{DepthInput, DepthType, NormalInput, NormalSpace, NormalType, TraceAmbientOcclusionTask};
+    use hybrid_rt_testkit::host::Host;
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let mut scene = Scene::default();
+    let plane = scene.add_mesh(Mesh::grid(8.0, 8));
+    let sphere = scene.add_mesh(Mesh::sphere(0.5, 24, 12));
+    let cube = scene.add_mesh(Mesh::cuboid(Vec3::splat(0.3)));
+    scene.add_instance(plane, Affine3A::IDENTITY);
+    scene.add_instance(sphere, Affine3A::from_translation(Vec3::new(-0.4, 0.5, 0.0)));
+    scene.add_instance(cube, Affine3A::from_rotation_translation(glam::Quat::from_rotation_y(0.6), Vec3::new(0.6, 0.3, 0.3)));
+    let camera = Camera::look_at(Vec3::new(0.3, 1.8, 2.2), Vec3::new(0.0, 0.2, 0.0));
+    let g = GBuffer::render(&Tracer::new(&scene), &camera, W, H);
+    assert!(g.hit.iter().any(|h| !h), "some background pixels, to check they are skipped");
+    let base = GBufferImages::upload(&host, &g).unwrap();
+    let mut frame = ctx.create_task_container();
+    let gpu_scene = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+
+    let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+    let sampled = vk::ImageUsageFlags::SAMPLED;
+    let world_to_view = camera.world_to_view();
+    let normals_as = |f: &dyn Fn(Vec3) -> [f32; 4]| -> Vec<u8> {
+        let v: Vec<[f32; 4]> = g.normal.iter().map(|n| f(*n)).collect();
+        bytemuck::cast_slice(&v).to_vec()
+    };
+    let rg: Vec<[f32; 2]> = g.normal.iter().map(|n| oct_encode(*n).to_array()).collect();
+    let img = |format, bytes: &[u8]| host.image_with_data(format, W, H, sampled, bytes, read).unwrap();
+    let d32 = img(vk::Format::D32_SFLOAT, &g.depth_bytes());
+    let positions = img(vk::Format::R32G32B32A32_SFLOAT, &g.position_bytes_rgba32f());
+    let n_normalized = img(vk::Format::R32G32B32A32_SFLOAT, &normals_as(&|n| [n.x * 0.5 + 0.5, n.y * 0.5 + 0.5, n.z * 0.5 + 0.5, 0.0]));
+    let n_rg_oct = img(vk::Format::R32G32_SFLOAT, bytemuck::cast_slice(&rg));
+    let n_ba_oct_view = img(
+        vk::Format::R32G32B32A32_SFLOAT,
+        &normals_as(&|n| {
+            let v = world_to_view.transform_vector3(n);
+            let e = oct_encode(v) * 0.5 + 0.5;
+            [0.0, 0.0, e.x, e.y]
+        }),
+    );
+
+    let rays = 4;
+    let baseline = base.ao_task(&camera, 1.0, rays);
+    let mut variants: Vec<(&str, TraceAmbientOcclusionTask)> = Vec::new();
+    let mut v = baseline;
+    v.common.depth.image = d32.input(read);
+    v.common.normals = NormalInput { image: n_normalized.input(read), normal_type: NormalType::RgbNormalizedVector, space: NormalSpace::World };
+    variants.push(("D32 depth, normalized RGB normals", v));
+    let mut v = baseline;
+    v.common.depth = DepthInput { image: positions.input(read), depth_type: DepthType::WorldPosition };
+    v.common.normals = NormalInput { image: n_rg_oct.input(read), normal_type: NormalType::RgOctahedron, space: NormalSpace::World };
+    variants.push(("world positions, RG octahedral normals", v));
+    let mut v = baseline;
+    v.common.normals = NormalInput { image: n_ba_oct_view.input(read), normal_type: NormalType::BaNormalizedOctahedron, space: NormalSpace::View };
+    variants.push(("view-space BA normalized octahedral normals", v));
+    let mut v = baseline;
+    v.common.use_inline_rt = true;
+    variants.push(("inline ray query", v));
+
+    frame.schedule_ambient_occlusion(&baseline).unwrap();
+    let mut outputs = Vec::new();
+    for (_, task) in variants.iter_mut() {
+        let out = host.image_cleared(vk::Format::R32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
+        task.output = out.input(vk::ImageLayout::GENERAL);
+        frame.schedule_ambient_occlusion(task).unwrap();
+        outputs.push(out);
+    }
+    run_frame(&host, &ctx, &mut frame).unwrap();
+    let reference = base.read_output(&host).unwrap();
+    for (i, &h) in g.hit.iter().enumerate() {
+        if !h {
+            assert_eq!(reference[i], 1.0, "background pixel {i} is skipped (AO 1)");
+        }
+    }
+    for ((what, _), out) in variants.iter().zip(&outputs) {
+        let ao = host.read_image_f32(out, vk::ImageLayout::GENERAL).unwrap();
+        let diffs: Vec<f32> = ao.iter().zip(&reference).map(|(a, b)| (a - b).abs()).collect();
+        let mean = stats::mean(&diffs);
+        let off = diffs.iter().filter(|d| **d > 1e-3).count() as f32 / diffs.len() as f32;
+        eprintln!("{what}: mean |diff| {mean:.2e}, pixels off by > 1e-3: {:.2}%", off * 100.0);
+        assert!(mean < 2e-3 && off < 0.02, "{what}: mean {mean}, fraction off {off}");
+    }
+    if !ctx.supports_inline_rt() {
+        eprintln!("(inline ray query not available: that variant ran the pipeline)");
+    }
+    for img in outputs.into_iter().chain([d32, positions, n_normalized, n_rg_oct, n_ba_oct_view]) {
+        host.destroy_image(img);
+    }
+    base.destroy(&host);
+    gpu_scene.destroy(&host);
+    drop(ctx);
+    let _ = Host::validation_errors;
+    assert_no_validation_errors();
+}
+
+/// Instances without the AO bit in their mask are invisible to AO rays.
+#[test]
+fn instance_mask_hides_instances_from_ao() {
+    use hybrid_rt::{InstanceInclusionMask, InstanceInput, InstanceOperation, InstanceTask};
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let mut scene = Scene::default();
+    let plane = scene.add_mesh(Mesh::grid(8.0, 8));
+    let sphere = scene.add_mesh(Mesh::sphere(0.5, 24, 12));
+    scene.add_instance(plane, Affine3A::IDENTITY);
+    scene.add_instance(sphere, Affine3A::from_translation(Vec3::new(0.0, 0.5, 0.0)));
+    let camera = Camera::look_at(Vec3::new(0.0, 1.6, 2.2), Vec3::new(0.0, 0.2, 0.0));
+    // The G-buffer holds only the plane: AO on the plane shows whether the sphere is seen.
+    let mut ground = Scene::default();
+    let p = ground.add_mesh(Mesh::grid(8.0, 8));
+    ground.add_instance(p, Affine3A::IDENTITY);
+    let g = GBuffer::render(&Tracer::new(&ground), &camera, W, H);
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let mut frame = ctx.create_task_container();
+    let s = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
+    frame
+        .schedule_instance(&InstanceTask {
+            handle: s.instances[1],
+            operation: InstanceOperation::Update,
+            input: InstanceInput {
+                geometry: s.geometries[1],
+                transform: scene.instances[1].transform,
+                mask: InstanceInclusionMask::REFLECTIONS | InstanceInclusionMask::SHADOWS,
+                ..Default::default()
+            },
+        })
+        .unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    frame.schedule_ambient_occlusion(&images.ao_task(&camera, 1.0, 4)).unwrap();
+    run_frame(&host, &ctx, &mut frame).unwrap();
+    let ao = images.read_output(&host).unwrap();
+    assert!(ao.iter().all(|v| *v > 0.9999), "the masked sphere occludes nothing");
+    images.destroy(&host);
+    s.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+}
+
+/// A viewport inside larger images: only its pixels are written, and they match the reference
+/// rendered for that viewport.
+#[test]
+fn viewport_offsets_are_honoured() {
+    use ash::vk;
+    use hybrid_rt::{DepthInput, DepthType, NormalInput, NormalSpace, NormalType, TraceAmbientOcclusionTask, TraceCommon, Viewport};
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let mut scene = Scene::default();
+    let plane = scene.add_mesh(Mesh::grid(8.0, 8));
+    let sphere = scene.add_mesh(Mesh::sphere(0.5, 24, 12));
+    scene.add_instance(plane, Affine3A::IDENTITY);
+    scene.add_instance(sphere, Affine3A::from_translation(Vec3::new(0.0, 0.5, 0.0)));
+    let camera = Camera::look_at(Vec3::new(0.0, 1.6, 2.2), Vec3::new(0.0, 0.2, 0.0));
+    let tracer = Tracer::new(&scene);
+    let (vw, vh, ox, oy) = (32u32, 32u32, 24u32, 8u32);
+    let g = GBuffer::render(&tracer, &camera, vw, vh);
+    // Place the viewport's G-buffer at (ox, oy) of W x H images.
+    let mut depth = vec![1.0f32; (W * H) as usize];
+    let mut normals = vec![[0.0f32; 4]; (W * H) as usize];
+    for y in 0..vh {
+        for x in 0..vw {
+            let s = (y * vw + x) as usize;
+            let d = ((y + oy) * W + x + ox) as usize;
+            depth[d] = g.depth[s];
+            let n = g.normal[s];
+            normals[d] = [n.x, n.y, n.z, 0.0];
+        }
+    }
+    let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+    let sampled = vk::ImageUsageFlags::SAMPLED;
+    let depth_img = host.image_with_data(vk::Format::R32_SFLOAT, W, H, sampled, bytemuck::cast_slice(&depth), read).unwrap();
+    let normal_img = host.image_with_data(vk::Format::R32G32B32A32_SFLOAT, W, H, sampled, bytemuck::cast_slice(&normals), read).unwrap();
+    let out = host.image_cleared(vk::Format::R32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
+    let rays = 16;
+    let task = TraceAmbientOcclusionTask {
+        common: TraceCommon {
+            depth: DepthInput { image: depth_img.input(read), depth_type: DepthType::ClipSpace },
+            normals: NormalInput { image: normal_img.input(read), normal_type: NormalType::RgbVector, space: NormalSpace::World },
+            viewport: Viewport { x: ox, y: oy, width: vw, height: vh, min_depth: 0.0, max_depth: 1.0 },
+            camera: camera.sdk_camera(vw, vh),
+            ..Default::default()
+        },
+        output: out.input(vk::ImageLayout::GENERAL),
+        ray_length: 1.0,
+        rays_per_pixel: rays,
+        ..Default::default()
+    };
+    let mut frame = ctx.create_task_container();
+    let s = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    frame.schedule_ambient_occlusion(&task).unwrap();
+    run_frame(&host, &ctx, &mut frame).unwrap();
+    let full = host.read_image_f32(&out, vk::ImageLayout::GENERAL).unwrap();
+    let mut inside = Vec::new();
+    for y in 0..H {
+        for x in 0..W {
+            let v = full[(y * W + x) as usize];
+            if (ox..ox + vw).contains(&x) && (oy..oy + vh).contains(&y) {
+                inside.push(v);
+            } else {
+                assert_eq!(v, 0.0, "pixel ({x}, {y}) outside the viewport was written");
+            }
+        }
+    }
+    let reference = reference_ao(&tracer, &g, camera.eye, &ao_params(1.0), 16);
+    let report = stats::compare_blocks(&inside, &reference, vw, vh, 8, stats::sample_sigma(rays, 256), 0.01);
+    assert!(report.worst_block_error <= report.tolerance, "worst block {}", report.worst_block_error);
+    for i in [depth_img, normal_img, out] {
+        host.destroy_image(i);
+    }
+    s.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+}

@@ -231,6 +231,9 @@ impl Default for ImageInput {
 #[repr(u32)]
 pub enum DepthType {
     /// R holds the hardware depth (after the viewport transform), as rasterized. Default.
+    /// Pixels still at the clear value of the far plane (the viewport's `max_depth`, or
+    /// `min_depth` for a reversed-Z projection, detected from `view_to_clip`) are background:
+    /// trace tasks write their "nothing here" value there (AO: 1).
     #[default]
     ClipSpace = 0,
     /// RGB holds the world-space position.

@@ -39,7 +39,7 @@ impl TraceCommonGpu {
             clip_to_world: clip_to_world.to_cols_array(),
             view_to_world: view_to_world.to_cols_array(),
             viewport: [vp.x as f32, vp.y as f32, vp.width as f32, vp.height as f32],
-            depth_range: [min_d, max_d, 0.0, 0.0],
+            depth_range: [min_d, max_d, background_depth(&c.camera.view_to_clip, min_d, max_d), 0.0],
             modes: [
                 match c.depth.depth_type {
                     DepthType::ClipSpace => 0,
@@ -57,6 +57,21 @@ impl TraceCommonGpu {
             offset_camera: [o.cam_constant, o.cam_linear, o.cam_quadratic, 0.0],
             frame: [seed, mask as u32, 0, 0],
         }
+    }
+}
+
+/// The depth texel of a pixel where nothing was drawn: the far end of the viewport's depth
+/// range, which is `min_depth` for a reversed-Z projection. Found by projecting a near and a far
+/// point, so standard, reversed, finite and infinite projections all work.
+fn background_depth(view_to_clip: &glam::Mat4, min_d: f32, max_d: f32) -> f32 {
+    let depth = |z: f32| {
+        let c = *view_to_clip * glam::Vec4::new(0.0, 0.0, z, 1.0);
+        c.z / c.w
+    };
+    if depth(-1.0) > depth(-1.0e4) {
+        min_d
+    } else {
+        max_d
     }
 }
 

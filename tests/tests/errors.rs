@@ -1,0 +1,285 @@
+//! Every public entry point refuses bad input with a typed error and leaves the context usable.
+mod common;
+use ash::vk;
+use common::*;
+use glam::{Affine3A, Mat4, Vec3};
+use hybrid_rt::{
+    BvhBuildTask, Error, GeometryInput, GeometryTask, GpuTicket, HandleProblem, IndexBufferInput, InitSettings,
+    InstanceInput, InstanceOperation, InstanceTask, TaskOperation, VertexBufferInput,
+};
+use hybrid_rt_testkit::reference::*;
+use hybrid_rt_testkit::sdk_scene::*;
+
+fn triangle_buffers(host: &hybrid_rt_testkit::host::Host) -> (hybrid_rt_testkit::host::HostBuffer, hybrid_rt_testkit::host::HostBuffer) {
+    let v = [Vec3::ZERO, Vec3::X, Vec3::Z];
+    let usage = vk::BufferUsageFlags::TRANSFER_SRC;
+    (
+        host.buffer_with_data(bytemuck::cast_slice(&v), usage).unwrap(),
+        host.buffer_with_data(bytemuck::cast_slice(&[0u32, 1, 2]), usage).unwrap(),
+    )
+}
+
+/// A small working scene rendered after every refusal: the context must still work.
+fn render_ok(host: &hybrid_rt_testkit::host::Host, ctx: &hybrid_rt::ExecuteContext) {
+    let mut scene = Scene::default();
+    let m = scene.add_mesh(Mesh::grid(10.0, 1));
+    scene.add_instance(m, Affine3A::IDENTITY);
+    let camera = Camera::look_at(Vec3::new(0.0, 4.0, 0.01), Vec3::ZERO);
+    let g = GBuffer::render(&Tracer::new(&scene), &camera, 16, 16);
+    let images = GBufferImages::upload(host, &g).unwrap();
+    let mut frame = ctx.create_task_container();
+    let s = SceneOnGpu::register(host, ctx, &mut frame, &scene).unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    frame.schedule_ambient_occlusion(&images.ao_task(&camera, 1.0, 1)).unwrap();
+    run_frame(host, ctx, &mut frame).unwrap();
+    assert!(images.read_output(host).unwrap().iter().all(|v| *v > 0.999));
+    ctx.destroy_instance_handles(&s.instances).unwrap();
+    ctx.destroy_geometry_handles(&s.geometries).unwrap();
+    images.destroy(host);
+    s.destroy(host);
+}
+
+#[test]
+fn bad_geometry_inputs_are_refused() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let (vb, ib) = triangle_buffers(&host);
+    let h = ctx.create_geometry_handles(1)[0];
+    let good = GeometryInput {
+        vertices: VertexBufferInput { buffer: vb.buffer, count: 3, ..Default::default() },
+        indices: IndexBufferInput { buffer: ib.buffer, count: 3, ..Default::default() },
+        ..Default::default()
+    };
+    let mut c = ctx.create_task_container();
+    let task = |input| GeometryTask { handle: h, operation: TaskOperation::Register, input };
+    let cases: Vec<(&str, GeometryInput)> = vec![
+        ("null vertex buffer", GeometryInput { vertices: VertexBufferInput { buffer: vk::Buffer::null(), ..good.vertices }, ..good }),
+        ("zero vertices", GeometryInput { vertices: VertexBufferInput { count: 0, ..good.vertices }, ..good }),
+        ("stride 8", GeometryInput { vertices: VertexBufferInput { stride: 8, ..good.vertices }, ..good }),
+        ("index count 4", GeometryInput { indices: IndexBufferInput { count: 4, ..good.indices }, ..good }),
+        ("zero tile unit", GeometryInput { surfels: hybrid_rt::SurfelSettings { tile_unit_length: 0.0, ..Default::default() }, ..good }),
+    ];
+    for (what, input) in cases {
+        let e = c.schedule_geometry(&task(input)).unwrap_err();
+        assert!(matches!(e, Error::InvalidInput { .. }), "{what}: {e}");
+    }
+    let e = c
+        .schedule_geometry(&task(GeometryInput { vertices: VertexBufferInput { format: vk::Format::R16G16B16A16_SFLOAT, ..good.vertices }, ..good }))
+        .unwrap_err();
+    assert!(matches!(e, Error::UnsupportedFormat { .. }), "{e}");
+    let e = c
+        .schedule_geometry(&task(GeometryInput { indices: IndexBufferInput { format: vk::Format::R8_UINT, ..good.indices }, ..good }))
+        .unwrap_err();
+    assert!(matches!(e, Error::UnsupportedFormat { .. }), "{e}");
+    // 3 vertices of 12 bytes fit; a million do not.
+    let e = c
+        .schedule_geometry(&task(GeometryInput {
+            vertices: VertexBufferInput { count: 999_999, ..good.vertices },
+            indices: IndexBufferInput { buffer: vk::Buffer::null(), ..good.indices },
+            ..good
+        }))
+        .unwrap_err();
+    assert!(matches!(e, Error::BufferTooSmall { .. }), "{e}");
+    let e = c.schedule_geometry(&task(GeometryInput { indices: IndexBufferInput { offset: 1 << 20, ..good.indices }, ..good })).unwrap_err();
+    assert!(matches!(e, Error::BufferTooSmall { .. }), "{e}");
+    assert!(c.is_empty(), "refused tasks are not scheduled");
+
+    // Registering twice: the second register is refused when the container is built, and
+    // the failed build leaves the container (and the context) as they were.
+    c.schedule_geometry(&task(good)).unwrap();
+    run_frame(&host, &ctx, &mut c).unwrap();
+    c.schedule_geometry(&task(good)).unwrap();
+    let e = run_frame(&host, &ctx, &mut c).unwrap_err();
+    assert!(e.contains("already registered"), "{e}");
+    assert_eq!(c.len(), 1, "a failed build keeps the tasks");
+    c.clear();
+    // An update of a never-registered handle.
+    let fresh = ctx.create_geometry_handles(1)[0];
+    c.schedule_geometry(&GeometryTask { handle: fresh, operation: TaskOperation::Update, input: good }).unwrap();
+    assert!(run_frame(&host, &ctx, &mut c).unwrap_err().contains("not registered"));
+    c.clear();
+
+    ctx.destroy_geometry_handles(&[h, fresh]).unwrap();
+    host.destroy_buffer(vb);
+    host.destroy_buffer(ib);
+    render_ok(&host, &ctx);
+    drop(ctx);
+    assert_no_validation_errors();
+}
+
+#[test]
+fn stale_foreign_and_null_handles_are_refused() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let other = hybrid_rt::ExecuteContext::new(&host.device_desc(), &InitSettings::default()).unwrap();
+    let (vb, _ib) = triangle_buffers(&host);
+    let input = GeometryInput { vertices: VertexBufferInput { buffer: vb.buffer, count: 3, ..Default::default() }, ..Default::default() };
+    let mut c = ctx.create_task_container();
+
+    let stale = ctx.create_geometry_handles(1)[0];
+    ctx.destroy_geometry_handles(&[stale]).unwrap();
+    let problem = |e: Error| match e {
+        Error::InvalidHandle { problem, .. } => problem,
+        e => panic!("expected InvalidHandle, got {e}"),
+    };
+    let t = |handle| GeometryTask { handle, operation: TaskOperation::Register, input };
+    assert_eq!(problem(c.schedule_geometry(&t(stale)).unwrap_err()), HandleProblem::Destroyed);
+    assert_eq!(problem(c.schedule_geometry(&t(hybrid_rt::GeometryHandle::NULL)).unwrap_err()), HandleProblem::Null);
+    let foreign = other.create_geometry_handles(1)[0];
+    assert_eq!(problem(c.schedule_geometry(&t(foreign)).unwrap_err()), HandleProblem::Foreign);
+    assert_eq!(problem(ctx.destroy_geometry_handles(&[stale]).unwrap_err()), HandleProblem::Destroyed);
+    // Destroying a handle twice in one call is refused, and destroys nothing.
+    let a = ctx.create_geometry_handles(1)[0];
+    assert!(ctx.destroy_geometry_handles(&[a, a]).is_err());
+    ctx.destroy_geometry_handles(&[a]).unwrap();
+
+    // A handle destroyed after scheduling is caught when the container is built.
+    let late = ctx.create_geometry_handles(1)[0];
+    c.schedule_geometry(&t(late)).unwrap();
+    ctx.destroy_geometry_handles(&[late]).unwrap();
+    assert!(run_frame(&host, &ctx, &mut c).unwrap_err().contains("destroyed"));
+    c.clear();
+
+    // An instance of an unregistered geometry.
+    let g = ctx.create_geometry_handles(1)[0];
+    let i = ctx.create_instance_handles(1)[0];
+    c.schedule_instance(&InstanceTask { handle: i, operation: InstanceOperation::Register, input: InstanceInput { geometry: g, ..Default::default() } })
+        .unwrap();
+    assert!(run_frame(&host, &ctx, &mut c).unwrap_err().contains("not registered"));
+    c.clear();
+    // Removing an instance that was never registered.
+    c.schedule_instance(&InstanceTask { handle: i, operation: InstanceOperation::Remove, ..Default::default() }).unwrap();
+    assert!(run_frame(&host, &ctx, &mut c).unwrap_err().contains("not registered"));
+    c.clear();
+
+    // A container of another context.
+    let mut foreign_container = other.create_task_container();
+    let cmd = host.allocate_command_buffer().unwrap();
+    host.begin(cmd).unwrap();
+    assert!(matches!(ctx.build_gpu_task(&mut foreign_container, cmd), Err(Error::ForeignContainer)));
+    assert!(matches!(ctx.build_gpu_task(&mut c, vk::CommandBuffer::null()), Err(Error::InvalidInput { .. })));
+    unsafe { host.device.end_command_buffer(cmd).unwrap() };
+
+    ctx.destroy_instance_handles(&[i]).unwrap();
+    ctx.destroy_geometry_handles(&[g]).unwrap();
+    host.destroy_buffer(vb);
+    host.destroy_buffer(_ib);
+    render_ok(&host, &ctx);
+    drop(other);
+    drop(ctx);
+    assert_no_validation_errors();
+}
+
+#[test]
+fn non_finite_transforms_and_cameras_are_refused() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let g = ctx.create_geometry_handles(1)[0];
+    let i = ctx.create_instance_handles(1)[0];
+    let mut c = ctx.create_task_container();
+    for t in [
+        Affine3A::from_translation(Vec3::new(f32::NAN, 0.0, 0.0)),
+        Affine3A::from_scale(Vec3::new(1.0, f32::INFINITY, 1.0)),
+        Affine3A::from_scale(Vec3::ZERO),
+    ] {
+        let e = c
+            .schedule_instance(&InstanceTask {
+                handle: i,
+                operation: InstanceOperation::Register,
+                input: InstanceInput { geometry: g, transform: t, ..Default::default() },
+            })
+            .unwrap_err();
+        assert!(matches!(e, Error::InvalidTransform { .. }), "{e}");
+    }
+
+    // AO task validation: camera, viewport, formats, layouts, parameters.
+    let mut scene = Scene::default();
+    let m = scene.add_mesh(Mesh::grid(10.0, 1));
+    scene.add_instance(m, Affine3A::IDENTITY);
+    let camera = Camera::look_at(Vec3::new(0.0, 4.0, 0.01), Vec3::ZERO);
+    let gb = GBuffer::render(&Tracer::new(&scene), &camera, 16, 16);
+    let images = GBufferImages::upload(&host, &gb).unwrap();
+    let good = images.ao_task(&camera, 1.0, 1);
+    let mut bad = good;
+    bad.common.camera.world_to_view = Mat4::from_cols_array(&[f32::NAN; 16]);
+    assert!(matches!(c.schedule_ambient_occlusion(&bad).unwrap_err(), Error::InvalidTransform { .. }));
+    bad = good;
+    bad.common.camera.view_to_clip = Mat4::ZERO;
+    assert!(matches!(c.schedule_ambient_occlusion(&bad).unwrap_err(), Error::InvalidTransform { .. }));
+    bad = good;
+    bad.common.viewport.width = 17;
+    assert!(matches!(c.schedule_ambient_occlusion(&bad).unwrap_err(), Error::InvalidInput { .. }));
+    bad = good;
+    bad.common.viewport.height = 0;
+    assert!(matches!(c.schedule_ambient_occlusion(&bad).unwrap_err(), Error::InvalidInput { .. }));
+    bad = good;
+    bad.output.format = vk::Format::R32G32_SFLOAT;
+    assert!(matches!(c.schedule_ambient_occlusion(&bad).unwrap_err(), Error::UnsupportedFormat { .. }));
+    bad = good;
+    bad.output.layout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+    assert!(matches!(c.schedule_ambient_occlusion(&bad).unwrap_err(), Error::InvalidInput { .. }));
+    bad = good;
+    bad.common.depth.image.format = vk::Format::R8G8B8A8_UNORM;
+    assert!(matches!(c.schedule_ambient_occlusion(&bad).unwrap_err(), Error::UnsupportedFormat { .. }));
+    bad = good;
+    bad.common.normals.image.format = vk::Format::R32G32_SFLOAT; // RGB vector needs 3 channels
+    assert!(matches!(c.schedule_ambient_occlusion(&bad).unwrap_err(), Error::UnsupportedFormat { .. }));
+    bad = good;
+    bad.common.depth.image.view = vk::ImageView::null();
+    assert!(matches!(c.schedule_ambient_occlusion(&bad).unwrap_err(), Error::InvalidInput { .. }));
+    for (rays, len, power) in [(0, 1.0, 1.0), (65, 1.0, 1.0), (1, -1.0, 1.0), (1, f32::NAN, 1.0), (1, 1.0, 0.0)] {
+        bad = good;
+        bad.rays_per_pixel = rays;
+        bad.ray_length = len;
+        bad.falloff_power = power;
+        assert!(matches!(c.schedule_ambient_occlusion(&bad).unwrap_err(), Error::InvalidInput { .. }), "{rays} {len} {power}");
+    }
+    assert!(c.is_empty());
+    c.schedule_ambient_occlusion(&good).unwrap();
+    c.clear();
+    images.destroy(&host);
+    render_ok(&host, &ctx);
+    drop(ctx);
+    assert_no_validation_errors();
+}
+
+#[test]
+fn tickets_working_sets_and_settings() {
+    assert!(matches!(
+        hybrid_rt::ExecuteContext::new(
+            &hybrid_rt_testkit::host::Host::new().unwrap().device_desc(),
+            &InitSettings { supported_working_sets: 0, ..Default::default() }
+        ),
+        Err(Error::InvalidInput { .. })
+    ));
+    let (host, ctx) = host_and_context(InitSettings { supported_working_sets: 1, ..Default::default() });
+    let mut c = ctx.create_task_container();
+    c.schedule_bvh_build(&BvhBuildTask::default()).unwrap();
+    let cmd = host.allocate_command_buffer().unwrap();
+    host.begin(cmd).unwrap();
+    let ticket = ctx.build_gpu_task(&mut c, cmd).unwrap();
+    assert!(c.is_empty());
+
+    // The only working set is in flight: the next build is refused and records nothing.
+    c.schedule_bvh_build(&BvhBuildTask::default()).unwrap();
+    let cmd2 = host.allocate_command_buffer().unwrap();
+    host.begin(cmd2).unwrap();
+    assert!(matches!(ctx.build_gpu_task(&mut c, cmd2), Err(Error::WorkingSetsExhausted { in_flight: 1 })));
+    assert_eq!(c.len(), 1, "the refused container keeps its tasks for the next try");
+    assert_eq!(ctx.tickets_in_flight(), vec![ticket.serial()]);
+
+    let fence = host.submit(cmd).unwrap();
+    host.wait(fence).unwrap();
+    let raw = ticket.into_raw();
+    let done = ctx.mark_gpu_task_completed(GpuTicket::from_raw(raw)).unwrap();
+    assert!(done.timings.iter().any(|t| t.kind == hybrid_rt::TaskKind::Bvh));
+    // The same ticket again, and a forged one.
+    assert!(matches!(ctx.mark_gpu_task_completed(GpuTicket::from_raw(raw)), Err(Error::UnknownTicket { .. })));
+    assert!(matches!(ctx.mark_gpu_task_completed(GpuTicket::from_raw(raw + 7)), Err(Error::UnknownTicket { .. })));
+
+    // Now the retry goes through.
+    let ticket = ctx.build_gpu_task(&mut c, cmd2).unwrap();
+    let fence = host.submit(cmd2).unwrap();
+    host.wait(fence).unwrap();
+    ctx.mark_gpu_task_completed(ticket).unwrap();
+    render_ok(&host, &ctx);
+    drop(ctx);
+    assert_no_validation_errors();
+}
