@@ -7,7 +7,7 @@
 #    from the machine's existing Debian source list, so no package host is written here.
 #  - glslangValidator (shader compiler) and spirv-val (shader validator)
 #  - the Khronos validation layer, so tests fail on validation errors
-#  - a C compiler, for the C ABI test
+#  - a C compiler and the Vulkan headers/loader (libvulkan-dev), for the C ABI test
 #
 # Usage: source it (`. scripts/setup.sh`) or run it. Idempotent. Needs root (or sudo) only
 # when something is missing.
@@ -75,7 +75,7 @@ main() {
   have_cmd vulkaninfo || pkgs+=(vulkan-tools)
   [ -e /usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json ] \
     || pkgs+=(vulkan-validationlayers)
-  ldconfig -p 2>/dev/null | grep -q 'libvulkan.so.1' || pkgs+=(libvulkan1)
+  [ -e /usr/include/vulkan/vulkan.h ] || pkgs+=(libvulkan-dev)
   if [ ${#pkgs[@]} -gt 0 ]; then apt_install "${pkgs[@]}"; fi
 
   if ! have_rt_vulkan; then

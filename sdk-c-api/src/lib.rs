@@ -1,1 +1,454 @@
+//! The C ABI of hybrid-rt. The header `include/hybrid_rt.h` is generated from this crate by
+//! cbindgen (`HRT_BLESS=1 cargo test -p hybrid-rt-c header` rewrites it; the same test fails
+//! when it is stale).
+//!
+//! Conventions: every function returns an `HrtStatus` (or a plain value that cannot fail);
+//! output goes through pointers; a NULL required pointer is `HRT_ERROR_NULL_POINTER`; on error
+//! `hrt_last_error_message` holds a message for the calling thread. No panic crosses this
+//! boundary. Contexts and containers are opaque pointers; geometry and instance handles and
+//! tickets are 64-bit integers that the SDK checks (stale, foreign, returned twice).
+#![allow(non_camel_case_types, clippy::missing_safety_doc)]
+mod log_bridge;
+mod status;
+mod types;
 
+use ash::vk;
+use ash::vk::Handle;
+use hybrid_rt as rt;
+pub use log_bridge::{HrtLogCallback, HrtLogSeverity};
+use status::{guard, null, Failure};
+pub use status::HrtStatus;
+use std::ffi::{c_char, c_void, CStr};
+pub use types::*;
+
+/// The API version this header describes: (major << 22) | (minor << 12) | patch.
+pub const HRT_API_VERSION: u32 = (0 << 22) | (1 << 12);
+
+/// Opaque context.
+pub struct HrtContext {
+    ctx: rt::ExecuteContext,
+    // Keeps the loader library alive when the SDK loaded it itself.
+    _entry: ash::Entry,
+}
+
+/// Opaque task container: fill on one thread, build on any.
+pub struct HrtTaskContainer {
+    inner: rt::TaskContainer,
+}
+
+fn get<'a, T>(p: *const T, what: &str) -> Result<&'a T, Failure> {
+    // SAFETY: the caller passes a valid pointer or NULL (checked).
+    unsafe { p.as_ref() }.ok_or_else(|| null(what))
+}
+
+fn get_mut<'a, T>(p: *mut T, what: &str) -> Result<&'a mut T, Failure> {
+    unsafe { p.as_mut() }.ok_or_else(|| null(what))
+}
+
+fn slice<'a, T>(p: *const T, n: u32, what: &str) -> Result<&'a [T], Failure> {
+    if n == 0 {
+        return Ok(&[]);
+    }
+    if p.is_null() {
+        return Err(null(what));
+    }
+    // SAFETY: the caller promises `n` readable elements.
+    Ok(unsafe { std::slice::from_raw_parts(p, n as usize) })
+}
+
+/// Writes the library version.
+#[no_mangle]
+pub extern "C" fn hrt_version(major: *mut u32, minor: *mut u32, patch: *mut u32) {
+    let (a, b, c) = rt::VERSION;
+    unsafe {
+        if let Some(m) = major.as_mut() {
+            *m = a;
+        }
+        if let Some(m) = minor.as_mut() {
+            *m = b;
+        }
+        if let Some(m) = patch.as_mut() {
+            *m = c;
+        }
+    }
+}
+
+/// The calling thread's last error message (NUL-terminated, truncated to `capacity`).
+/// Returns the full length in bytes, without the NUL.
+#[no_mangle]
+pub extern "C" fn hrt_last_error_message(buffer: *mut c_char, capacity: u32) -> u32 {
+    let msg = status::last_error();
+    if !buffer.is_null() && capacity > 0 {
+        let n = msg.len().min(capacity as usize - 1);
+        unsafe {
+            std::ptr::copy_nonoverlapping(msg.as_ptr() as *const c_char, buffer, n);
+            *buffer.add(n) = 0;
+        }
+    }
+    msg.len() as u32
+}
+
+/// Routes the SDK's diagnostics to `callback` for messages at or above `min_severity`
+/// (NULL removes it). Returns false if another logger of the Rust `log` crate already owns
+/// the process.
+#[no_mangle]
+pub extern "C" fn hrt_set_log_callback(callback: HrtLogCallback, min_severity: HrtLogSeverity, user_data: *mut c_void) -> bool {
+    std::panic::catch_unwind(|| log_bridge::install(callback, min_severity, user_data)).unwrap_or(false)
+}
+
+/// The device extensions the SDK needs (static strings). Enable all of them, plus
+/// VK_KHR_ray_query where the device has it (`hrt_optional_device_extensions`), and these
+/// features: bufferDeviceAddress (1.2), synchronization2 (1.3), accelerationStructure,
+/// rayTracingPipeline, shaderStorageImageWriteWithoutFormat (and rayQuery if enabled).
+#[no_mangle]
+pub extern "C" fn hrt_required_device_extensions(names: *mut *const *const c_char, count: *mut u32) {
+    static NAMES: std::sync::OnceLock<Vec<usize>> = std::sync::OnceLock::new();
+    let v = NAMES.get_or_init(|| rt::REQUIRED_DEVICE_EXTENSIONS.iter().map(|n| n.as_ptr() as usize).collect());
+    unsafe {
+        if let Some(n) = names.as_mut() {
+            *n = v.as_ptr() as *const *const c_char;
+        }
+        if let Some(c) = count.as_mut() {
+            *c = v.len() as u32;
+        }
+    }
+}
+
+/// Optional extensions (VK_KHR_ray_query), same form as hrt_required_device_extensions.
+#[no_mangle]
+pub extern "C" fn hrt_optional_device_extensions(names: *mut *const *const c_char, count: *mut u32) {
+    static NAMES: std::sync::OnceLock<Vec<usize>> = std::sync::OnceLock::new();
+    let v = NAMES.get_or_init(|| rt::OPTIONAL_DEVICE_EXTENSIONS.iter().map(|n| n.as_ptr() as usize).collect());
+    unsafe {
+        if let Some(n) = names.as_mut() {
+            *n = v.as_ptr() as *const *const c_char;
+        }
+        if let Some(c) = count.as_mut() {
+            *c = v.len() as u32;
+        }
+    }
+}
+
+unsafe fn entry_from(get_instance_proc_addr: PFN_vkGetInstanceProcAddr) -> Result<ash::Entry, Failure> {
+    if get_instance_proc_addr.is_null() {
+        ash::Entry::load().map_err(|e| Failure(HrtStatus::HRT_ERROR_VULKAN, format!("cannot load libvulkan: {e}")))
+    } else {
+        let f: vk::PFN_vkGetInstanceProcAddr = std::mem::transmute(get_instance_proc_addr);
+        Ok(ash::Entry::from_static_fn(ash::StaticFn { get_instance_proc_addr: f }))
+    }
+}
+
+/// Whether a physical device has what the SDK needs. `missing` (optional) receives a
+/// comma-separated list of what is missing, NUL-terminated and truncated to its capacity.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_query_device_support(
+    get_instance_proc_addr: PFN_vkGetInstanceProcAddr,
+    instance: VkInstance,
+    physical_device: VkPhysicalDevice,
+    supported: *mut bool,
+    ray_query: *mut bool,
+    missing: *mut c_char,
+    missing_capacity: u32,
+) -> HrtStatus {
+    guard(|| {
+        if instance.is_null() || physical_device.is_null() {
+            return Err(null("instance or physical_device"));
+        }
+        let entry = entry_from(get_instance_proc_addr)?;
+        let inst = ash::Instance::load(entry.static_fn(), vk::Instance::from_raw(instance as u64));
+        let s = rt::query_device_support(&inst, vk::PhysicalDevice::from_raw(physical_device as u64));
+        *get_mut(supported, "supported")? = s.supported;
+        if let Some(r) = ray_query.as_mut() {
+            *r = s.ray_query;
+        }
+        if !missing.is_null() && missing_capacity > 0 {
+            let text = s.missing.join(", ");
+            let n = text.len().min(missing_capacity as usize - 1);
+            std::ptr::copy_nonoverlapping(text.as_ptr() as *const c_char, missing, n);
+            *missing.add(n) = 0;
+        }
+        Ok(())
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn hrt_init_settings_default() -> HrtInitSettings {
+    rt::InitSettings::default().into()
+}
+
+/// Creates a context from the engine's device. Checks `desc->api_version` against the
+/// library, and the device against the SDK's needs (HRT_ERROR_MISSING_DEVICE_SUPPORT names
+/// what is missing).
+#[no_mangle]
+pub unsafe extern "C" fn hrt_context_create(desc: *const HrtContextDesc, out: *mut *mut HrtContext) -> HrtStatus {
+    guard(|| {
+        let desc = get(desc, "desc")?;
+        let out = get_mut(out, "out")?;
+        *out = std::ptr::null_mut();
+        if desc.api_version != HRT_API_VERSION {
+            return Err(Failure(
+                HrtStatus::HRT_ERROR_VERSION_MISMATCH,
+                format!("header API version {:#x}, library {:#x}", desc.api_version, HRT_API_VERSION),
+            ));
+        }
+        if desc.instance.is_null() || desc.physical_device.is_null() || desc.device.is_null() {
+            return Err(null("desc->instance, physical_device or device"));
+        }
+        let names = slice(desc.enabled_extensions, desc.enabled_extension_count, "desc->enabled_extensions")?;
+        let mut exts: Vec<&CStr> = Vec::with_capacity(names.len());
+        for &n in names {
+            if n.is_null() {
+                return Err(null("an enabled extension name"));
+            }
+            exts.push(CStr::from_ptr(n));
+        }
+        let entry = entry_from(desc.get_instance_proc_addr)?;
+        let instance = ash::Instance::load(entry.static_fn(), vk::Instance::from_raw(desc.instance as u64));
+        let device = ash::Device::load(instance.fp_v1_0(), vk::Device::from_raw(desc.device as u64));
+        let ctx = rt::ExecuteContext::new(
+            &rt::DeviceDesc {
+                entry: &entry,
+                instance: &instance,
+                physical_device: vk::PhysicalDevice::from_raw(desc.physical_device as u64),
+                device: &device,
+                enabled_extensions: &exts,
+            },
+            &(&desc.settings).into(),
+        )?;
+        *out = Box::into_raw(Box::new(HrtContext { ctx, _entry: entry }));
+        Ok(())
+    })
+}
+
+/// Destroys a context (NULL is ignored). Every ticket must be complete; destroy containers
+/// first or after, in any order.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_context_destroy(ctx: *mut HrtContext) {
+    if !ctx.is_null() {
+        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(ctx))));
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_supports_inline_rt(ctx: *const HrtContext) -> bool {
+    ctx.as_ref().is_some_and(|c| c.ctx.supports_inline_rt())
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_create_geometry_handles(ctx: *mut HrtContext, count: u32, out: *mut HrtGeometryHandle) -> HrtStatus {
+    guard(|| {
+        let c = get(ctx, "ctx")?;
+        if count > 0 && out.is_null() {
+            return Err(null("out"));
+        }
+        for (i, h) in c.ctx.create_geometry_handles(count as usize).into_iter().enumerate() {
+            *out.add(i) = h.0;
+        }
+        Ok(())
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_destroy_geometry_handles(ctx: *mut HrtContext, handles: *const HrtGeometryHandle, count: u32) -> HrtStatus {
+    guard(|| {
+        let c = get(ctx, "ctx")?;
+        let hs: Vec<rt::GeometryHandle> = slice(handles, count, "handles")?.iter().map(|&h| rt::GeometryHandle(h)).collect();
+        Ok(c.ctx.destroy_geometry_handles(&hs)?)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_create_instance_handles(ctx: *mut HrtContext, count: u32, out: *mut HrtInstanceHandle) -> HrtStatus {
+    guard(|| {
+        let c = get(ctx, "ctx")?;
+        if count > 0 && out.is_null() {
+            return Err(null("out"));
+        }
+        for (i, h) in c.ctx.create_instance_handles(count as usize).into_iter().enumerate() {
+            *out.add(i) = h.0;
+        }
+        Ok(())
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_destroy_instance_handles(ctx: *mut HrtContext, handles: *const HrtInstanceHandle, count: u32) -> HrtStatus {
+    guard(|| {
+        let c = get(ctx, "ctx")?;
+        let hs: Vec<rt::InstanceHandle> = slice(handles, count, "handles")?.iter().map(|&h| rt::InstanceHandle(h)).collect();
+        Ok(c.ctx.destroy_instance_handles(&hs)?)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_destroy_all_instance_handles(ctx: *mut HrtContext) -> HrtStatus {
+    guard(|| {
+        get(ctx, "ctx")?.ctx.destroy_all_instance_handles();
+        Ok(())
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_task_container_create(ctx: *mut HrtContext, out: *mut *mut HrtTaskContainer) -> HrtStatus {
+    guard(|| {
+        let c = get(ctx, "ctx")?;
+        let out = get_mut(out, "out")?;
+        *out = Box::into_raw(Box::new(HrtTaskContainer { inner: c.ctx.create_task_container() }));
+        Ok(())
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_task_container_destroy(container: *mut HrtTaskContainer) {
+    if !container.is_null() {
+        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(container))));
+    }
+}
+
+/// Tasks scheduled and not yet built.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_task_container_len(container: *const HrtTaskContainer) -> u32 {
+    container.as_ref().map_or(0, |c| c.inner.len() as u32)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_task_container_clear(container: *mut HrtTaskContainer) {
+    if let Some(c) = container.as_mut() {
+        c.inner.clear();
+    }
+}
+
+#[no_mangle]
+pub extern "C" fn hrt_geometry_task_default() -> HrtGeometryTask {
+    types::geometry_task_default()
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_schedule_geometry(container: *mut HrtTaskContainer, task: *const HrtGeometryTask) -> HrtStatus {
+    guard(|| {
+        let c = get_mut(container, "container")?;
+        Ok(c.inner.schedule_geometry(&types::geometry_task(get(task, "task")?)?)?)
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn hrt_instance_task_default() -> HrtInstanceTask {
+    types::instance_task_default()
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_schedule_instance(container: *mut HrtTaskContainer, task: *const HrtInstanceTask) -> HrtStatus {
+    guard(|| {
+        let c = get_mut(container, "container")?;
+        Ok(c.inner.schedule_instance(&types::instance_task(get(task, "task")?)?)?)
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn hrt_bvh_build_task_default() -> HrtBvhBuildTask {
+    HrtBvhBuildTask { max_blas_build_count: rt::BvhBuildTask::default().max_blas_build_count }
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_schedule_bvh_build(container: *mut HrtTaskContainer, task: *const HrtBvhBuildTask) -> HrtStatus {
+    guard(|| {
+        let c = get_mut(container, "container")?;
+        let t = get(task, "task")?;
+        Ok(c.inner.schedule_bvh_build(&rt::BvhBuildTask { max_blas_build_count: t.max_blas_build_count })?)
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn hrt_trace_common_default() -> HrtTraceCommon {
+    types::trace_common_default()
+}
+
+#[no_mangle]
+pub extern "C" fn hrt_trace_ambient_occlusion_task_default() -> HrtTraceAmbientOcclusionTask {
+    types::ao_task_default()
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_schedule_ambient_occlusion(container: *mut HrtTaskContainer, task: *const HrtTraceAmbientOcclusionTask) -> HrtStatus {
+    guard(|| {
+        let c = get_mut(container, "container")?;
+        Ok(c.inner.schedule_ambient_occlusion(&types::ao_task(get(task, "task")?)?)?)
+    })
+}
+
+/// Records the container into `command_buffer` (begun by the engine, which also ends, submits
+/// and waits for it) and writes a ticket. On success the container is emptied; on error it
+/// keeps its tasks and nothing usable was recorded.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_build_gpu_task(
+    ctx: *mut HrtContext,
+    container: *mut HrtTaskContainer,
+    command_buffer: VkCommandBuffer,
+    ticket: *mut HrtTicket,
+) -> HrtStatus {
+    guard(|| {
+        let c = get(ctx, "ctx")?;
+        let k = get_mut(container, "container")?;
+        let out = get_mut(ticket, "ticket")?;
+        let t = c.ctx.build_gpu_task(&mut k.inner, vk::CommandBuffer::from_raw(command_buffer as u64))?;
+        *out = t.into_raw();
+        Ok(())
+    })
+}
+
+/// Hands a ticket back after the GPU finished its command buffer. Writes up to `capacity`
+/// per-task timings and their total number to `timing_count` (both optional). A ticket
+/// returned twice or never issued is HRT_ERROR_UNKNOWN_TICKET.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_mark_gpu_task_completed(
+    ctx: *mut HrtContext,
+    ticket: HrtTicket,
+    timings: *mut HrtTaskTiming,
+    capacity: u32,
+    timing_count: *mut u32,
+) -> HrtStatus {
+    guard(|| {
+        let c = get(ctx, "ctx")?;
+        let done = c.ctx.mark_gpu_task_completed(rt::GpuTicket::from_raw(ticket))?;
+        if let Some(n) = timing_count.as_mut() {
+            *n = done.timings.len() as u32;
+        }
+        if !timings.is_null() {
+            for (i, t) in done.timings.iter().take(capacity as usize).enumerate() {
+                *timings.add(i) = HrtTaskTiming {
+                    kind: match t.kind {
+                        rt::TaskKind::Bvh => HrtTaskKind::HRT_TASK_BVH,
+                        rt::TaskKind::AmbientOcclusion => HrtTaskKind::HRT_TASK_AMBIENT_OCCLUSION,
+                    },
+                    task_index: t.task_index,
+                    gpu_ms: t.gpu_ms,
+                };
+            }
+        }
+        Ok(())
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_release_device_resources_immediately(ctx: *mut HrtContext) -> HrtStatus {
+    guard(|| Ok(get(ctx, "ctx")?.ctx.release_device_resources_immediately()?))
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_pending_blas_builds(ctx: *const HrtContext) -> u32 {
+    ctx.as_ref().map_or(0, |c| c.ctx.pending_blas_builds() as u32)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_tlas_instance_count(ctx: *const HrtContext) -> u32 {
+    ctx.as_ref().map_or(0, |c| c.ctx.tlas_instance_count() as u32)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_resource_allocations(ctx: *const HrtContext, out: *mut HrtResourceAllocations) -> HrtStatus {
+    guard(|| {
+        let c = get(ctx, "ctx")?;
+        *get_mut(out, "out")? = c.ctx.resource_allocations().into();
+        Ok(())
+    })
+}

@@ -1,0 +1,529 @@
+/*
+ * hybrid-rt from C: the smallest complete integration.
+ *
+ * The "engine" here creates its own Vulkan instance and device (enabling what the SDK asks
+ * for), registers a ground quad and a small ceiling quad with the SDK, fills a 32x32
+ * G-buffer (a camera looking straight down at the ground: constant depth, normals +Y),
+ * records the SDK's BVH and AO work into its own command buffer, submits it, waits on its
+ * own fence and hands the ticket back. Then it checks the AO: dark under the ceiling, open
+ * elsewhere, open everywhere once the ceiling instance is removed; and that bad input gets
+ * the right status codes. Exit code 0 = all checks passed. With the Khronos validation
+ * layer installed, any validation error fails the run.
+ */
+#include "hybrid_rt.h"
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define W 32
+#define H 32
+
+#define CHECK_VK(x)                                                                  \
+    do {                                                                             \
+        VkResult r_ = (x);                                                           \
+        if (r_ != VK_SUCCESS) {                                                      \
+            fprintf(stderr, "%s:%d: %s -> VkResult %d\n", __FILE__, __LINE__, #x, r_); \
+            exit(1);                                                                 \
+        }                                                                            \
+    } while (0)
+
+#define CHECK_HRT(x)                                                                           \
+    do {                                                                                       \
+        HrtStatus s_ = (x);                                                                    \
+        if (s_ != HRT_OK) {                                                                    \
+            char m_[512];                                                                      \
+            hrt_last_error_message(m_, sizeof m_);                                             \
+            fprintf(stderr, "%s:%d: %s -> status %d: %s\n", __FILE__, __LINE__, #x, s_, m_); \
+            exit(1);                                                                           \
+        }                                                                                      \
+    } while (0)
+
+#define EXPECT(cond, ...)                                                 \
+    do {                                                                  \
+        if (!(cond)) {                                                    \
+            fprintf(stderr, "%s:%d: check failed: %s: ", __FILE__, __LINE__, #cond); \
+            fprintf(stderr, __VA_ARGS__);                                 \
+            fprintf(stderr, "\n");                                        \
+            exit(1);                                                      \
+        }                                                                 \
+    } while (0)
+
+static VkInstance instance;
+static VkPhysicalDevice physical_device;
+static VkDevice device;
+static VkQueue queue;
+static VkCommandPool pool;
+static VkPhysicalDeviceMemoryProperties memory_properties;
+static int validation_errors;
+
+static VKAPI_ATTR VkBool32 VKAPI_CALL on_validation(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                                    VkDebugUtilsMessageTypeFlagsEXT type,
+                                                    const VkDebugUtilsMessengerCallbackDataEXT *data, void *user) {
+    (void)type;
+    (void)user;
+    if (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT) {
+        validation_errors++;
+        fprintf(stderr, "[validation error] %s\n", data->pMessage);
+    }
+    return VK_FALSE;
+}
+
+static void on_sdk_log(HrtLogSeverity severity, const char *message, void *user) {
+    (void)user;
+    fprintf(stderr, "[hybrid-rt %d] %s\n", (int)severity, message);
+}
+
+static uint32_t memory_type(uint32_t bits, VkMemoryPropertyFlags flags) {
+    for (uint32_t i = 0; i < memory_properties.memoryTypeCount; i++)
+        if ((bits & (1u << i)) && (memory_properties.memoryTypes[i].propertyFlags & flags) == flags) return i;
+    fprintf(stderr, "no memory type\n");
+    exit(1);
+}
+
+typedef struct {
+    VkBuffer buffer;
+    VkDeviceMemory memory;
+} Buffer;
+
+static Buffer make_buffer(VkDeviceSize size, VkBufferUsageFlags usage, const void *data) {
+    Buffer b;
+    VkBufferCreateInfo info = {VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+    info.size = size;
+    info.usage = usage;
+    CHECK_VK(vkCreateBuffer(device, &info, NULL, &b.buffer));
+    VkMemoryRequirements req;
+    vkGetBufferMemoryRequirements(device, b.buffer, &req);
+    VkMemoryAllocateInfo alloc = {VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    alloc.allocationSize = req.size;
+    alloc.memoryTypeIndex = memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
+    CHECK_VK(vkAllocateMemory(device, &alloc, NULL, &b.memory));
+    CHECK_VK(vkBindBufferMemory(device, b.buffer, b.memory, 0));
+    if (data) {
+        void *p;
+        CHECK_VK(vkMapMemory(device, b.memory, 0, size, 0, &p));
+        memcpy(p, data, (size_t)size);
+        vkUnmapMemory(device, b.memory);
+    }
+    return b;
+}
+
+static void free_buffer(Buffer b) {
+    vkDestroyBuffer(device, b.buffer, NULL);
+    vkFreeMemory(device, b.memory, NULL);
+}
+
+typedef struct {
+    VkImage image;
+    VkDeviceMemory memory;
+    VkImageView view;
+    VkFormat format;
+} Image;
+
+static Image make_image(VkFormat format, VkImageUsageFlags usage) {
+    Image img;
+    img.format = format;
+    VkImageCreateInfo info = {VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+    info.imageType = VK_IMAGE_TYPE_2D;
+    info.format = format;
+    info.extent.width = W;
+    info.extent.height = H;
+    info.extent.depth = 1;
+    info.mipLevels = 1;
+    info.arrayLayers = 1;
+    info.samples = VK_SAMPLE_COUNT_1_BIT;
+    info.tiling = VK_IMAGE_TILING_OPTIMAL;
+    info.usage = usage | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+    CHECK_VK(vkCreateImage(device, &info, NULL, &img.image));
+    VkMemoryRequirements req;
+    vkGetImageMemoryRequirements(device, img.image, &req);
+    VkMemoryAllocateInfo alloc = {VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    alloc.allocationSize = req.size;
+    alloc.memoryTypeIndex = memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+    CHECK_VK(vkAllocateMemory(device, &alloc, NULL, &img.memory));
+    CHECK_VK(vkBindImageMemory(device, img.image, img.memory, 0));
+    VkImageViewCreateInfo view = {VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+    view.image = img.image;
+    view.viewType = VK_IMAGE_VIEW_TYPE_2D;
+    view.format = format;
+    view.subresourceRange.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
+    view.subresourceRange.levelCount = 1;
+    view.subresourceRange.layerCount = 1;
+    CHECK_VK(vkCreateImageView(device, &view, NULL, &img.view));
+    return img;
+}
+
+static void free_image(Image i) {
+    vkDestroyImageView(device, i.view, NULL);
+    vkDestroyImage(device, i.image, NULL);
+    vkFreeMemory(device, i.memory, NULL);
+}
+
+static HrtImageInput sdk_image(const Image *i, VkImageLayout layout) {
+    HrtImageInput in;
+    in.image = i->image;
+    in.view = i->view;
+    in.format = i->format;
+    in.width = W;
+    in.height = H;
+    in.layout = layout;
+    return in;
+}
+
+/* A full barrier with a layout change: this sample favours brevity over tight stages. */
+static void transition(VkCommandBuffer cmd, VkImage image, VkImageLayout from, VkImageLayout to) {
+    VkImageMemoryBarrier2 b = {VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2};
+    b.srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+    b.srcAccessMask = VK_ACCESS_2_MEMORY_WRITE_BIT;
+    b.dstStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+    b.dstAccessMask = VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT;
+    b.oldLayout = from;
+    b.newLayout = to;
+    b.image = image;
+    b.subresourceRange.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
+    b.subresourceRange.levelCount = 1;
+    b.subresourceRange.layerCount = 1;
+    VkDependencyInfo dep = {VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+    dep.imageMemoryBarrierCount = 1;
+    dep.pImageMemoryBarriers = &b;
+    vkCmdPipelineBarrier2(cmd, &dep);
+}
+
+static VkCommandBuffer begin(void) {
+    VkCommandBufferAllocateInfo info = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    info.commandPool = pool;
+    info.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    info.commandBufferCount = 1;
+    VkCommandBuffer cmd;
+    CHECK_VK(vkAllocateCommandBuffers(device, &info, &cmd));
+    VkCommandBufferBeginInfo bi = {VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+    CHECK_VK(vkBeginCommandBuffer(cmd, &bi));
+    return cmd;
+}
+
+static void submit_and_wait(VkCommandBuffer cmd) {
+    CHECK_VK(vkEndCommandBuffer(cmd));
+    VkFenceCreateInfo fi = {VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    VkFence fence;
+    CHECK_VK(vkCreateFence(device, &fi, NULL, &fence));
+    VkSubmitInfo si = {VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    si.commandBufferCount = 1;
+    si.pCommandBuffers = &cmd;
+    CHECK_VK(vkQueueSubmit(queue, 1, &si, fence));
+    CHECK_VK(vkWaitForFences(device, 1, &fence, VK_TRUE, UINT64_MAX));
+    vkDestroyFence(device, fence, NULL);
+    vkFreeCommandBuffers(device, pool, 1, &cmd);
+}
+
+/* Records the container between two full barriers (the engine's own work around it), submits,
+ * waits, hands the ticket back and returns the number of timed tasks. */
+static uint32_t run_frame(HrtContext *ctx, HrtTaskContainer *frame, Image *out, float *ao) {
+    VkCommandBuffer cmd = begin();
+    HrtTicket ticket;
+    CHECK_HRT(hrt_build_gpu_task(ctx, frame, cmd, &ticket));
+    EXPECT(hrt_task_container_len(frame) == 0, "a built container is emptied");
+    transition(cmd, out->image, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+    Buffer readback = make_buffer(W * H * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT, NULL);
+    VkBufferImageCopy region = {0};
+    region.imageSubresource.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
+    region.imageSubresource.layerCount = 1;
+    region.imageExtent.width = W;
+    region.imageExtent.height = H;
+    region.imageExtent.depth = 1;
+    vkCmdCopyImageToBuffer(cmd, out->image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, readback.buffer, 1, &region);
+    transition(cmd, out->image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL);
+    submit_and_wait(cmd);
+
+    HrtTaskTiming timings[8];
+    uint32_t count = 0;
+    CHECK_HRT(hrt_mark_gpu_task_completed(ctx, ticket, timings, 8, &count));
+    for (uint32_t i = 0; i < count && i < 8; i++)
+        printf("  task %u (kind %d): %.3f ms\n", timings[i].task_index, (int)timings[i].kind, timings[i].gpu_ms);
+    /* The same ticket twice is refused. */
+    EXPECT(hrt_mark_gpu_task_completed(ctx, ticket, NULL, 0, NULL) == HRT_ERROR_UNKNOWN_TICKET, "second return");
+
+    void *p;
+    CHECK_VK(vkMapMemory(device, readback.memory, 0, W * H * 4, 0, &p));
+    memcpy(ao, p, W * H * 4);
+    vkUnmapMemory(device, readback.memory);
+    free_buffer(readback);
+    return count;
+}
+
+int main(void) {
+    /* ---- The engine's instance and device. */
+    uint32_t layer_count = 0;
+    vkEnumerateInstanceLayerProperties(&layer_count, NULL);
+    VkLayerProperties *layers = calloc(layer_count ? layer_count : 1, sizeof *layers);
+    vkEnumerateInstanceLayerProperties(&layer_count, layers);
+    int validation = 0;
+    const char *env = getenv("HRT_VALIDATION");
+    for (uint32_t i = 0; i < layer_count; i++)
+        if (!strcmp(layers[i].layerName, "VK_LAYER_KHRONOS_validation") && !(env && !strcmp(env, "0"))) validation = 1;
+    free(layers);
+    const char *layer_names[] = {"VK_LAYER_KHRONOS_validation"};
+    const char *instance_exts[] = {VK_EXT_DEBUG_UTILS_EXTENSION_NAME};
+
+    VkApplicationInfo app = {VK_STRUCTURE_TYPE_APPLICATION_INFO};
+    app.pApplicationName = "hybrid-rt C sample";
+    app.apiVersion = VK_API_VERSION_1_3;
+    VkInstanceCreateInfo ici = {VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+    ici.pApplicationInfo = &app;
+    ici.enabledLayerCount = validation ? 1 : 0;
+    ici.ppEnabledLayerNames = layer_names;
+    ici.enabledExtensionCount = validation ? 1 : 0;
+    ici.ppEnabledExtensionNames = instance_exts;
+    CHECK_VK(vkCreateInstance(&ici, NULL, &instance));
+    VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
+    if (validation) {
+        PFN_vkCreateDebugUtilsMessengerEXT create =
+            (PFN_vkCreateDebugUtilsMessengerEXT)vkGetInstanceProcAddr(instance, "vkCreateDebugUtilsMessengerEXT");
+        VkDebugUtilsMessengerCreateInfoEXT mi = {VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+        mi.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT;
+        mi.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT;
+        mi.pfnUserCallback = on_validation;
+        CHECK_VK(create(instance, &mi, NULL, &messenger));
+    }
+
+    uint32_t device_count = 0;
+    CHECK_VK(vkEnumeratePhysicalDevices(instance, &device_count, NULL));
+    VkPhysicalDevice devices[16];
+    if (device_count > 16) device_count = 16;
+    CHECK_VK(vkEnumeratePhysicalDevices(instance, &device_count, devices));
+    bool ray_query = false;
+    char missing[512];
+    for (uint32_t i = 0; i < device_count && !physical_device; i++) {
+        bool supported = false, rq = false;
+        CHECK_HRT(hrt_query_device_support((const void *)vkGetInstanceProcAddr, instance, devices[i], &supported, &rq, missing, sizeof missing));
+        if (supported) {
+            physical_device = devices[i];
+            ray_query = rq;
+        } else {
+            printf("device %u lacks: %s\n", i, missing);
+        }
+    }
+    EXPECT(physical_device != VK_NULL_HANDLE, "a device with ray tracing (run scripts/setup.sh)");
+    vkGetPhysicalDeviceMemoryProperties(physical_device, &memory_properties);
+
+    uint32_t family_count = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(physical_device, &family_count, NULL);
+    VkQueueFamilyProperties families[16];
+    if (family_count > 16) family_count = 16;
+    vkGetPhysicalDeviceQueueFamilyProperties(physical_device, &family_count, families);
+    uint32_t family = 0;
+    while (family < family_count && !(families[family].queueFlags & VK_QUEUE_COMPUTE_BIT)) family++;
+
+    /* Extensions and features the SDK asks for. */
+    const char *const *required;
+    const char *const *optional;
+    uint32_t n_required, n_optional;
+    hrt_required_device_extensions(&required, &n_required);
+    hrt_optional_device_extensions(&optional, &n_optional);
+    const char *exts[16];
+    uint32_t n_exts = 0;
+    for (uint32_t i = 0; i < n_required; i++) exts[n_exts++] = required[i];
+    if (ray_query)
+        for (uint32_t i = 0; i < n_optional; i++) exts[n_exts++] = optional[i];
+
+    VkPhysicalDeviceRayQueryFeaturesKHR rqf = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_QUERY_FEATURES_KHR};
+    rqf.rayQuery = VK_TRUE;
+    VkPhysicalDeviceRayTracingPipelineFeaturesKHR rtf = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_TRACING_PIPELINE_FEATURES_KHR};
+    rtf.rayTracingPipeline = VK_TRUE;
+    rtf.pNext = ray_query ? &rqf : NULL;
+    VkPhysicalDeviceAccelerationStructureFeaturesKHR asf = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_FEATURES_KHR};
+    asf.accelerationStructure = VK_TRUE;
+    asf.pNext = &rtf;
+    VkPhysicalDeviceVulkan13Features f13 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+    f13.synchronization2 = VK_TRUE;
+    f13.pNext = &asf;
+    VkPhysicalDeviceVulkan12Features f12 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+    f12.bufferDeviceAddress = VK_TRUE;
+    f12.pNext = &f13;
+    VkPhysicalDeviceFeatures2 f2 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+    f2.features.shaderStorageImageWriteWithoutFormat = VK_TRUE;
+    f2.pNext = &f12;
+
+    float priority = 1.0f;
+    VkDeviceQueueCreateInfo qci = {VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+    qci.queueFamilyIndex = family;
+    qci.queueCount = 1;
+    qci.pQueuePriorities = &priority;
+    VkDeviceCreateInfo dci = {VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+    dci.pNext = &f2;
+    dci.queueCreateInfoCount = 1;
+    dci.pQueueCreateInfos = &qci;
+    dci.enabledExtensionCount = n_exts;
+    dci.ppEnabledExtensionNames = exts;
+    CHECK_VK(vkCreateDevice(physical_device, &dci, NULL, &device));
+    vkGetDeviceQueue(device, family, 0, &queue);
+    VkCommandPoolCreateInfo pci = {VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    pci.queueFamilyIndex = family;
+    CHECK_VK(vkCreateCommandPool(device, &pci, NULL, &pool));
+
+    /* ---- The SDK context. */
+    hrt_set_log_callback(on_sdk_log, HRT_LOG_WARNING, NULL);
+    HrtContextDesc desc;
+    memset(&desc, 0, sizeof desc);
+    desc.api_version = HRT_API_VERSION;
+    desc.get_instance_proc_addr = (const void *)vkGetInstanceProcAddr;
+    desc.instance = instance;
+    desc.physical_device = physical_device;
+    desc.device = device;
+    desc.enabled_extensions = exts;
+    desc.enabled_extension_count = n_exts;
+    desc.settings = hrt_init_settings_default();
+    HrtContext *ctx = NULL;
+    desc.api_version = HRT_API_VERSION + 1;
+    EXPECT(hrt_context_create(&desc, &ctx) == HRT_ERROR_VERSION_MISMATCH, "a header/library mismatch is refused");
+    desc.api_version = HRT_API_VERSION;
+    CHECK_HRT(hrt_context_create(&desc, &ctx));
+
+    /* ---- Geometry: a 20x20 ground quad at y = 0 and a 1x1 ceiling quad 0.2 above it. */
+    const float ground[] = {-10, 0, -10, 10, 0, -10, 10, 0, 10, -10, 0, 10};
+    const float ceiling[] = {-0.5f, 0.2f, -0.5f, 0.5f, 0.2f, -0.5f, 0.5f, 0.2f, 0.5f, -0.5f, 0.2f, 0.5f};
+    const uint32_t quad_indices[] = {0, 2, 1, 0, 3, 2};
+    Buffer vb_ground = make_buffer(sizeof ground, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, ground);
+    Buffer vb_ceiling = make_buffer(sizeof ceiling, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, ceiling);
+    Buffer ib = make_buffer(sizeof quad_indices, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, quad_indices);
+
+    HrtGeometryHandle geometries[2];
+    HrtInstanceHandle instances[2];
+    CHECK_HRT(hrt_create_geometry_handles(ctx, 2, geometries));
+    CHECK_HRT(hrt_create_instance_handles(ctx, 2, instances));
+    HrtTaskContainer *frame = NULL;
+    CHECK_HRT(hrt_task_container_create(ctx, &frame));
+
+    Buffer vbs[2] = {vb_ground, vb_ceiling};
+    for (int i = 0; i < 2; i++) {
+        HrtGeometryTask g = hrt_geometry_task_default();
+        g.handle = geometries[i];
+        g.input.vertices.buffer = vbs[i].buffer;
+        g.input.vertices.count = 4;
+        g.input.indices.buffer = ib.buffer;
+        g.input.indices.count = 6;
+        CHECK_HRT(hrt_schedule_geometry(frame, &g));
+        HrtInstanceTask inst = hrt_instance_task_default();
+        inst.handle = instances[i];
+        inst.input.geometry = geometries[i];
+        CHECK_HRT(hrt_schedule_instance(frame, &inst));
+    }
+    HrtBvhBuildTask bvh = hrt_bvh_build_task_default();
+    CHECK_HRT(hrt_schedule_bvh_build(frame, &bvh));
+
+    /* ---- Bad input gets a status, and schedules nothing. */
+    HrtInstanceTask bad = hrt_instance_task_default();
+    bad.handle = instances[0];
+    bad.input.geometry = geometries[0];
+    bad.input.transform[3] = NAN;
+    EXPECT(hrt_schedule_instance(frame, &bad) == HRT_ERROR_INVALID_TRANSFORM, "NaN transform");
+    bad.input.transform[3] = 0.0f;
+    bad.operation = 7;
+    EXPECT(hrt_schedule_instance(frame, &bad) == HRT_ERROR_INVALID_INPUT, "out-of-range enum");
+    EXPECT(hrt_schedule_instance(NULL, &bad) == HRT_ERROR_NULL_POINTER, "NULL container");
+    EXPECT(hrt_schedule_instance(frame, NULL) == HRT_ERROR_NULL_POINTER, "NULL task");
+    HrtGeometryTask stale = hrt_geometry_task_default();
+    stale.handle = geometries[0] + (1ull << 32); /* same slot, another generation: stale */
+    stale.input.vertices.buffer = vb_ground.buffer;
+    stale.input.vertices.count = 3;
+    EXPECT(hrt_schedule_geometry(frame, &stale) == HRT_ERROR_INVALID_HANDLE, "stale handle");
+    char message[256];
+    hrt_last_error_message(message, sizeof message);
+    printf("refused as expected: %s\n", message);
+
+    /* ---- The G-buffer: a camera 3 above the origin looking straight down (-Y). */
+    const float eye_height = 3.0f, near = 0.05f, far = 100.0f, fov = 60.0f * 3.14159265f / 180.0f;
+    const float f = 1.0f / tanf(fov / 2.0f);
+    HrtCamera camera = {
+        /* world_to_view, column-major: x_v = x, y_v = -z, z_v = y - 3 */
+        {1, 0, 0, 0, 0, 0, 1, 0, 0, -1, 0, 0, 0, 0, -eye_height, 1},
+        /* Vulkan perspective: y down, depth 0..1 */
+        {f, 0, 0, 0, 0, -f, 0, 0, 0, 0, far / (near - far), -1, 0, 0, near * far / (near - far), 0},
+    };
+    const float z_view = -eye_height;
+    const float ground_depth = (far / (near - far) * z_view + near * far / (near - far)) / -z_view;
+
+    Image depth = make_image(VK_FORMAT_R32_SFLOAT, VK_IMAGE_USAGE_SAMPLED_BIT);
+    Image normals = make_image(VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_SAMPLED_BIT);
+    Image out = make_image(VK_FORMAT_R32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT);
+    VkCommandBuffer cmd = begin();
+    VkImageSubresourceRange all = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+    VkClearColorValue depth_value = {{ground_depth, 0, 0, 0}};
+    VkClearColorValue up = {{0, 1, 0, 0}};
+    VkClearColorValue zero = {{0, 0, 0, 0}};
+    transition(cmd, depth.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+    transition(cmd, normals.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+    transition(cmd, out.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+    vkCmdClearColorImage(cmd, depth.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &depth_value, 1, &all);
+    vkCmdClearColorImage(cmd, normals.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &up, 1, &all);
+    vkCmdClearColorImage(cmd, out.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &zero, 1, &all);
+    transition(cmd, depth.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    transition(cmd, normals.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    transition(cmd, out.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL);
+    submit_and_wait(cmd);
+
+    HrtTraceAmbientOcclusionTask ao = hrt_trace_ambient_occlusion_task_default();
+    ao.common.depth.image = sdk_image(&depth, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    ao.common.normals.image = sdk_image(&normals, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    ao.common.normals.normal_type = HRT_NORMAL_RGB_VECTOR;
+    ao.common.viewport.width = W;
+    ao.common.viewport.height = H;
+    ao.common.camera = camera;
+    ao.common.use_inline_rt = hrt_supports_inline_rt(ctx);
+    ao.output = sdk_image(&out, VK_IMAGE_LAYOUT_GENERAL);
+    ao.ray_length = 1.0f;
+    ao.rays_per_pixel = 16;
+    CHECK_HRT(hrt_schedule_ambient_occlusion(frame, &ao));
+
+    /* ---- Frame 1: everything registered; dark under the ceiling, open at the corners. */
+    float result[W * H];
+    printf("frame 1:\n");
+    uint32_t timed = run_frame(ctx, frame, &out, result);
+    EXPECT(timed >= 2, "BVH and AO timings reported (%u)", timed);
+    EXPECT(hrt_tlas_instance_count(ctx) == 2, "two instances in the TLAS");
+    float centre = result[(H / 2) * W + W / 2], corner = result[0];
+    printf("AO under the ceiling %.3f, at the corner %.3f\n", centre, corner);
+    EXPECT(centre < 0.6f, "the ceiling occludes the centre (%f)", centre);
+    EXPECT(corner > 0.999f, "nothing occludes the corner (%f)", corner);
+
+    HrtResourceAllocations mem;
+    CHECK_HRT(hrt_resource_allocations(ctx, &mem));
+    EXPECT(mem.blas.count == 2, "two BLASes");
+    EXPECT(hrt_destroy_geometry_handles(ctx, &geometries[1], 1) == HRT_ERROR_GEOMETRY_IN_USE, "geometry in use");
+
+    /* ---- Frame 2: the ceiling instance removed: open everywhere. */
+    HrtInstanceTask remove = hrt_instance_task_default();
+    remove.handle = instances[1];
+    remove.operation = HRT_INSTANCE_REMOVE;
+    CHECK_HRT(hrt_schedule_instance(frame, &remove));
+    CHECK_HRT(hrt_schedule_bvh_build(frame, &bvh));
+    CHECK_HRT(hrt_schedule_ambient_occlusion(frame, &ao));
+    printf("frame 2:\n");
+    run_frame(ctx, frame, &out, result);
+    centre = result[(H / 2) * W + W / 2];
+    EXPECT(centre > 0.999f, "the removed ceiling no longer occludes (%f)", centre);
+
+    /* ---- Teardown. */
+    CHECK_HRT(hrt_destroy_all_instance_handles(ctx));
+    CHECK_HRT(hrt_destroy_geometry_handles(ctx, geometries, 2));
+    CHECK_HRT(hrt_release_device_resources_immediately(ctx));
+    hrt_task_container_destroy(frame);
+    hrt_context_destroy(ctx);
+    free_image(depth);
+    free_image(normals);
+    free_image(out);
+    free_buffer(vb_ground);
+    free_buffer(vb_ceiling);
+    free_buffer(ib);
+    vkDestroyCommandPool(device, pool, NULL);
+    vkDestroyDevice(device, NULL);
+    if (messenger) {
+        PFN_vkDestroyDebugUtilsMessengerEXT destroy =
+            (PFN_vkDestroyDebugUtilsMessengerEXT)vkGetInstanceProcAddr(instance, "vkDestroyDebugUtilsMessengerEXT");
+        destroy(instance, messenger, NULL);
+    }
+    vkDestroyInstance(instance, NULL);
+    EXPECT(validation_errors == 0, "%d validation errors", validation_errors);
+    printf("c_api: all checks passed%s\n", validation ? " (with validation)" : "");
+    return 0;
+}

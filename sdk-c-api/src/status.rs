@@ -1,0 +1,100 @@
+//! Status codes, the thread-local last-error message, and the panic guard every entry point
+//! runs inside: nothing unwinds across the C boundary.
+use hybrid_rt::Error;
+use std::cell::RefCell;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+/// Result of every `hrt_*` call. On anything but `HRT_OK`, `hrt_last_error_message` tells
+/// what went wrong, naming the field.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HrtStatus {
+    HRT_OK = 0,
+    /// A required pointer argument was NULL.
+    HRT_ERROR_NULL_POINTER = 1,
+    /// The header the caller was compiled with does not match this library.
+    HRT_ERROR_VERSION_MISMATCH = 2,
+    HRT_ERROR_MISSING_DEVICE_SUPPORT = 3,
+    HRT_ERROR_VULKAN = 4,
+    HRT_ERROR_OUT_OF_MEMORY = 5,
+    HRT_ERROR_INVALID_HANDLE = 6,
+    HRT_ERROR_INVALID_INPUT = 7,
+    HRT_ERROR_UNSUPPORTED_FORMAT = 8,
+    HRT_ERROR_BUFFER_TOO_SMALL = 9,
+    HRT_ERROR_INVALID_TRANSFORM = 10,
+    HRT_ERROR_WORKING_SETS_EXHAUSTED = 11,
+    HRT_ERROR_UNKNOWN_TICKET = 12,
+    HRT_ERROR_TICKETS_IN_FLIGHT = 13,
+    HRT_ERROR_GEOMETRY_IN_USE = 14,
+    HRT_ERROR_FOREIGN_CONTAINER = 15,
+    /// An SDK bug (a caught panic); the context may be unusable.
+    HRT_ERROR_INTERNAL = 16,
+    /// An output array was too small; the count says how many are needed.
+    HRT_ERROR_INSUFFICIENT_CAPACITY = 17,
+}
+
+thread_local! {
+    static LAST_ERROR: RefCell<String> = const { RefCell::new(String::new()) };
+}
+
+pub(crate) fn set_last_error(msg: String) {
+    LAST_ERROR.with(|e| *e.borrow_mut() = msg);
+}
+
+pub(crate) fn last_error() -> String {
+    LAST_ERROR.with(|e| e.borrow().clone())
+}
+
+pub(crate) fn status_of(e: &Error) -> HrtStatus {
+    use HrtStatus::*;
+    match e {
+        Error::MissingDeviceSupport { .. } => HRT_ERROR_MISSING_DEVICE_SUPPORT,
+        Error::Vulkan { .. } => HRT_ERROR_VULKAN,
+        Error::OutOfMemory { .. } => HRT_ERROR_OUT_OF_MEMORY,
+        Error::InvalidHandle { .. } => HRT_ERROR_INVALID_HANDLE,
+        Error::InvalidInput { .. } => HRT_ERROR_INVALID_INPUT,
+        Error::UnsupportedFormat { .. } => HRT_ERROR_UNSUPPORTED_FORMAT,
+        Error::BufferTooSmall { .. } => HRT_ERROR_BUFFER_TOO_SMALL,
+        Error::InvalidTransform { .. } => HRT_ERROR_INVALID_TRANSFORM,
+        Error::WorkingSetsExhausted { .. } => HRT_ERROR_WORKING_SETS_EXHAUSTED,
+        Error::UnknownTicket { .. } => HRT_ERROR_UNKNOWN_TICKET,
+        Error::TicketsInFlight { .. } => HRT_ERROR_TICKETS_IN_FLIGHT,
+        Error::GeometryInUse { .. } => HRT_ERROR_GEOMETRY_IN_USE,
+        Error::ForeignContainer => HRT_ERROR_FOREIGN_CONTAINER,
+        _ => HRT_ERROR_INTERNAL,
+    }
+}
+
+/// What an entry point body returns on failure.
+pub(crate) struct Failure(pub HrtStatus, pub String);
+
+impl From<Error> for Failure {
+    fn from(e: Error) -> Failure {
+        Failure(status_of(&e), e.to_string())
+    }
+}
+
+pub(crate) fn null(what: &str) -> Failure {
+    Failure(HrtStatus::HRT_ERROR_NULL_POINTER, format!("{what} is NULL"))
+}
+
+/// Runs an entry point: maps errors to a status (recording the message) and panics to
+/// HRT_ERROR_INTERNAL.
+pub(crate) fn guard(f: impl FnOnce() -> Result<(), Failure>) -> HrtStatus {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok(Ok(())) => HrtStatus::HRT_OK,
+        Ok(Err(Failure(status, msg))) => {
+            set_last_error(msg);
+            status
+        }
+        Err(panic) => {
+            let msg = panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".into());
+            set_last_error(format!("internal error (panic): {msg}"));
+            HrtStatus::HRT_ERROR_INTERNAL
+        }
+    }
+}

@@ -1,0 +1,558 @@
+//! C mirrors of the SDK's task structs, field for field, with the same defaults (each has an
+//! `hrt_*_default()` in lib.rs). Vulkan handles and enums are the <vulkan/vulkan.h> types.
+//! Matrices are column-major float[16] (as GLSL and glam); transforms are row-major 3x4
+//! float[12] (as VkTransformMatrixKHR).
+use ash::vk;
+use ash::vk::Handle;
+use hybrid_rt as rt;
+use std::ffi::c_void;
+
+// Vulkan types as the header names them (declared by <vulkan/vulkan.h>, not by cbindgen).
+// Non-dispatchable handles are 64-bit on every platform the SDK supports.
+pub type VkInstance = *mut c_void;
+pub type VkPhysicalDevice = *mut c_void;
+pub type VkDevice = *mut c_void;
+pub type VkCommandBuffer = *mut c_void;
+pub type VkBuffer = u64;
+pub type VkImage = u64;
+pub type VkImageView = u64;
+pub type VkFormat = i32;
+pub type VkImageLayout = i32;
+pub type PFN_vkGetInstanceProcAddr = *const c_void;
+
+pub type HrtGeometryHandle = u64;
+pub type HrtInstanceHandle = u64;
+pub type HrtTicket = u64;
+
+pub(crate) fn buffer(b: VkBuffer) -> vk::Buffer {
+    vk::Buffer::from_raw(b)
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtInitSettings {
+    /// Tickets in flight at once. Default 2.
+    pub supported_working_sets: u32,
+    /// Initial upload ring bytes per working set. Default 1 MiB.
+    pub upload_ring_bytes: u64,
+    /// Timed tasks per ticket. Default 64.
+    pub max_timed_tasks: u32,
+}
+
+impl From<rt::InitSettings> for HrtInitSettings {
+    fn from(s: rt::InitSettings) -> Self {
+        HrtInitSettings { supported_working_sets: s.supported_working_sets, upload_ring_bytes: s.upload_ring_bytes, max_timed_tasks: s.max_timed_tasks }
+    }
+}
+impl From<&HrtInitSettings> for rt::InitSettings {
+    fn from(s: &HrtInitSettings) -> Self {
+        rt::InitSettings { supported_working_sets: s.supported_working_sets, upload_ring_bytes: s.upload_ring_bytes, max_timed_tasks: s.max_timed_tasks }
+    }
+}
+
+/// The engine's Vulkan objects. The SDK keeps function tables, not ownership.
+#[repr(C)]
+pub struct HrtContextDesc {
+    /// Must be HRT_API_VERSION (checked: a header/library mismatch is an error).
+    pub api_version: u32,
+    /// The loader's vkGetInstanceProcAddr; NULL loads libvulkan.so.1 itself.
+    pub get_instance_proc_addr: PFN_vkGetInstanceProcAddr,
+    pub instance: VkInstance,
+    pub physical_device: VkPhysicalDevice,
+    pub device: VkDevice,
+    /// The device extensions the engine enabled (see hrt_required_device_extensions).
+    pub enabled_extensions: *const *const std::ffi::c_char,
+    pub enabled_extension_count: u32,
+    pub settings: HrtInitSettings,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtTaskOperation {
+    HRT_OPERATION_REGISTER = 0,
+    HRT_OPERATION_UPDATE = 1,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtInstanceOperation {
+    HRT_INSTANCE_REGISTER = 0,
+    HRT_INSTANCE_UPDATE = 1,
+    HRT_INSTANCE_REMOVE = 2,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtSurfelType {
+    HRT_SURFEL_MESH_COLORS = 0,
+    HRT_SURFEL_TILES = 1,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtVertexBufferInput {
+    /// Needs TRANSFER_SRC usage; read while the registering ticket runs.
+    pub buffer: VkBuffer,
+    pub offset: u64,
+    /// Default 12.
+    pub stride: u64,
+    pub count: u32,
+    /// Default VK_FORMAT_R32G32B32_SFLOAT.
+    pub format: VkFormat,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtIndexBufferInput {
+    /// VK_NULL_HANDLE for non-indexed triangles.
+    pub buffer: VkBuffer,
+    pub offset: u64,
+    pub count: u32,
+    /// Default VK_FORMAT_R32_UINT (or VK_FORMAT_R16_UINT).
+    pub format: VkFormat,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtSurfelSettings {
+    /// An HrtSurfelType. Default HRT_SURFEL_MESH_COLORS.
+    pub surfel_type: u32,
+    /// Default 1.0.
+    pub tile_unit_length: f32,
+    /// Default 64.
+    pub tile_resolution_limit: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtGeometryInput {
+    pub vertices: HrtVertexBufferInput,
+    pub indices: HrtIndexBufferInput,
+    /// Deformable: updates refit the BLAS. Default false.
+    pub allow_update: bool,
+    pub surfels: HrtSurfelSettings,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtGeometryTask {
+    pub handle: HrtGeometryHandle,
+    /// An HrtTaskOperation.
+    pub operation: u32,
+    pub input: HrtGeometryInput,
+}
+
+/// Bits of HrtInstanceInput::mask.
+pub const HRT_MASK_REFLECTIONS: u32 = 1;
+pub const HRT_MASK_DIFFUSE_GI: u32 = 2;
+pub const HRT_MASK_AMBIENT_OCCLUSION: u32 = 4;
+pub const HRT_MASK_SHADOWS: u32 = 8;
+pub const HRT_MASK_LIGHT_INJECTION: u32 = 16;
+pub const HRT_MASK_ALL: u32 = 31;
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtInstanceInput {
+    pub geometry: HrtGeometryHandle,
+    /// Object to world, row-major 3x4. Default identity.
+    pub transform: [f32; 12],
+    /// HRT_MASK_* bits. Default HRT_MASK_ALL.
+    pub mask: u32,
+    /// Default black.
+    pub initial_tile_color: [f32; 3],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtInstanceTask {
+    pub handle: HrtInstanceHandle,
+    /// An HrtInstanceOperation.
+    pub operation: u32,
+    pub input: HrtInstanceInput,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtBvhBuildTask {
+    /// Default 4.
+    pub max_blas_build_count: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtImageInput {
+    pub image: VkImage,
+    pub view: VkImageView,
+    pub format: VkFormat,
+    pub width: u32,
+    pub height: u32,
+    /// Inputs: VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL (default) or another read-only layout;
+    /// outputs: VK_IMAGE_LAYOUT_GENERAL.
+    pub layout: VkImageLayout,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtDepthType {
+    HRT_DEPTH_CLIP_SPACE = 0,
+    HRT_DEPTH_WORLD_POSITION = 1,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtNormalType {
+    HRT_NORMAL_RGB_VECTOR = 0,
+    HRT_NORMAL_RGB_NORMALIZED_VECTOR = 1,
+    HRT_NORMAL_RG_OCTAHEDRON = 2,
+    HRT_NORMAL_BA_OCTAHEDRON = 3,
+    HRT_NORMAL_RG_NORMALIZED_OCTAHEDRON = 4,
+    HRT_NORMAL_BA_NORMALIZED_OCTAHEDRON = 5,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtNormalSpace {
+    HRT_NORMAL_SPACE_WORLD = 0,
+    HRT_NORMAL_SPACE_VIEW = 1,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtRayOffsetType {
+    HRT_RAY_OFFSET_DISABLED = 0,
+    HRT_RAY_OFFSET_WORLD_POSITION = 1,
+    HRT_RAY_OFFSET_CAMERA_DISTANCE = 2,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtDepthInput {
+    pub image: HrtImageInput,
+    /// An HrtDepthType. Default HRT_DEPTH_CLIP_SPACE.
+    pub depth_type: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtNormalInput {
+    pub image: HrtImageInput,
+    /// An HrtNormalType. Default HRT_NORMAL_RGB_NORMALIZED_VECTOR.
+    pub normal_type: u32,
+    /// An HrtNormalSpace. Default HRT_NORMAL_SPACE_WORLD.
+    pub space: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtViewport {
+    pub x: u32,
+    pub y: u32,
+    pub width: u32,
+    pub height: u32,
+    /// 0 and 0 mean 0..1.
+    pub min_depth: f32,
+    pub max_depth: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtCamera {
+    /// Column-major.
+    pub world_to_view: [f32; 16],
+    /// Column-major, Vulkan clip space (y down, depth 0..1, standard or reversed).
+    pub view_to_clip: [f32; 16],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtRayOffset {
+    /// An HrtRayOffsetType. Default HRT_RAY_OFFSET_CAMERA_DISTANCE.
+    pub offset_type: u32,
+    pub world_threshold: f32,
+    pub world_float_scale: f32,
+    pub world_int_scale: f32,
+    pub cam_constant: f32,
+    pub cam_linear: f32,
+    pub cam_quadratic: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtTraceCommon {
+    pub depth: HrtDepthInput,
+    pub normals: HrtNormalInput,
+    pub viewport: HrtViewport,
+    pub camera: HrtCamera,
+    pub ray_offset: HrtRayOffset,
+    /// Default false.
+    pub use_inline_rt: bool,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtTraceAmbientOcclusionTask {
+    pub common: HrtTraceCommon,
+    /// GENERAL layout, STORAGE usage.
+    pub output: HrtImageInput,
+    /// Default 1.0.
+    pub ray_length: f32,
+    /// 1..=64. Default 1.
+    pub rays_per_pixel: u32,
+    /// > 0. Default 1.0.
+    pub falloff_power: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtTaskKind {
+    HRT_TASK_BVH = 0,
+    HRT_TASK_AMBIENT_OCCLUSION = 1,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtTaskTiming {
+    pub kind: HrtTaskKind,
+    pub task_index: u32,
+    pub gpu_ms: f64,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Default)]
+pub struct HrtAllocationCount {
+    pub count: u64,
+    pub bytes: u64,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Default)]
+pub struct HrtResourceAllocations {
+    pub geometry_copies: HrtAllocationCount,
+    pub blas: HrtAllocationCount,
+    pub build_scratch: HrtAllocationCount,
+    pub tlas: HrtAllocationCount,
+    pub upload_rings: HrtAllocationCount,
+    pub pipelines: HrtAllocationCount,
+}
+
+// ---------------------------------------------------------------- conversions
+// C enums arrive as integers: an out-of-range value is an HRT_ERROR_INVALID_INPUT, never UB.
+
+use crate::status::Failure;
+
+fn pick<T: Copy>(what: &str, v: u32, table: &[T]) -> Result<T, Failure> {
+    table.get(v as usize).copied().ok_or_else(|| {
+        Failure(crate::status::HrtStatus::HRT_ERROR_INVALID_INPUT, format!("invalid {what}: {v} is not a valid enum value"))
+    })
+}
+
+fn image(i: &HrtImageInput) -> rt::ImageInput {
+    rt::ImageInput {
+        image: vk::Image::from_raw(i.image),
+        view: vk::ImageView::from_raw(i.view),
+        format: vk::Format::from_raw(i.format),
+        width: i.width,
+        height: i.height,
+        layout: vk::ImageLayout::from_raw(i.layout),
+    }
+}
+fn image_c(i: &rt::ImageInput) -> HrtImageInput {
+    HrtImageInput {
+        image: i.image.as_raw(),
+        view: i.view.as_raw(),
+        format: i.format.as_raw(),
+        width: i.width,
+        height: i.height,
+        layout: i.layout.as_raw(),
+    }
+}
+
+pub(crate) fn geometry_task(t: &HrtGeometryTask) -> Result<rt::GeometryTask, Failure> {
+    let i = &t.input;
+    Ok(rt::GeometryTask {
+        handle: rt::GeometryHandle(t.handle),
+        operation: pick("HrtGeometryTask.operation", t.operation, &[rt::TaskOperation::Register, rt::TaskOperation::Update])?,
+        input: rt::GeometryInput {
+            vertices: rt::VertexBufferInput {
+                buffer: buffer(i.vertices.buffer),
+                offset: i.vertices.offset,
+                stride: i.vertices.stride,
+                count: i.vertices.count,
+                format: vk::Format::from_raw(i.vertices.format),
+            },
+            indices: rt::IndexBufferInput {
+                buffer: buffer(i.indices.buffer),
+                offset: i.indices.offset,
+                count: i.indices.count,
+                format: vk::Format::from_raw(i.indices.format),
+            },
+            allow_update: i.allow_update,
+            surfels: rt::SurfelSettings {
+                surfel_type: pick("HrtSurfelSettings.surfel_type", i.surfels.surfel_type, &[rt::SurfelType::MeshColors, rt::SurfelType::Tiles])?,
+                tile_unit_length: i.surfels.tile_unit_length,
+                tile_resolution_limit: i.surfels.tile_resolution_limit,
+            },
+        },
+    })
+}
+
+pub(crate) fn geometry_task_default() -> HrtGeometryTask {
+    let d = rt::GeometryTask::default();
+    let i = &d.input;
+    HrtGeometryTask {
+        handle: 0,
+        operation: d.operation as u32,
+        input: HrtGeometryInput {
+            vertices: HrtVertexBufferInput {
+                buffer: 0,
+                offset: i.vertices.offset,
+                stride: i.vertices.stride,
+                count: i.vertices.count,
+                format: i.vertices.format.as_raw(),
+            },
+            indices: HrtIndexBufferInput { buffer: 0, offset: 0, count: 0, format: i.indices.format.as_raw() },
+            allow_update: i.allow_update,
+            surfels: HrtSurfelSettings {
+                surfel_type: i.surfels.surfel_type as u32,
+                tile_unit_length: i.surfels.tile_unit_length,
+                tile_resolution_limit: i.surfels.tile_resolution_limit,
+            },
+        },
+    }
+}
+
+pub(crate) fn instance_task(t: &HrtInstanceTask) -> Result<rt::InstanceTask, Failure> {
+    let m = &t.input.transform;
+    // Row-major 3x4 -> glam's columns.
+    let transform = glam::Affine3A::from_cols_array(&[m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10], m[3], m[7], m[11]]);
+    Ok(rt::InstanceTask {
+        handle: rt::InstanceHandle(t.handle),
+        operation: pick(
+            "HrtInstanceTask.operation",
+            t.operation,
+            &[rt::InstanceOperation::Register, rt::InstanceOperation::Update, rt::InstanceOperation::Remove],
+        )?,
+        input: rt::InstanceInput {
+            geometry: rt::GeometryHandle(t.input.geometry),
+            transform,
+            mask: rt::InstanceInclusionMask((t.input.mask & 0xff) as u8),
+            initial_tile_color: t.input.initial_tile_color,
+        },
+    })
+}
+
+pub(crate) fn instance_task_default() -> HrtInstanceTask {
+    let d = rt::InstanceInput::default();
+    HrtInstanceTask {
+        handle: 0,
+        operation: rt::InstanceOperation::Register as u32,
+        input: HrtInstanceInput {
+            geometry: 0,
+            transform: [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+            mask: d.mask.0 as u32,
+            initial_tile_color: d.initial_tile_color,
+        },
+    }
+}
+
+pub(crate) fn trace_common(c: &HrtTraceCommon) -> Result<rt::TraceCommon, Failure> {
+    use rt::NormalType as N;
+    let o = &c.ray_offset;
+    Ok(rt::TraceCommon {
+        depth: rt::DepthInput {
+            image: image(&c.depth.image),
+            depth_type: pick("HrtDepthInput.depth_type", c.depth.depth_type, &[rt::DepthType::ClipSpace, rt::DepthType::WorldPosition])?,
+        },
+        normals: rt::NormalInput {
+            image: image(&c.normals.image),
+            normal_type: pick(
+                "HrtNormalInput.normal_type",
+                c.normals.normal_type,
+                &[N::RgbVector, N::RgbNormalizedVector, N::RgOctahedron, N::BaOctahedron, N::RgNormalizedOctahedron, N::BaNormalizedOctahedron],
+            )?,
+            space: pick("HrtNormalInput.space", c.normals.space, &[rt::NormalSpace::World, rt::NormalSpace::View])?,
+        },
+        viewport: rt::Viewport {
+            x: c.viewport.x,
+            y: c.viewport.y,
+            width: c.viewport.width,
+            height: c.viewport.height,
+            min_depth: c.viewport.min_depth,
+            max_depth: c.viewport.max_depth,
+        },
+        camera: rt::Camera {
+            world_to_view: glam::Mat4::from_cols_array(&c.camera.world_to_view),
+            view_to_clip: glam::Mat4::from_cols_array(&c.camera.view_to_clip),
+        },
+        ray_offset: rt::RayOffset {
+            offset_type: pick(
+                "HrtRayOffset.offset_type",
+                o.offset_type,
+                &[rt::RayOffsetType::Disabled, rt::RayOffsetType::WorldPosition, rt::RayOffsetType::CameraDistance],
+            )?,
+            world_threshold: o.world_threshold,
+            world_float_scale: o.world_float_scale,
+            world_int_scale: o.world_int_scale,
+            cam_constant: o.cam_constant,
+            cam_linear: o.cam_linear,
+            cam_quadratic: o.cam_quadratic,
+        },
+        use_inline_rt: c.use_inline_rt,
+    })
+}
+
+pub(crate) fn trace_common_default() -> HrtTraceCommon {
+    let d = rt::TraceCommon::default();
+    let o = &d.ray_offset;
+    HrtTraceCommon {
+        depth: HrtDepthInput { image: image_c(&d.depth.image), depth_type: d.depth.depth_type as u32 },
+        normals: HrtNormalInput { image: image_c(&d.normals.image), normal_type: d.normals.normal_type as u32, space: d.normals.space as u32 },
+        viewport: HrtViewport { x: 0, y: 0, width: 0, height: 0, min_depth: 0.0, max_depth: 0.0 },
+        camera: HrtCamera { world_to_view: d.camera.world_to_view.to_cols_array(), view_to_clip: d.camera.view_to_clip.to_cols_array() },
+        ray_offset: HrtRayOffset {
+            offset_type: o.offset_type as u32,
+            world_threshold: o.world_threshold,
+            world_float_scale: o.world_float_scale,
+            world_int_scale: o.world_int_scale,
+            cam_constant: o.cam_constant,
+            cam_linear: o.cam_linear,
+            cam_quadratic: o.cam_quadratic,
+        },
+        use_inline_rt: d.use_inline_rt,
+    }
+}
+
+pub(crate) fn ao_task(t: &HrtTraceAmbientOcclusionTask) -> Result<rt::TraceAmbientOcclusionTask, Failure> {
+    Ok(rt::TraceAmbientOcclusionTask {
+        common: trace_common(&t.common)?,
+        output: image(&t.output),
+        ray_length: t.ray_length,
+        rays_per_pixel: t.rays_per_pixel,
+        falloff_power: t.falloff_power,
+    })
+}
+
+pub(crate) fn ao_task_default() -> HrtTraceAmbientOcclusionTask {
+    let d = rt::TraceAmbientOcclusionTask::default();
+    HrtTraceAmbientOcclusionTask {
+        common: trace_common_default(),
+        output: image_c(&d.output),
+        ray_length: d.ray_length,
+        rays_per_pixel: d.rays_per_pixel,
+        falloff_power: d.falloff_power,
+    }
+}
+
+impl From<rt::ResourceAllocations> for HrtResourceAllocations {
+    fn from(a: rt::ResourceAllocations) -> Self {
+        let c = |x: rt::AllocationCount| HrtAllocationCount { count: x.count, bytes: x.bytes };
+        HrtResourceAllocations {
+            geometry_copies: c(a.geometry_copies),
+            blas: c(a.blas),
+            build_scratch: c(a.build_scratch),
+            tlas: c(a.tlas),
+            upload_rings: c(a.upload_rings),
+            pipelines: c(a.pipelines),
+        }
+    }
+}
