@@ -419,6 +419,8 @@ pub unsafe extern "C" fn hrt_mark_gpu_task_completed(
                     kind: match t.kind {
                         rt::TaskKind::Bvh => HrtTaskKind::HRT_TASK_BVH,
                         rt::TaskKind::AmbientOcclusion => HrtTaskKind::HRT_TASK_AMBIENT_OCCLUSION,
+                        rt::TaskKind::BlasBuild => HrtTaskKind::HRT_TASK_BLAS_BUILD,
+                        rt::TaskKind::TlasBuild => HrtTaskKind::HRT_TASK_TLAS_BUILD,
                     },
                     task_index: t.task_index,
                     gpu_ms: t.gpu_ms,

@@ -305,8 +305,13 @@ pub struct HrtTraceAmbientOcclusionTask {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum HrtTaskKind {
+    /// All BVH work of the ticket.
     HRT_TASK_BVH = 0,
     HRT_TASK_AMBIENT_OCCLUSION = 1,
+    /// Inside HRT_TASK_BVH: batched BLAS builds, refits and compactions.
+    HRT_TASK_BLAS_BUILD = 2,
+    /// Inside HRT_TASK_BVH: the TLAS build.
+    HRT_TASK_TLAS_BUILD = 3,
 }
 
 #[repr(C)]

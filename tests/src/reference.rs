@@ -326,22 +326,36 @@ impl GBuffer {
             position: vec![Vec3::ZERO; n],
             hit: vec![false; n],
         };
-        for y in 0..height {
-            for x in 0..width {
-                let ndc = Vec3::new((x as f32 + 0.5) / width as f32 * 2.0 - 1.0, (y as f32 + 0.5) / height as f32 * 2.0 - 1.0, 0.5);
-                let p = clip_to_world * ndc.extend(1.0);
-                let dir = (p.truncate() / p.w - camera.eye).normalize();
-                let i = (y * width + x) as usize;
-                if let Some(h) = tracer.closest_hit(camera.eye, dir, 0.0, f32::MAX) {
-                    let pos = camera.eye + dir * h.t;
-                    let c: Vec4 = world_to_clip * pos.extend(1.0);
-                    g.depth[i] = c.z / c.w;
-                    g.normal[i] = if h.normal.dot(dir) > 0.0 { -h.normal } else { h.normal };
-                    g.position[i] = pos;
-                    g.hit[i] = true;
-                }
+        // Rows in parallel: the bench renders 1080p G-buffers of million-triangle scenes.
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(32);
+        let rows_per = (height as usize).div_ceil(threads).max(1);
+        let px = width as usize;
+        std::thread::scope(|s| {
+            let chunks = g
+                .depth
+                .chunks_mut(rows_per * px)
+                .zip(g.normal.chunks_mut(rows_per * px))
+                .zip(g.position.chunks_mut(rows_per * px).zip(g.hit.chunks_mut(rows_per * px)));
+            for (c, ((depth, normal), (position, hit))) in chunks.enumerate() {
+                s.spawn(move || {
+                    for (k, d) in depth.iter_mut().enumerate() {
+                        let i = c * rows_per * px + k;
+                        let (x, y) = ((i % px) as f32, (i / px) as f32);
+                        let ndc = Vec3::new((x + 0.5) / width as f32 * 2.0 - 1.0, (y + 0.5) / height as f32 * 2.0 - 1.0, 0.5);
+                        let p = clip_to_world * ndc.extend(1.0);
+                        let dir = (p.truncate() / p.w - camera.eye).normalize();
+                        if let Some(h) = tracer.closest_hit(camera.eye, dir, 0.0, f32::MAX) {
+                            let pos = camera.eye + dir * h.t;
+                            let c: Vec4 = world_to_clip * pos.extend(1.0);
+                            *d = c.z / c.w;
+                            normal[k] = if h.normal.dot(dir) > 0.0 { -h.normal } else { h.normal };
+                            position[k] = pos;
+                            hit[k] = true;
+                        }
+                    }
+                });
             }
-        }
+        });
         g
     }
 

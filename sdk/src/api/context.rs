@@ -8,12 +8,13 @@ use super::container::{Task, TaskContainer};
 use super::handles::{GeometryHandle, InstanceHandle, Registry};
 use super::settings::InitSettings;
 use super::tasks::*;
-use super::ticket::{CompletedTask, GpuTicket, TaskKind, TaskTiming};
+use super::ticket::{CompletedTask, GpuTicket, TaskKind};
 use crate::error::{Error, HandleProblem, Result};
 use crate::gpu::deferred::{self, DeferredFrees, Garbage};
 use crate::gpu::device::{Device, DeviceDesc};
 use crate::gpu::memory::{self, Buffer, Memory, MemoryKind, ResourceAllocations};
 use crate::gpu::sync::{self, Hazards};
+use crate::gpu::timestamps::Timer;
 use crate::gpu::upload::UploadRing;
 use crate::passes::{self, ao::AoPass, Recording};
 use crate::scene::blas::{self, BuildJob};
@@ -48,9 +49,7 @@ struct WorkingSet {
     in_flight: Option<u64>,
     ring: UploadRing,
     scratch: Option<Buffer>,
-    timestamps: vk::QueryPool,
-    timestamp_slots: u32,
-    timed: Vec<(TaskKind, u32)>,
+    timer: Timer,
     compaction_pool: vk::QueryPool,
     compaction_slots: u32,
     compactions: Vec<(GeometryHandle, u64)>,
@@ -302,15 +301,9 @@ impl ExecuteContext {
         let d = &self.shared.device;
         let ws = &mut st.working_sets[ws_index];
         let mut done = CompletedTask { serial: ticket.serial, timings: Vec::new() };
-        if let (Some(period), false) = (d.timestamp_period_ns, ws.timed.is_empty()) {
-            let mut stamps = vec![0u64; ws.timed.len() * 2];
-            match unsafe { d.raw.get_query_pool_results(ws.timestamps, 0, &mut stamps, vk::QueryResultFlags::TYPE_64) } {
-                Ok(()) => {
-                    for (i, (kind, task_index)) in ws.timed.iter().enumerate() {
-                        let ticks = stamps[2 * i + 1].saturating_sub(stamps[2 * i]);
-                        done.timings.push(TaskTiming { kind: *kind, task_index: *task_index, gpu_ms: ticks as f64 * period * 1e-6 });
-                    }
-                }
+        if let Some(period) = d.timestamp_period_ns {
+            match ws.timer.read(&d.raw, period) {
+                Ok(t) => done.timings = t,
                 Err(e) => log::warn!("ticket {}: timestamps unavailable ({e:?}); was it really complete?", ticket.serial),
             }
         }
@@ -331,7 +324,6 @@ impl ExecuteContext {
         }
         let ws = &mut st.working_sets[ws_index];
         ws.in_flight = None;
-        ws.timed.clear();
         let oldest = st.in_flight().min();
         st.deferred.collect(d, &self.shared.memory, oldest);
         Ok(done)
@@ -449,13 +441,12 @@ impl Shared {
 
     fn new_working_set(&self, settings: &InitSettings) -> Result<WorkingSet> {
         let d = &self.device.raw;
-        let slots = settings.max_timed_tasks * 2;
-        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(slots);
-        let timestamps = unsafe { d.create_query_pool(&info, None) }.map_err(Error::vk("vkCreateQueryPool"))?;
+        // Two slots per timed task plus the nested BLAS/TLAS intervals of the BVH work.
+        let timer = Timer::new(d, settings.max_timed_tasks * 2 + 4, self.device.timestamp_period_ns.is_some())?;
         let ring = match UploadRing::new(&self.memory, settings.upload_ring_bytes.max(4096)) {
             Ok(r) => r,
             Err(e) => {
-                unsafe { d.destroy_query_pool(timestamps, None) };
+                timer.destroy(d);
                 return Err(e);
             }
         };
@@ -463,9 +454,7 @@ impl Shared {
             in_flight: None,
             ring,
             scratch: None,
-            timestamps,
-            timestamp_slots: slots,
-            timed: Vec::new(),
+            timer,
             compaction_pool: vk::QueryPool::null(),
             compaction_slots: 0,
             compactions: Vec::new(),
@@ -478,28 +467,11 @@ impl Shared {
         let device = &self.device;
         let d = &device.raw;
         let mut hazards = Hazards::default();
-        let timestamp_slots = st.working_sets[ws_index].timestamp_slots;
-        let timing = device.timestamp_period_ns.is_some();
         st.working_sets[ws_index].ring.reset();
-        unsafe { d.cmd_reset_query_pool(cmd, st.working_sets[ws_index].timestamps, 0, timestamp_slots) };
-        st.working_sets[ws_index].timed.clear();
-        let mut next_stamp = 0u32;
-        let mut stamp = |st: &mut State, kind: TaskKind, index: u32, begin: bool| {
-            if !timing {
-                return;
-            }
-            let ws = &mut st.working_sets[ws_index];
-            if begin {
-                if next_stamp + 2 > timestamp_slots {
-                    return;
-                }
-                ws.timed.push((kind, index));
-            } else if ws.timed.last() != Some(&(kind, index)) {
-                return;
-            }
-            unsafe { d.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, ws.timestamps, next_stamp) };
-            next_stamp += 1;
-        };
+        st.working_sets[ws_index].timer.reset(d, cmd);
+        fn timer(st: &mut State, ws: usize) -> &mut Timer {
+            &mut st.working_sets[ws].timer
+        }
 
         // ---- BVH work: copies, builds, refits, compactions, TLAS.
         let first_bvh = tasks
@@ -507,25 +479,29 @@ impl Shared {
             .position(|t| matches!(t, Task::Geometry(_) | Task::Instance(_) | Task::BvhBuild(_)))
             .map(|i| i as u32);
         let has_render = tasks.iter().any(|t| matches!(t, Task::AmbientOcclusion(_)));
-        if let Some(i) = first_bvh {
-            stamp(st, TaskKind::Bvh, i, true);
-        }
+        let bvh_span = first_bvh.map(|i| timer(st, ws_index).begin(d, cmd, TaskKind::Bvh, i));
         self.apply_scene_tasks(st, tasks, cmd, serial, &mut hazards)?;
         let max_builds: Option<u32> = tasks
             .iter()
             .filter_map(|t| if let Task::BvhBuild(b) = t { Some(b.max_blas_build_count) } else { None })
             .reduce(|a, b| a.saturating_add(b));
         if let Some(max_builds) = max_builds {
+            let span = timer(st, ws_index).begin(d, cmd, TaskKind::BlasBuild, first_bvh.unwrap_or(0));
             self.record_blas_work(st, ws_index, serial, max_builds, cmd, &mut hazards)?;
+            timer(st, ws_index).end(d, cmd, span);
         }
         if max_builds.is_some() || has_render {
             if st.snapshot_dirty {
                 st.rebuild_snapshot();
             }
-            self.record_tlas(st, ws_index, cmd, &mut hazards)?;
+            if st.working_sets[ws_index].tlas.version != st.snapshot_version {
+                let span = timer(st, ws_index).begin(d, cmd, TaskKind::TlasBuild, first_bvh.unwrap_or(0));
+                self.record_tlas(st, ws_index, cmd, &mut hazards)?;
+                timer(st, ws_index).end(d, cmd, span);
+            }
         }
-        if let Some(i) = first_bvh {
-            stamp(st, TaskKind::Bvh, i, false);
+        if let Some(span) = bvh_span {
+            timer(st, ws_index).end(d, cmd, span);
         }
 
         // ---- Render tasks, in scheduled order.
@@ -534,7 +510,7 @@ impl Shared {
         self.ensure_ring(st, ws_index, ao_count * (passes::ao::UPLOAD_BYTES + device.ubo_alignment))?;
         for (i, task) in tasks.iter().enumerate() {
             let Task::AmbientOcclusion(t) = task else { continue };
-            stamp(st, TaskKind::AmbientOcclusion, i as u32, true);
+            let span = timer(st, ws_index).begin(d, cmd, TaskKind::AmbientOcclusion, i as u32);
             let inline = t.common.use_inline_rt && device.ray_query;
             if t.common.use_inline_rt && !device.ray_query && !self.warned_inline.swap(true, Ordering::Relaxed) {
                 log::warn!("use_inline_rt: the device has no VK_KHR_ray_query enabled; using the ray-tracing pipeline");
@@ -543,7 +519,7 @@ impl Shared {
             let tlas = ws.tlas.accel.as_ref().map(|a| a.accel).unwrap_or_default();
             let mut r = Recording { device, cmd, ring: &mut ws.ring, hazards: &mut hazards, tlas, seed: serial as u32 };
             st.ao.as_ref().expect("created in new").record(&mut r, t, inline, floor);
-            stamp(st, TaskKind::AmbientOcclusion, i as u32, false);
+            timer(st, ws_index).end(d, cmd, span);
         }
         Ok(())
     }
@@ -804,8 +780,8 @@ impl Drop for Shared {
             if let Some(s) = ws.scratch.take() {
                 memory.destroy_buffer(s);
             }
+            ws.timer.destroy(&device.raw);
             unsafe {
-                device.raw.destroy_query_pool(ws.timestamps, None);
                 if ws.compaction_pool != vk::QueryPool::null() {
                     device.raw.destroy_query_pool(ws.compaction_pool, None);
                 }

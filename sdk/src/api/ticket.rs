@@ -32,9 +32,13 @@ impl GpuTicket {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[repr(u32)]
 pub enum TaskKind {
-    /// Geometry copies, BLAS builds/refits/compactions and the TLAS build of the ticket.
+    /// All BVH work of the ticket: geometry copies, BLAS builds/refits/compactions, TLAS.
     Bvh = 0,
     AmbientOcclusion = 1,
+    /// Inside `Bvh`: the batched BLAS builds and refits (and compaction copies).
+    BlasBuild = 2,
+    /// Inside `Bvh`: the TLAS build (only when the scene changed since the working set's last).
+    TlasBuild = 3,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]

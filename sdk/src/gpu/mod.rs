@@ -5,4 +5,5 @@ pub(crate) mod deferred;
 pub mod memory;
 pub(crate) mod pipeline;
 pub(crate) mod sync;
+pub(crate) mod timestamps;
 pub(crate) mod upload;

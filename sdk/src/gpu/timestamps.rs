@@ -1,0 +1,90 @@
+//! Per-task GPU timing from timestamp queries: one pool per working set, intervals may nest
+//! (the BVH interval holds the BLAS and TLAS intervals), read back when the ticket returns.
+use crate::api::ticket::{TaskKind, TaskTiming};
+use crate::error::{Error, Result};
+use ash::vk;
+
+struct Interval {
+    kind: TaskKind,
+    task_index: u32,
+    begin: u32,
+    end: Option<u32>,
+}
+
+pub(crate) struct Timer {
+    pool: vk::QueryPool,
+    slots: u32,
+    next: u32,
+    intervals: Vec<Interval>,
+    /// False when the device cannot time compute work: every call is a no-op.
+    enabled: bool,
+}
+
+/// An interval begun with `Timer::begin` (None when out of slots or timing is off).
+#[derive(Clone, Copy)]
+pub(crate) struct Span(Option<usize>);
+
+impl Timer {
+    pub fn new(device: &ash::Device, slots: u32, enabled: bool) -> Result<Timer> {
+        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(slots);
+        let pool = unsafe { device.create_query_pool(&info, None) }.map_err(Error::vk("vkCreateQueryPool"))?;
+        Ok(Timer { pool, slots, next: 0, intervals: Vec::new(), enabled })
+    }
+
+    /// Starts a recording: every slot is reset in the command buffer itself.
+    pub fn reset(&mut self, device: &ash::Device, cmd: vk::CommandBuffer) {
+        self.next = 0;
+        self.intervals.clear();
+        if self.enabled {
+            unsafe { device.cmd_reset_query_pool(cmd, self.pool, 0, self.slots) };
+        }
+    }
+
+    fn write(&mut self, device: &ash::Device, cmd: vk::CommandBuffer) -> u32 {
+        let slot = self.next;
+        // ALL_COMMANDS: the stamp waits for earlier work, so intervals measure their own work.
+        unsafe { device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, slot) };
+        self.next += 1;
+        slot
+    }
+
+    pub fn begin(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, kind: TaskKind, task_index: u32) -> Span {
+        // Keep a slot free for the end of every open interval.
+        let open = self.intervals.iter().filter(|i| i.end.is_none()).count() as u32;
+        if !self.enabled || self.next + open + 2 > self.slots {
+            return Span(None);
+        }
+        let begin = self.write(device, cmd);
+        self.intervals.push(Interval { kind, task_index, begin, end: None });
+        Span(Some(self.intervals.len() - 1))
+    }
+
+    pub fn end(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, span: Span) {
+        if let Some(i) = span.0 {
+            let slot = self.write(device, cmd);
+            self.intervals[i].end = Some(slot);
+        }
+    }
+
+    /// Reads the intervals of a completed ticket.
+    pub fn read(&self, device: &ash::Device, period_ns: f64) -> std::result::Result<Vec<TaskTiming>, vk::Result> {
+        if self.next == 0 {
+            return Ok(Vec::new());
+        }
+        let mut stamps = vec![0u64; self.next as usize];
+        unsafe { device.get_query_pool_results(self.pool, 0, &mut stamps, vk::QueryResultFlags::TYPE_64) }?;
+        Ok(self
+            .intervals
+            .iter()
+            .filter_map(|i| {
+                let end = i.end?;
+                let ticks = stamps[end as usize].saturating_sub(stamps[i.begin as usize]);
+                Some(TaskTiming { kind: i.kind, task_index: i.task_index, gpu_ms: ticks as f64 * period_ns * 1e-6 })
+            })
+            .collect())
+    }
+
+    pub fn destroy(&self, device: &ash::Device) {
+        unsafe { device.destroy_query_pool(self.pool, None) };
+    }
+}
