@@ -72,9 +72,9 @@ typedef enum HrtStatus {
    */
   HRT_ERROR_INTERNAL = 16,
   /**
-   * An output array was too small; the count says how many are needed.
+   * The container's context was destroyed.
    */
-  HRT_ERROR_INSUFFICIENT_CAPACITY = 17,
+  HRT_ERROR_CONTEXT_DESTROYED = 17,
 } HrtStatus;
 
 typedef enum HrtTaskKind {

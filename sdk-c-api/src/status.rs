@@ -29,8 +29,8 @@ pub enum HrtStatus {
     HRT_ERROR_FOREIGN_CONTAINER = 15,
     /// An SDK bug (a caught panic); the context may be unusable.
     HRT_ERROR_INTERNAL = 16,
-    /// An output array was too small; the count says how many are needed.
-    HRT_ERROR_INSUFFICIENT_CAPACITY = 17,
+    /// The container's context was destroyed.
+    HRT_ERROR_CONTEXT_DESTROYED = 17,
 }
 
 thread_local! {
@@ -61,6 +61,7 @@ pub(crate) fn status_of(e: &Error) -> HrtStatus {
         Error::TicketsInFlight { .. } => HRT_ERROR_TICKETS_IN_FLIGHT,
         Error::GeometryInUse { .. } => HRT_ERROR_GEOMETRY_IN_USE,
         Error::ForeignContainer => HRT_ERROR_FOREIGN_CONTAINER,
+        Error::ContextDestroyed => HRT_ERROR_CONTEXT_DESTROYED,
         _ => HRT_ERROR_INTERNAL,
     }
 }

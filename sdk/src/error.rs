@@ -86,6 +86,10 @@ pub enum Error {
     #[error("the task container belongs to another ExecuteContext")]
     ForeignContainer,
 
+    /// The container's context was dropped.
+    #[error("the task container's ExecuteContext has been destroyed")]
+    ContextDestroyed,
+
     /// A bug in the SDK (a caught panic at the C boundary, an impossible state).
     #[error("internal error: {0}")]
     Internal(String),

@@ -14,6 +14,16 @@ fn ao_params(ray_length: f32) -> AoParams {
     AoParams { ray_length, falloff_power: 1.0, ray_offset: hybrid_rt::RayOffset::default() }
 }
 
+/// A sphere resting on a plane, seen from above and in front.
+fn sphere_on_plane() -> (Scene, Camera) {
+    let mut scene = Scene::default();
+    let plane = scene.add_mesh(Mesh::grid(8.0, 8));
+    let sphere = scene.add_mesh(Mesh::sphere(0.5, 24, 12));
+    scene.add_instance(plane, Affine3A::IDENTITY);
+    scene.add_instance(sphere, Affine3A::from_translation(Vec3::new(0.0, 0.5, 0.0)));
+    (scene, Camera::look_at(Vec3::new(0.0, 1.6, 2.2), Vec3::new(0.0, 0.2, 0.0)))
+}
+
 #[test]
 fn open_plane_is_unoccluded() {
     let (host, ctx) = host_and_context(InitSettings::default());
@@ -44,12 +54,7 @@ fn open_plane_is_unoccluded() {
 #[test]
 fn sphere_on_plane_matches_reference() {
     let (host, ctx) = host_and_context(InitSettings::default());
-    let mut scene = Scene::default();
-    let plane = scene.add_mesh(Mesh::grid(8.0, 8));
-    let sphere = scene.add_mesh(Mesh::sphere(0.5, 24, 12));
-    scene.add_instance(plane, Affine3A::IDENTITY);
-    scene.add_instance(sphere, Affine3A::from_translation(Vec3::new(0.0, 0.5, 0.0)));
-    let camera = Camera::look_at(Vec3::new(0.0, 1.6, 2.2), Vec3::new(0.0, 0.2, 0.0));
+    let (scene, camera) = sphere_on_plane();
     let tracer = Tracer::new(&scene);
     let g = GBuffer::render(&tracer, &camera, W, H);
 
@@ -196,12 +201,7 @@ fn encodings_and_inline_rt_give_the_same_image() {
 fn instance_mask_hides_instances_from_ao() {
     use hybrid_rt::{InstanceInclusionMask, InstanceInput, InstanceOperation, InstanceTask};
     let (host, ctx) = host_and_context(InitSettings::default());
-    let mut scene = Scene::default();
-    let plane = scene.add_mesh(Mesh::grid(8.0, 8));
-    let sphere = scene.add_mesh(Mesh::sphere(0.5, 24, 12));
-    scene.add_instance(plane, Affine3A::IDENTITY);
-    scene.add_instance(sphere, Affine3A::from_translation(Vec3::new(0.0, 0.5, 0.0)));
-    let camera = Camera::look_at(Vec3::new(0.0, 1.6, 2.2), Vec3::new(0.0, 0.2, 0.0));
+    let (scene, camera) = sphere_on_plane();
     // The G-buffer holds only the plane: AO on the plane shows whether the sphere is seen.
     let mut ground = Scene::default();
     let p = ground.add_mesh(Mesh::grid(8.0, 8));
@@ -240,12 +240,7 @@ fn viewport_offsets_are_honoured() {
     use ash::vk;
     use hybrid_rt::{DepthInput, DepthType, NormalInput, NormalSpace, NormalType, TraceAmbientOcclusionTask, TraceCommon, Viewport};
     let (host, ctx) = host_and_context(InitSettings::default());
-    let mut scene = Scene::default();
-    let plane = scene.add_mesh(Mesh::grid(8.0, 8));
-    let sphere = scene.add_mesh(Mesh::sphere(0.5, 24, 12));
-    scene.add_instance(plane, Affine3A::IDENTITY);
-    scene.add_instance(sphere, Affine3A::from_translation(Vec3::new(0.0, 0.5, 0.0)));
-    let camera = Camera::look_at(Vec3::new(0.0, 1.6, 2.2), Vec3::new(0.0, 0.2, 0.0));
+    let (scene, camera) = sphere_on_plane();
     let tracer = Tracer::new(&scene);
     let (vw, vh, ox, oy) = (32u32, 32u32, 24u32, 8u32);
     let g = GBuffer::render(&tracer, &camera, vw, vh);

@@ -19,10 +19,8 @@ fn ring(g: &GBuffer, c: Vec3) -> Vec<bool> {
     (0..g.depth.len())
         .map(|i| {
             let p = g.position[i];
-            let d = (p - c).truncate().abs(); // x, y, z -> x, y
             let dx = (p.x - c.x).abs();
             let dz = (p.z - c.z).abs();
-            let _ = d;
             g.hit[i] && p.y.abs() < 1e-3 && dx.max(dz) > 0.52 && dx.max(dz) < 0.85
         })
         .collect()
@@ -80,60 +78,82 @@ fn check_rings(gpu: &[f32], g: &GBuffer, b: &Boxes, in_tlas: impl Fn(usize) -> b
     }
 }
 
-#[test]
-fn blas_throttle_brings_instances_in_over_frames() {
+/// The boxes scene registered with a fresh context, its G-buffer uploaded, and the first
+/// BVH build done when `build` is set.
+struct Fixture {
+    host: Host,
+    ctx: hybrid_rt::ExecuteContext,
+    b: Boxes,
+    g: GBuffer,
+    images: GBufferImages,
+    frame: hybrid_rt::TaskContainer,
+    gpu_scene: SceneOnGpu,
+}
+
+fn fixture(n: usize, build: bool) -> Fixture {
     let (host, ctx) = host_and_context(InitSettings::default());
-    let b = boxes(10);
+    let b = boxes(n);
     let g = GBuffer::render(&Tracer::new(&b.ground), &b.camera, W, H);
     let images = GBufferImages::upload(&host, &g).unwrap();
     let mut frame = ctx.create_task_container();
     let gpu_scene = SceneOnGpu::register(&host, &ctx, &mut frame, &b.boxes).unwrap();
-    for (k, expected) in [3usize, 6, 9, 10].into_iter().enumerate() {
-        frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 3 }).unwrap();
-        frame.schedule_ambient_occlusion(&images.ao_task(&b.camera, 1.0, RAYS)).unwrap();
+    if build {
+        frame.schedule_bvh_build(&Default::default()).unwrap();
         run_frame(&host, &ctx, &mut frame).unwrap();
-        assert_eq!(ctx.tlas_instance_count(), expected, "build {k}");
-        assert_eq!(ctx.pending_blas_builds(), 10 - expected);
-        let gpu = images.read_output(&host).unwrap();
-        check_rings(&gpu, &g, &b, |i| i < expected, &format!("build {k}"));
     }
-    images.destroy(&host);
-    gpu_scene.destroy(&host);
-    drop(ctx);
-    assert_no_validation_errors();
+    Fixture { host, ctx, b, g, images, frame, gpu_scene }
+}
+
+impl Fixture {
+    fn ao(&self) -> hybrid_rt::TraceAmbientOcclusionTask {
+        self.images.ao_task(&self.b.camera, 1.0, RAYS)
+    }
+
+    fn finish(self) {
+        self.images.destroy(&self.host);
+        self.gpu_scene.destroy(&self.host);
+        drop(self.ctx);
+        assert_no_validation_errors();
+    }
+}
+
+#[test]
+fn blas_throttle_brings_instances_in_over_frames() {
+    let mut f = fixture(10, false);
+    for (k, expected) in [3usize, 6, 9, 10].into_iter().enumerate() {
+        f.frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 3 }).unwrap();
+        f.frame.schedule_ambient_occlusion(&f.ao()).unwrap();
+        run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
+        assert_eq!(f.ctx.tlas_instance_count(), expected, "build {k}");
+        assert_eq!(f.ctx.pending_blas_builds(), 10 - expected);
+        let gpu = f.images.read_output(&f.host).unwrap();
+        check_rings(&gpu, &f.g, &f.b, |i| i < expected, &format!("build {k}"));
+    }
+    f.finish();
 }
 
 #[test]
 fn moving_an_instance_moves_its_occlusion() {
-    let (host, ctx) = host_and_context(InitSettings::default());
-    let mut b = boxes(2);
-    let g = GBuffer::render(&Tracer::new(&b.ground), &b.camera, W, H);
-    let images = GBufferImages::upload(&host, &g).unwrap();
-    let mut frame = ctx.create_task_container();
-    let gpu_scene = SceneOnGpu::register(&host, &ctx, &mut frame, &b.boxes).unwrap();
-    frame.schedule_bvh_build(&Default::default()).unwrap();
-    frame.schedule_ambient_occlusion(&images.ao_task(&b.camera, 1.0, RAYS)).unwrap();
-    run_frame(&host, &ctx, &mut frame).unwrap();
-    check_rings(&images.read_output(&host).unwrap(), &g, &b, |_| true, "before the move");
+    let mut f = fixture(2, false);
+    f.frame.schedule_bvh_build(&Default::default()).unwrap();
+    f.frame.schedule_ambient_occlusion(&f.ao()).unwrap();
+    run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
+    check_rings(&f.images.read_output(&f.host).unwrap(), &f.g, &f.b, |_| true, "before the move");
 
     // Move box 0 far away (off the ground the camera sees); box 1 stays.
     let far = Affine3A::from_translation(Vec3::new(0.0, 50.0, 0.0));
-    frame
-        .schedule_instance(&InstanceTask {
-            handle: gpu_scene.instances[0],
-            operation: InstanceOperation::Update,
-            input: InstanceInput { geometry: gpu_scene.geometries[0], transform: far, ..Default::default() },
-        })
-        .unwrap();
-    frame.schedule_bvh_build(&Default::default()).unwrap();
-    frame.schedule_ambient_occlusion(&images.ao_task(&b.camera, 1.0, RAYS)).unwrap();
-    run_frame(&host, &ctx, &mut frame).unwrap();
-    b.boxes.instances[0].transform = far;
-    check_rings(&images.read_output(&host).unwrap(), &g, &b, |i| i == 1, "after the move");
-    images.destroy(&host);
-    gpu_scene.destroy(&host);
-    drop(ctx);
-    assert_no_validation_errors();
+    let moved = InstanceTask {
+        handle: f.gpu_scene.instances[0],
+        operation: InstanceOperation::Update,
+        input: InstanceInput { geometry: f.gpu_scene.geometries[0], transform: far, ..Default::default() },
+    };
+    f.frame.schedule_instance(&moved).unwrap();
+    f.frame.schedule_bvh_build(&Default::default()).unwrap();
+    f.frame.schedule_ambient_occlusion(&f.ao()).unwrap();
+    run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
+    f.b.boxes.instances[0].transform = far;
+    check_rings(&f.images.read_output(&f.host).unwrap(), &f.g, &f.b, |i| i == 1, "after the move");
+    f.finish();
 }
 
 /// A deformable (allow_update) quad is refitted in place when its vertices change.
@@ -221,51 +241,34 @@ fn updating_a_deformable_geometry_refits_its_blas() {
 /// Static BLASes are compacted a frame after their build (no stall), and tracing still works.
 #[test]
 fn static_blases_are_compacted() {
-    let (host, ctx) = host_and_context(InitSettings::default());
-    let b = boxes(4);
-    let g = GBuffer::render(&Tracer::new(&b.ground), &b.camera, W, H);
-    let images = GBufferImages::upload(&host, &g).unwrap();
-    let mut frame = ctx.create_task_container();
-    let gpu_scene = SceneOnGpu::register(&host, &ctx, &mut frame, &b.boxes).unwrap();
-    frame.schedule_bvh_build(&Default::default()).unwrap();
-    run_frame(&host, &ctx, &mut frame).unwrap();
-    let built = ctx.resource_allocations().blas;
+    let mut f = fixture(4, true);
+    let built = f.ctx.resource_allocations().blas;
     assert_eq!(built.count, 4);
     // Next build: compaction copies; the originals are freed when that ticket is back.
-    frame.schedule_bvh_build(&Default::default()).unwrap();
-    frame.schedule_ambient_occlusion(&images.ao_task(&b.camera, 1.0, RAYS)).unwrap();
-    run_frame(&host, &ctx, &mut frame).unwrap();
-    let compacted = ctx.resource_allocations().blas;
+    f.frame.schedule_bvh_build(&Default::default()).unwrap();
+    f.frame.schedule_ambient_occlusion(&f.ao()).unwrap();
+    run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
+    let compacted = f.ctx.resource_allocations().blas;
     eprintln!("BLAS bytes: built {} -> compacted {}", built.bytes, compacted.bytes);
     assert_eq!(compacted.count, 4, "originals freed once the compacting ticket is back");
     assert!(compacted.bytes <= built.bytes);
-    check_rings(&images.read_output(&host).unwrap(), &g, &b, |_| true, "after compaction");
-    images.destroy(&host);
-    gpu_scene.destroy(&host);
-    drop(ctx);
-    assert_no_validation_errors();
+    check_rings(&f.images.read_output(&f.host).unwrap(), &f.g, &f.b, |_| true, "after compaction");
+    f.finish();
 }
 
 /// Destroying handles while a ticket that uses them is in flight defers the frees.
 #[test]
 fn destruction_is_deferred_until_tickets_return() {
-    let (host, ctx) = host_and_context(InitSettings::default());
-    let b = boxes(2);
-    let g = GBuffer::render(&Tracer::new(&b.ground), &b.camera, W, H);
-    let images = GBufferImages::upload(&host, &g).unwrap();
-    let mut frame = ctx.create_task_container();
-    let gpu_scene = SceneOnGpu::register(&host, &ctx, &mut frame, &b.boxes).unwrap();
-    frame.schedule_bvh_build(&Default::default()).unwrap();
-    run_frame(&host, &ctx, &mut frame).unwrap();
-
-    frame.schedule_ambient_occlusion(&images.ao_task(&b.camera, 1.0, RAYS)).unwrap();
+    let mut f = fixture(2, true);
+    let (host, ctx) = (&f.host, &f.ctx);
+    f.frame.schedule_ambient_occlusion(&f.images.ao_task(&f.b.camera, 1.0, RAYS)).unwrap();
     let cmd = host.allocate_command_buffer().unwrap();
     host.begin(cmd).unwrap();
-    let ticket = ctx.build_gpu_task(&mut frame, cmd).unwrap();
+    let ticket = ctx.build_gpu_task(&mut f.frame, cmd).unwrap();
     // The AO recorded above still reads both BLASes: destroying now must not free them.
-    assert!(matches!(ctx.destroy_geometry_handles(&gpu_scene.geometries), Err(Error::GeometryInUse { .. })));
-    ctx.destroy_instance_handles(&gpu_scene.instances).unwrap();
-    ctx.destroy_geometry_handles(&gpu_scene.geometries).unwrap();
+    assert!(matches!(ctx.destroy_geometry_handles(&f.gpu_scene.geometries), Err(Error::GeometryInUse { .. })));
+    ctx.destroy_instance_handles(&f.gpu_scene.instances).unwrap();
+    ctx.destroy_geometry_handles(&f.gpu_scene.geometries).unwrap();
     let during = ctx.resource_allocations();
     assert_eq!(during.blas.count, 2, "BLASes live while the ticket is out");
     assert!(matches!(ctx.release_device_resources_immediately(), Err(Error::TicketsInFlight { .. })));
@@ -276,11 +279,7 @@ fn destruction_is_deferred_until_tickets_return() {
     assert_eq!(after.blas.count, 0);
     assert_eq!(after.geometry_copies.count, 0);
     // The frame's AO saw both boxes.
-    check_rings(&images.read_output(&host).unwrap(), &g, &b, |_| true, "in-flight frame");
+    check_rings(&f.images.read_output(host).unwrap(), &f.g, &f.b, |_| true, "in-flight frame");
     ctx.release_device_resources_immediately().unwrap();
-    images.destroy(&host);
-    gpu_scene.destroy(&host);
-    drop(ctx);
-    let _ = Host::validation_errors;
-    assert_no_validation_errors();
+    f.finish();
 }

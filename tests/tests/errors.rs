@@ -164,7 +164,13 @@ fn stale_foreign_and_null_handles_are_refused() {
     host.destroy_buffer(_ib);
     render_ok(&host, &ctx);
     drop(other);
+    // A container that outlives its context: the context's GPU objects are gone at once (the
+    // engine may destroy its device next), and the container refuses politely.
     drop(ctx);
+    assert!(matches!(foreign_container.schedule_bvh_build(&BvhBuildTask::default()), Err(Error::ContextDestroyed)));
+    drop(host);
+    drop(foreign_container);
+    drop(c);
     assert_no_validation_errors();
 }
 

@@ -7,7 +7,7 @@ use super::handles::{GeometryHandle, InstanceHandle};
 use super::tasks::*;
 use super::validate;
 use crate::error::Result;
-use std::sync::Arc;
+use std::sync::{Arc, Weak};
 
 #[derive(Debug, Clone)]
 pub(crate) enum Task {
@@ -17,23 +17,32 @@ pub(crate) enum Task {
     AmbientOcclusion(TraceAmbientOcclusionTask),
 }
 
+/// Holds only a weak reference to its context: dropping the `ExecuteContext` frees the SDK's
+/// GPU objects at once, whatever containers are still around (they then refuse to schedule
+/// with `Error::ContextDestroyed`).
 pub struct TaskContainer {
-    pub(crate) shared: Arc<Shared>,
+    pub(crate) shared: Weak<Shared>,
     pub(crate) tasks: Vec<Task>,
 }
 
 impl TaskContainer {
+    fn shared(&self) -> Result<Arc<Shared>> {
+        self.shared.upgrade().ok_or(crate::Error::ContextDestroyed)
+    }
+
     pub fn schedule_geometry(&mut self, task: &GeometryTask) -> Result<()> {
-        self.shared.check_geometry_alive(task.handle)?;
-        validate::geometry_input(&self.shared.device.raw, &task.input)?;
+        let shared = self.shared()?;
+        shared.check_geometry_alive(task.handle)?;
+        validate::geometry_input(&shared.device.raw, &task.input)?;
         self.tasks.push(Task::Geometry(*task));
         Ok(())
     }
 
     pub fn schedule_instance(&mut self, task: &InstanceTask) -> Result<()> {
-        self.shared.check_instance_alive(task.handle)?;
+        let shared = self.shared()?;
+        shared.check_instance_alive(task.handle)?;
         if task.operation != InstanceOperation::Remove {
-            self.shared.check_geometry_alive(task.input.geometry)?;
+            shared.check_geometry_alive(task.input.geometry)?;
             validate::transform("InstanceInput.transform", &task.input.transform)?;
             if task.input.initial_tile_color.iter().any(|c| !c.is_finite()) {
                 return Err(crate::Error::invalid("InstanceInput.initial_tile_color", "is not finite"));
@@ -44,11 +53,13 @@ impl TaskContainer {
     }
 
     pub fn schedule_bvh_build(&mut self, task: &BvhBuildTask) -> Result<()> {
+        self.shared()?;
         self.tasks.push(Task::BvhBuild(*task));
         Ok(())
     }
 
     pub fn schedule_ambient_occlusion(&mut self, task: &TraceAmbientOcclusionTask) -> Result<()> {
+        self.shared()?;
         validate::ambient_occlusion(task)?;
         self.tasks.push(Task::AmbientOcclusion(*task));
         Ok(())

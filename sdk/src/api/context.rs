@@ -216,7 +216,7 @@ impl ExecuteContext {
     }
 
     pub fn create_task_container(&self) -> TaskContainer {
-        TaskContainer { shared: self.shared.clone(), tasks: Vec::new() }
+        TaskContainer { shared: Arc::downgrade(&self.shared), tasks: Vec::new() }
     }
 
     /// BLAS builds waiting for a `BvhBuildTask` (registered geometries not built yet, and
@@ -265,7 +265,7 @@ impl ExecuteContext {
     /// tasks. (A Vulkan error in the middle of recording leaves `cmd` partly recorded: reset
     /// it.)
     pub fn build_gpu_task(&self, container: &mut TaskContainer, cmd: vk::CommandBuffer) -> Result<GpuTicket> {
-        if !Arc::ptr_eq(&container.shared, &self.shared) {
+        if !std::ptr::eq(container.shared.as_ptr(), Arc::as_ptr(&self.shared)) {
             return Err(Error::ForeignContainer);
         }
         if cmd == vk::CommandBuffer::null() {
