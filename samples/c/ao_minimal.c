@@ -222,6 +222,9 @@ static uint32_t run_frame(HrtContext *ctx, HrtTaskContainer *frame, Image *out, 
     VkCommandBuffer cmd = begin();
     HrtTicket ticket;
     CHECK_HRT(hrt_build_gpu_task(ctx, frame, cmd, &ticket));
+    uint32_t in_flight = 0;
+    CHECK_HRT(hrt_tickets_in_flight(ctx, NULL, 0, &in_flight));
+    EXPECT(in_flight == 1, "one ticket in flight (%u)", in_flight);
     EXPECT(hrt_task_container_len(frame) == 0, "a built container is emptied");
     transition(cmd, out->image, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
     Buffer readback = make_buffer(W * H * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT, NULL);
@@ -378,6 +381,9 @@ int main(void) {
     EXPECT(hrt_context_create(&desc, &ctx) == HRT_ERROR_VERSION_MISMATCH, "a header/library mismatch is refused");
     desc.api_version = HRT_API_VERSION;
     CHECK_HRT(hrt_context_create(&desc, &ctx));
+    char device_name[256];
+    hrt_device_name(ctx, device_name, sizeof device_name);
+    printf("hybrid-rt on %s\n", device_name);
 
     /* ---- Geometry: a 20x20 ground quad at y = 0 and a 1x1 ceiling quad 0.2 above it. */
     const float ground[] = {-10, 0, -10, 10, 0, -10, 10, 0, 10, -10, 0, 10};

@@ -557,6 +557,20 @@ uint32_t hrt_tlas_instance_count(const struct HrtContext *ctx);
 enum HrtStatus hrt_resource_allocations(const struct HrtContext *ctx,
                                         struct HrtResourceAllocations *out);
 
+/**
+ * Serials of the tickets built and not yet handed back: writes up to `capacity` and the total
+ * to `count`.
+ */
+enum HrtStatus hrt_tickets_in_flight(const struct HrtContext *ctx,
+                                     uint64_t *serials,
+                                     uint32_t capacity,
+                                     uint32_t *count);
+
+/**
+ * The device's name (NUL-terminated, truncated to `capacity`). Returns its full length.
+ */
+uint32_t hrt_device_name(const struct HrtContext *ctx, char *buffer, uint32_t capacity);
+
 #ifdef __cplusplus
 }  // extern "C"
 #endif  // __cplusplus

@@ -454,3 +454,33 @@ pub unsafe extern "C" fn hrt_resource_allocations(ctx: *const HrtContext, out: *
         Ok(())
     })
 }
+
+/// Serials of the tickets built and not yet handed back: writes up to `capacity` and the total
+/// to `count`.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_tickets_in_flight(ctx: *const HrtContext, serials: *mut u64, capacity: u32, count: *mut u32) -> HrtStatus {
+    guard(|| {
+        let c = get(ctx, "ctx")?;
+        let all = c.ctx.tickets_in_flight();
+        *get_mut(count, "count")? = all.len() as u32;
+        if !serials.is_null() {
+            for (i, s) in all.iter().take(capacity as usize).enumerate() {
+                *serials.add(i) = *s;
+            }
+        }
+        Ok(())
+    })
+}
+
+/// The device's name (NUL-terminated, truncated to `capacity`). Returns its full length.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_device_name(ctx: *const HrtContext, buffer: *mut c_char, capacity: u32) -> u32 {
+    let Some(c) = ctx.as_ref() else { return 0 };
+    let name = c.ctx.device_name();
+    if !buffer.is_null() && capacity > 0 {
+        let n = name.len().min(capacity as usize - 1);
+        std::ptr::copy_nonoverlapping(name.as_ptr() as *const c_char, buffer, n);
+        *buffer.add(n) = 0;
+    }
+    name.len() as u32
+}
