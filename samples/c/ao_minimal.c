@@ -218,7 +218,7 @@ static void submit_and_wait(VkCommandBuffer cmd) {
 
 /* Records the container between two full barriers (the engine's own work around it), submits,
  * waits, hands the ticket back and returns the number of timed tasks. */
-static uint32_t run_frame(HrtContext *ctx, HrtTaskContainer *frame, Image *out, float *ao) {
+static uint32_t run_frame(HrtContext *ctx, HrtTaskContainer *frame, Image *out, uint32_t texel_bytes, float *result) {
     VkCommandBuffer cmd = begin();
     HrtTicket ticket;
     CHECK_HRT(hrt_build_gpu_task(ctx, frame, cmd, &ticket));
@@ -227,7 +227,7 @@ static uint32_t run_frame(HrtContext *ctx, HrtTaskContainer *frame, Image *out, 
     EXPECT(in_flight == 1, "one ticket in flight (%u)", in_flight);
     EXPECT(hrt_task_container_len(frame) == 0, "a built container is emptied");
     transition(cmd, out->image, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
-    Buffer readback = make_buffer(W * H * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT, NULL);
+    Buffer readback = make_buffer(W * H * texel_bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, NULL);
     VkBufferImageCopy region = {0};
     region.imageSubresource.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
     region.imageSubresource.layerCount = 1;
@@ -247,8 +247,8 @@ static uint32_t run_frame(HrtContext *ctx, HrtTaskContainer *frame, Image *out, 
     EXPECT(hrt_mark_gpu_task_completed(ctx, ticket, NULL, 0, NULL) == HRT_ERROR_UNKNOWN_TICKET, "second return");
 
     void *p;
-    CHECK_VK(vkMapMemory(device, readback.memory, 0, W * H * 4, 0, &p));
-    memcpy(ao, p, W * H * 4);
+    CHECK_VK(vkMapMemory(device, readback.memory, 0, W * H * texel_bytes, 0, &p));
+    memcpy(result, p, W * H * texel_bytes);
     vkUnmapMemory(device, readback.memory);
     free_buffer(readback);
     return count;
@@ -329,11 +329,14 @@ int main(void) {
     if (ray_query)
         for (uint32_t i = 0; i < n_optional; i++) exts[n_exts++] = optional[i];
 
+    VkPhysicalDeviceShaderAtomicFloatFeaturesEXT aff = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_FLOAT_FEATURES_EXT};
+    aff.shaderBufferFloat32AtomicAdd = VK_TRUE;
     VkPhysicalDeviceRayQueryFeaturesKHR rqf = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_QUERY_FEATURES_KHR};
     rqf.rayQuery = VK_TRUE;
+    rqf.pNext = &aff;
     VkPhysicalDeviceRayTracingPipelineFeaturesKHR rtf = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_TRACING_PIPELINE_FEATURES_KHR};
     rtf.rayTracingPipeline = VK_TRUE;
-    rtf.pNext = ray_query ? &rqf : NULL;
+    rtf.pNext = ray_query ? (void *)&rqf : (void *)&aff;
     VkPhysicalDeviceAccelerationStructureFeaturesKHR asf = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_FEATURES_KHR};
     asf.accelerationStructure = VK_TRUE;
     asf.pNext = &rtf;
@@ -412,6 +415,8 @@ int main(void) {
         HrtInstanceTask inst = hrt_instance_task_default();
         inst.handle = instances[i];
         inst.input.geometry = geometries[i];
+        inst.input.initial_tile_color[0] = 1.0f; /* magenta: "not injected yet" */
+        inst.input.initial_tile_color[2] = 1.0f;
         CHECK_HRT(hrt_schedule_instance(frame, &inst));
     }
     HrtBvhBuildTask bvh = hrt_bvh_build_task_default();
@@ -484,7 +489,7 @@ int main(void) {
     /* ---- Frame 1: everything registered; dark under the ceiling, open at the corners. */
     float result[W * H];
     printf("frame 1:\n");
-    uint32_t timed = run_frame(ctx, frame, &out, result);
+    uint32_t timed = run_frame(ctx, frame, &out, 4, result);
     EXPECT(timed >= 2, "BVH and AO timings reported (%u)", timed);
     EXPECT(hrt_tlas_instance_count(ctx) == 2, "two instances in the TLAS");
     float centre = result[(H / 2) * W + W / 2], corner = result[0];
@@ -505,9 +510,53 @@ int main(void) {
     CHECK_HRT(hrt_schedule_bvh_build(frame, &bvh));
     CHECK_HRT(hrt_schedule_ambient_occlusion(frame, &ao));
     printf("frame 2:\n");
-    run_frame(ctx, frame, &out, result);
+    run_frame(ctx, frame, &out, 4, result);
     centre = result[(H / 2) * W + W / 2];
     EXPECT(centre > 0.999f, "the removed ceiling no longer occludes (%f)", centre);
+
+    /* ---- The direct-lighting cache: the ground's cache exists by now (its layout came back
+     * with frame 1's ticket and frame 2 allocated it); inject a constant lit image, look at
+     * the cache through the debug view, clear it, look again. */
+    uint64_t cache_bytes = 0;
+    CHECK_HRT(hrt_instance_cache_bytes(ctx, instances[0], &cache_bytes));
+    EXPECT(cache_bytes > 0, "the ground has a cache");
+    printf("ground cache: %llu bytes\n", (unsigned long long)cache_bytes);
+    Image lit = make_image(VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_SAMPLED_BIT);
+    Image view = make_image(VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT);
+    cmd = begin();
+    VkClearColorValue lit_colour = {{0.2f, 0.4f, 0.6f, 1.0f}};
+    transition(cmd, lit.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+    vkCmdClearColorImage(cmd, lit.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &lit_colour, 1, &all);
+    transition(cmd, lit.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    transition(cmd, view.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL);
+    submit_and_wait(cmd);
+
+    HrtDirectLightingInjectionTask inject = hrt_direct_lighting_injection_task_default();
+    inject.depth.image = ao.common.depth.image;
+    inject.lit = sdk_image(&lit, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    inject.viewport = ao.common.viewport;
+    inject.camera = camera;
+    inject.average_window = 1.0f;
+    CHECK_HRT(hrt_schedule_direct_lighting_injection(frame, &inject));
+    HrtTraceAmbientOcclusionTask debug_view = ao;
+    debug_view.common.debug_output = HRT_DEBUG_DIRECT_LIGHTING_CACHE;
+    debug_view.output = sdk_image(&view, VK_IMAGE_LAYOUT_GENERAL);
+    CHECK_HRT(hrt_schedule_ambient_occlusion(frame, &debug_view));
+    float rgba[W * H * 4];
+    printf("frame 3 (injection + cache view):\n");
+    run_frame(ctx, frame, &view, 16, rgba);
+    const float *c = &rgba[((H / 2) * W + W / 2) * 4];
+    printf("cache at the centre: %.3f %.3f %.3f\n", c[0], c[1], c[2]);
+    EXPECT(fabsf(c[0] - 0.2f) < 1e-4f && fabsf(c[1] - 0.4f) < 1e-4f && fabsf(c[2] - 0.6f) < 1e-4f, "injected colour cached");
+
+    HrtClearCacheTask clear = {instances[0]};
+    CHECK_HRT(hrt_schedule_clear_cache(frame, &clear));
+    CHECK_HRT(hrt_schedule_ambient_occlusion(frame, &debug_view));
+    printf("frame 4 (clear + cache view):\n");
+    run_frame(ctx, frame, &view, 16, rgba);
+    EXPECT(c[0] == 1.0f && c[1] == 0.0f && c[2] == 1.0f, "cleared to the initial colour (%f %f %f)", c[0], c[1], c[2]);
+    free_image(lit);
+    free_image(view);
 
     /* ---- Teardown. */
     CHECK_HRT(hrt_destroy_all_instance_handles(ctx));

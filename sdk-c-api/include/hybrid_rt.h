@@ -91,7 +91,18 @@ typedef enum HrtTaskKind {
    * Inside HRT_TASK_BVH: the TLAS build.
    */
   HRT_TASK_TLAS_BUILD = 3,
+  HRT_TASK_DIRECT_LIGHTING_INJECTION = 4,
+  HRT_TASK_CACHE_UPDATE = 5,
 } HrtTaskKind;
+
+typedef enum HrtDebugOutput {
+  HRT_DEBUG_DEFAULT = 0,
+  HRT_DEBUG_DIRECT_LIGHTING_CACHE = 1,
+  HRT_DEBUG_RANDOM_TILE_COLOR = 2,
+  HRT_DEBUG_RANDOM_MESH_COLOR = 3,
+  HRT_DEBUG_HIT_T = 4,
+  HRT_DEBUG_BARYCENTRICS = 5,
+} HrtDebugOutput;
 
 typedef enum HrtTaskOperation {
   HRT_OPERATION_REGISTER = 0,
@@ -366,6 +377,14 @@ typedef struct HrtTraceCommon {
    * Default false.
    */
   bool use_inline_rt;
+  /**
+   * Interpolate mesh-colors caches. Default true.
+   */
+  bool enable_bilinear_sampling;
+  /**
+   * An HrtDebugOutput. Default HRT_DEBUG_DEFAULT.
+   */
+  uint32_t debug_output;
 } HrtTraceCommon;
 
 typedef struct HrtTraceAmbientOcclusionTask {
@@ -408,7 +427,38 @@ typedef struct HrtResourceAllocations {
   struct HrtAllocationCount tlas;
   struct HrtAllocationCount upload_rings;
   struct HrtAllocationCount pipelines;
+  struct HrtAllocationCount cache;
+  struct HrtAllocationCount readback;
 } HrtResourceAllocations;
+
+/**
+ * Bakes a lit view into the direct-lighting caches (see the Rust docs of
+ * DirectLightingInjectionTask).
+ */
+typedef struct HrtDirectLightingInjectionTask {
+  struct HrtDepthInput depth;
+  /**
+   * The lit frame (RGB radiance), read-only layout, SAMPLED usage.
+   */
+  struct HrtImageInput lit;
+  struct HrtViewport viewport;
+  struct HrtCamera camera;
+  /**
+   * Frames of the running average, >= 1. Default 200.
+   */
+  float average_window;
+  /**
+   * Default false (injection always uses the ray-tracing pipeline).
+   */
+  bool use_inline_rt;
+} HrtDirectLightingInjectionTask;
+
+/**
+ * Resets an instance's cache to its initial colour.
+ */
+typedef struct HrtClearCacheTask {
+  HrtInstanceHandle instance;
+} HrtClearCacheTask;
 
 #ifdef __cplusplus
 extern "C" {
@@ -570,6 +620,22 @@ enum HrtStatus hrt_tickets_in_flight(const struct HrtContext *ctx,
  * The device's name (NUL-terminated, truncated to `capacity`). Returns its full length.
  */
 uint32_t hrt_device_name(const struct HrtContext *ctx, char *buffer, uint32_t capacity);
+
+struct HrtDirectLightingInjectionTask hrt_direct_lighting_injection_task_default(void);
+
+enum HrtStatus hrt_schedule_direct_lighting_injection(struct HrtTaskContainer *container,
+                                                      const struct HrtDirectLightingInjectionTask *task);
+
+enum HrtStatus hrt_schedule_clear_cache(struct HrtTaskContainer *container,
+                                        const struct HrtClearCacheTask *task);
+
+/**
+ * Bytes of an instance's direct-lighting cache (0 until allocated, one recording after the
+ * ticket that registered its geometry came back).
+ */
+enum HrtStatus hrt_instance_cache_bytes(const struct HrtContext *ctx,
+                                        HrtInstanceHandle instance,
+                                        uint64_t *bytes);
 
 #ifdef __cplusplus
 }  // extern "C"

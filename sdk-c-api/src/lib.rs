@@ -421,6 +421,8 @@ pub unsafe extern "C" fn hrt_mark_gpu_task_completed(
                         rt::TaskKind::AmbientOcclusion => HrtTaskKind::HRT_TASK_AMBIENT_OCCLUSION,
                         rt::TaskKind::BlasBuild => HrtTaskKind::HRT_TASK_BLAS_BUILD,
                         rt::TaskKind::TlasBuild => HrtTaskKind::HRT_TASK_TLAS_BUILD,
+                        rt::TaskKind::DirectLightingInjection => HrtTaskKind::HRT_TASK_DIRECT_LIGHTING_INJECTION,
+                        rt::TaskKind::CacheUpdate => HrtTaskKind::HRT_TASK_CACHE_UPDATE,
                     },
                     task_index: t.task_index,
                     gpu_ms: t.gpu_ms,
@@ -483,4 +485,40 @@ pub unsafe extern "C" fn hrt_device_name(ctx: *const HrtContext, buffer: *mut c_
         *buffer.add(n) = 0;
     }
     name.len() as u32
+}
+
+#[no_mangle]
+pub extern "C" fn hrt_direct_lighting_injection_task_default() -> HrtDirectLightingInjectionTask {
+    types::injection_task_default()
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_schedule_direct_lighting_injection(
+    container: *mut HrtTaskContainer,
+    task: *const HrtDirectLightingInjectionTask,
+) -> HrtStatus {
+    guard(|| {
+        let c = get_mut(container, "container")?;
+        Ok(c.inner.schedule_direct_lighting_injection(&types::injection_task(get(task, "task")?)?)?)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_schedule_clear_cache(container: *mut HrtTaskContainer, task: *const HrtClearCacheTask) -> HrtStatus {
+    guard(|| {
+        let c = get_mut(container, "container")?;
+        let t = get(task, "task")?;
+        Ok(c.inner.schedule_clear_cache(&rt::ClearCacheTask { instance: rt::InstanceHandle(t.instance) })?)
+    })
+}
+
+/// Bytes of an instance's direct-lighting cache (0 until allocated, one recording after the
+/// ticket that registered its geometry came back).
+#[no_mangle]
+pub unsafe extern "C" fn hrt_instance_cache_bytes(ctx: *const HrtContext, instance: HrtInstanceHandle, bytes: *mut u64) -> HrtStatus {
+    guard(|| {
+        let c = get(ctx, "ctx")?;
+        *get_mut(bytes, "bytes")? = c.ctx.instance_cache_bytes(rt::InstanceHandle(instance))?;
+        Ok(())
+    })
 }

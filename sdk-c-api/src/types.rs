@@ -277,6 +277,17 @@ pub struct HrtRayOffset {
 }
 
 #[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtDebugOutput {
+    HRT_DEBUG_DEFAULT = 0,
+    HRT_DEBUG_DIRECT_LIGHTING_CACHE = 1,
+    HRT_DEBUG_RANDOM_TILE_COLOR = 2,
+    HRT_DEBUG_RANDOM_MESH_COLOR = 3,
+    HRT_DEBUG_HIT_T = 4,
+    HRT_DEBUG_BARYCENTRICS = 5,
+}
+
+#[repr(C)]
 #[derive(Clone, Copy)]
 pub struct HrtTraceCommon {
     pub depth: HrtDepthInput,
@@ -286,6 +297,33 @@ pub struct HrtTraceCommon {
     pub ray_offset: HrtRayOffset,
     /// Default false.
     pub use_inline_rt: bool,
+    /// Interpolate mesh-colors caches. Default true.
+    pub enable_bilinear_sampling: bool,
+    /// An HrtDebugOutput. Default HRT_DEBUG_DEFAULT.
+    pub debug_output: u32,
+}
+
+/// Bakes a lit view into the direct-lighting caches (see the Rust docs of
+/// DirectLightingInjectionTask).
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtDirectLightingInjectionTask {
+    pub depth: HrtDepthInput,
+    /// The lit frame (RGB radiance), read-only layout, SAMPLED usage.
+    pub lit: HrtImageInput,
+    pub viewport: HrtViewport,
+    pub camera: HrtCamera,
+    /// Frames of the running average, >= 1. Default 200.
+    pub average_window: f32,
+    /// Default false (injection always uses the ray-tracing pipeline).
+    pub use_inline_rt: bool,
+}
+
+/// Resets an instance's cache to its initial colour.
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtClearCacheTask {
+    pub instance: HrtInstanceHandle,
 }
 
 #[repr(C)]
@@ -312,6 +350,8 @@ pub enum HrtTaskKind {
     HRT_TASK_BLAS_BUILD = 2,
     /// Inside HRT_TASK_BVH: the TLAS build.
     HRT_TASK_TLAS_BUILD = 3,
+    HRT_TASK_DIRECT_LIGHTING_INJECTION = 4,
+    HRT_TASK_CACHE_UPDATE = 5,
 }
 
 #[repr(C)]
@@ -338,6 +378,8 @@ pub struct HrtResourceAllocations {
     pub tlas: HrtAllocationCount,
     pub upload_rings: HrtAllocationCount,
     pub pipelines: HrtAllocationCount,
+    pub cache: HrtAllocationCount,
+    pub readback: HrtAllocationCount,
 }
 
 // ---------------------------------------------------------------- conversions
@@ -503,6 +545,19 @@ pub(crate) fn trace_common(c: &HrtTraceCommon) -> Result<rt::TraceCommon, Failur
             cam_quadratic: o.cam_quadratic,
         },
         use_inline_rt: c.use_inline_rt,
+        enable_bilinear_sampling: c.enable_bilinear_sampling,
+        debug_output: pick(
+            "HrtTraceCommon.debug_output",
+            c.debug_output,
+            &[
+                rt::DebugOutput::Default,
+                rt::DebugOutput::DirectLightingCache,
+                rt::DebugOutput::RandomTileColor,
+                rt::DebugOutput::RandomMeshColor,
+                rt::DebugOutput::HitT,
+                rt::DebugOutput::Barycentrics,
+            ],
+        )?,
     })
 }
 
@@ -523,6 +578,40 @@ pub(crate) fn trace_common_default() -> HrtTraceCommon {
             cam_linear: o.cam_linear,
             cam_quadratic: o.cam_quadratic,
         },
+        use_inline_rt: d.use_inline_rt,
+        enable_bilinear_sampling: d.enable_bilinear_sampling,
+        debug_output: d.debug_output as u32,
+    }
+}
+
+pub(crate) fn injection_task(t: &HrtDirectLightingInjectionTask) -> Result<rt::DirectLightingInjectionTask, Failure> {
+    // Reuse the trace-common conversion for the shared inputs.
+    let common = trace_common(&HrtTraceCommon {
+        depth: t.depth,
+        normals: trace_common_default().normals,
+        viewport: t.viewport,
+        camera: t.camera,
+        ..trace_common_default()
+    })?;
+    Ok(rt::DirectLightingInjectionTask {
+        depth: common.depth,
+        lit: image(&t.lit),
+        viewport: common.viewport,
+        camera: common.camera,
+        average_window: t.average_window,
+        use_inline_rt: t.use_inline_rt,
+    })
+}
+
+pub(crate) fn injection_task_default() -> HrtDirectLightingInjectionTask {
+    let d = rt::DirectLightingInjectionTask::default();
+    let c = trace_common_default();
+    HrtDirectLightingInjectionTask {
+        depth: c.depth,
+        lit: image_c(&d.lit),
+        viewport: c.viewport,
+        camera: c.camera,
+        average_window: d.average_window,
         use_inline_rt: d.use_inline_rt,
     }
 }
@@ -558,6 +647,8 @@ impl From<rt::ResourceAllocations> for HrtResourceAllocations {
             tlas: c(a.tlas),
             upload_rings: c(a.upload_rings),
             pipelines: c(a.pipelines),
+            cache: c(a.cache),
+            readback: c(a.readback),
         }
     }
 }

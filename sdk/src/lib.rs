@@ -20,6 +20,7 @@
 //!
 //! See docs/ for the integration guide and shared/DESIGN.md for the architecture.
 pub mod api;
+pub(crate) mod cache;
 pub mod error;
 pub mod gpu;
 pub(crate) mod passes;

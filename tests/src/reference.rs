@@ -131,11 +131,17 @@ pub struct Hit {
     /// Geometric normal (unit), as wound.
     pub normal: Vec3,
     pub triangle: u32,
+    /// Weights of the triangle's vertices 1 and 2 (Vulkan's hit attributes).
+    pub bary: [f32; 2],
+    /// Index of the scene instance hit.
+    pub instance: u32,
 }
 
 /// World-space triangles of a scene with a BVH over them.
 pub struct Tracer {
     tris: Vec<[Vec3; 3]>,
+    /// Scene instance of each triangle (kept in step with `tris` through the BVH sort).
+    instance_of: Vec<u32>,
     nodes: Vec<Node>,
 }
 
@@ -147,6 +153,7 @@ impl Tracer {
     /// Only the instances `keep` accepts (e.g. those whose BLAS the SDK has built).
     pub fn with_instances(scene: &Scene, keep: impl Fn(usize) -> bool) -> Tracer {
         let mut tris = Vec::new();
+        let mut instance_of = Vec::new();
         for (i, inst) in scene.instances.iter().enumerate() {
             if !keep(i) {
                 continue;
@@ -154,9 +161,10 @@ impl Tracer {
             let m = &scene.meshes[inst.mesh];
             for t in m.indices.chunks_exact(3) {
                 tris.push([0, 1, 2].map(|k| inst.transform.transform_point3(m.positions[t[k] as usize])));
+                instance_of.push(i as u32);
             }
         }
-        let mut tracer = Tracer { tris, nodes: Vec::new() };
+        let mut tracer = Tracer { tris, instance_of, nodes: Vec::new() };
         tracer.build();
         tracer
     }
@@ -189,9 +197,13 @@ impl Tracer {
             }
             let ext = cmax - cmin;
             let axis = if ext.x >= ext.y && ext.x >= ext.z { 0 } else if ext.y >= ext.z { 1 } else { 2 };
-            let slice = &mut self.tris[start..start + count];
             let key = |t: &[Vec3; 3]| (t[0][axis] + t[1][axis] + t[2][axis]) / 3.0;
-            slice.sort_by(|a, b| key(a).total_cmp(&key(b)));
+            let mut order: Vec<usize> = (start..start + count).collect();
+            order.sort_by(|&a, &b| key(&self.tris[a]).total_cmp(&key(&self.tris[b])));
+            let tris: Vec<[Vec3; 3]> = order.iter().map(|&i| self.tris[i]).collect();
+            let inst: Vec<u32> = order.iter().map(|&i| self.instance_of[i]).collect();
+            self.tris[start..start + count].copy_from_slice(&tris);
+            self.instance_of[start..start + count].copy_from_slice(&inst);
             let half = count / 2;
             let left = self.nodes.len();
             self.nodes.push(Node { min, max, start: start as u32, count: half as u32 });
@@ -226,11 +238,11 @@ impl Tracer {
             if n.count > 0 {
                 for i in n.start..n.start + n.count {
                     let tri = &self.tris[i as usize];
-                    if let Some(t) = intersect(origin, dir, tri) {
+                    if let Some((t, u, v)) = intersect(origin, dir, tri) {
                         if t > tmin && t < t_best {
                             t_best = t;
                             let normal = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize();
-                            best = Some(Hit { t, normal, triangle: i });
+                            best = Some(Hit { t, normal, triangle: i, bary: [u, v], instance: self.instance_of[i as usize] });
                         }
                     }
                 }
@@ -244,8 +256,8 @@ impl Tracer {
     }
 }
 
-/// Möller–Trumbore.
-fn intersect(o: Vec3, d: Vec3, tri: &[Vec3; 3]) -> Option<f32> {
+/// Möller–Trumbore: (t, weight of vertex 1, weight of vertex 2).
+fn intersect(o: Vec3, d: Vec3, tri: &[Vec3; 3]) -> Option<(f32, f32, f32)> {
     let e1 = tri[1] - tri[0];
     let e2 = tri[2] - tri[0];
     let p = d.cross(e2);
@@ -264,7 +276,7 @@ fn intersect(o: Vec3, d: Vec3, tri: &[Vec3; 3]) -> Option<f32> {
     if v < 0.0 || u + v > 1.0 {
         return None;
     }
-    Some(e2.dot(q) * inv)
+    Some((e2.dot(q) * inv, u, v))
 }
 
 // ---------------------------------------------------------------- camera and G-buffer

@@ -15,6 +15,19 @@ pub struct SceneOnGpu {
 impl SceneOnGpu {
     /// Creates handles and schedules register tasks for every mesh and instance of `scene`.
     pub fn register(host: &Host, ctx: &ExecuteContext, container: &mut TaskContainer, scene: &Scene) -> HostResult<SceneOnGpu> {
+        Self::register_with(host, ctx, container, scene, SurfelSettings::default(), [0.0; 3])
+    }
+
+    /// `register` with the surfel settings of every geometry and the initial cache colour of
+    /// every instance.
+    pub fn register_with(
+        host: &Host,
+        ctx: &ExecuteContext,
+        container: &mut TaskContainer,
+        scene: &Scene,
+        surfels: SurfelSettings,
+        initial_tile_color: [f32; 3],
+    ) -> HostResult<SceneOnGpu> {
         let geometries = ctx.create_geometry_handles(scene.meshes.len());
         let mut buffers = Vec::new();
         for (mesh, &handle) in scene.meshes.iter().zip(&geometries) {
@@ -24,6 +37,7 @@ impl SceneOnGpu {
             let input = GeometryInput {
                 vertices: VertexBufferInput { buffer: vb.buffer, count: mesh.positions.len() as u32, ..Default::default() },
                 indices: IndexBufferInput { buffer: ib.buffer, count: mesh.indices.len() as u32, ..Default::default() },
+                surfels,
                 ..Default::default()
             };
             container
@@ -33,7 +47,7 @@ impl SceneOnGpu {
         }
         let instances = ctx.create_instance_handles(scene.instances.len());
         for (inst, &handle) in scene.instances.iter().zip(&instances) {
-            let input = InstanceInput { geometry: geometries[inst.mesh], transform: inst.transform, ..Default::default() };
+            let input = InstanceInput { geometry: geometries[inst.mesh], transform: inst.transform, initial_tile_color, ..Default::default() };
             container
                 .schedule_instance(&InstanceTask { handle, operation: InstanceOperation::Register, input })
                 .map_err(|e| e.to_string())?;

@@ -15,6 +15,8 @@ pub(crate) enum Task {
     Instance(InstanceTask),
     BvhBuild(BvhBuildTask),
     AmbientOcclusion(TraceAmbientOcclusionTask),
+    DirectLightingInjection(DirectLightingInjectionTask),
+    ClearCache(ClearCacheTask),
 }
 
 /// Holds only a weak reference to its context: dropping the `ExecuteContext` frees the SDK's
@@ -62,6 +64,21 @@ impl TaskContainer {
         self.shared()?;
         validate::ambient_occlusion(task)?;
         self.tasks.push(Task::AmbientOcclusion(*task));
+        Ok(())
+    }
+
+    /// Bakes a lit view into the direct-lighting caches (see `DirectLightingInjectionTask`).
+    pub fn schedule_direct_lighting_injection(&mut self, task: &DirectLightingInjectionTask) -> Result<()> {
+        self.shared()?;
+        validate::injection(task)?;
+        self.tasks.push(Task::DirectLightingInjection(*task));
+        Ok(())
+    }
+
+    /// Resets an instance's cache to its initial colour (before the container's render tasks).
+    pub fn schedule_clear_cache(&mut self, task: &ClearCacheTask) -> Result<()> {
+        self.shared()?.check_instance_alive(task.instance)?;
+        self.tasks.push(Task::ClearCache(*task));
         Ok(())
     }
 

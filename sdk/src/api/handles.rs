@@ -117,6 +117,11 @@ impl<H: RawHandle, T> Registry<H, T> {
         Ok(value)
     }
 
+    /// Number of slots ever used (an upper bound of live slot indices).
+    pub fn slot_count(&self) -> usize {
+        self.slots.len()
+    }
+
     pub fn len(&self) -> usize {
         self.len
     }

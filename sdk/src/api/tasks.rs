@@ -376,8 +376,30 @@ impl Default for RayOffset {
     }
 }
 
+/// Debug visualisations. Any mode but `Default` replaces the task's output with an image made
+/// by primary rays from the task's camera through the SDK's TLAS (one per pixel centre of the
+/// viewport; the G-buffer is not read), into an output with four channels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum DebugOutput {
+    /// The task's normal output.
+    #[default]
+    Default = 0,
+    /// The direct-lighting cache's colour at the hit (bilinear for mesh colors when
+    /// `enable_bilinear_sampling`): what injection has baked so far.
+    DirectLightingCache = 1,
+    /// A random colour per cache sample (tile cell or mesh-colors lattice point).
+    RandomTileColor = 2,
+    /// A random colour per instance.
+    RandomMeshColor = 3,
+    /// The hit distance in every channel (0 where nothing is hit).
+    HitT = 4,
+    /// The hit's barycentrics (b0, b1, b2) as RGB.
+    Barycentrics = 5,
+}
+
 /// Inputs every trace task shares.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TraceCommon {
     pub depth: DepthInput,
     pub normals: NormalInput,
@@ -388,6 +410,26 @@ pub struct TraceCommon {
     /// (e.g. NVIDIA's Vulkan driver today) the ray-tracing pipeline is used and a warning is
     /// logged once. Both give the same image. Default false.
     pub use_inline_rt: bool,
+    /// Interpolate mesh-colors caches between samples (continuous across triangle edges)
+    /// instead of taking the nearest sample. Default true (see `TraceCommon::default`).
+    pub enable_bilinear_sampling: bool,
+    /// Default `DebugOutput::Default`.
+    pub debug_output: DebugOutput,
+}
+
+impl Default for TraceCommon {
+    fn default() -> Self {
+        TraceCommon {
+            depth: DepthInput::default(),
+            normals: NormalInput::default(),
+            viewport: Viewport::default(),
+            camera: Camera::default(),
+            ray_offset: RayOffset::default(),
+            use_inline_rt: false,
+            enable_bilinear_sampling: true,
+            debug_output: DebugOutput::Default,
+        }
+    }
 }
 
 /// Ray-traced ambient occlusion. Output: visibility in [0, 1] (1 = unoccluded) written to
@@ -417,4 +459,48 @@ impl Default for TraceAmbientOcclusionTask {
             falloff_power: 1.0,
         }
     }
+}
+
+// ---------------------------------------------------------------- direct-lighting cache
+
+/// Bakes a lit image into the direct-lighting caches of the surfaces it shows. Each pixel
+/// finds the surface under it (a ray from the camera to the depth buffer's point; the hit must
+/// match the depth within 0.5%) and adds its radiance to that surface's nearest cache sample;
+/// after the pass every touched sample moves to the mean of its pixels by the running average
+/// `value += (mean - value) / min(history + 1, average_window)`. Any number per container,
+/// from any view and resolution (a low-resolution "lidar" camera sweeping the scene warms
+/// surfaces the main camera has not seen).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DirectLightingInjectionTask {
+    pub depth: DepthInput,
+    /// The rasterized, lit frame (RGB radiance): RGBA16F/32F, RGBA8, B10G11R11 …, in a
+    /// read-only layout with SAMPLED usage.
+    pub lit: ImageInput,
+    pub viewport: Viewport,
+    pub camera: Camera,
+    /// Frames of the running average (>= 1). Default 200, as in the guide: stable, slow to
+    /// react; lower it for fast-changing lights.
+    pub average_window: f32,
+    /// Accepted for symmetry with trace tasks; injection always uses the ray-tracing pipeline.
+    pub use_inline_rt: bool,
+}
+
+impl Default for DirectLightingInjectionTask {
+    fn default() -> Self {
+        DirectLightingInjectionTask {
+            depth: DepthInput::default(),
+            lit: ImageInput::default(),
+            viewport: Viewport::default(),
+            camera: Camera::default(),
+            average_window: 200.0,
+            use_inline_rt: false,
+        }
+    }
+}
+
+/// Resets an instance's cache to its `initial_tile_color` (no history), without
+/// re-registering it. A no-op for an instance whose cache does not exist yet.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ClearCacheTask {
+    pub instance: InstanceHandle,
 }

@@ -39,6 +39,10 @@ pub enum TaskKind {
     BlasBuild = 2,
     /// Inside `Bvh`: the TLAS build (only when the scene changed since the working set's last).
     TlasBuild = 3,
+    /// A direct-lighting injection and its cache resolve.
+    DirectLightingInjection = 4,
+    /// Cache maintenance of the ticket: new layouts, new and cleared caches.
+    CacheUpdate = 5,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -55,8 +55,11 @@ pub(crate) fn geometry_input(device: &ash::Device, input: &GeometryInput) -> Res
     if !(t.tile_unit_length.is_finite() && t.tile_unit_length > 0.0) {
         return Err(Error::invalid("SurfelSettings.tile_unit_length", "must be finite and > 0"));
     }
-    if t.tile_resolution_limit == 0 {
-        return Err(Error::invalid("SurfelSettings.tile_resolution_limit", "is 0"));
+    if t.tile_resolution_limit == 0 || t.tile_resolution_limit > crate::cache::layout::MAX_RESOLUTION {
+        return Err(Error::invalid(
+            "SurfelSettings.tile_resolution_limit",
+            format!("{} is not in 1..={}", t.tile_resolution_limit, crate::cache::layout::MAX_RESOLUTION),
+        ));
     }
     let layout = GeometryLayout::of(input);
     check_region(device, "GeometryInput.vertices", v.buffer, v.offset, layout.vertex_bytes)?;
@@ -208,9 +211,23 @@ pub(crate) fn output_image(what: &'static str, img: &ImageInput, vp: &Viewport, 
     format_in(what, img.format, formats, "R8/R16/R32 single channel or an RGBA 8/16/32-bit format")
 }
 
+/// Formats a debug visualisation (colour) may be written to.
+pub(crate) const COLOR_OUTPUT_FORMATS: &[vk::Format] =
+    &[vk::Format::R8G8B8A8_UNORM, vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT];
+
 pub(crate) fn ambient_occlusion(t: &TraceAmbientOcclusionTask) -> Result<()> {
     trace_common(&t.common)?;
-    output_image("TraceAmbientOcclusionTask.output", &t.output, &t.common.viewport, SCALAR_OUTPUT_FORMATS)?;
+    if t.common.debug_output != DebugOutput::Default {
+        image("TraceAmbientOcclusionTask.output", &t.output, &t.common.viewport, &[vk::ImageLayout::GENERAL])?;
+        format_in(
+            "TraceAmbientOcclusionTask.output (debug output)",
+            t.output.format,
+            COLOR_OUTPUT_FORMATS,
+            "R8G8B8A8_UNORM, R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT for a debug visualisation",
+        )?;
+    } else {
+        output_image("TraceAmbientOcclusionTask.output", &t.output, &t.common.viewport, SCALAR_OUTPUT_FORMATS)?;
+    }
     if !(t.ray_length.is_finite() && t.ray_length > 0.0) {
         return Err(Error::invalid("TraceAmbientOcclusionTask.ray_length", "must be finite and > 0"));
     }
@@ -219,6 +236,36 @@ pub(crate) fn ambient_occlusion(t: &TraceAmbientOcclusionTask) -> Result<()> {
     }
     if !(t.falloff_power.is_finite() && t.falloff_power > 0.0) {
         return Err(Error::invalid("TraceAmbientOcclusionTask.falloff_power", "must be finite and > 0"));
+    }
+    Ok(())
+}
+
+const LIT_FORMATS: &[vk::Format] = &[
+    vk::Format::R8G8B8A8_UNORM,
+    vk::Format::R8G8B8A8_SRGB,
+    vk::Format::B8G8R8A8_UNORM,
+    vk::Format::B8G8R8A8_SRGB,
+    vk::Format::A2B10G10R10_UNORM_PACK32,
+    vk::Format::B10G11R11_UFLOAT_PACK32,
+    vk::Format::R16G16B16A16_SFLOAT,
+    vk::Format::R32G32B32A32_SFLOAT,
+];
+
+pub(crate) fn injection(t: &DirectLightingInjectionTask) -> Result<()> {
+    let common = TraceCommon { depth: t.depth, viewport: t.viewport, camera: t.camera, ..Default::default() };
+    let vp = &t.viewport;
+    if vp.width == 0 || vp.height == 0 {
+        return Err(Error::invalid("DirectLightingInjectionTask.viewport", "has zero width or height"));
+    }
+    image("DirectLightingInjectionTask.depth.image", &t.depth.image, vp, INPUT_LAYOUTS)?;
+    let depth_formats = if t.depth.depth_type == DepthType::ClipSpace { CLIP_DEPTH_FORMATS } else { POSITION_FORMATS };
+    format_in("DirectLightingInjectionTask.depth.image.format", t.depth.image.format, depth_formats, "a depth format matching depth_type")?;
+    image("DirectLightingInjectionTask.lit", &t.lit, vp, INPUT_LAYOUTS)?;
+    format_in("DirectLightingInjectionTask.lit.format", t.lit.format, LIT_FORMATS, "an RGB(A) colour format")?;
+    matrix("DirectLightingInjectionTask.camera.world_to_view", &common.camera.world_to_view)?;
+    matrix("DirectLightingInjectionTask.camera.view_to_clip", &common.camera.view_to_clip)?;
+    if !(t.average_window.is_finite() && t.average_window >= 1.0) {
+        return Err(Error::invalid("DirectLightingInjectionTask.average_window", "must be finite and >= 1"));
     }
     Ok(())
 }

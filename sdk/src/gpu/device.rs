@@ -10,6 +10,8 @@ pub const REQUIRED_DEVICE_EXTENSIONS: &[&CStr] = &[
     khr::ray_tracing_pipeline::NAME,
     khr::deferred_host_operations::NAME,
     khr::push_descriptor::NAME,
+    // Float atomics: injection adds radiance from many pixels into one cache sample.
+    ash::ext::shader_atomic_float::NAME,
 ];
 
 /// Enable where present: lets trace tasks with `use_inline_rt` run as compute shaders with ray
@@ -26,6 +28,7 @@ pub struct DeviceFeatures {
     pub acceleration_structure: vk::PhysicalDeviceAccelerationStructureFeaturesKHR<'static>,
     pub ray_tracing_pipeline: vk::PhysicalDeviceRayTracingPipelineFeaturesKHR<'static>,
     pub ray_query: vk::PhysicalDeviceRayQueryFeaturesKHR<'static>,
+    pub atomic_float: vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT<'static>,
 }
 
 impl DeviceFeatures {
@@ -45,6 +48,7 @@ impl DeviceFeatures {
             ray_tracing_pipeline: vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default()
                 .ray_tracing_pipeline(true),
             ray_query: vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(with_ray_query),
+            atomic_float: vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default().shader_buffer_float32_atomic_add(true),
         }
     }
 
@@ -56,7 +60,8 @@ impl DeviceFeatures {
             .push_next(&mut self.vulkan12)
             .push_next(&mut self.vulkan13)
             .push_next(&mut self.acceleration_structure)
-            .push_next(&mut self.ray_tracing_pipeline);
+            .push_next(&mut self.ray_tracing_pipeline)
+            .push_next(&mut self.atomic_float);
         if with_rq {
             info = info.push_next(&mut self.ray_query);
         }
@@ -97,18 +102,21 @@ pub fn query_device_support(instance: &ash::Instance, pdev: vk::PhysicalDevice) 
     let mut fas = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
     let mut frt = vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default();
     let mut frq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
+    let mut faf = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
     let core = {
         let mut f2 = vk::PhysicalDeviceFeatures2::default()
             .push_next(&mut f12)
             .push_next(&mut f13)
             .push_next(&mut fas)
             .push_next(&mut frt)
-            .push_next(&mut frq);
+            .push_next(&mut frq)
+            .push_next(&mut faf);
         // SAFETY: a well-formed feature chain that lives for the call.
         unsafe { instance.get_physical_device_features2(pdev, &mut f2) };
         f2.features
     };
-    let checks: [(&str, vk::Bool32); 5] = [
+    let checks: [(&str, vk::Bool32); 6] = [
+        ("feature shaderBufferFloat32AtomicAdd", faf.shader_buffer_float32_atomic_add),
         ("feature bufferDeviceAddress", f12.buffer_device_address),
         ("feature synchronization2", f13.synchronization2),
         ("feature accelerationStructure", fas.acceleration_structure),

@@ -22,9 +22,13 @@ pub enum MemoryKind {
     UploadRing = 4,
     /// Shader binding tables and other fixed pipeline data.
     Pipeline = 5,
+    /// Direct-lighting cache pages and surfel layouts.
+    Cache = 6,
+    /// Read-back copies of geometry, alive from registration until their ticket returns.
+    Readback = 7,
 }
 
-pub const MEMORY_KIND_COUNT: usize = 6;
+pub const MEMORY_KIND_COUNT: usize = 8;
 
 /// Bytes and counts of live SDK allocations, per kind.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -44,11 +48,13 @@ pub struct ResourceAllocations {
     pub tlas: AllocationCount,
     pub upload_rings: AllocationCount,
     pub pipelines: AllocationCount,
+    pub cache: AllocationCount,
+    pub readback: AllocationCount,
 }
 
 impl ResourceAllocations {
     pub fn total_bytes(&self) -> u64 {
-        [self.geometry_copies, self.blas, self.build_scratch, self.tlas, self.upload_rings, self.pipelines]
+        [self.geometry_copies, self.blas, self.build_scratch, self.tlas, self.upload_rings, self.pipelines, self.cache, self.readback]
             .iter()
             .map(|c| c.bytes)
             .sum()
@@ -64,6 +70,11 @@ pub(crate) struct Buffer {
 }
 
 impl Buffer {
+    /// The mapped bytes of a host-visible buffer (read-back buffers too).
+    pub fn mapped_bytes(&self) -> Option<&[u8]> {
+        self.allocation.as_ref().and_then(|a| a.mapped_slice())
+    }
+
     /// The mapped bytes of a host-visible buffer.
     pub fn mapped(&mut self) -> &mut [u8] {
         self.allocation
@@ -169,6 +180,8 @@ impl Memory {
             tlas: c[MemoryKind::Tlas as usize],
             upload_rings: c[MemoryKind::UploadRing as usize],
             pipelines: c[MemoryKind::Pipeline as usize],
+            cache: c[MemoryKind::Cache as usize],
+            readback: c[MemoryKind::Readback as usize],
         }
     }
 

@@ -13,6 +13,8 @@ pub(crate) struct Use {
 
 pub(crate) const TRANSFER_WRITE: Use =
     Use { stages: vk::PipelineStageFlags2::COPY, access: vk::AccessFlags2::TRANSFER_WRITE };
+pub(crate) const TRANSFER_READ: Use =
+    Use { stages: vk::PipelineStageFlags2::COPY, access: vk::AccessFlags2::TRANSFER_READ };
 pub(crate) const AS_BUILD_READ: Use = Use {
     stages: vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR,
     access: vk::AccessFlags2::from_raw(
@@ -42,6 +44,10 @@ pub(crate) fn shader_read(stage: vk::PipelineStageFlags2) -> Use {
             | vk::AccessFlags2::UNIFORM_READ
             | vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR,
     }
+}
+/// Atomic read-modify-writes from shaders (injection's accumulation).
+pub(crate) fn shader_atomic(stage: vk::PipelineStageFlags2) -> Use {
+    Use { stages: stage, access: vk::AccessFlags2::SHADER_STORAGE_WRITE | vk::AccessFlags2::SHADER_STORAGE_READ }
 }
 pub(crate) fn shader_write(stage: vk::PipelineStageFlags2) -> Use {
     Use { stages: stage, access: vk::AccessFlags2::SHADER_STORAGE_WRITE }

@@ -2,7 +2,11 @@
 //! reads and writes to the hazard tracker (which emits the barriers) and never reaches into
 //! another pass.
 pub(crate) mod ao;
+pub(crate) mod cache_ops;
 pub(crate) mod constants;
+pub(crate) mod debug;
+pub(crate) mod descriptors;
+pub(crate) mod inject;
 
 use crate::gpu::sync::Hazards;
 use crate::gpu::upload::UploadRing;
@@ -17,4 +21,6 @@ pub(crate) struct Recording<'a> {
     pub tlas: vk::AccelerationStructureKHR,
     /// Per-ticket random seed (the ticket serial), so successive frames get fresh samples.
     pub seed: u32,
+    /// Device address of this recording's instance table (0 when the recording has none).
+    pub instance_table: u64,
 }

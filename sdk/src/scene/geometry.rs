@@ -88,6 +88,19 @@ pub(crate) struct GeometryRecord {
     /// Registered instances that use this geometry.
     pub instance_refs: usize,
     pub input: GeometryInput,
+    /// The surfel layout on the GPU, once its read-back came home.
+    pub surfel: Option<SurfelGpu>,
+    /// A layout built from a read-back, to upload at the next recording.
+    pub pending_layout: Option<crate::cache::layout::SurfelLayout>,
+}
+
+/// A geometry's surfel layout on the GPU. `id` changes with every new layout, so instance
+/// caches made for an older one are reallocated.
+pub(crate) struct SurfelGpu {
+    pub buffer: Buffer,
+    pub sample_count: u32,
+    pub surfel_type: crate::api::tasks::SurfelType,
+    pub id: u64,
 }
 
 impl GeometryRecord {
@@ -102,6 +115,8 @@ impl GeometryRecord {
             compacted_size: None,
             instance_refs: 0,
             input: GeometryInput::default(),
+            surfel: None,
+            pending_layout: None,
         }
     }
 
@@ -122,6 +137,7 @@ pub(crate) fn record_copy(
         "geometry copy",
         layout.total_bytes(),
         vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC
             | vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR,
         MemoryLocation::GpuOnly,

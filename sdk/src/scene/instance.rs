@@ -14,8 +14,9 @@ pub(crate) struct Placement {
     pub transform: Affine3A,
     pub mask: u8,
     /// Kept for the direct-lighting cache, which fills a new instance's cache with it.
-    #[allow(dead_code)]
     pub initial_tile_color: [f32; 3],
+    /// This instance's cache and the layout id it was made for.
+    pub cache: Option<(crate::cache::pool::CacheRange, u64)>,
 }
 
 /// The TLAS record of an instance. `custom_index` is the instance's slot, so shaders can find

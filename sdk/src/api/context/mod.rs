@@ -21,9 +21,13 @@ use crate::scene::blas::{self, BuildJob};
 use crate::scene::geometry::{self, BlasState, GeometryLayout, GeometryRecord};
 use crate::scene::instance::{self, InstanceRecord, Placement};
 use crate::scene::tlas::{self, Tlas};
+use crate::cache::pool::{CachePool, CacheRange};
+use crate::passes::{cache_ops::CacheOps, debug::DebugPass, inject::InjectPass};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 use parking_lot::Mutex;
+
+mod cache;
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, AtomicU16, Ordering};
 use std::sync::Arc;
@@ -53,6 +57,8 @@ struct WorkingSet {
     compaction_pool: vk::QueryPool,
     compaction_slots: u32,
     compactions: Vec<(GeometryHandle, u64)>,
+    /// Geometry copies read back for their surfel layouts: (geometry, build id, buffer).
+    readbacks: Vec<(GeometryHandle, u64, Buffer)>,
     tlas: Tlas,
 }
 
@@ -75,6 +81,15 @@ struct State {
     deferred: DeferredFrees,
     next_serial: u64,
     ao: Option<AoPass>,
+    debug: Option<DebugPass>,
+    inject: Option<InjectPass>,
+    cache_ops: Option<CacheOps>,
+    cache_pool: CachePool,
+    /// Cache ranges of destroyed/changed instances: (newest serial issued then, range).
+    cache_frees: Vec<(u64, CacheRange)>,
+    /// Some instance may need a cache (new layout, new or moved instance).
+    caches_dirty: bool,
+    next_layout_id: u64,
     sampler: vk::Sampler,
 }
 
@@ -125,6 +140,13 @@ impl ExecuteContext {
                 deferred: DeferredFrees::default(),
                 next_serial: 1,
                 ao: None,
+                debug: None,
+                inject: None,
+                cache_ops: None,
+                cache_pool: CachePool::default(),
+                cache_frees: Vec::new(),
+                caches_dirty: false,
+                next_layout_id: 0,
                 sampler,
             }),
             bench_floor: AtomicBool::new(false),
@@ -133,6 +155,9 @@ impl ExecuteContext {
         {
             let mut st = shared.state.lock();
             st.ao = Some(AoPass::new(&shared.device, &shared.memory, sampler)?);
+            st.debug = Some(DebugPass::new(&shared.device, &shared.memory)?);
+            st.inject = Some(InjectPass::new(&shared.device, &shared.memory, sampler)?);
+            st.cache_ops = Some(CacheOps::new(&shared.device)?);
             for _ in 0..settings.supported_working_sets {
                 let ws = shared.new_working_set(settings)?;
                 st.working_sets.push(ws);
@@ -231,6 +256,14 @@ impl ExecuteContext {
         self.shared.state.lock().snapshot.len()
     }
 
+    /// Bytes of the instance's direct-lighting cache (0 until its layout has come back and the
+    /// cache is allocated: one recording after the ticket that registered its geometry).
+    pub fn instance_cache_bytes(&self, instance: InstanceHandle) -> Result<u64> {
+        let st = self.shared.state.lock();
+        let rec = st.instances.get(instance)?;
+        Ok(rec.placement.and_then(|p| p.cache).map_or(0, |(r, _)| r.count * crate::cache::pool::SAMPLE_BYTES))
+    }
+
     pub fn resource_allocations(&self) -> ResourceAllocations {
         self.shared.memory.allocations()
     }
@@ -249,7 +282,7 @@ impl ExecuteContext {
             return Err(Error::TicketsInFlight { serials });
         }
         let st = &mut *st;
-        st.deferred.collect(&self.shared.device, &self.shared.memory, None);
+        st.collect_garbage(&self.shared.device, &self.shared.memory);
         Ok(())
     }
 
@@ -277,8 +310,7 @@ impl ExecuteContext {
             in_flight: st.working_sets.len() as u32,
         })?;
         validate_handles(st, &container.tasks)?;
-        let oldest = st.in_flight().min();
-        st.deferred.collect(&self.shared.device, &self.shared.memory, oldest);
+        st.collect_garbage(&self.shared.device, &self.shared.memory);
 
         let serial = st.next_serial;
         self.shared.record(st, ws_index, serial, &container.tasks, cmd)?;
@@ -322,10 +354,9 @@ impl ExecuteContext {
                 }
             }
         }
-        let ws = &mut st.working_sets[ws_index];
-        ws.in_flight = None;
-        let oldest = st.in_flight().min();
-        st.deferred.collect(d, &self.shared.memory, oldest);
+        self.shared.finish_readbacks(st, ws_index);
+        st.working_sets[ws_index].in_flight = None;
+        st.collect_garbage(d, &self.shared.memory);
         Ok(done)
     }
 }
@@ -388,13 +419,19 @@ fn validate_handles(st: &State, tasks: &[Task]) -> Result<()> {
                 }
                 instance_registered.insert(t.handle, t.operation != InstanceOperation::Remove);
             }
-            Task::BvhBuild(_) | Task::AmbientOcclusion(_) => {}
+            Task::ClearCache(t) => {
+                st.instances.get(t.instance)?;
+            }
+            Task::BvhBuild(_) | Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) => {}
         }
     }
     Ok(())
 }
 
 fn retire_geometry(deferred: &mut DeferredFrees, serial: u64, g: GeometryRecord) {
+    if let Some(s) = g.surfel {
+        deferred.retire(serial, Garbage::Buffer(s.buffer));
+    }
     if let Some(c) = g.copy {
         deferred.retire(serial, Garbage::Buffer(c));
     }
@@ -406,6 +443,9 @@ fn retire_geometry(deferred: &mut DeferredFrees, serial: u64, g: GeometryRecord)
 impl State {
     /// Bookkeeping when an instance leaves the scene.
     fn unplace(&mut self, placement: Option<Placement>) {
+        if let Some((range, _)) = placement.and_then(|p| p.cache) {
+            self.free_cache(range);
+        }
         if let Some(p) = placement {
             if let Ok(g) = self.geometries.get_mut(p.geometry) {
                 g.instance_refs = g.instance_refs.saturating_sub(1);
@@ -458,6 +498,7 @@ impl Shared {
             compaction_pool: vk::QueryPool::null(),
             compaction_slots: 0,
             compactions: Vec::new(),
+            readbacks: Vec::new(),
             tlas: Tlas { accel: None, version: 0 },
         })
     }
@@ -478,9 +519,9 @@ impl Shared {
             .iter()
             .position(|t| matches!(t, Task::Geometry(_) | Task::Instance(_) | Task::BvhBuild(_)))
             .map(|i| i as u32);
-        let has_render = tasks.iter().any(|t| matches!(t, Task::AmbientOcclusion(_)));
+        let has_render = tasks.iter().any(|t| matches!(t, Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_)));
         let bvh_span = first_bvh.map(|i| timer(st, ws_index).begin(d, cmd, TaskKind::Bvh, i));
-        self.apply_scene_tasks(st, tasks, cmd, serial, &mut hazards)?;
+        self.apply_scene_tasks(st, ws_index, tasks, cmd, serial, &mut hazards)?;
         let max_builds: Option<u32> = tasks
             .iter()
             .filter_map(|t| if let Task::BvhBuild(b) = t { Some(b.max_blas_build_count) } else { None })
@@ -504,30 +545,70 @@ impl Shared {
             timer(st, ws_index).end(d, cmd, span);
         }
 
+        // ---- Cache maintenance: new layouts, new caches, clears.
+        if st.caches_dirty || tasks.iter().any(|t| matches!(t, Task::ClearCache(_))) {
+            let span = timer(st, ws_index).begin(d, cmd, TaskKind::CacheUpdate, 0);
+            self.update_caches(st, ws_index, cmd, &mut hazards, tasks, serial)?;
+            timer(st, ws_index).end(d, cmd, span);
+        }
+
         // ---- Render tasks, in scheduled order.
+        if !has_render {
+            return Ok(());
+        }
         let floor = self.bench_floor.load(Ordering::Relaxed);
-        let ao_count = tasks.iter().filter(|t| matches!(t, Task::AmbientOcclusion(_))).count() as u64;
-        self.ensure_ring(st, ws_index, ao_count * (passes::ao::UPLOAD_BYTES + device.ubo_alignment))?;
+        let per_task = passes::ao::UPLOAD_BYTES.max(passes::debug::UPLOAD_BYTES).max(passes::inject::UPLOAD_BYTES) + device.ubo_alignment;
+        self.ensure_ring(st, ws_index, Self::instance_table_bytes(st) + tasks.len() as u64 * per_task)?;
+        let instance_table = self.push_instance_table(st, ws_index);
         for (i, task) in tasks.iter().enumerate() {
-            let Task::AmbientOcclusion(t) = task else { continue };
-            let span = timer(st, ws_index).begin(d, cmd, TaskKind::AmbientOcclusion, i as u32);
-            let inline = t.common.use_inline_rt && device.ray_query;
-            if t.common.use_inline_rt && !device.ray_query && !self.warned_inline.swap(true, Ordering::Relaxed) {
-                log::warn!("use_inline_rt: the device has no VK_KHR_ray_query enabled; using the ray-tracing pipeline");
-            }
+            let kind = match task {
+                Task::AmbientOcclusion(_) => TaskKind::AmbientOcclusion,
+                Task::DirectLightingInjection(_) => TaskKind::DirectLightingInjection,
+                _ => continue,
+            };
+            let span = timer(st, ws_index).begin(d, cmd, kind, i as u32);
             let ws = &mut st.working_sets[ws_index];
             let tlas = ws.tlas.accel.as_ref().map(|a| a.accel).unwrap_or_default();
-            let mut r = Recording { device, cmd, ring: &mut ws.ring, hazards: &mut hazards, tlas, seed: serial as u32 };
-            st.ao.as_ref().expect("created in new").record(&mut r, t, inline, floor);
+            let mut r =
+                Recording { device, cmd, ring: &mut ws.ring, hazards: &mut hazards, tlas, seed: serial as u32, instance_table };
+            match task {
+                Task::AmbientOcclusion(t) if t.common.debug_output != DebugOutput::Default => {
+                    st.debug.as_ref().expect("created in new").record(&mut r, &t.common, &t.output);
+                }
+                Task::AmbientOcclusion(t) => {
+                    let inline = t.common.use_inline_rt && device.ray_query;
+                    if t.common.use_inline_rt && !device.ray_query && !self.warned_inline.swap(true, Ordering::Relaxed) {
+                        log::warn!("use_inline_rt: the device has no VK_KHR_ray_query enabled; using the ray-tracing pipeline");
+                    }
+                    st.ao.as_ref().expect("created in new").record(&mut r, t, inline, floor);
+                }
+                Task::DirectLightingInjection(t) => cache::record_injection(
+                    &mut r,
+                    st.inject.as_ref().expect("created in new"),
+                    st.cache_ops.as_ref().expect("created in new"),
+                    &st.cache_pool,
+                    t,
+                ),
+                _ => {}
+            }
             timer(st, ws_index).end(d, cmd, span);
         }
         Ok(())
     }
 
     /// Applies geometry and instance tasks to the registries and records the geometry copies.
-    fn apply_scene_tasks(&self, st: &mut State, tasks: &[Task], cmd: vk::CommandBuffer, serial: u64, hazards: &mut Hazards) -> Result<()> {
+    fn apply_scene_tasks(
+        &self,
+        st: &mut State,
+        ws_index: usize,
+        tasks: &[Task],
+        cmd: vk::CommandBuffer,
+        serial: u64,
+        hazards: &mut Hazards,
+    ) -> Result<()> {
         let d = &self.device.raw;
         let mut copies_declared = false;
+        let mut read_back: Vec<GeometryHandle> = Vec::new();
         for task in tasks {
             match task {
                 Task::Geometry(t) => {
@@ -549,6 +630,8 @@ impl Shared {
                         g.needs_refit = true;
                         st.refit_queue.push(t.handle);
                     } else {
+                        read_back.retain(|h| *h != t.handle);
+                        read_back.push(t.handle);
                         g.build_id += 1;
                         g.compacted_size = None;
                         if g.blas.is_none() {
@@ -560,14 +643,23 @@ impl Shared {
                     }
                 }
                 Task::Instance(t) => {
-                    let old = st.instances.get(t.handle)?.placement;
+                    let mut old = st.instances.get(t.handle)?.placement;
+                    // Moving an instance keeps its lighting; a new geometry needs a new cache.
+                    let keep = old.filter(|o| t.operation == InstanceOperation::Update && o.geometry == t.input.geometry).and_then(|o| o.cache);
+                    if keep.is_some() {
+                        if let Some(o) = old.as_mut() {
+                            o.cache = None;
+                        }
+                    }
                     st.unplace(old);
                     let placement = (t.operation != InstanceOperation::Remove).then(|| Placement {
                         geometry: t.input.geometry,
                         transform: t.input.transform,
                         mask: t.input.mask.0,
                         initial_tile_color: t.input.initial_tile_color,
+                        cache: keep,
                     });
+                    st.caches_dirty = true;
                     if let Some(p) = placement {
                         st.geometries.get_mut(p.geometry)?.instance_refs += 1;
                     }
@@ -577,7 +669,7 @@ impl Shared {
                 _ => {}
             }
         }
-        Ok(())
+        self.record_readbacks(st, ws_index, &read_back, cmd, hazards)
     }
 
     /// Compactions, throttled BLAS builds and refits, in one batch where possible.
@@ -772,10 +864,16 @@ impl Drop for Shared {
                 if let Some(b) = g.blas {
                     deferred::destroy(device, memory, Garbage::AccelerationStructure(b.accel, b.buffer));
                 }
+                if let Some(sf) = g.surfel {
+                    memory.destroy_buffer(sf.buffer);
+                }
             }
         }
         for mut ws in st.working_sets.drain(..) {
             ws.tlas.destroy(device, memory);
+            for (_, _, b) in ws.readbacks.drain(..) {
+                memory.destroy_buffer(b);
+            }
             memory.destroy_buffer(ws.ring.buffer);
             if let Some(s) = ws.scratch.take() {
                 memory.destroy_buffer(s);
@@ -790,6 +888,16 @@ impl Drop for Shared {
         if let Some(ao) = st.ao.take() {
             ao.destroy(device, memory);
         }
+        if let Some(p) = st.debug.take() {
+            p.destroy(device, memory);
+        }
+        if let Some(p) = st.inject.take() {
+            p.destroy(device, memory);
+        }
+        if let Some(p) = st.cache_ops.take() {
+            p.destroy(device);
+        }
+        st.cache_pool.destroy(memory);
         unsafe { device.raw.destroy_sampler(st.sampler, None) };
         memory.shutdown();
     }

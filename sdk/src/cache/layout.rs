@@ -1,0 +1,205 @@
+//! Surfel layouts of a geometry, built on the CPU from the geometry's vertices and indices
+//! (read back once, when the ticket that copied them returns — no stall). Shaders read them
+//! through shaders/include/cache.glsl; the two must agree word for word.
+//!
+//! Kickstart RT computes sizes on the GPU and reads them back to allocate; we read back the
+//! geometry instead and build the whole layout here, where it is easy to test, including the
+//! edge sharing that mesh colors need.
+use crate::api::tasks::{SurfelSettings, SurfelType};
+use glam::Vec3;
+use std::collections::HashMap;
+
+/// Largest resolution along an edge (the layout packs it in 9 bits).
+pub const MAX_RESOLUTION: u32 = 256;
+
+#[derive(Debug, Clone)]
+pub(crate) struct SurfelLayout {
+    pub surfel_type: SurfelType,
+    /// Words as the shader reads them (per triangle: 2 for tiles, 9 for mesh colors).
+    pub words: Vec<u32>,
+    pub sample_count: u32,
+}
+
+/// Samples along the longest edge: edge length / unit, at least 1, at most the limit.
+pub(crate) fn resolution(tri: [Vec3; 3], s: &SurfelSettings) -> u32 {
+    let longest = (0..3).map(|k| tri[k].distance(tri[(k + 1) % 3])).fold(0.0f32, f32::max);
+    let r = (longest / s.tile_unit_length).ceil();
+    (if r.is_finite() { r as u32 } else { 1 }).clamp(1, s.tile_resolution_limit.clamp(1, MAX_RESOLUTION))
+}
+
+pub(crate) fn build(positions: &[Vec3], triangles: &[[u32; 3]], s: &SurfelSettings) -> SurfelLayout {
+    match s.surfel_type {
+        SurfelType::Tiles => tiles(positions, triangles, s),
+        SurfelType::MeshColors => mesh_colors(positions, triangles, s),
+    }
+}
+
+fn corners(positions: &[Vec3], t: &[u32; 3]) -> [Vec3; 3] {
+    t.map(|i| positions.get(i as usize).copied().unwrap_or(Vec3::ZERO))
+}
+
+/// An R x R tile of samples per triangle.
+fn tiles(positions: &[Vec3], triangles: &[[u32; 3]], s: &SurfelSettings) -> SurfelLayout {
+    let mut words = Vec::with_capacity(triangles.len() * 2);
+    let mut next = 0u32;
+    for t in triangles {
+        let r = resolution(corners(positions, t), s);
+        words.extend_from_slice(&[next, r]);
+        next += r * r;
+    }
+    SurfelLayout { surfel_type: SurfelType::Tiles, words, sample_count: next }
+}
+
+/// Interior lattice points of a triangle of resolution r.
+pub(crate) fn interior_count(r: u32) -> u32 {
+    if r < 3 {
+        0
+    } else {
+        (r - 1) * (r - 2) / 2
+    }
+}
+
+/// Mesh colors: one sample per distinct vertex position, r_e - 1 per edge (r_e: the finest
+/// resolution of the triangles sharing it), and the interior lattice points per triangle.
+fn mesh_colors(positions: &[Vec3], triangles: &[[u32; 3]], s: &SurfelSettings) -> SurfelLayout {
+    // Samples are shared through the mesh's own topology (shared vertex indices), not by
+    // position: engines split vertices at hard edges, and a cube's faces must not share
+    // lighting across a 90-degree crease. (A UV seam that splits vertices of a smooth surface
+    // keeps two rows of samples that injection fills alike.)
+    let mut vertex_sample: HashMap<u32, u32> = HashMap::new();
+    let mut next = 0u32;
+    let mut weld = |i: u32, next: &mut u32| -> u32 {
+        *vertex_sample.entry(i).or_insert_with(|| {
+            *next += 1;
+            *next - 1
+        })
+    };
+    let welded: Vec<[u32; 3]> = triangles.iter().map(|t| t.map(|i| weld(i, &mut next))).collect();
+    let res: Vec<u32> = triangles.iter().map(|t| resolution(corners(positions, t), s)).collect();
+
+    // Edges keyed by their (lower, higher) vertex samples; resolution = max of the faces.
+    let mut edge_res: HashMap<(u32, u32), u32> = HashMap::new();
+    for (t, &r) in welded.iter().zip(&res) {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let e = edge_res.entry((a.min(b), a.max(b))).or_insert(1);
+            *e = (*e).max(r);
+        }
+    }
+    let mut edge_base: HashMap<(u32, u32), u32> = HashMap::with_capacity(edge_res.len());
+    // Deterministic order (sorted keys) so a layout does not depend on hash iteration.
+    let mut keys: Vec<_> = edge_res.keys().copied().collect();
+    keys.sort_unstable();
+    for key in keys {
+        edge_base.insert(key, next);
+        next += edge_res[&key] - 1;
+    }
+    let mut words = Vec::with_capacity(triangles.len() * 9);
+    for (t, &r) in welded.iter().zip(&res) {
+        let mut e = [0u32; 3];
+        let mut info = 0u32;
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let key = (a.min(b), a.max(b));
+            e[k] = edge_base[&key];
+            let reversed = (a > b) as u32;
+            info |= (edge_res[&key] | (reversed << 9)) << (10 * k);
+        }
+        let face = next;
+        next += interior_count(r);
+        words.extend_from_slice(&[t[0], t[1], t[2], e[0], e[1], e[2], info, face, r]);
+    }
+    SurfelLayout { surfel_type: SurfelType::MeshColors, words, sample_count: next }
+}
+
+/// Positions and triangles from a read-back geometry copy (vertices with their stride, then
+/// indices at `index_offset`).
+pub(crate) fn read_geometry(bytes: &[u8], g: &crate::scene::geometry::GeometryLayout) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let f = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
+    let positions: Vec<Vec3> = (0..g.vertex_count as usize)
+        .map(|v| {
+            let o = v * g.vertex_stride as usize;
+            if o + 12 <= bytes.len() {
+                Vec3::new(f(o), f(o + 4), f(o + 8))
+            } else {
+                Vec3::ZERO
+            }
+        })
+        .collect();
+    let io = g.index_offset as usize;
+    let index = |i: usize| -> u32 {
+        match g.index_size() {
+            2 => bytes.get(io + i * 2..io + i * 2 + 2).map_or(0, |b| u16::from_le_bytes([b[0], b[1]]) as u32),
+            4 => bytes.get(io + i * 4..io + i * 4 + 4).map_or(0, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+            _ => i as u32,
+        }
+    };
+    let triangles = (0..g.primitive_count as usize).map(|t| [index(3 * t), index(3 * t + 1), index(3 * t + 2)]).collect();
+    (positions, triangles)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn settings(t: SurfelType, unit: f32, limit: u32) -> SurfelSettings {
+        SurfelSettings { surfel_type: t, tile_unit_length: unit, tile_resolution_limit: limit }
+    }
+
+    /// A unit quad as two triangles sharing the diagonal (0, 2).
+    fn quad() -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        (vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 0.0, 1.0), Vec3::Z], vec![[0, 1, 2], [0, 2, 3]])
+    }
+
+    #[test]
+    fn tiles_hold_r_squared_samples_per_triangle() {
+        let (p, t) = quad();
+        // Longest edge is the diagonal, sqrt(2): 0.25 units per sample -> 6 samples along it.
+        let l = build(&p, &t, &settings(SurfelType::Tiles, 0.25, 64));
+        assert_eq!(l.words, vec![0, 6, 36, 6]);
+        assert_eq!(l.sample_count, 72);
+        let limited = build(&p, &t, &settings(SurfelType::Tiles, 0.25, 4));
+        assert_eq!(limited.sample_count, 32);
+    }
+
+    #[test]
+    fn mesh_colors_share_vertices_and_edges() {
+        let (p, t) = quad();
+        let l = build(&p, &t, &settings(SurfelType::MeshColors, 0.25, 64));
+        let r = 6;
+        // 4 vertices + 5 edges of (r - 1) + 2 interiors of (r-1)(r-2)/2.
+        assert_eq!(l.sample_count, 4 + 5 * (r - 1) + 2 * interior_count(r));
+        // The shared diagonal: triangle 0 runs 2 -> 0 on its edge 2, triangle 1 runs 0 -> 2
+        // on its edge 0; same first sample, opposite directions.
+        let w0 = &l.words[0..9];
+        let w1 = &l.words[9..18];
+        assert_eq!(w0[5], w1[3]);
+        let dir = |info: u32, k: u32| (info >> (10 * k + 9)) & 1;
+        assert_ne!(dir(w0[6], 2), dir(w1[6], 0));
+        // Vertex samples are shared too.
+        assert_eq!(w0[0], w1[0]);
+        assert_eq!(w0[2], w1[1]);
+    }
+
+    #[test]
+    fn split_vertices_do_not_share_samples() {
+        // The same quad with the diagonal's vertices duplicated (a hard edge): the two
+        // triangles keep separate vertex and edge samples.
+        let p = vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 0.0, 1.0), Vec3::ZERO, Vec3::new(1.0, 0.0, 1.0), Vec3::Z];
+        let t = vec![[0, 1, 2], [3, 4, 5]];
+        let split = build(&p, &t, &settings(SurfelType::MeshColors, 0.25, 64));
+        let (qp, qt) = quad();
+        let shared = build(&qp, &qt, &settings(SurfelType::MeshColors, 0.25, 64));
+        // Two more vertices and one more diagonal edge (r - 1 = 5 samples).
+        assert_eq!(split.sample_count, shared.sample_count + 2 + 5);
+    }
+
+    #[test]
+    fn memory_scales_with_inverse_square_unit_until_the_limit() {
+        let (p, t) = quad();
+        let count = |unit| build(&p, &t, &settings(SurfelType::Tiles, unit, 32)).sample_count as f32;
+        let ratio = count(0.05) / count(0.1);
+        assert!((ratio - 4.0).abs() < 0.5, "{ratio}");
+        assert_eq!(count(0.001), count(0.0001), "clamped by the limit");
+    }
+}

@@ -1,0 +1,97 @@
+//! Cache samples live in large shared pages (one buffer each), not a buffer per instance:
+//! an instance's cache is a contiguous range of samples, addressed by device address.
+//! First-fit allocation with coalescing frees; a cache larger than a page gets a page of its
+//! own.
+use crate::error::Result;
+use crate::gpu::memory::{Buffer, Memory, MemoryKind};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+/// Bytes per sample: vec4 cached value (rgb, history length) + vec4 accumulator (rgb, count).
+pub(crate) const SAMPLE_BYTES: u64 = 32;
+/// Samples per page: 1 Mi samples = 32 MiB.
+pub(crate) const PAGE_SAMPLES: u64 = 1 << 20;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct CacheRange {
+    pub page: usize,
+    pub first: u64,
+    pub count: u64,
+    pub address: vk::DeviceAddress,
+}
+
+struct Page {
+    buffer: Buffer,
+    capacity: u64,
+    /// Free (first, count) runs, sorted by first.
+    free: Vec<(u64, u64)>,
+    /// One past the highest sample ever allocated (what the resolve pass covers).
+    high_water: u64,
+}
+
+#[derive(Default)]
+pub(crate) struct CachePool {
+    pages: Vec<Page>,
+}
+
+impl CachePool {
+    pub fn allocate(&mut self, memory: &Memory, count: u64) -> Result<CacheRange> {
+        let count = count.max(1);
+        for (p, page) in self.pages.iter_mut().enumerate() {
+            if let Some(i) = page.free.iter().position(|&(_, n)| n >= count) {
+                let (first, n) = page.free[i];
+                if n == count {
+                    page.free.remove(i);
+                } else {
+                    page.free[i] = (first + count, n - count);
+                }
+                page.high_water = page.high_water.max(first + count);
+                return Ok(CacheRange { page: p, first, count, address: page.buffer.address + first * SAMPLE_BYTES });
+            }
+        }
+        let capacity = PAGE_SAMPLES.max(count);
+        let buffer = memory.create_buffer(
+            "direct-lighting cache page",
+            capacity * SAMPLE_BYTES,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::GpuOnly,
+            MemoryKind::Cache,
+        )?;
+        let mut free = Vec::new();
+        if capacity > count {
+            free.push((count, capacity - count));
+        }
+        let address = buffer.address;
+        self.pages.push(Page { buffer, capacity, free, high_water: count });
+        Ok(CacheRange { page: self.pages.len() - 1, first: 0, count, address })
+    }
+
+    pub fn free(&mut self, r: CacheRange) {
+        let Some(page) = self.pages.get_mut(r.page) else { return };
+        let at = page.free.partition_point(|&(f, _)| f < r.first);
+        page.free.insert(at, (r.first, r.count));
+        // Coalesce with the neighbours.
+        if at + 1 < page.free.len() && page.free[at].0 + page.free[at].1 == page.free[at + 1].0 {
+            page.free[at].1 += page.free[at + 1].1;
+            page.free.remove(at + 1);
+        }
+        if at > 0 && page.free[at - 1].0 + page.free[at - 1].1 == page.free[at].0 {
+            page.free[at - 1].1 += page.free[at].1;
+            page.free.remove(at);
+        }
+        if page.free.len() == 1 && page.free[0] == (0, page.capacity) {
+            page.high_water = 0;
+        }
+    }
+
+    /// (address, samples) of every page's used span, for whole-cache passes (resolve).
+    pub fn spans(&self) -> impl Iterator<Item = (vk::DeviceAddress, u64)> + '_ {
+        self.pages.iter().filter(|p| p.high_water > 0).map(|p| (p.buffer.address, p.high_water))
+    }
+
+    pub fn destroy(&mut self, memory: &Memory) {
+        for p in self.pages.drain(..) {
+            memory.destroy_buffer(p.buffer);
+        }
+    }
+}

@@ -1,0 +1,77 @@
+//! Debug visualisations (`DebugOutput`): primary rays from the task's camera through the TLAS,
+//! shaded by what they hit (cache colour, random sample/mesh colour, distance, barycentrics).
+use super::constants::TraceCommonGpu;
+use super::descriptors::{self, Slot};
+use super::Recording;
+use crate::api::tasks::{DebugOutput, ImageInput, InstanceInclusionMask, TraceCommon};
+use crate::error::Result;
+use crate::gpu::device::Device;
+use crate::gpu::memory::Memory;
+use crate::gpu::pipeline::{self, Binding, RtPipeline};
+use crate::gpu::sync;
+use crate::shaders;
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+
+/// `DebugConstants` in shaders/debug.rgen.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+pub(crate) struct DebugConstantsGpu {
+    pub common: TraceCommonGpu,
+    pub mode: [u32; 4],
+}
+
+pub(crate) const UPLOAD_BYTES: u64 = std::mem::size_of::<DebugConstantsGpu>() as u64;
+
+pub(crate) struct DebugPass {
+    set_layout: vk::DescriptorSetLayout,
+    layout: vk::PipelineLayout,
+    rt: RtPipeline,
+}
+
+impl DebugPass {
+    pub fn new(device: &Device, memory: &Memory) -> Result<DebugPass> {
+        let d = &device.raw;
+        let set_layout = pipeline::push_set_layout(
+            d,
+            &[
+                Binding { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, sampler: None },
+                Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
+                Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
+            ],
+            vk::ShaderStageFlags::RAYGEN_KHR,
+        )?;
+        let layout = pipeline::pipeline_layout(d, set_layout)?;
+        let rt = pipeline::rt_pipeline(device, memory, layout, shaders::DEBUG_RGEN, &[shaders::HIT_RECORD_RMISS], &[shaders::HIT_RECORD_RCHIT])?;
+        Ok(DebugPass { set_layout, layout, rt })
+    }
+
+    /// Records the visualisation `common.debug_output` into `output`.
+    pub fn record(&self, r: &mut Recording<'_>, common: &TraceCommon, output: &ImageInput) {
+        let table = r.instance_table;
+        let constants = DebugConstantsGpu {
+            // Debug rays see every instance.
+            common: TraceCommonGpu::new(common, r.seed, InstanceInclusionMask::ALL.0),
+            mode: [common.debug_output as u32, common.enable_bilinear_sampling as u32, table as u32, (table >> 32) as u32],
+        };
+        debug_assert!(common.debug_output != DebugOutput::Default);
+        let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
+        let stage = vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR;
+        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
+        let bind = vk::PipelineBindPoint::RAY_TRACING_KHR;
+        unsafe { r.device.raw.cmd_bind_pipeline(r.cmd, bind, self.rt.pipeline) };
+        descriptors::push(r.device, r.cmd, bind, self.layout, &[Slot::Tlas(r.tlas), Slot::Storage(output), Slot::Uniform(ubo)]);
+        let p = &self.rt;
+        let vp = &common.viewport;
+        unsafe { r.device.rt.cmd_trace_rays(r.cmd, &p.raygen, &p.miss, &p.hit, &p.callable, vp.width, vp.height, 1) };
+    }
+
+    pub fn destroy(self, device: &Device, memory: &Memory) {
+        unsafe {
+            device.raw.destroy_pipeline(self.rt.pipeline, None);
+            device.raw.destroy_pipeline_layout(self.layout, None);
+            device.raw.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+        memory.destroy_buffer(self.rt.sbt);
+    }
+}

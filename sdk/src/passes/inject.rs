@@ -1,0 +1,83 @@
+//! Direct-lighting injection (see `DirectLightingInjectionTask`): a ray-tracing pass that adds
+//! each lit pixel's radiance to the cache sample under it (float atomics), followed by the
+//! cache resolve (passes::cache_ops) that applies the running average.
+use super::constants::TraceCommonGpu;
+use super::descriptors::{self, Slot};
+use super::Recording;
+use crate::api::tasks::{DirectLightingInjectionTask, InstanceInclusionMask, TraceCommon};
+use crate::error::Result;
+use crate::gpu::device::Device;
+use crate::gpu::memory::Memory;
+use crate::gpu::pipeline::{self, Binding, RtPipeline};
+use crate::gpu::sync;
+use crate::shaders;
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+
+/// `InjectConstants` in shaders/inject.rgen.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+pub(crate) struct InjectConstantsGpu {
+    pub common: TraceCommonGpu,
+    pub table: [u32; 4],
+}
+
+pub(crate) const UPLOAD_BYTES: u64 = std::mem::size_of::<InjectConstantsGpu>() as u64;
+
+pub(crate) struct InjectPass {
+    set_layout: vk::DescriptorSetLayout,
+    layout: vk::PipelineLayout,
+    rt: RtPipeline,
+}
+
+impl InjectPass {
+    pub fn new(device: &Device, memory: &Memory, sampler: vk::Sampler) -> Result<InjectPass> {
+        let d = &device.raw;
+        let set_layout = pipeline::push_set_layout(
+            d,
+            &[
+                Binding { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, sampler: None },
+                Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
+                Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
+                Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
+            ],
+            vk::ShaderStageFlags::RAYGEN_KHR,
+        )?;
+        let layout = pipeline::pipeline_layout(d, set_layout)?;
+        let rt = pipeline::rt_pipeline(device, memory, layout, shaders::INJECT_RGEN, &[shaders::HIT_RECORD_RMISS], &[shaders::HIT_RECORD_RCHIT])?;
+        Ok(InjectPass { set_layout, layout, rt })
+    }
+
+    pub fn record(&self, r: &mut Recording<'_>, task: &DirectLightingInjectionTask) {
+        let common = TraceCommon { depth: task.depth, viewport: task.viewport, camera: task.camera, ..Default::default() };
+        let table = r.instance_table;
+        let constants = InjectConstantsGpu {
+            common: TraceCommonGpu::new(&common, r.seed, InstanceInclusionMask::LIGHT_INJECTION.0),
+            table: [table as u32, (table >> 32) as u32, 0, 0],
+        };
+        let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
+        let stage = vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR;
+        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_atomic(stage));
+        let bind = vk::PipelineBindPoint::RAY_TRACING_KHR;
+        unsafe { r.device.raw.cmd_bind_pipeline(r.cmd, bind, self.rt.pipeline) };
+        descriptors::push(
+            r.device,
+            r.cmd,
+            bind,
+            self.layout,
+            &[Slot::Tlas(r.tlas), Slot::Sampled(&task.depth.image), Slot::Sampled(&task.lit), Slot::Uniform(ubo)],
+        );
+        let p = &self.rt;
+        let vp = &task.viewport;
+        unsafe { r.device.rt.cmd_trace_rays(r.cmd, &p.raygen, &p.miss, &p.hit, &p.callable, vp.width, vp.height, 1) };
+    }
+
+    pub fn destroy(self, device: &Device, memory: &Memory) {
+        unsafe {
+            device.raw.destroy_pipeline(self.rt.pipeline, None);
+            device.raw.destroy_pipeline_layout(self.layout, None);
+            device.raw.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+        memory.destroy_buffer(self.rt.sbt);
+    }
+}

@@ -1,0 +1,168 @@
+// The surfel direct-lighting cache as shaders see it: the instance table (one record per TLAS
+// instance, indexed by gl_InstanceCustomIndexEXT), each geometry's surfel layout, and each
+// instance's cache samples — all reached through buffer device addresses, so there is no
+// descriptor per instance and no limit but memory.
+//
+// Layouts (built on the CPU by sdk/src/cache/layout.rs; keep in sync):
+//   Tiles: per triangle uvec2(first sample, R). The triangle maps to an R x R square through
+//     the warped barycentrics s = b1 + b2, t = b2 / (b1 + b2); one sample per cell.
+//   MeshColors (Yuksel et al. 2010): samples on the barycentric lattice of resolution R —
+//     vertex samples shared by every triangle at a vertex, edge samples shared by the two
+//     triangles at an edge, interior samples per triangle — so interpolation is continuous
+//     across edges. Per triangle 9 words:
+//     [v0, v1, v2, e0, e1, e2, edge_info, face_base, R]. Edge k runs from vertex k to vertex
+//     (k+1)%3; e_k is its first inner sample; edge_info packs, per edge, 9 bits of the edge's
+//     resolution and 1 bit "stored in the opposite direction".
+// Sample = 32 bytes: vec4(cached rgb, history length) then vec4(accumulated rgb, count).
+#ifndef HRT_CACHE_GLSL
+#define HRT_CACHE_GLSL
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference_uvec2 : require
+
+#define HRT_SURFEL_MESH_COLORS 0u
+#define HRT_SURFEL_TILES 1u
+#define HRT_INSTANCE_HAS_CACHE 1u
+
+struct InstanceGpu {
+    uvec2 layout_addr;   // surfel layout of the geometry (0 when not ready)
+    uvec2 cache_addr;    // first sample of this instance's cache (0 when none)
+    vec4 initial_color;  // rgb, unused
+    uint surfel_type;
+    uint triangle_count;
+    uint flags;
+    uint sample_count;
+};
+
+layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer InstanceTable { InstanceGpu v[]; };
+layout(buffer_reference, std430, buffer_reference_align = 4) readonly buffer LayoutWords { uint w[]; };
+struct CacheSample { vec4 value; vec4 accum; };
+layout(buffer_reference, std430, buffer_reference_align = 16) buffer CacheSamples { CacheSample s[]; };
+
+bool hrt_has_cache(InstanceGpu inst) { return (inst.flags & HRT_INSTANCE_HAS_CACHE) != 0u; }
+
+// ---- Tiles
+uint hrt_tile_sample(InstanceGpu inst, uint prim, vec2 bary) {
+    LayoutWords l = LayoutWords(inst.layout_addr);
+    uint base = l.w[prim * 2u], r = l.w[prim * 2u + 1u];
+    float s = clamp(bary.x + bary.y, 0.0, 1.0);
+    float t = s > 0.0 ? clamp(bary.y / s, 0.0, 1.0) : 0.0;
+    uvec2 cell = min(uvec2(vec2(s, t) * float(r)), uvec2(r - 1u));
+    return base + cell.y * r + cell.x;
+}
+
+// ---- Mesh colors
+struct MeshColorTri {
+    uint v[3];
+    uint e[3];
+    uint einfo;
+    uint face;
+    uint r;
+};
+
+MeshColorTri hrt_mc_tri(InstanceGpu inst, uint prim) {
+    LayoutWords l = LayoutWords(inst.layout_addr);
+    uint o = prim * 9u;
+    MeshColorTri t;
+    t.v[0] = l.w[o]; t.v[1] = l.w[o + 1u]; t.v[2] = l.w[o + 2u];
+    t.e[0] = l.w[o + 3u]; t.e[1] = l.w[o + 4u]; t.e[2] = l.w[o + 5u];
+    t.einfo = l.w[o + 6u]; t.face = l.w[o + 7u]; t.r = l.w[o + 8u];
+    return t;
+}
+
+// Value of lattice point (i, j, k), i + j + k = R, weights of vertices 0, 1, 2. Points on an
+// edge whose stored resolution differs from R are interpolated along the edge's own samples.
+vec3 hrt_mc_point(CacheSamples c, MeshColorTri t, ivec3 ijk) {
+    int r = int(t.r);
+    if (ijk.x == r) return c.s[t.v[0]].value.rgb;
+    if (ijk.y == r) return c.s[t.v[1]].value.rgb;
+    if (ijk.z == r) return c.s[t.v[2]].value.rgb;
+    int zero = ijk.x == 0 ? 0 : (ijk.y == 0 ? 1 : (ijk.z == 0 ? 2 : -1));
+    if (zero < 0) {
+        // Interior: rows of the (R-3)-triangle over i' = i - 1, j' = j - 1.
+        int n = r - 3, i = ijk.x - 1, j = ijk.y - 1;
+        uint idx = uint(i * (n + 1) - (i * (i - 1)) / 2 + j);
+        return c.s[t.face + idx].value.rgb;
+    }
+    // On the edge opposite vertex `zero`: edge k runs from vertex k to vertex k+1.
+    int k = (zero + 1) % 3;           // edge from vertex k to k+1 excludes vertex `zero`
+    int a = k, b = (k + 1) % 3;
+    float x = float(ijk[b]) / float(r); // 0 at vertex a, 1 at vertex b
+    uint info = (t.einfo >> (10u * uint(k))) & 0x3ffu;
+    uint re = info & 0x1ffu;
+    if ((info & 0x200u) != 0u) x = 1.0 - x;
+    vec3 va = c.s[t.v[(info & 0x200u) != 0u ? b : a]].value.rgb;
+    vec3 vb = c.s[t.v[(info & 0x200u) != 0u ? a : b]].value.rgb;
+    float p = x * float(re);
+    int m0 = int(floor(p)), m1 = min(m0 + 1, int(re));
+    float f = p - float(m0);
+    vec3 s0 = m0 == 0 ? va : (m0 == int(re) ? vb : c.s[t.e[k] + uint(m0 - 1)].value.rgb);
+    vec3 s1 = m1 == 0 ? va : (m1 == int(re) ? vb : c.s[t.e[k] + uint(m1 - 1)].value.rgb);
+    return mix(s0, s1, f);
+}
+
+// Nearest sample of a mesh-colors triangle (for injection).
+uint hrt_mc_nearest(MeshColorTri t, vec3 b) {
+    int r = int(t.r);
+    vec3 p = b * float(r);
+    ivec3 q = ivec3(floor(p + 0.5));
+    // Make the rounded point sum to R: fix the coordinate with the largest rounding error.
+    int excess = q.x + q.y + q.z - r;
+    if (excess != 0) {
+        vec3 err = vec3(q) - p;
+        int m = excess > 0 ? (err.x > err.y ? (err.x > err.z ? 0 : 2) : (err.y > err.z ? 1 : 2))
+                           : (err.x < err.y ? (err.x < err.z ? 0 : 2) : (err.y < err.z ? 1 : 2));
+        q[m] -= excess;
+    }
+    q = clamp(q, ivec3(0), ivec3(r));
+    if (q.x == r) return t.v[0];
+    if (q.y == r) return t.v[1];
+    if (q.z == r) return t.v[2];
+    int zero = q.x == 0 ? 0 : (q.y == 0 ? 1 : (q.z == 0 ? 2 : -1));
+    if (zero < 0) {
+        int n = r - 3, i = q.x - 1, j = q.y - 1;
+        return t.face + uint(i * (n + 1) - (i * (i - 1)) / 2 + j);
+    }
+    int k = (zero + 1) % 3, b2 = (k + 1) % 3;
+    float x = float(q[b2]) / float(r);
+    uint info = (t.einfo >> (10u * uint(k))) & 0x3ffu;
+    uint re = info & 0x1ffu;
+    if ((info & 0x200u) != 0u) x = 1.0 - x;
+    int m = int(floor(x * float(re) + 0.5));
+    if (m <= 0) return t.v[(info & 0x200u) != 0u ? b2 : k];
+    if (m >= int(re)) return t.v[(info & 0x200u) != 0u ? k : b2];
+    return t.e[k] + uint(m - 1);
+}
+
+// Barycentrics of hit attributes (b1, b2) -> (b0, b1, b2).
+vec3 hrt_bary3(vec2 b) { return vec3(1.0 - b.x - b.y, b.x, b.y); }
+
+// The sample a hit lands on (nearest), as an index into the instance's cache.
+uint hrt_cache_sample_index(InstanceGpu inst, uint prim, vec2 bary) {
+    if (inst.surfel_type == HRT_SURFEL_TILES) return hrt_tile_sample(inst, prim, bary);
+    return hrt_mc_nearest(hrt_mc_tri(inst, prim), hrt_bary3(bary));
+}
+
+// Cached radiance at a hit. Mesh colors interpolate linearly over the lattice triangle that
+// holds the point (continuous across edges) when `bilinear`; tiles are piecewise constant.
+vec3 hrt_cache_radiance(InstanceGpu inst, uint prim, vec2 bary, bool bilinear) {
+    if (!hrt_has_cache(inst)) return inst.initial_color.rgb;
+    CacheSamples c = CacheSamples(inst.cache_addr);
+    if (inst.surfel_type == HRT_SURFEL_TILES || !bilinear)
+        return c.s[hrt_cache_sample_index(inst, prim, bary)].value.rgb;
+    MeshColorTri t = hrt_mc_tri(inst, prim);
+    vec3 p = hrt_bary3(bary) * float(t.r);
+    ivec3 f = ivec3(floor(p));
+    vec3 w = p - vec3(f);
+    // The lattice cell is an "upward" triangle when the fractional parts sum to 2, else
+    // "downward"; interpolate its three corners.
+    int rem = int(t.r) - (f.x + f.y + f.z);
+    if (rem == 2) {
+        ivec3 c0 = f + ivec3(0, 1, 1), c1 = f + ivec3(1, 0, 1), c2 = f + ivec3(1, 1, 0);
+        vec3 wt = vec3(1.0) - w; // weights: distance from the opposite corner
+        return (hrt_mc_point(c, t, c0) * wt.x + hrt_mc_point(c, t, c1) * wt.y + hrt_mc_point(c, t, c2) * wt.z) / max(wt.x + wt.y + wt.z, 1e-6);
+    }
+    if (rem <= 0) return hrt_mc_point(c, t, clamp(f, ivec3(0), ivec3(int(t.r))));
+    ivec3 c0 = f + ivec3(1, 0, 0), c1 = f + ivec3(0, 1, 0), c2 = f + ivec3(0, 0, 1);
+    return (hrt_mc_point(c, t, c0) * w.x + hrt_mc_point(c, t, c1) * w.y + hrt_mc_point(c, t, c2) * w.z) / max(w.x + w.y + w.z, 1e-6);
+}
+#endif
