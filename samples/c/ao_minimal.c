@@ -555,6 +555,11 @@ int main(void) {
     printf("frame 4 (clear + cache view):\n");
     run_frame(ctx, frame, &view, 16, rgba);
     EXPECT(c[0] == 1.0f && c[1] == 0.0f && c[2] == 1.0f, "cleared to the initial colour (%f %f %f)", c[0], c[1], c[2]);
+    /* A transfer is validated like every task: the same instance twice is refused. */
+    HrtDirectLightTransferTask transfer = hrt_direct_light_transfer_task_default();
+    transfer.source = instances[0];
+    transfer.target = instances[0];
+    EXPECT(hrt_schedule_direct_light_transfer(frame, &transfer) == HRT_ERROR_INVALID_INPUT, "transfer onto itself");
     free_image(lit);
     free_image(view);
 

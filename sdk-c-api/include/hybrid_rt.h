@@ -93,6 +93,7 @@ typedef enum HrtTaskKind {
   HRT_TASK_TLAS_BUILD = 3,
   HRT_TASK_DIRECT_LIGHTING_INJECTION = 4,
   HRT_TASK_CACHE_UPDATE = 5,
+  HRT_TASK_CACHE_TRANSFER = 6,
 } HrtTaskKind;
 
 typedef enum HrtDebugOutput {
@@ -460,6 +461,22 @@ typedef struct HrtClearCacheTask {
   HrtInstanceHandle instance;
 } HrtClearCacheTask;
 
+/**
+ * Copies one instance's cached lighting onto another covering the same surface (LODs).
+ */
+typedef struct HrtDirectLightTransferTask {
+  HrtInstanceHandle source;
+  HrtInstanceHandle target;
+  /**
+   * World-space distance the two surfaces may be apart (> 0). Default 0.1.
+   */
+  float max_distance;
+  /**
+   * Default true.
+   */
+  bool enable_bilinear_sampling;
+} HrtDirectLightTransferTask;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -636,6 +653,11 @@ enum HrtStatus hrt_schedule_clear_cache(struct HrtTaskContainer *container,
 enum HrtStatus hrt_instance_cache_bytes(const struct HrtContext *ctx,
                                         HrtInstanceHandle instance,
                                         uint64_t *bytes);
+
+struct HrtDirectLightTransferTask hrt_direct_light_transfer_task_default(void);
+
+enum HrtStatus hrt_schedule_direct_light_transfer(struct HrtTaskContainer *container,
+                                                  const struct HrtDirectLightTransferTask *task);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -423,6 +423,7 @@ pub unsafe extern "C" fn hrt_mark_gpu_task_completed(
                         rt::TaskKind::TlasBuild => HrtTaskKind::HRT_TASK_TLAS_BUILD,
                         rt::TaskKind::DirectLightingInjection => HrtTaskKind::HRT_TASK_DIRECT_LIGHTING_INJECTION,
                         rt::TaskKind::CacheUpdate => HrtTaskKind::HRT_TASK_CACHE_UPDATE,
+                        rt::TaskKind::CacheTransfer => HrtTaskKind::HRT_TASK_CACHE_TRANSFER,
                     },
                     task_index: t.task_index,
                     gpu_ms: t.gpu_ms,
@@ -520,5 +521,28 @@ pub unsafe extern "C" fn hrt_instance_cache_bytes(ctx: *const HrtContext, instan
         let c = get(ctx, "ctx")?;
         *get_mut(bytes, "bytes")? = c.ctx.instance_cache_bytes(rt::InstanceHandle(instance))?;
         Ok(())
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn hrt_direct_light_transfer_task_default() -> HrtDirectLightTransferTask {
+    let d = rt::DirectLightTransferTask::default();
+    HrtDirectLightTransferTask { source: 0, target: 0, max_distance: d.max_distance, enable_bilinear_sampling: d.enable_bilinear_sampling }
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_schedule_direct_light_transfer(
+    container: *mut HrtTaskContainer,
+    task: *const HrtDirectLightTransferTask,
+) -> HrtStatus {
+    guard(|| {
+        let c = get_mut(container, "container")?;
+        let t = get(task, "task")?;
+        Ok(c.inner.schedule_direct_light_transfer(&rt::DirectLightTransferTask {
+            source: rt::InstanceHandle(t.source),
+            target: rt::InstanceHandle(t.target),
+            max_distance: t.max_distance,
+            enable_bilinear_sampling: t.enable_bilinear_sampling,
+        })?)
     })
 }

@@ -319,6 +319,18 @@ pub struct HrtDirectLightingInjectionTask {
     pub use_inline_rt: bool,
 }
 
+/// Copies one instance's cached lighting onto another covering the same surface (LODs).
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtDirectLightTransferTask {
+    pub source: HrtInstanceHandle,
+    pub target: HrtInstanceHandle,
+    /// World-space distance the two surfaces may be apart (> 0). Default 0.1.
+    pub max_distance: f32,
+    /// Default true.
+    pub enable_bilinear_sampling: bool,
+}
+
 /// Resets an instance's cache to its initial colour.
 #[repr(C)]
 #[derive(Clone, Copy)]
@@ -352,6 +364,7 @@ pub enum HrtTaskKind {
     HRT_TASK_TLAS_BUILD = 3,
     HRT_TASK_DIRECT_LIGHTING_INJECTION = 4,
     HRT_TASK_CACHE_UPDATE = 5,
+    HRT_TASK_CACHE_TRANSFER = 6,
 }
 
 #[repr(C)]

@@ -31,6 +31,13 @@ struct InstanceGpu {
     uint triangle_count;
     uint flags;
     uint sample_count;
+    vec4 object_to_world[3]; // rows of the 3x4 transform
+    uvec2 vertex_addr;   // the SDK's copy of the positions (stride below)
+    uvec2 index_addr;    // indices (index_size bytes each; 0 = non-indexed)
+    uint vertex_stride;
+    uint index_size;
+    uint max_resolution; // largest per-triangle resolution of the layout
+    uint pad;
 };
 
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer InstanceTable { InstanceGpu v[]; };
@@ -39,6 +46,25 @@ struct CacheSample { vec4 value; vec4 accum; };
 layout(buffer_reference, std430, buffer_reference_align = 16) buffer CacheSamples { CacheSample s[]; };
 
 bool hrt_has_cache(InstanceGpu inst) { return (inst.flags & HRT_INSTANCE_HAS_CACHE) != 0u; }
+
+uint hrt_index(InstanceGpu inst, uint i) {
+    if (inst.index_size == 0u) return i;
+    LayoutWords w = LayoutWords(inst.index_addr);
+    if (inst.index_size == 4u) return w.w[i];
+    uint word = w.w[i >> 1];
+    return (i & 1u) == 0u ? (word & 0xffffu) : (word >> 16);
+}
+
+vec3 hrt_vertex(InstanceGpu inst, uint v) {
+    LayoutWords w = LayoutWords(inst.vertex_addr);
+    uint o = v * (inst.vertex_stride / 4u);
+    return vec3(uintBitsToFloat(w.w[o]), uintBitsToFloat(w.w[o + 1u]), uintBitsToFloat(w.w[o + 2u]));
+}
+
+vec3 hrt_to_world(InstanceGpu inst, vec3 p) {
+    vec4 h = vec4(p, 1.0);
+    return vec3(dot(inst.object_to_world[0], h), dot(inst.object_to_world[1], h), dot(inst.object_to_world[2], h));
+}
 
 // ---- Tiles
 uint hrt_tile_sample(InstanceGpu inst, uint prim, vec2 bary) {

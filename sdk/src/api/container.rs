@@ -17,6 +17,7 @@ pub(crate) enum Task {
     AmbientOcclusion(TraceAmbientOcclusionTask),
     DirectLightingInjection(DirectLightingInjectionTask),
     ClearCache(ClearCacheTask),
+    DirectLightTransfer(DirectLightTransferTask),
 }
 
 /// Holds only a weak reference to its context: dropping the `ExecuteContext` frees the SDK's
@@ -79,6 +80,21 @@ impl TaskContainer {
     pub fn schedule_clear_cache(&mut self, task: &ClearCacheTask) -> Result<()> {
         self.shared()?.check_instance_alive(task.instance)?;
         self.tasks.push(Task::ClearCache(*task));
+        Ok(())
+    }
+
+    /// Copies one instance's cached lighting onto another covering the same surface.
+    pub fn schedule_direct_light_transfer(&mut self, task: &DirectLightTransferTask) -> Result<()> {
+        let shared = self.shared()?;
+        shared.check_instance_alive(task.source)?;
+        shared.check_instance_alive(task.target)?;
+        if task.source == task.target {
+            return Err(crate::Error::invalid("DirectLightTransferTask", "source and target are the same instance"));
+        }
+        if !(task.max_distance.is_finite() && task.max_distance > 0.0) {
+            return Err(crate::Error::invalid("DirectLightTransferTask.max_distance", "must be finite and > 0"));
+        }
+        self.tasks.push(Task::DirectLightTransfer(*task));
         Ok(())
     }
 

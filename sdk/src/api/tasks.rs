@@ -504,3 +504,30 @@ impl Default for DirectLightingInjectionTask {
 pub struct ClearCacheTask {
     pub instance: InstanceHandle,
 }
+
+/// Copies the lighting of `source`'s cache onto `target`'s, for two instances that cover the
+/// same surface with different triangles (switching LODs: the new LOD starts lit instead of
+/// cold). For every target sample a ray crosses the surface along the sample's normal from
+/// `max_distance` above to `max_distance` below and reads the source's cache where it meets
+/// the source; samples whose ray misses the source keep their values. Both instances need
+/// their caches (one recording after registration).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DirectLightTransferTask {
+    pub source: InstanceHandle,
+    pub target: InstanceHandle,
+    /// How far apart the two surfaces may be, in world units (> 0). Default 0.1.
+    pub max_distance: f32,
+    /// Interpolate the source's mesh-colors cache. Default true.
+    pub enable_bilinear_sampling: bool,
+}
+
+impl Default for DirectLightTransferTask {
+    fn default() -> Self {
+        DirectLightTransferTask {
+            source: InstanceHandle::NULL,
+            target: InstanceHandle::NULL,
+            max_distance: 0.1,
+            enable_bilinear_sampling: true,
+        }
+    }
+}

@@ -43,6 +43,8 @@ pub enum TaskKind {
     DirectLightingInjection = 4,
     /// Cache maintenance of the ticket: new layouts, new and cleared caches.
     CacheUpdate = 5,
+    /// A cache transfer between two instances.
+    CacheTransfer = 6,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]

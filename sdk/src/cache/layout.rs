@@ -18,6 +18,8 @@ pub(crate) struct SurfelLayout {
     /// Words as the shader reads them (per triangle: 2 for tiles, 9 for mesh colors).
     pub words: Vec<u32>,
     pub sample_count: u32,
+    /// Largest per-triangle resolution (sizes the transfer pass's launch).
+    pub max_resolution: u32,
 }
 
 /// Samples along the longest edge: edge length / unit, at least 1, at most the limit.
@@ -42,12 +44,14 @@ fn corners(positions: &[Vec3], t: &[u32; 3]) -> [Vec3; 3] {
 fn tiles(positions: &[Vec3], triangles: &[[u32; 3]], s: &SurfelSettings) -> SurfelLayout {
     let mut words = Vec::with_capacity(triangles.len() * 2);
     let mut next = 0u32;
+    let mut max_resolution = 1;
     for t in triangles {
         let r = resolution(corners(positions, t), s);
+        max_resolution = max_resolution.max(r);
         words.extend_from_slice(&[next, r]);
         next += r * r;
     }
-    SurfelLayout { surfel_type: SurfelType::Tiles, words, sample_count: next }
+    SurfelLayout { surfel_type: SurfelType::Tiles, words, sample_count: next, max_resolution }
 }
 
 /// Interior lattice points of a triangle of resolution r.
@@ -109,7 +113,8 @@ fn mesh_colors(positions: &[Vec3], triangles: &[[u32; 3]], s: &SurfelSettings) -
         next += interior_count(r);
         words.extend_from_slice(&[t[0], t[1], t[2], e[0], e[1], e[2], info, face, r]);
     }
-    SurfelLayout { surfel_type: SurfelType::MeshColors, words, sample_count: next }
+    let max_resolution = res.iter().copied().max().unwrap_or(1);
+    SurfelLayout { surfel_type: SurfelType::MeshColors, words, sample_count: next, max_resolution }
 }
 
 /// Positions and triangles from a read-back geometry copy (vertices with their stride, then

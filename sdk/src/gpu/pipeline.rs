@@ -77,10 +77,11 @@ pub(crate) fn rt_pipeline(
     raygen: &[u8],
     misses: &[&[u8]],
     closest_hits: &[&[u8]],
+    any_hit: Option<&[u8]>,
 ) -> Result<RtPipeline> {
     let d = &device.raw;
     let mut modules = vec![shader_module(d, raygen)?];
-    for m in misses.iter().chain(closest_hits) {
+    for m in misses.iter().chain(closest_hits).chain(any_hit.as_slice()) {
         match shader_module(d, m) {
             Ok(m) => modules.push(m),
             Err(e) => {
@@ -110,6 +111,16 @@ pub(crate) fn rt_pipeline(
                 .name(entry),
         );
     }
+    // One any-hit shader shared by every hit group (a filter, e.g. "only this instance").
+    let any_hit_stage = any_hit.map(|_| {
+        stages.push(
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::ANY_HIT_KHR)
+                .module(modules[1 + misses.len() + closest_hits.len()])
+                .name(entry),
+        );
+        (stages.len() - 1) as u32
+    });
     let general = |i: usize| {
         vk::RayTracingShaderGroupCreateInfoKHR::default()
             .ty(vk::RayTracingShaderGroupTypeKHR::GENERAL)
@@ -125,7 +136,7 @@ pub(crate) fn rt_pipeline(
                 .ty(vk::RayTracingShaderGroupTypeKHR::TRIANGLES_HIT_GROUP)
                 .general_shader(vk::SHADER_UNUSED_KHR)
                 .closest_hit_shader((1 + misses.len() + i) as u32)
-                .any_hit_shader(vk::SHADER_UNUSED_KHR)
+                .any_hit_shader(any_hit_stage.unwrap_or(vk::SHADER_UNUSED_KHR))
                 .intersection_shader(vk::SHADER_UNUSED_KHR),
         );
     }

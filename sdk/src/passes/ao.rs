@@ -45,9 +45,9 @@ impl AoPass {
             stages,
         )?;
         let layout = pipeline::pipeline_layout(d, set_layout)?;
-        let rt = pipeline::rt_pipeline(device, memory, layout, shaders::AO_RGEN, &[shaders::HIT_T_RMISS], &[shaders::HIT_T_RCHIT])?;
+        let rt = pipeline::rt_pipeline(device, memory, layout, shaders::AO_RGEN, &[shaders::HIT_T_RMISS], &[shaders::HIT_T_RCHIT], None)?;
         let floor =
-            pipeline::rt_pipeline(device, memory, layout, shaders::AO_RGEN, &[shaders::EMPTY_RMISS], &[shaders::EMPTY_RCHIT])?;
+            pipeline::rt_pipeline(device, memory, layout, shaders::AO_RGEN, &[shaders::EMPTY_RMISS], &[shaders::EMPTY_RCHIT], None)?;
         let inline = if device.ray_query { Some(pipeline::compute_pipeline(d, layout, shaders::AO_COMP)?) } else { None };
         Ok(AoPass { set_layout, layout, rt, floor, inline })
     }

@@ -42,7 +42,7 @@ impl DebugPass {
             vk::ShaderStageFlags::RAYGEN_KHR,
         )?;
         let layout = pipeline::pipeline_layout(d, set_layout)?;
-        let rt = pipeline::rt_pipeline(device, memory, layout, shaders::DEBUG_RGEN, &[shaders::HIT_RECORD_RMISS], &[shaders::HIT_RECORD_RCHIT])?;
+        let rt = pipeline::rt_pipeline(device, memory, layout, shaders::DEBUG_RGEN, &[shaders::HIT_RECORD_RMISS], &[shaders::HIT_RECORD_RCHIT], None)?;
         Ok(DebugPass { set_layout, layout, rt })
     }
 

@@ -44,7 +44,7 @@ impl InjectPass {
             vk::ShaderStageFlags::RAYGEN_KHR,
         )?;
         let layout = pipeline::pipeline_layout(d, set_layout)?;
-        let rt = pipeline::rt_pipeline(device, memory, layout, shaders::INJECT_RGEN, &[shaders::HIT_RECORD_RMISS], &[shaders::HIT_RECORD_RCHIT])?;
+        let rt = pipeline::rt_pipeline(device, memory, layout, shaders::INJECT_RGEN, &[shaders::HIT_RECORD_RMISS], &[shaders::HIT_RECORD_RCHIT], None)?;
         Ok(InjectPass { set_layout, layout, rt })
     }
 

@@ -101,6 +101,7 @@ pub(crate) struct SurfelGpu {
     pub sample_count: u32,
     pub surfel_type: crate::api::tasks::SurfelType,
     pub id: u64,
+    pub max_resolution: u32,
 }
 
 impl GeometryRecord {

@@ -126,7 +126,7 @@ impl Shared {
             st.next_layout_id += 1;
             let id = st.next_layout_id;
             let g = st.geometries.get_mut(h)?;
-            let fresh = SurfelGpu { buffer, sample_count: l.sample_count, surfel_type: l.surfel_type, id };
+            let fresh = SurfelGpu { buffer, sample_count: l.sample_count, surfel_type: l.surfel_type, id, max_resolution: l.max_resolution };
             if let Some(old) = g.surfel.replace(fresh) {
                 st.deferred.retire(serial, Garbage::Buffer(old.buffer));
             }
@@ -183,7 +183,21 @@ impl Shared {
             let Ok(g) = st.geometries.get(p.geometry) else { continue };
             let surfel = g.surfel.as_ref();
             let c = p.initial_tile_color;
+            let m = p.transform.matrix3;
+            let tr = p.transform.translation;
+            let copy = g.copy.as_ref().map_or(0, |b| b.address);
             table[i as usize] = InstanceGpu {
+                object_to_world: [
+                    [m.x_axis.x, m.y_axis.x, m.z_axis.x, tr.x],
+                    [m.x_axis.y, m.y_axis.y, m.z_axis.y, tr.y],
+                    [m.x_axis.z, m.y_axis.z, m.z_axis.z, tr.z],
+                ],
+                vertex_addr: copy,
+                index_addr: g.layout.filter(|l| l.index_type.is_some()).map_or(0, |l| copy + l.index_offset),
+                vertex_stride: g.layout.map_or(12, |l| l.vertex_stride as u32),
+                index_size: g.layout.map_or(0, |l| l.index_size() as u32),
+                max_resolution: surfel.map_or(1, |s| s.max_resolution),
+                pad: 0,
                 layout_addr: surfel.map_or(0, |s| s.buffer.address),
                 cache_addr: p.cache.map_or(0, |(r, _)| r.address),
                 initial_color: [c[0], c[1], c[2], 0.0],
@@ -210,4 +224,30 @@ pub(super) fn record_injection(
     for (address, count) in pool.spans() {
         ops.resolve(r, address, count, task.average_window);
     }
+}
+
+/// The launch of a transfer, or None when either instance has no cache yet.
+pub(super) fn transfer_job(st: &State, t: &DirectLightTransferTask) -> Option<crate::passes::transfer::TransferJob> {
+    let placed = |h: InstanceHandle| -> Option<(u32, Placement)> {
+        let p = st.instances.get(h).ok()?.placement?;
+        p.cache?;
+        Some((st.instances.index_of(h).ok()?, p))
+    };
+    let (source_index, _) = placed(t.source)?;
+    let (target_index, target) = placed(t.target)?;
+    let g = st.geometries.get(target.geometry).ok()?;
+    let surfel = g.surfel.as_ref()?;
+    let r = surfel.max_resolution;
+    let samples_per_triangle = match surfel.surfel_type {
+        SurfelType::Tiles => r * r,
+        SurfelType::MeshColors => (r + 1) * (r + 2) / 2,
+    };
+    Some(crate::passes::transfer::TransferJob {
+        source_index,
+        target_index,
+        target_triangles: g.layout?.primitive_count,
+        samples_per_triangle,
+        distance: t.max_distance,
+        bilinear: t.enable_bilinear_sampling,
+    })
 }

@@ -22,7 +22,7 @@ use crate::scene::geometry::{self, BlasState, GeometryLayout, GeometryRecord};
 use crate::scene::instance::{self, InstanceRecord, Placement};
 use crate::scene::tlas::{self, Tlas};
 use crate::cache::pool::{CachePool, CacheRange};
-use crate::passes::{cache_ops::CacheOps, debug::DebugPass, inject::InjectPass};
+use crate::passes::{cache_ops::CacheOps, debug::DebugPass, inject::InjectPass, transfer::TransferPass};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 use parking_lot::Mutex;
@@ -83,6 +83,7 @@ struct State {
     ao: Option<AoPass>,
     debug: Option<DebugPass>,
     inject: Option<InjectPass>,
+    transfer: Option<TransferPass>,
     cache_ops: Option<CacheOps>,
     cache_pool: CachePool,
     /// Cache ranges of destroyed/changed instances: (newest serial issued then, range).
@@ -142,6 +143,7 @@ impl ExecuteContext {
                 ao: None,
                 debug: None,
                 inject: None,
+                transfer: None,
                 cache_ops: None,
                 cache_pool: CachePool::default(),
                 cache_frees: Vec::new(),
@@ -157,6 +159,7 @@ impl ExecuteContext {
             st.ao = Some(AoPass::new(&shared.device, &shared.memory, sampler)?);
             st.debug = Some(DebugPass::new(&shared.device, &shared.memory)?);
             st.inject = Some(InjectPass::new(&shared.device, &shared.memory, sampler)?);
+            st.transfer = Some(TransferPass::new(&shared.device, &shared.memory)?);
             st.cache_ops = Some(CacheOps::new(&shared.device)?);
             for _ in 0..settings.supported_working_sets {
                 let ws = shared.new_working_set(settings)?;
@@ -422,6 +425,10 @@ fn validate_handles(st: &State, tasks: &[Task]) -> Result<()> {
             Task::ClearCache(t) => {
                 st.instances.get(t.instance)?;
             }
+            Task::DirectLightTransfer(t) => {
+                st.instances.get(t.source)?;
+                st.instances.get(t.target)?;
+            }
             Task::BvhBuild(_) | Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) => {}
         }
     }
@@ -519,7 +526,9 @@ impl Shared {
             .iter()
             .position(|t| matches!(t, Task::Geometry(_) | Task::Instance(_) | Task::BvhBuild(_)))
             .map(|i| i as u32);
-        let has_render = tasks.iter().any(|t| matches!(t, Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_)));
+        let has_render = tasks
+            .iter()
+            .any(|t| matches!(t, Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) | Task::DirectLightTransfer(_)));
         let bvh_span = first_bvh.map(|i| timer(st, ws_index).begin(d, cmd, TaskKind::Bvh, i));
         self.apply_scene_tasks(st, ws_index, tasks, cmd, serial, &mut hazards)?;
         let max_builds: Option<u32> = tasks
@@ -557,14 +566,29 @@ impl Shared {
             return Ok(());
         }
         let floor = self.bench_floor.load(Ordering::Relaxed);
-        let per_task = passes::ao::UPLOAD_BYTES.max(passes::debug::UPLOAD_BYTES).max(passes::inject::UPLOAD_BYTES) + device.ubo_alignment;
+        let per_task = passes::ao::UPLOAD_BYTES
+            .max(passes::debug::UPLOAD_BYTES)
+            .max(passes::inject::UPLOAD_BYTES)
+            .max(passes::transfer::UPLOAD_BYTES)
+            + device.ubo_alignment;
         self.ensure_ring(st, ws_index, Self::instance_table_bytes(st) + tasks.len() as u64 * per_task)?;
         let instance_table = self.push_instance_table(st, ws_index);
         for (i, task) in tasks.iter().enumerate() {
             let kind = match task {
                 Task::AmbientOcclusion(_) => TaskKind::AmbientOcclusion,
                 Task::DirectLightingInjection(_) => TaskKind::DirectLightingInjection,
+                Task::DirectLightTransfer(_) => TaskKind::CacheTransfer,
                 _ => continue,
+            };
+            let transfer_job = match task {
+                Task::DirectLightTransfer(t) => match cache::transfer_job(st, t) {
+                    Some(job) => Some(job),
+                    None => {
+                        log::debug!("cache transfer skipped: an instance has no cache yet");
+                        continue;
+                    }
+                },
+                _ => None,
             };
             let span = timer(st, ws_index).begin(d, cmd, kind, i as u32);
             let ws = &mut st.working_sets[ws_index];
@@ -589,6 +613,11 @@ impl Shared {
                     &st.cache_pool,
                     t,
                 ),
+                Task::DirectLightTransfer(_) => {
+                    if let Some(job) = transfer_job.as_ref() {
+                        st.transfer.as_ref().expect("created in new").record(&mut r, job);
+                    }
+                }
                 _ => {}
             }
             timer(st, ws_index).end(d, cmd, span);
@@ -892,6 +921,9 @@ impl Drop for Shared {
             p.destroy(device, memory);
         }
         if let Some(p) = st.inject.take() {
+            p.destroy(device, memory);
+        }
+        if let Some(p) = st.transfer.take() {
             p.destroy(device, memory);
         }
         if let Some(p) = st.cache_ops.take() {
