@@ -27,3 +27,14 @@ pub fn write_png_gray(path: &Path, width: u32, height: u32, values: &[f32]) -> R
     let bytes: Vec<u8> = values.iter().map(|v| srgb(*v)).collect();
     w.write_image_data(&bytes).map_err(|e| e.to_string())
 }
+
+/// Writes RGBA float texels as an sRGB 8-bit RGB PNG (values scaled by `scale` first).
+pub fn write_png_rgb(path: &Path, width: u32, height: u32, texels: &[[f32; 4]], scale: f32) -> Result<(), String> {
+    let file = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    let mut w = enc.write_header().map_err(|e| e.to_string())?;
+    let bytes: Vec<u8> = texels.iter().flat_map(|t| [srgb(t[0] * scale), srgb(t[1] * scale), srgb(t[2] * scale)]).collect();
+    w.write_image_data(&bytes).map_err(|e| e.to_string())
+}

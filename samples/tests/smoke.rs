@@ -6,14 +6,17 @@ fn sample_writes_a_plausible_ao_image() {
     let out = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("sample-smoke");
     let _ = std::fs::remove_dir_all(&out);
     let run = Command::new(env!("CARGO_BIN_EXE_sample"))
-        .args(["--width", "96", "--height", "54", "--rays", "4", "--frames", "2", "--out"])
+        .args(["--width", "96", "--height", "54", "--rays", "4", "--frames", "3", "--out"])
         .arg(&out)
         .output()
         .expect("run sample");
     let text = String::from_utf8_lossy(&run.stdout).to_string() + &String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success(), "{text}");
     assert!(text.contains("GPU time") && text.contains("wrote"), "{text}");
-    assert!(out.join("ao.png").metadata().unwrap().len() > 100);
+    for name in ["ao.png", "lit.png", "debug_cache.png", "debug_cache_overview.png", "debug_random_tile.png", "debug_random_mesh.png", "debug_hit_t.png", "debug_barycentrics.png"] {
+        assert!(out.join(name).metadata().map_or(0, |m| m.len()) > 100, "{name} written");
+    }
+    assert!(text.contains("injection"), "{text}");
     let image = exr::prelude::read_first_rgba_layer_from_file(
         out.join("ao.exr"),
         |res, _| vec![0f32; res.width() * res.height()],

@@ -95,19 +95,36 @@ MeshColorTri hrt_mc_tri(InstanceGpu inst, uint prim) {
     return t;
 }
 
+// A sample as (rgb, lit): lit = 1 once injection or a transfer has written it, 0 while it
+// still holds its initial colour.
+vec4 hrt_sample(CacheSamples c, uint i) {
+    vec4 v = c.s[i].value;
+    return vec4(v.rgb, v.w > 0.0 ? 1.0 : 0.0);
+}
+
+// Interpolates (rgb, lit) values by weight, over lit ones only; all unlit -> the plain mix
+// (their initial colour), so never-lit surfaces still show it.
+vec4 hrt_lit_mix(vec4 a, vec4 b, vec4 c, vec3 w) {
+    vec3 lw = w * vec3(a.w, b.w, c.w);
+    float s = lw.x + lw.y + lw.z;
+    if (s > 0.0) return vec4((a.rgb * lw.x + b.rgb * lw.y + c.rgb * lw.z) / s, 1.0);
+    float ws = max(w.x + w.y + w.z, 1e-6);
+    return vec4((a.rgb * w.x + b.rgb * w.y + c.rgb * w.z) / ws, 0.0);
+}
+
 // Value of lattice point (i, j, k), i + j + k = R, weights of vertices 0, 1, 2. Points on an
 // edge whose stored resolution differs from R are interpolated along the edge's own samples.
-vec3 hrt_mc_point(CacheSamples c, MeshColorTri t, ivec3 ijk) {
+vec4 hrt_mc_point(CacheSamples c, MeshColorTri t, ivec3 ijk) {
     int r = int(t.r);
-    if (ijk.x == r) return c.s[t.v[0]].value.rgb;
-    if (ijk.y == r) return c.s[t.v[1]].value.rgb;
-    if (ijk.z == r) return c.s[t.v[2]].value.rgb;
+    if (ijk.x == r) return hrt_sample(c, t.v[0]);
+    if (ijk.y == r) return hrt_sample(c, t.v[1]);
+    if (ijk.z == r) return hrt_sample(c, t.v[2]);
     int zero = ijk.x == 0 ? 0 : (ijk.y == 0 ? 1 : (ijk.z == 0 ? 2 : -1));
     if (zero < 0) {
         // Interior: rows of the (R-3)-triangle over i' = i - 1, j' = j - 1.
         int n = r - 3, i = ijk.x - 1, j = ijk.y - 1;
         uint idx = uint(i * (n + 1) - (i * (i - 1)) / 2 + j);
-        return c.s[t.face + idx].value.rgb;
+        return hrt_sample(c, t.face + idx);
     }
     // On the edge opposite vertex `zero`: edge k runs from vertex k to vertex k+1.
     int k = (zero + 1) % 3;           // edge from vertex k to k+1 excludes vertex `zero`
@@ -116,14 +133,14 @@ vec3 hrt_mc_point(CacheSamples c, MeshColorTri t, ivec3 ijk) {
     uint info = (t.einfo >> (10u * uint(k))) & 0x3ffu;
     uint re = info & 0x1ffu;
     if ((info & 0x200u) != 0u) x = 1.0 - x;
-    vec3 va = c.s[t.v[(info & 0x200u) != 0u ? b : a]].value.rgb;
-    vec3 vb = c.s[t.v[(info & 0x200u) != 0u ? a : b]].value.rgb;
+    vec4 va = hrt_sample(c, t.v[(info & 0x200u) != 0u ? b : a]);
+    vec4 vb = hrt_sample(c, t.v[(info & 0x200u) != 0u ? a : b]);
     float p = x * float(re);
     int m0 = int(floor(p)), m1 = min(m0 + 1, int(re));
     float f = p - float(m0);
-    vec3 s0 = m0 == 0 ? va : (m0 == int(re) ? vb : c.s[t.e[k] + uint(m0 - 1)].value.rgb);
-    vec3 s1 = m1 == 0 ? va : (m1 == int(re) ? vb : c.s[t.e[k] + uint(m1 - 1)].value.rgb);
-    return mix(s0, s1, f);
+    vec4 s0 = m0 == 0 ? va : (m0 == int(re) ? vb : hrt_sample(c, t.e[k] + uint(m0 - 1)));
+    vec4 s1 = m1 == 0 ? va : (m1 == int(re) ? vb : hrt_sample(c, t.e[k] + uint(m1 - 1)));
+    return hrt_lit_mix(s0, s1, s1, vec3(1.0 - f, f, 0.0));
 }
 
 // Nearest sample of a mesh-colors triangle (for injection).
@@ -169,7 +186,9 @@ uint hrt_cache_sample_index(InstanceGpu inst, uint prim, vec2 bary) {
 }
 
 // Cached radiance at a hit. Mesh colors interpolate linearly over the lattice triangle that
-// holds the point (continuous across edges) when `bilinear`; tiles are piecewise constant.
+// holds the point (continuous across edges) when `bilinear`, over lit samples only, so a
+// sample no injected pixel landed on (skinny triangles, grazing views) does not show through;
+// tiles are piecewise constant.
 vec3 hrt_cache_radiance(InstanceGpu inst, uint prim, vec2 bary, bool bilinear) {
     if (!hrt_has_cache(inst)) return inst.initial_color.rgb;
     CacheSamples c = CacheSamples(inst.cache_addr);
@@ -185,10 +204,10 @@ vec3 hrt_cache_radiance(InstanceGpu inst, uint prim, vec2 bary, bool bilinear) {
     if (rem == 2) {
         ivec3 c0 = f + ivec3(0, 1, 1), c1 = f + ivec3(1, 0, 1), c2 = f + ivec3(1, 1, 0);
         vec3 wt = vec3(1.0) - w; // weights: distance from the opposite corner
-        return (hrt_mc_point(c, t, c0) * wt.x + hrt_mc_point(c, t, c1) * wt.y + hrt_mc_point(c, t, c2) * wt.z) / max(wt.x + wt.y + wt.z, 1e-6);
+        return hrt_lit_mix(hrt_mc_point(c, t, c0), hrt_mc_point(c, t, c1), hrt_mc_point(c, t, c2), wt).rgb;
     }
-    if (rem <= 0) return hrt_mc_point(c, t, clamp(f, ivec3(0), ivec3(int(t.r))));
+    if (rem <= 0) return hrt_mc_point(c, t, clamp(f, ivec3(0), ivec3(int(t.r)))).rgb;
     ivec3 c0 = f + ivec3(1, 0, 0), c1 = f + ivec3(0, 1, 0), c2 = f + ivec3(0, 0, 1);
-    return (hrt_mc_point(c, t, c0) * w.x + hrt_mc_point(c, t, c1) * w.y + hrt_mc_point(c, t, c2) * w.z) / max(w.x + w.y + w.z, 1e-6);
+    return hrt_lit_mix(hrt_mc_point(c, t, c0), hrt_mc_point(c, t, c1), hrt_mc_point(c, t, c2), w).rgb;
 }
 #endif

@@ -322,6 +322,8 @@ pub struct GBuffer {
     pub normal: Vec<Vec3>,
     pub position: Vec<Vec3>,
     pub hit: Vec<bool>,
+    /// Scene instance under each pixel (0 on background).
+    pub instance: Vec<u32>,
 }
 
 impl GBuffer {
@@ -337,6 +339,7 @@ impl GBuffer {
             normal: vec![Vec3::ZERO; n],
             position: vec![Vec3::ZERO; n],
             hit: vec![false; n],
+            instance: vec![0; n],
         };
         // Rows in parallel: the bench renders 1080p G-buffers of million-triangle scenes.
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(32);
@@ -347,8 +350,9 @@ impl GBuffer {
                 .depth
                 .chunks_mut(rows_per * px)
                 .zip(g.normal.chunks_mut(rows_per * px))
-                .zip(g.position.chunks_mut(rows_per * px).zip(g.hit.chunks_mut(rows_per * px)));
-            for (c, ((depth, normal), (position, hit))) in chunks.enumerate() {
+                .zip(g.position.chunks_mut(rows_per * px).zip(g.hit.chunks_mut(rows_per * px)))
+                .zip(g.instance.chunks_mut(rows_per * px));
+            for (c, (((depth, normal), (position, hit)), instance)) in chunks.enumerate() {
                 s.spawn(move || {
                     for (k, d) in depth.iter_mut().enumerate() {
                         let i = c * rows_per * px + k;
@@ -363,6 +367,7 @@ impl GBuffer {
                             normal[k] = if h.normal.dot(dir) > 0.0 { -h.normal } else { h.normal };
                             position[k] = pos;
                             hit[k] = true;
+                            instance[k] = h.instance;
                         }
                     }
                 });
@@ -465,5 +470,34 @@ pub fn reference_ao(tracer: &Tracer, g: &GBuffer, eye: Vec3, params: &AoParams, 
     let mut rng = Rng::new(0x5eed);
     (0..g.depth.len())
         .map(|i| if g.hit[i] { ao_at(tracer, g.position[i], g.normal[i], eye, params, strata, &mut rng) } else { 1.0 })
+        .collect()
+}
+
+// ---------------------------------------------------------------- direct lighting
+
+/// A sun: direction towards the light and its radiance scale.
+#[derive(Clone, Copy, Debug)]
+pub struct Sun {
+    pub to_light: Vec3,
+    pub intensity: f32,
+}
+
+/// What the engine's rasterizer would have lit: Lambertian albedo under a sun with ray-traced
+/// shadows plus a small ambient term, RGBA32F texels (A = 1 on surfaces, 0 on background).
+/// `albedo` gives each scene instance its colour.
+pub fn direct_lighting(tracer: &Tracer, g: &GBuffer, sun: Sun, albedo: impl Fn(u32) -> [f32; 3]) -> Vec<[f32; 4]> {
+    let l = sun.to_light.normalize();
+    (0..g.depth.len())
+        .map(|i| {
+            if !g.hit[i] {
+                return [0.0; 4];
+            }
+            let (p, n) = (g.position[i], g.normal[i]);
+            let a = albedo(g.instance[i]);
+            let lit = n.dot(l).max(0.0) * sun.intensity;
+            let shadowed = lit > 0.0 && tracer.closest_hit(p + n * 1e-3, l, 0.0, f32::MAX).is_some();
+            let e = if shadowed { 0.0 } else { lit } + 0.08;
+            [a[0] * e, a[1] * e, a[2] * e, 1.0]
+        })
         .collect()
 }

@@ -1,17 +1,26 @@
-//! The hybrid-rt sample, headless: renders ray-traced AO of the built-in room and writes it as
-//! EXR and PNG, printing the per-task GPU times and the SDK's memory use.
+//! The hybrid-rt sample, headless: the built-in room, integrated as an engine would.
 //!
-//! It integrates the SDK as an engine would: its own device (`Host`), its own G-buffer (for
-//! now from the CPU reference renderer; the rasterized G-buffer comes with the full sample),
-//! one task container per frame, tickets handed back after its fence.
-use hybrid_rt::{ExecuteContext, InitSettings, TaskKind};
+//! Each frame: BVH tasks, direct-lighting injection of the "rasterized" lit frame from the main
+//! camera and from a low-resolution secondary ("lidar") camera that looks back at the room,
+//! and ray-traced AO. Then one image per debug visualisation. Writes EXR + PNG, prints per-task
+//! GPU times (from the SDK's timestamp queries) and the SDK's memory.
+//!
+//! The G-buffer and the lit frame come from the CPU reference renderer for now (the full
+//! sample rasterizes its own); everything the SDK sees goes through its public API: its own
+//! device (`Host`), one task container per frame, tickets handed back after the fence.
+use ash::vk;
+use glam::Vec3;
+use hybrid_rt::{
+    DebugOutput, DepthInput, DepthType, DirectLightingInjectionTask, ExecuteContext, InitSettings, SurfelSettings, TaskKind, Viewport,
+};
 use hybrid_rt_samples::{args::Args, images, scenes};
-use hybrid_rt_testkit::host::Host;
-use hybrid_rt_testkit::reference::{GBuffer, Tracer};
-use hybrid_rt_testkit::sdk_scene::{run_frame, GBufferImages, SceneOnGpu};
+use hybrid_rt_testkit::host::{Host, HostImage};
+use hybrid_rt_testkit::reference::{direct_lighting, Camera, GBuffer, Sun, Tracer};
+use hybrid_rt_testkit::sdk_scene::{run_frame, GBufferImages, SceneOnGpu, READ};
 use std::path::PathBuf;
 
-const USAGE: &str = "sample [--width 640] [--height 360] [--rays 16] [--ray-length 1.0] [--frames 4] [--out out]";
+const USAGE: &str = "sample [--width 640] [--height 360] [--rays 16] [--ray-length 1.0] [--frames 4] [--tile-unit-length 0.1] [--out out]";
+const MAGENTA: [f32; 3] = [1.0, 0.0, 1.0];
 
 fn main() {
     if let Err(e) = run() {
@@ -20,57 +29,147 @@ fn main() {
     }
 }
 
+/// Albedo per instance of the room (walls, then objects).
+fn albedo(instance: u32) -> [f32; 3] {
+    match instance {
+        0 => [0.75, 0.72, 0.68],
+        1 => [0.7, 0.7, 0.75],
+        2 => [0.75, 0.2, 0.15],
+        3 => [0.2, 0.45, 0.75],
+        4 => [0.8, 0.8, 0.8],
+        5 => [0.85, 0.65, 0.2],
+        6 => [0.3, 0.7, 0.35],
+        _ => [0.6, 0.6, 0.6],
+    }
+}
+
+struct View {
+    camera: Camera,
+    width: u32,
+    height: u32,
+    gbuffer: GBufferImages,
+    lit: HostImage,
+}
+
+fn view(host: &Host, tracer: &Tracer, camera: Camera, width: u32, height: u32, sun: Sun) -> Result<View, String> {
+    let g = GBuffer::render(tracer, &camera, width, height);
+    let gbuffer = GBufferImages::upload(host, &g)?;
+    let lit_texels = direct_lighting(tracer, &g, sun, albedo);
+    let lit = host.image_with_data(vk::Format::R32G32B32A32_SFLOAT, width, height, vk::ImageUsageFlags::SAMPLED, bytemuck::cast_slice(&lit_texels), READ)?;
+    Ok(View { camera, width, height, gbuffer, lit })
+}
+
+impl View {
+    fn injection(&self) -> DirectLightingInjectionTask {
+        DirectLightingInjectionTask {
+            depth: DepthInput { image: self.gbuffer.depth.input(READ), depth_type: DepthType::ClipSpace },
+            lit: self.lit.input(READ),
+            viewport: Viewport::full(self.width, self.height),
+            camera: self.camera.sdk_camera(self.width, self.height),
+            average_window: 8.0,
+            ..Default::default()
+        }
+    }
+}
+
 fn run() -> Result<(), String> {
     let args = Args::parse(USAGE);
     let (width, height) = (args.get("width", 640u32), args.get("height", 360u32));
     let rays = args.get("rays", 16u32);
     let ray_length = args.get("ray-length", 1.0f32);
-    let frames = args.get("frames", 4u32).max(1);
+    let frames = args.get("frames", 4u32).max(3);
+    let unit = args.get("tile-unit-length", 0.1f32);
     let out = PathBuf::from(args.string("out", "out"));
     std::fs::create_dir_all(&out).map_err(|e| e.to_string())?;
+    let e = |e: hybrid_rt::Error| e.to_string();
 
     let host = Host::new()?;
     println!("device: {}{}", host.device_name, if host.validation_enabled { " (validation on)" } else { "" });
-    let ctx = ExecuteContext::new(&host.device_desc(), &InitSettings::default()).map_err(|e| e.to_string())?;
+    let ctx = ExecuteContext::new(&host.device_desc(), &InitSettings::default()).map_err(e)?;
     let (scene, camera) = scenes::room();
     println!("scene: room, {} triangles in {} instances", scene.triangle_count(), scene.instances.len());
-    let g = GBuffer::render(&Tracer::new(&scene), &camera, width, height);
-    let gbuffer = GBufferImages::upload(&host, &g)?;
+    let tracer = Tracer::new(&scene);
+    let sun = Sun { to_light: Vec3::new(0.45, 1.0, 0.6), intensity: 2.5 };
+    let main = view(&host, &tracer, camera, width, height, sun)?;
+    // The lidar camera: 256x256 from the front-left corner looking back into the room, so
+    // surfaces the main camera misses get lit too (the integration guide's advice).
+    let lidar_camera = Camera { fov_y_radians: 100f32.to_radians(), ..Camera::look_at(Vec3::new(-2.5, 4.5, 2.5), Vec3::new(1.0, 0.5, -1.5)) };
+    let lidar = view(&host, &tracer, lidar_camera, 256, 256, sun)?;
 
     let mut frame = ctx.create_task_container();
-    let gpu_scene = SceneOnGpu::register(&host, &ctx, &mut frame, &scene)?;
-    let mut ao_ms = Vec::new();
-    let mut bvh_ms = 0.0;
+    let surfels = SurfelSettings { tile_unit_length: unit, ..Default::default() };
+    let gpu_scene = SceneOnGpu::register_with(&host, &ctx, &mut frame, &scene, surfels, MAGENTA)?;
+    let (mut ao_ms, mut inject_ms, mut bvh_ms) = (Vec::new(), Vec::new(), 0.0);
     for i in 0..frames {
-        frame.schedule_bvh_build(&Default::default()).map_err(|e| e.to_string())?;
-        frame.schedule_ambient_occlusion(&gbuffer.ao_task(&camera, ray_length, rays)).map_err(|e| e.to_string())?;
+        frame.schedule_bvh_build(&Default::default()).map_err(e)?;
+        // Caches exist from the second frame on (layouts come back with the first ticket).
+        if i >= 1 {
+            frame.schedule_direct_lighting_injection(&main.injection()).map_err(e)?;
+            frame.schedule_direct_lighting_injection(&lidar.injection()).map_err(e)?;
+        }
+        frame.schedule_ambient_occlusion(&main.gbuffer.ao_task(&camera, ray_length, rays)).map_err(e)?;
         let done = run_frame(&host, &ctx, &mut frame)?;
         if i == 0 {
             bvh_ms = done.gpu_ms(TaskKind::Bvh);
         } else {
             ao_ms.push(done.gpu_ms(TaskKind::AmbientOcclusion));
+            inject_ms.push(done.gpu_ms(TaskKind::DirectLightingInjection));
         }
     }
-    let ao = gbuffer.read_output(&host)?;
-    let exr = out.join("ao.exr");
-    let png = out.join("ao.png");
-    images::write_exr_gray(&exr, width, height, &ao)?;
-    images::write_png_gray(&png, width, height, &ao)?;
+    let ao = main.gbuffer.read_output(&host)?;
+    images::write_exr_gray(&out.join("ao.exr"), width, height, &ao)?;
+    images::write_png_gray(&out.join("ao.png"), width, height, &ao)?;
+    let lit_bytes = host.read_image(&main.lit, READ)?;
+    images::write_png_rgb(&out.join("lit.png"), width, height, bytemuck::cast_slice(&lit_bytes), 1.0)?;
 
-    let mean_ao = if ao_ms.is_empty() { f64::NAN } else { ao_ms.iter().sum::<f64>() / ao_ms.len() as f64 };
+    // One image per debug visualisation, from the main camera; the cache also from above the
+    // room, where magenta shows what no camera has lit yet.
+    let overview = Camera { fov_y_radians: 80f32.to_radians(), ..Camera::look_at(Vec3::new(0.5, 5.6, 2.9), Vec3::new(0.0, 0.0, -0.5)) };
+    let modes = [
+        ("debug_cache", DebugOutput::DirectLightingCache, camera, 1.0),
+        ("debug_cache_overview", DebugOutput::DirectLightingCache, overview, 1.0),
+        ("debug_random_tile", DebugOutput::RandomTileColor, camera, 1.0),
+        ("debug_random_mesh", DebugOutput::RandomMeshColor, camera, 1.0),
+        ("debug_hit_t", DebugOutput::HitT, camera, 1.0 / 10.0),
+        ("debug_barycentrics", DebugOutput::Barycentrics, camera, 1.0),
+    ];
+    let debug_out = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, width, height, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL)?;
+    let mut written = vec![out.join("ao.png").display().to_string(), out.join("lit.png").display().to_string()];
+    for (name, mode, cam, scale) in modes {
+        let mut task = main.gbuffer.ao_task(&cam, ray_length, 1);
+        task.common.debug_output = mode;
+        task.output = debug_out.input(vk::ImageLayout::GENERAL);
+        frame.schedule_ambient_occlusion(&task).map_err(e)?;
+        run_frame(&host, &ctx, &mut frame)?;
+        let bytes = host.read_image(&debug_out, vk::ImageLayout::GENERAL)?;
+        let path = out.join(format!("{name}.png"));
+        images::write_png_rgb(&path, width, height, bytemuck::cast_slice(&bytes), scale)?;
+        written.push(path.display().to_string());
+    }
+
+    let mean = |v: &[f64]| if v.is_empty() { f64::NAN } else { v.iter().sum::<f64>() / v.len() as f64 };
     let mem = ctx.resource_allocations();
-    println!("GPU time: BVH build (first frame) {bvh_ms:.3} ms; AO {width}x{height} x {rays} rays {mean_ao:.3} ms (mean of {} frames)", ao_ms.len());
+    let cache_bytes: u64 = gpu_scene.instances.iter().map(|h| ctx.instance_cache_bytes(*h).unwrap_or(0)).sum();
     println!(
-        "SDK memory: {:.2} MiB (BLAS {:.2} MiB in {}, geometry copies {:.2} MiB, TLAS {:.2} MiB, scratch {:.2} MiB)",
+        "GPU time: BVH build (first frame) {bvh_ms:.3} ms; AO {width}x{height} x {rays} rays {:.3} ms; injection (main {width}x{height} + lidar 256x256, with resolves) {:.3} ms (means of {} frames)",
+        mean(&ao_ms),
+        mean(&inject_ms),
+        ao_ms.len()
+    );
+    println!(
+        "SDK memory: {:.2} MiB (BLAS {:.2} MiB, cache pages {:.2} MiB holding {:.2} MiB of instance caches, {} instances)",
         mem.total_bytes() as f64 / 1048576.0,
         mem.blas.bytes as f64 / 1048576.0,
-        mem.blas.count,
-        mem.geometry_copies.bytes as f64 / 1048576.0,
-        mem.tlas.bytes as f64 / 1048576.0,
-        mem.build_scratch.bytes as f64 / 1048576.0
+        mem.cache.bytes as f64 / 1048576.0,
+        cache_bytes as f64 / 1048576.0,
+        gpu_scene.instances.len()
     );
-    println!("wrote {} and {}", exr.display(), png.display());
-    gbuffer.destroy(&host);
+    println!("wrote {}", written.join(", "));
+    host.destroy_image(debug_out);
+    for v in [main, lidar] {
+        v.gbuffer.destroy(&host);
+        host.destroy_image(v.lit);
+    }
     gpu_scene.destroy(&host);
     drop(ctx);
     let errors = Host::validation_errors();
