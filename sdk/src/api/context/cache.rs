@@ -99,30 +99,43 @@ impl Shared {
         let device = &self.device;
         let d = &device.raw;
 
-        // 1. Layouts: ring -> device-local buffer.
+        // 1. Layouts: a staging buffer (freed when this ticket is back — layouts are too big
+        //    and too rare for the per-frame upload ring) -> device-local buffers.
         let pending: Vec<GeometryHandle> =
             st.geometries.iter().filter(|(_, g)| g.pending_layout.is_some()).map(|(h, _)| h).collect();
         let bytes: u64 = pending
             .iter()
-            .filter_map(|h| st.geometries.get(*h).ok()?.pending_layout.as_ref().map(|l| l.words.len() as u64 * 4 + 16))
+            .filter_map(|h| st.geometries.get(*h).ok()?.pending_layout.as_ref().map(|l| (l.words.len() as u64 * 4).div_ceil(16) * 16))
             .sum();
-        if !pending.is_empty() {
-            self.ensure_ring(st, ws_index, bytes)?;
+        let mut staging = if pending.is_empty() {
+            None
+        } else {
             hazards.write(d, cmd, sync::TRANSFER_WRITE);
-        }
+            Some(self.memory.create_buffer(
+                "surfel layout staging",
+                bytes,
+                vk::BufferUsageFlags::TRANSFER_SRC,
+                MemoryLocation::CpuToGpu,
+                MemoryKind::Readback,
+            )?)
+        };
+        let mut offset = 0u64;
         for h in pending {
             let g = st.geometries.get_mut(h)?;
             let Some(l) = g.pending_layout.take() else { continue };
+            let Some(staging) = staging.as_mut() else { break };
+            let size = l.words.len() as u64 * 4;
             let buffer = self.memory.create_buffer(
                 "surfel layout",
-                l.words.len() as u64 * 4,
+                size,
                 vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
                 MemoryLocation::GpuOnly,
                 MemoryKind::Cache,
             )?;
-            let upload = st.working_sets[ws_index].ring.push(bytemuck::cast_slice(&l.words), 16);
-            let region = [vk::BufferCopy { src_offset: upload.offset, dst_offset: 0, size: upload.size }];
-            unsafe { d.cmd_copy_buffer(cmd, upload.buffer, buffer.raw, &region) };
+            staging.mapped()[offset as usize..(offset + size) as usize].copy_from_slice(bytemuck::cast_slice(&l.words));
+            let region = [vk::BufferCopy { src_offset: offset, dst_offset: 0, size }];
+            unsafe { d.cmd_copy_buffer(cmd, staging.raw, buffer.raw, &region) };
+            offset += size.div_ceil(16) * 16;
             st.next_layout_id += 1;
             let id = st.next_layout_id;
             let g = st.geometries.get_mut(h)?;
@@ -130,6 +143,9 @@ impl Shared {
             if let Some(old) = g.surfel.replace(fresh) {
                 st.deferred.retire(serial, Garbage::Buffer(old.buffer));
             }
+        }
+        if let Some(staging) = staging {
+            st.deferred.retire(serial, Garbage::Buffer(staging));
         }
 
         // 2. Caches for instances whose geometry has a (new) layout; 3. clears.
