@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # README command 1: installs what is missing (scripts/setup.sh), builds the sample in release
-# mode and renders ray-traced AO of the built-in room into out/ (EXR + PNG preview), printing
-# the per-task GPU times. Extra arguments go to the sample (see `--help`).
+# mode and renders the built-in room into out/: ray-traced AO (EXR + PNG), the lit frame it
+# injects, and one PNG per debug visualisation of the direct-lighting cache, printing the
+# per-task GPU times. Extra arguments go to the sample (see `--help`).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 cargo run --release --locked -p hybrid-rt-samples --bin sample -- --out out "$@"
-echo "images: $(pwd)/out/ao.png (preview) and $(pwd)/out/ao.exr (linear float)"
+echo "images in $(pwd)/out/: ao.png and ao.exr (AO), lit.png, debug_*.png (cache and debug views)"
