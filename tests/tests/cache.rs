@@ -114,6 +114,21 @@ fn pattern(p: Vec3) -> [f32; 3] {
     [0.5 + 0.25 * (p.x * 2.0).sin(), 0.5 + 0.25 * (p.z * 2.0).cos(), 0.25 + 0.1 * p.x]
 }
 
+/// Mean and largest per-channel error of a cache view against `pattern` over the surface.
+fn error_vs_pattern(view: &[[f32; 4]], g: &GBuffer) -> (f32, f32) {
+    let (mut max_err, mut sum, mut n) = (0.0f32, 0.0, 0);
+    for i in (0..g.depth.len()).filter(|&i| g.hit[i]) {
+        let want = pattern(g.position[i]);
+        for c in 0..3 {
+            let e = (view[i][c] - want[c]).abs();
+            max_err = max_err.max(e);
+            sum += e;
+            n += 1;
+        }
+    }
+    (sum / n.max(1) as f32, max_err)
+}
+
 fn settings(surfel_type: SurfelType, unit: f32) -> SurfelSettings {
     SurfelSettings { surfel_type, tile_unit_length: unit, tile_resolution_limit: 64 }
 }
@@ -139,22 +154,7 @@ fn injected_pattern_comes_back_from_the_cache() {
         // one sample spacing of it, so a lookup is off by at most |gradient| x spacing x sqrt 2
         // = 0.5 x 0.15 x 1.41 ~ 0.11 per channel (tiles: a cell is at most that wide too); on
         // average about a quarter of that.
-        let mut max_err = 0.0f32;
-        let mut sum = 0.0;
-        let mut n = 0;
-        for i in 0..g.depth.len() {
-            if !g.hit[i] {
-                continue;
-            }
-            let want = pattern(g.position[i]);
-            for c in 0..3 {
-                let e = (cached[i][c] - want[c]).abs();
-                max_err = max_err.max(e);
-                sum += e;
-                n += 1;
-            }
-        }
-        let mean = sum / n as f32;
+        let (mean, max_err) = error_vs_pattern(&cached, &g);
         eprintln!("{surfel_type:?}: cache vs injected pattern: mean |err| {mean:.4}, max {max_err:.4}");
         assert!(max_err < 0.11, "{surfel_type:?}: max error {max_err}");
         assert!(mean < 0.03, "{surfel_type:?}: mean error {mean}");
@@ -364,20 +364,7 @@ fn transfer_between_tessellations_preserves_colours() {
     // frame; the view below then sees only the new one.
     w.frame.schedule_instance(&InstanceTask { handle: source, operation: InstanceOperation::Remove, ..Default::default() }).unwrap();
     let after = w.debug(&images, &camera, DebugOutput::DirectLightingCache, true);
-    let (mut max_err, mut sum, mut n) = (0.0f32, 0.0, 0);
-    for i in 0..g.depth.len() {
-        if !g.hit[i] {
-            continue;
-        }
-        let want = pattern(g.position[i]);
-        for c in 0..3 {
-            let e = (after[i][c] - want[c]).abs();
-            max_err = max_err.max(e);
-            sum += e;
-            n += 1;
-        }
-    }
-    let mean = sum / n as f32;
+    let (mean, max_err) = error_vs_pattern(&after, &g);
     eprintln!("transferred cache vs pattern: mean |err| {mean:.4}, max {max_err:.4}");
     // Two lookups in a row (source cache, then target samples): at most twice the single-
     // cache budget of `injected_pattern_comes_back_from_the_cache`.

@@ -15,26 +15,25 @@ use crate::error::Result;
 use crate::gpu::device::Device;
 use crate::gpu::memory::Memory;
 use crate::gpu::pipeline::{self, Binding, RtPipeline};
+use super::descriptors::{self, Slot};
+use super::program::{RtProgram, Shaders};
 use crate::gpu::sync;
 use crate::shaders;
 use ash::vk;
 
 pub(crate) struct AoPass {
-    set_layout: vk::DescriptorSetLayout,
-    layout: vk::PipelineLayout,
-    rt: RtPipeline,
+    program: RtProgram,
     /// Same raygen, empty hit and miss shaders: the bench's bare-ray floor.
-    floor: RtPipeline,
+    floor: Option<RtPipeline>,
     /// Compute + ray query variant, when the device has ray queries.
     inline: Option<vk::Pipeline>,
 }
 
 impl AoPass {
     pub fn new(device: &Device, memory: &Memory, sampler: vk::Sampler) -> Result<AoPass> {
-        let d = &device.raw;
-        let stages = vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE;
-        let set_layout = pipeline::push_set_layout(
-            d,
+        let program = RtProgram::new(
+            device,
+            memory,
             &[
                 Binding { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, sampler: None },
                 Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
@@ -42,14 +41,17 @@ impl AoPass {
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
             ],
-            stages,
+            vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE,
+            Shaders { raygen: shaders::AO_RGEN, misses: &[shaders::HIT_T_RMISS], closest_hits: &[shaders::HIT_T_RCHIT], any_hit: None },
         )?;
-        let layout = pipeline::pipeline_layout(d, set_layout)?;
-        let rt = pipeline::rt_pipeline(device, memory, layout, shaders::AO_RGEN, &[shaders::HIT_T_RMISS], &[shaders::HIT_T_RCHIT], None)?;
-        let floor =
-            pipeline::rt_pipeline(device, memory, layout, shaders::AO_RGEN, &[shaders::EMPTY_RMISS], &[shaders::EMPTY_RCHIT], None)?;
-        let inline = if device.ray_query { Some(pipeline::compute_pipeline(d, layout, shaders::AO_COMP)?) } else { None };
-        Ok(AoPass { set_layout, layout, rt, floor, inline })
+        let floor = program.variant(
+            device,
+            memory,
+            Shaders { raygen: shaders::AO_RGEN, misses: &[shaders::EMPTY_RMISS], closest_hits: &[shaders::EMPTY_RCHIT], any_hit: None },
+        )?;
+        let inline =
+            if device.ray_query { Some(pipeline::compute_pipeline(&device.raw, program.layout, shaders::AO_COMP)?) } else { None };
+        Ok(AoPass { program, floor: Some(floor), inline })
     }
 
     pub fn record(&self, r: &mut Recording<'_>, task: &TraceAmbientOcclusionTask, inline: bool, floor: bool) {
@@ -59,81 +61,42 @@ impl AoPass {
             counts: [task.rays_per_pixel, 0, 0, 0],
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
-
         let inline_pipeline = self.inline.filter(|_| inline && !floor);
-        let (bind_point, stage) = if inline_pipeline.is_some() {
-            (vk::PipelineBindPoint::COMPUTE, vk::PipelineStageFlags2::COMPUTE_SHADER)
+        let stage = if inline_pipeline.is_some() {
+            vk::PipelineStageFlags2::COMPUTE_SHADER
         } else {
-            (vk::PipelineBindPoint::RAY_TRACING_KHR, vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR)
+            vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR
         };
-        let d = &r.device.raw;
-        r.hazards.read_write(d, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
-
-        let tlas = [r.tlas];
-        let mut as_write = vk::WriteDescriptorSetAccelerationStructureKHR::default().acceleration_structures(&tlas);
-        let image = |i: &crate::api::tasks::ImageInput| {
-            [vk::DescriptorImageInfo { sampler: vk::Sampler::null(), image_view: i.view, image_layout: i.layout }]
-        };
-        let depth = image(&task.common.depth.image);
-        let normals = image(&task.common.normals.image);
-        let out = image(&task.output);
-        let buffer = [vk::DescriptorBufferInfo { buffer: ubo.buffer, offset: ubo.offset, range: ubo.size }];
-        let mut writes = [
-            vk::WriteDescriptorSet::default()
-                .dst_binding(0)
-                .descriptor_type(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)
-                .descriptor_count(1)
-                .push_next(&mut as_write),
-            vk::WriteDescriptorSet::default()
-                .dst_binding(1)
-                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                .image_info(&depth),
-            vk::WriteDescriptorSet::default()
-                .dst_binding(2)
-                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                .image_info(&normals),
-            vk::WriteDescriptorSet::default()
-                .dst_binding(3)
-                .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
-                .image_info(&out),
-            vk::WriteDescriptorSet::default()
-                .dst_binding(4)
-                .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
-                .buffer_info(&buffer),
+        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
+        let slots = [
+            Slot::Tlas(r.tlas),
+            Slot::Sampled(&task.common.depth.image),
+            Slot::Sampled(&task.common.normals.image),
+            Slot::Storage(&task.output),
+            Slot::Uniform(ubo),
         ];
-        writes[0].descriptor_count = 1;
         let vp = &task.common.viewport;
-        // SAFETY: inputs validated at scheduling; the command buffer is recording.
-        unsafe {
-            match inline_pipeline {
-                Some(p) => {
-                    d.cmd_bind_pipeline(r.cmd, bind_point, p);
-                    r.device.push.cmd_push_descriptor_set(r.cmd, bind_point, self.layout, 0, &writes);
-                    d.cmd_dispatch(r.cmd, vp.width.div_ceil(8), vp.height.div_ceil(8), 1);
-                }
-                None => {
-                    let p = if floor { &self.floor } else { &self.rt };
-                    d.cmd_bind_pipeline(r.cmd, bind_point, p.pipeline);
-                    r.device.push.cmd_push_descriptor_set(r.cmd, bind_point, self.layout, 0, &writes);
-                    r.device.rt.cmd_trace_rays(r.cmd, &p.raygen, &p.miss, &p.hit, &p.callable, vp.width, vp.height, 1);
-                }
+        match (inline_pipeline, floor.then_some(self.floor.as_ref()).flatten()) {
+            (Some(p), _) => {
+                let bind = vk::PipelineBindPoint::COMPUTE;
+                // SAFETY: inputs validated at scheduling; the command buffer is recording.
+                unsafe { r.device.raw.cmd_bind_pipeline(r.cmd, bind, p) };
+                descriptors::push(r.device, r.cmd, bind, self.program.layout, &slots);
+                unsafe { r.device.raw.cmd_dispatch(r.cmd, vp.width.div_ceil(8), vp.height.div_ceil(8), 1) };
             }
+            (None, Some(floor)) => self.program.trace_with(r, floor, &slots, vp.width, vp.height),
+            (None, None) => self.program.trace(r, &slots, vp.width, vp.height),
         }
     }
 
-    pub fn destroy(self, device: &Device, memory: &Memory) {
-        let d = &device.raw;
-        unsafe {
-            for p in [self.rt, self.floor] {
-                d.destroy_pipeline(p.pipeline, None);
-                memory.destroy_buffer(p.sbt);
-            }
-            if let Some(p) = self.inline {
-                d.destroy_pipeline(p, None);
-            }
-            d.destroy_pipeline_layout(self.layout, None);
-            d.destroy_descriptor_set_layout(self.set_layout, None);
+    pub fn destroy(mut self, device: &Device, memory: &Memory) {
+        if let Some(p) = self.floor.take() {
+            RtProgram::destroy_pipeline(device, memory, p);
         }
+        if let Some(p) = self.inline {
+            unsafe { device.raw.destroy_pipeline(p, None) };
+        }
+        self.program.destroy(device, memory);
     }
 }
 

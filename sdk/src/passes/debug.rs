@@ -1,13 +1,14 @@
 //! Debug visualisations (`DebugOutput`): primary rays from the task's camera through the TLAS,
 //! shaded by what they hit (cache colour, random sample/mesh colour, distance, barycentrics).
 use super::constants::TraceCommonGpu;
-use super::descriptors::{self, Slot};
+use super::descriptors::Slot;
+use super::program::{RtProgram, Shaders};
 use super::Recording;
 use crate::api::tasks::{DebugOutput, ImageInput, InstanceInclusionMask, TraceCommon};
 use crate::error::Result;
 use crate::gpu::device::Device;
 use crate::gpu::memory::Memory;
-use crate::gpu::pipeline::{self, Binding, RtPipeline};
+use crate::gpu::pipeline::Binding;
 use crate::gpu::sync;
 use crate::shaders;
 use ash::vk;
@@ -24,26 +25,23 @@ pub(crate) struct DebugConstantsGpu {
 pub(crate) const UPLOAD_BYTES: u64 = std::mem::size_of::<DebugConstantsGpu>() as u64;
 
 pub(crate) struct DebugPass {
-    set_layout: vk::DescriptorSetLayout,
-    layout: vk::PipelineLayout,
-    rt: RtPipeline,
+    program: RtProgram,
 }
 
 impl DebugPass {
     pub fn new(device: &Device, memory: &Memory) -> Result<DebugPass> {
-        let d = &device.raw;
-        let set_layout = pipeline::push_set_layout(
-            d,
+        let program = RtProgram::new(
+            device,
+            memory,
             &[
                 Binding { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, sampler: None },
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
             ],
             vk::ShaderStageFlags::RAYGEN_KHR,
+            Shaders { raygen: shaders::DEBUG_RGEN, misses: &[shaders::HIT_RECORD_RMISS], closest_hits: &[shaders::HIT_RECORD_RCHIT], any_hit: None },
         )?;
-        let layout = pipeline::pipeline_layout(d, set_layout)?;
-        let rt = pipeline::rt_pipeline(device, memory, layout, shaders::DEBUG_RGEN, &[shaders::HIT_RECORD_RMISS], &[shaders::HIT_RECORD_RCHIT], None)?;
-        Ok(DebugPass { set_layout, layout, rt })
+        Ok(DebugPass { program })
     }
 
     /// Records the visualisation `common.debug_output` into `output`.
@@ -58,20 +56,11 @@ impl DebugPass {
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
         let stage = vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR;
         r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
-        let bind = vk::PipelineBindPoint::RAY_TRACING_KHR;
-        unsafe { r.device.raw.cmd_bind_pipeline(r.cmd, bind, self.rt.pipeline) };
-        descriptors::push(r.device, r.cmd, bind, self.layout, &[Slot::Tlas(r.tlas), Slot::Storage(output), Slot::Uniform(ubo)]);
-        let p = &self.rt;
         let vp = &common.viewport;
-        unsafe { r.device.rt.cmd_trace_rays(r.cmd, &p.raygen, &p.miss, &p.hit, &p.callable, vp.width, vp.height, 1) };
+        self.program.trace(r, &[Slot::Tlas(r.tlas), Slot::Storage(output), Slot::Uniform(ubo)], vp.width, vp.height);
     }
 
     pub fn destroy(self, device: &Device, memory: &Memory) {
-        unsafe {
-            device.raw.destroy_pipeline(self.rt.pipeline, None);
-            device.raw.destroy_pipeline_layout(self.layout, None);
-            device.raw.destroy_descriptor_set_layout(self.set_layout, None);
-        }
-        memory.destroy_buffer(self.rt.sbt);
+        self.program.destroy(device, memory);
     }
 }

@@ -33,7 +33,7 @@ pub(crate) fn push(
     }
     let mut as_writes: Vec<_> =
         tlas.iter().map(|t| vk::WriteDescriptorSetAccelerationStructureKHR::default().acceleration_structures(t)).collect();
-    let (mut ti, mut ii, mut bi) = (0, 0, 0);
+    let (mut ii, mut bi) = (0, 0);
     let mut as_iter = as_writes.iter_mut();
     let writes: Vec<vk::WriteDescriptorSet> = slots
         .iter()
@@ -42,7 +42,6 @@ pub(crate) fn push(
             let w = vk::WriteDescriptorSet::default().dst_binding(binding as u32);
             match s {
                 Slot::Tlas(_) => {
-                    ti += 1;
                     let mut w = w
                         .descriptor_type(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)
                         .push_next(as_iter.next().expect("one per TLAS slot"));
@@ -64,7 +63,6 @@ pub(crate) fn push(
             }
         })
         .collect();
-    let _ = ti;
     // SAFETY: every referenced array outlives this call; the layout has these bindings.
     unsafe { device.push.cmd_push_descriptor_set(cmd, bind_point, layout, 0, &writes) };
 }

@@ -2,13 +2,14 @@
 //! each lit pixel's radiance to the cache sample under it (float atomics), followed by the
 //! cache resolve (passes::cache_ops) that applies the running average.
 use super::constants::TraceCommonGpu;
-use super::descriptors::{self, Slot};
+use super::descriptors::Slot;
+use super::program::{RtProgram, Shaders};
 use super::Recording;
 use crate::api::tasks::{DirectLightingInjectionTask, InstanceInclusionMask, TraceCommon};
 use crate::error::Result;
 use crate::gpu::device::Device;
 use crate::gpu::memory::Memory;
-use crate::gpu::pipeline::{self, Binding, RtPipeline};
+use crate::gpu::pipeline::Binding;
 use crate::gpu::sync;
 use crate::shaders;
 use ash::vk;
@@ -25,16 +26,14 @@ pub(crate) struct InjectConstantsGpu {
 pub(crate) const UPLOAD_BYTES: u64 = std::mem::size_of::<InjectConstantsGpu>() as u64;
 
 pub(crate) struct InjectPass {
-    set_layout: vk::DescriptorSetLayout,
-    layout: vk::PipelineLayout,
-    rt: RtPipeline,
+    program: RtProgram,
 }
 
 impl InjectPass {
     pub fn new(device: &Device, memory: &Memory, sampler: vk::Sampler) -> Result<InjectPass> {
-        let d = &device.raw;
-        let set_layout = pipeline::push_set_layout(
-            d,
+        let program = RtProgram::new(
+            device,
+            memory,
             &[
                 Binding { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, sampler: None },
                 Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
@@ -42,10 +41,9 @@ impl InjectPass {
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
             ],
             vk::ShaderStageFlags::RAYGEN_KHR,
+            Shaders { raygen: shaders::INJECT_RGEN, misses: &[shaders::HIT_RECORD_RMISS], closest_hits: &[shaders::HIT_RECORD_RCHIT], any_hit: None },
         )?;
-        let layout = pipeline::pipeline_layout(d, set_layout)?;
-        let rt = pipeline::rt_pipeline(device, memory, layout, shaders::INJECT_RGEN, &[shaders::HIT_RECORD_RMISS], &[shaders::HIT_RECORD_RCHIT], None)?;
-        Ok(InjectPass { set_layout, layout, rt })
+        Ok(InjectPass { program })
     }
 
     pub fn record(&self, r: &mut Recording<'_>, task: &DirectLightingInjectionTask) {
@@ -58,26 +56,11 @@ impl InjectPass {
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
         let stage = vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR;
         r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_atomic(stage));
-        let bind = vk::PipelineBindPoint::RAY_TRACING_KHR;
-        unsafe { r.device.raw.cmd_bind_pipeline(r.cmd, bind, self.rt.pipeline) };
-        descriptors::push(
-            r.device,
-            r.cmd,
-            bind,
-            self.layout,
-            &[Slot::Tlas(r.tlas), Slot::Sampled(&task.depth.image), Slot::Sampled(&task.lit), Slot::Uniform(ubo)],
-        );
-        let p = &self.rt;
-        let vp = &task.viewport;
-        unsafe { r.device.rt.cmd_trace_rays(r.cmd, &p.raygen, &p.miss, &p.hit, &p.callable, vp.width, vp.height, 1) };
+        let slots = [Slot::Tlas(r.tlas), Slot::Sampled(&task.depth.image), Slot::Sampled(&task.lit), Slot::Uniform(ubo)];
+        self.program.trace(r, &slots, task.viewport.width, task.viewport.height);
     }
 
     pub fn destroy(self, device: &Device, memory: &Memory) {
-        unsafe {
-            device.raw.destroy_pipeline(self.rt.pipeline, None);
-            device.raw.destroy_pipeline_layout(self.layout, None);
-            device.raw.destroy_descriptor_set_layout(self.set_layout, None);
-        }
-        memory.destroy_buffer(self.rt.sbt);
+        self.program.destroy(device, memory);
     }
 }

@@ -7,6 +7,7 @@ pub(crate) mod constants;
 pub(crate) mod debug;
 pub(crate) mod descriptors;
 pub(crate) mod inject;
+pub(crate) mod program;
 pub(crate) mod transfer;
 
 use crate::gpu::sync::Hazards;

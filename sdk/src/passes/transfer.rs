@@ -3,12 +3,13 @@
 //! normal meets the source (shaders/transfer.rgen). Kickstart RT traces two rays per source
 //! primitive onto the destination; tracing from the destination's samples instead writes
 //! every target sample exactly once per triangle, with no gaps where the target is finer.
-use super::descriptors::{self, Slot};
+use super::descriptors::Slot;
+use super::program::{RtProgram, Shaders};
 use super::Recording;
 use crate::error::Result;
 use crate::gpu::device::Device;
 use crate::gpu::memory::Memory;
-use crate::gpu::pipeline::{self, Binding, RtPipeline};
+use crate::gpu::pipeline::Binding;
 use crate::gpu::sync;
 use crate::shaders;
 use ash::vk;
@@ -35,33 +36,27 @@ pub(crate) struct TransferJob {
 }
 
 pub(crate) struct TransferPass {
-    set_layout: vk::DescriptorSetLayout,
-    layout: vk::PipelineLayout,
-    rt: RtPipeline,
+    program: RtProgram,
 }
 
 impl TransferPass {
     pub fn new(device: &Device, memory: &Memory) -> Result<TransferPass> {
-        let d = &device.raw;
-        let set_layout = pipeline::push_set_layout(
-            d,
+        let program = RtProgram::new(
+            device,
+            memory,
             &[
                 Binding { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, sampler: None },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
             ],
             vk::ShaderStageFlags::RAYGEN_KHR,
+            Shaders {
+                raygen: shaders::TRANSFER_RGEN,
+                misses: &[shaders::TRANSFER_RMISS],
+                closest_hits: &[shaders::TRANSFER_RCHIT],
+                any_hit: Some(shaders::TRANSFER_RAHIT),
+            },
         )?;
-        let layout = pipeline::pipeline_layout(d, set_layout)?;
-        let rt = pipeline::rt_pipeline(
-            device,
-            memory,
-            layout,
-            shaders::TRANSFER_RGEN,
-            &[shaders::TRANSFER_RMISS],
-            &[shaders::TRANSFER_RCHIT],
-            Some(shaders::TRANSFER_RAHIT),
-        )?;
-        Ok(TransferPass { set_layout, layout, rt })
+        Ok(TransferPass { program })
     }
 
     pub fn record(&self, r: &mut Recording<'_>, job: &TransferJob) {
@@ -73,21 +68,10 @@ impl TransferPass {
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
         let stage = vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR;
         r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
-        let bind = vk::PipelineBindPoint::RAY_TRACING_KHR;
-        unsafe { r.device.raw.cmd_bind_pipeline(r.cmd, bind, self.rt.pipeline) };
-        descriptors::push(r.device, r.cmd, bind, self.layout, &[Slot::Tlas(r.tlas), Slot::Uniform(ubo)]);
-        let p = &self.rt;
-        unsafe {
-            r.device.rt.cmd_trace_rays(r.cmd, &p.raygen, &p.miss, &p.hit, &p.callable, job.target_triangles, job.samples_per_triangle, 1)
-        };
+        self.program.trace(r, &[Slot::Tlas(r.tlas), Slot::Uniform(ubo)], job.target_triangles, job.samples_per_triangle);
     }
 
     pub fn destroy(self, device: &Device, memory: &Memory) {
-        unsafe {
-            device.raw.destroy_pipeline(self.rt.pipeline, None);
-            device.raw.destroy_pipeline_layout(self.layout, None);
-            device.raw.destroy_descriptor_set_layout(self.set_layout, None);
-        }
-        memory.destroy_buffer(self.rt.sbt);
+        self.program.destroy(device, memory);
     }
 }

@@ -1,0 +1,66 @@
+//! A ray-tracing program: a push-descriptor set layout, its pipeline layout, and one
+//! ray-tracing pipeline with its SBT. Passes that are "bind these, trace that many rays" are a
+//! program plus their constants.
+use super::descriptors::{self, Slot};
+use super::Recording;
+use crate::error::Result;
+use crate::gpu::device::Device;
+use crate::gpu::memory::Memory;
+use crate::gpu::pipeline::{self, Binding, RtPipeline};
+use ash::vk;
+
+pub(crate) struct RtProgram {
+    set_layout: vk::DescriptorSetLayout,
+    pub layout: vk::PipelineLayout,
+    pub rt: RtPipeline,
+}
+
+/// The shaders of a program.
+pub(crate) struct Shaders<'a> {
+    pub raygen: &'a [u8],
+    pub misses: &'a [&'a [u8]],
+    pub closest_hits: &'a [&'a [u8]],
+    pub any_hit: Option<&'a [u8]>,
+}
+
+impl RtProgram {
+    pub fn new(device: &Device, memory: &Memory, bindings: &[Binding], stages: vk::ShaderStageFlags, shaders: Shaders<'_>) -> Result<RtProgram> {
+        let d = &device.raw;
+        let set_layout = pipeline::push_set_layout(d, bindings, stages)?;
+        let layout = pipeline::pipeline_layout(d, set_layout)?;
+        let rt = pipeline::rt_pipeline(device, memory, layout, shaders.raygen, shaders.misses, shaders.closest_hits, shaders.any_hit)?;
+        Ok(RtProgram { set_layout, layout, rt })
+    }
+
+    /// Another pipeline over the same layout (e.g. a variant with other hit shaders).
+    pub fn variant(&self, device: &Device, memory: &Memory, shaders: Shaders<'_>) -> Result<RtPipeline> {
+        pipeline::rt_pipeline(device, memory, self.layout, shaders.raygen, shaders.misses, shaders.closest_hits, shaders.any_hit)
+    }
+
+    /// Binds `pipeline` (this program's or a variant), pushes `slots` and traces width x height.
+    pub fn trace_with(&self, r: &mut Recording<'_>, pipeline: &RtPipeline, slots: &[Slot<'_>], width: u32, height: u32) {
+        let bind = vk::PipelineBindPoint::RAY_TRACING_KHR;
+        unsafe { r.device.raw.cmd_bind_pipeline(r.cmd, bind, pipeline.pipeline) };
+        descriptors::push(r.device, r.cmd, bind, self.layout, slots);
+        let p = pipeline;
+        // SAFETY: the slots match the set layout; the command buffer is recording.
+        unsafe { r.device.rt.cmd_trace_rays(r.cmd, &p.raygen, &p.miss, &p.hit, &p.callable, width, height, 1) };
+    }
+
+    pub fn trace(&self, r: &mut Recording<'_>, slots: &[Slot<'_>], width: u32, height: u32) {
+        self.trace_with(r, &self.rt, slots, width, height);
+    }
+
+    pub fn destroy_pipeline(device: &Device, memory: &Memory, p: RtPipeline) {
+        unsafe { device.raw.destroy_pipeline(p.pipeline, None) };
+        memory.destroy_buffer(p.sbt);
+    }
+
+    pub fn destroy(self, device: &Device, memory: &Memory) {
+        Self::destroy_pipeline(device, memory, self.rt);
+        unsafe {
+            device.raw.destroy_pipeline_layout(self.layout, None);
+            device.raw.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
