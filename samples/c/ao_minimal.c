@@ -502,6 +502,26 @@ int main(void) {
     EXPECT(mem.blas.count == 2, "two BLASes");
     EXPECT(hrt_destroy_geometry_handles(ctx, &geometries[1], 1) == HRT_ERROR_GEOMETRY_IN_USE, "geometry in use");
 
+    /* ---- Shadows: a light straight above; the ceiling shadows the centre, not the corner. */
+    Image shadow = make_image(VK_FORMAT_R32G32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT);
+    cmd = begin();
+    transition(cmd, shadow.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL);
+    submit_and_wait(cmd);
+    HrtTraceShadowTask shadow_task = hrt_trace_shadow_task_default();
+    shadow_task.common = ao.common;
+    shadow_task.light.light_type = HRT_LIGHT_POINT;
+    shadow_task.light.position[1] = 2.0f;
+    shadow_task.output = sdk_image(&shadow, VK_IMAGE_LAYOUT_GENERAL);
+    CHECK_HRT(hrt_schedule_shadow(frame, &shadow_task));
+    float rg[W * H * 2];
+    printf("shadow frame:\n");
+    run_frame(ctx, frame, &shadow, 8, rg);
+    const float *sc = &rg[((H / 2) * W + W / 2) * 2];
+    printf("shadow at the centre: distance %.3f, visible %.2f; corner %.3f\n", sc[0], sc[1], rg[0]);
+    EXPECT(sc[0] > 0.1f && sc[0] < 0.3f && sc[1] == 0.0f, "the ceiling 0.2 above shadows the centre");
+    EXPECT(rg[0] < 0.0f && rg[1] == 1.0f, "the corner sees the light");
+    free_image(shadow);
+
     /* ---- Frame 2: the ceiling instance removed: open everywhere. */
     HrtInstanceTask remove = hrt_instance_task_default();
     remove.handle = instances[1];

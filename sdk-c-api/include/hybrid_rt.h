@@ -94,6 +94,7 @@ typedef enum HrtTaskKind {
   HRT_TASK_DIRECT_LIGHTING_INJECTION = 4,
   HRT_TASK_CACHE_UPDATE = 5,
   HRT_TASK_CACHE_TRANSFER = 6,
+  HRT_TASK_SHADOW = 7,
 } HrtTaskKind;
 
 typedef enum HrtDebugOutput {
@@ -104,6 +105,12 @@ typedef enum HrtDebugOutput {
   HRT_DEBUG_HIT_T = 4,
   HRT_DEBUG_BARYCENTRICS = 5,
 } HrtDebugOutput;
+
+typedef enum HrtLightType {
+  HRT_LIGHT_DIRECTIONAL = 0,
+  HRT_LIGHT_POINT = 1,
+  HRT_LIGHT_SPOT = 2,
+} HrtLightType;
 
 typedef enum HrtTaskOperation {
   HRT_OPERATION_REGISTER = 0,
@@ -477,6 +484,48 @@ typedef struct HrtDirectLightTransferTask {
   bool enable_bilinear_sampling;
 } HrtDirectLightTransferTask;
 
+/**
+ * A light (see the Rust docs of LightInfo).
+ */
+typedef struct HrtLightInfo {
+  /**
+   * An HrtLightType. Default HRT_LIGHT_DIRECTIONAL.
+   */
+  uint32_t light_type;
+  float position[3];
+  /**
+   * The direction the light travels. Default (0, -1, 0).
+   */
+  float direction[3];
+  /**
+   * Directional: apparent diameter in radians. Default 0 (hard).
+   */
+  float angular_extent;
+  /**
+   * Point/spot: emitter radius. Default 0 (hard).
+   */
+  float radius;
+  float inner_cone;
+  float outer_cone;
+} HrtLightInfo;
+
+/**
+ * Shadows from one light: R = closest occluder distance, negative where visible; G (if
+ * present) = fraction of rays that reached the light.
+ */
+typedef struct HrtTraceShadowTask {
+  struct HrtTraceCommon common;
+  struct HrtLightInfo light;
+  /**
+   * GENERAL layout, STORAGE usage, a float format.
+   */
+  struct HrtImageInput output;
+  /**
+   * 1..=64. Default 1.
+   */
+  uint32_t rays_per_pixel;
+} HrtTraceShadowTask;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -658,6 +707,11 @@ struct HrtDirectLightTransferTask hrt_direct_light_transfer_task_default(void);
 
 enum HrtStatus hrt_schedule_direct_light_transfer(struct HrtTaskContainer *container,
                                                   const struct HrtDirectLightTransferTask *task);
+
+struct HrtTraceShadowTask hrt_trace_shadow_task_default(void);
+
+enum HrtStatus hrt_schedule_shadow(struct HrtTaskContainer *container,
+                                   const struct HrtTraceShadowTask *task);
 
 #ifdef __cplusplus
 }  // extern "C"

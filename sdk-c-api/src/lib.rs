@@ -424,6 +424,7 @@ pub unsafe extern "C" fn hrt_mark_gpu_task_completed(
                         rt::TaskKind::DirectLightingInjection => HrtTaskKind::HRT_TASK_DIRECT_LIGHTING_INJECTION,
                         rt::TaskKind::CacheUpdate => HrtTaskKind::HRT_TASK_CACHE_UPDATE,
                         rt::TaskKind::CacheTransfer => HrtTaskKind::HRT_TASK_CACHE_TRANSFER,
+                        rt::TaskKind::Shadow => HrtTaskKind::HRT_TASK_SHADOW,
                     },
                     task_index: t.task_index,
                     gpu_ms: t.gpu_ms,
@@ -544,5 +545,18 @@ pub unsafe extern "C" fn hrt_schedule_direct_light_transfer(
             max_distance: t.max_distance,
             enable_bilinear_sampling: t.enable_bilinear_sampling,
         })?)
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn hrt_trace_shadow_task_default() -> HrtTraceShadowTask {
+    types::shadow_task_default()
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_schedule_shadow(container: *mut HrtTaskContainer, task: *const HrtTraceShadowTask) -> HrtStatus {
+    guard(|| {
+        let c = get_mut(container, "container")?;
+        Ok(c.inner.schedule_shadow(&types::shadow_task(get(task, "task")?)?)?)
     })
 }

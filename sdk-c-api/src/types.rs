@@ -331,6 +331,44 @@ pub struct HrtDirectLightTransferTask {
     pub enable_bilinear_sampling: bool,
 }
 
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtLightType {
+    HRT_LIGHT_DIRECTIONAL = 0,
+    HRT_LIGHT_POINT = 1,
+    HRT_LIGHT_SPOT = 2,
+}
+
+/// A light (see the Rust docs of LightInfo).
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtLightInfo {
+    /// An HrtLightType. Default HRT_LIGHT_DIRECTIONAL.
+    pub light_type: u32,
+    pub position: [f32; 3],
+    /// The direction the light travels. Default (0, -1, 0).
+    pub direction: [f32; 3],
+    /// Directional: apparent diameter in radians. Default 0 (hard).
+    pub angular_extent: f32,
+    /// Point/spot: emitter radius. Default 0 (hard).
+    pub radius: f32,
+    pub inner_cone: f32,
+    pub outer_cone: f32,
+}
+
+/// Shadows from one light: R = closest occluder distance, negative where visible; G (if
+/// present) = fraction of rays that reached the light.
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtTraceShadowTask {
+    pub common: HrtTraceCommon,
+    pub light: HrtLightInfo,
+    /// GENERAL layout, STORAGE usage, a float format.
+    pub output: HrtImageInput,
+    /// 1..=64. Default 1.
+    pub rays_per_pixel: u32,
+}
+
 /// Resets an instance's cache to its initial colour.
 #[repr(C)]
 #[derive(Clone, Copy)]
@@ -365,6 +403,7 @@ pub enum HrtTaskKind {
     HRT_TASK_DIRECT_LIGHTING_INJECTION = 4,
     HRT_TASK_CACHE_UPDATE = 5,
     HRT_TASK_CACHE_TRANSFER = 6,
+    HRT_TASK_SHADOW = 7,
 }
 
 #[repr(C)]
@@ -663,5 +702,42 @@ impl From<rt::ResourceAllocations> for HrtResourceAllocations {
             cache: c(a.cache),
             readback: c(a.readback),
         }
+    }
+}
+
+pub(crate) fn shadow_task(t: &HrtTraceShadowTask) -> Result<rt::TraceShadowTask, Failure> {
+    let l = &t.light;
+    Ok(rt::TraceShadowTask {
+        common: trace_common(&t.common)?,
+        light: rt::LightInfo {
+            light_type: pick("HrtLightInfo.light_type", l.light_type, &[rt::LightType::Directional, rt::LightType::Point, rt::LightType::Spot])?,
+            position: glam::Vec3::from_array(l.position),
+            direction: glam::Vec3::from_array(l.direction),
+            angular_extent: l.angular_extent,
+            radius: l.radius,
+            inner_cone: l.inner_cone,
+            outer_cone: l.outer_cone,
+        },
+        output: image(&t.output),
+        rays_per_pixel: t.rays_per_pixel,
+    })
+}
+
+pub(crate) fn shadow_task_default() -> HrtTraceShadowTask {
+    let d = rt::TraceShadowTask::default();
+    let l = &d.light;
+    HrtTraceShadowTask {
+        common: trace_common_default(),
+        light: HrtLightInfo {
+            light_type: l.light_type as u32,
+            position: l.position.to_array(),
+            direction: l.direction.to_array(),
+            angular_extent: l.angular_extent,
+            radius: l.radius,
+            inner_cone: l.inner_cone,
+            outer_cone: l.outer_cone,
+        },
+        output: image_c(&d.output),
+        rays_per_pixel: d.rays_per_pixel,
     }
 }

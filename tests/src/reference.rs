@@ -501,3 +501,59 @@ pub fn direct_lighting(tracer: &Tracer, g: &GBuffer, sun: Sun, albedo: impl Fn(u
         })
         .collect()
 }
+
+// ---------------------------------------------------------------- shadows
+
+/// A point of the unit disk (concentric map), as the SDK samples a light's extent.
+pub fn concentric_disk(u: f32, v: f32) -> (f32, f32) {
+    let (a, b) = (2.0 * u - 1.0, 2.0 * v - 1.0);
+    if a == 0.0 && b == 0.0 {
+        return (0.0, 0.0);
+    }
+    let (r, phi) = if a.abs() > b.abs() {
+        (a, std::f32::consts::FRAC_PI_4 * (b / a))
+    } else {
+        (b, std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (a / b))
+    };
+    (r * phi.cos(), r * phi.sin())
+}
+
+/// Fraction of the light's extent visible from surface point `p` (normal `n`), with
+/// `strata`² stratified samples of the same disk of directions / positions the SDK samples,
+/// and the closest occluder distance over them (None if all reach the light).
+pub fn shadow_visibility(
+    tracer: &Tracer,
+    p: Vec3,
+    n: Vec3,
+    eye: Vec3,
+    light: &hybrid_rt::LightInfo,
+    offset: &hybrid_rt::RayOffset,
+    strata: u32,
+    rng: &mut Rng,
+) -> (f32, Option<f32>) {
+    let origin = offset_origin(p, n, eye, offset);
+    let mut visible = 0;
+    let mut closest: Option<f32> = None;
+    for sy in 0..strata {
+        for sx in 0..strata {
+            let (u, v) = ((sx as f32 + rng.next_f32()) / strata as f32, (sy as f32 + rng.next_f32()) / strata as f32);
+            let (dx, dy) = concentric_disk(u, v);
+            let (dir, tmax) = if light.light_type == hybrid_rt::LightType::Directional {
+                let to_light = -light.direction.normalize();
+                let (t, b) = basis(to_light);
+                ((to_light + (t * dx + b * dy) * (light.angular_extent * 0.5).tan()).normalize(), f32::MAX)
+            } else {
+                let to_centre = (light.position - origin).normalize();
+                let (t, b) = basis(to_centre);
+                let target = light.position + (t * dx + b * dy) * light.radius;
+                let v = target - origin;
+                (v.normalize(), v.length() * 0.9999)
+            };
+            match tracer.closest_hit(origin, dir, 0.0, tmax) {
+                None => visible += 1,
+                Some(h) => closest = Some(closest.map_or(h.t, |c: f32| c.min(h.t))),
+            }
+        }
+    }
+    (visible as f32 / (strata * strata) as f32, closest)
+}

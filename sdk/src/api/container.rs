@@ -18,6 +18,7 @@ pub(crate) enum Task {
     DirectLightingInjection(DirectLightingInjectionTask),
     ClearCache(ClearCacheTask),
     DirectLightTransfer(DirectLightTransferTask),
+    Shadow(TraceShadowTask),
 }
 
 /// Holds only a weak reference to its context: dropping the `ExecuteContext` frees the SDK's
@@ -65,6 +66,14 @@ impl TaskContainer {
         self.shared()?;
         validate::ambient_occlusion(task)?;
         self.tasks.push(Task::AmbientOcclusion(*task));
+        Ok(())
+    }
+
+    /// Shadows from one light (see `TraceShadowTask`).
+    pub fn schedule_shadow(&mut self, task: &TraceShadowTask) -> Result<()> {
+        self.shared()?;
+        validate::shadow(task)?;
+        self.tasks.push(Task::Shadow(*task));
         Ok(())
     }
 

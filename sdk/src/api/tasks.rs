@@ -531,3 +531,75 @@ impl Default for DirectLightTransferTask {
         }
     }
 }
+
+// ---------------------------------------------------------------- shadows
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum LightType {
+    /// Parallel rays (the sun). Default.
+    #[default]
+    Directional = 0,
+    /// An emitting sphere of `radius` at `position`.
+    Point = 1,
+    /// A point light with a cone; the cone's falloff is the engine's to apply (it does not
+    /// change visibility).
+    Spot = 2,
+}
+
+/// A light, as the engine converts its own to. Size makes soft shadows: the SDK samples the
+/// light's extent.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightInfo {
+    pub light_type: LightType,
+    /// Point and spot: world-space centre.
+    pub position: glam::Vec3,
+    /// Directional and spot: the direction the light travels (need not be normalized).
+    pub direction: glam::Vec3,
+    /// Directional: apparent diameter in radians (the sun: about 0.0093). 0 = hard shadows.
+    pub angular_extent: f32,
+    /// Point and spot: radius of the emitting sphere. 0 = hard shadows.
+    pub radius: f32,
+    /// Spot: inner and outer cone half-angles in radians (kept for the engine's shading).
+    pub inner_cone: f32,
+    pub outer_cone: f32,
+}
+
+impl Default for LightInfo {
+    fn default() -> Self {
+        LightInfo {
+            light_type: LightType::Directional,
+            position: glam::Vec3::ZERO,
+            direction: glam::Vec3::NEG_Y,
+            angular_extent: 0.0,
+            radius: 0.0,
+            inner_cone: 0.5,
+            outer_cone: 0.6,
+        }
+    }
+}
+
+/// Ray-traced shadows from one light. Output (the integration guide's format): R = distance
+/// to the closest occluder, negative where the light is visible; G, when the output has a
+/// second channel, = the fraction of rays that reached the light (soft visibility).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TraceShadowTask {
+    pub common: TraceCommon,
+    pub light: LightInfo,
+    /// GENERAL layout, STORAGE usage: R16_SFLOAT, R32_SFLOAT, R16G16_SFLOAT, R32G32_SFLOAT,
+    /// R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT.
+    pub output: ImageInput,
+    /// Rays per pixel, 1..=64. Default 1 (the guide's one ray per light; denoise it).
+    pub rays_per_pixel: u32,
+}
+
+impl Default for TraceShadowTask {
+    fn default() -> Self {
+        TraceShadowTask {
+            common: TraceCommon::default(),
+            light: LightInfo::default(),
+            output: ImageInput { layout: vk::ImageLayout::GENERAL, ..Default::default() },
+            rays_per_pixel: 1,
+        }
+    }
+}

@@ -45,6 +45,7 @@ pub enum TaskKind {
     CacheUpdate = 5,
     /// A cache transfer between two instances.
     CacheTransfer = 6,
+    Shadow = 7,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]

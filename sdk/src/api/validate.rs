@@ -269,3 +269,39 @@ pub(crate) fn injection(t: &DirectLightingInjectionTask) -> Result<()> {
     }
     Ok(())
 }
+
+const SHADOW_OUTPUT_FORMATS: &[vk::Format] = &[
+    vk::Format::R16_SFLOAT,
+    vk::Format::R32_SFLOAT,
+    vk::Format::R16G16_SFLOAT,
+    vk::Format::R32G32_SFLOAT,
+    vk::Format::R16G16B16A16_SFLOAT,
+    vk::Format::R32G32B32A32_SFLOAT,
+];
+
+pub(crate) fn shadow(t: &TraceShadowTask) -> Result<()> {
+    trace_common(&t.common)?;
+    if t.common.debug_output != DebugOutput::Default {
+        image("TraceShadowTask.output", &t.output, &t.common.viewport, &[vk::ImageLayout::GENERAL])?;
+        return format_in("TraceShadowTask.output (debug output)", t.output.format, COLOR_OUTPUT_FORMATS, "an RGBA format for a debug visualisation");
+    }
+    image("TraceShadowTask.output", &t.output, &t.common.viewport, &[vk::ImageLayout::GENERAL])?;
+    format_in("TraceShadowTask.output", t.output.format, SHADOW_OUTPUT_FORMATS, "a signed float format (R16/R32, RG or RGBA)")?;
+    let l = &t.light;
+    if !l.position.is_finite() || !l.direction.is_finite() {
+        return Err(Error::invalid("TraceShadowTask.light", "position or direction is not finite"));
+    }
+    if l.light_type != LightType::Point && l.direction.length_squared() < 1e-12 {
+        return Err(Error::invalid("TraceShadowTask.light.direction", "is zero"));
+    }
+    if !(l.angular_extent.is_finite() && (0.0..3.0).contains(&l.angular_extent)) {
+        return Err(Error::invalid("TraceShadowTask.light.angular_extent", "must be in [0, 3) radians"));
+    }
+    if !(l.radius.is_finite() && l.radius >= 0.0) {
+        return Err(Error::invalid("TraceShadowTask.light.radius", "must be finite and >= 0"));
+    }
+    if !(1..=64).contains(&t.rays_per_pixel) {
+        return Err(Error::invalid("TraceShadowTask.rays_per_pixel", format!("{} is not in 1..=64", t.rays_per_pixel)));
+    }
+    Ok(())
+}

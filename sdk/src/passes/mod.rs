@@ -8,6 +8,7 @@ pub(crate) mod debug;
 pub(crate) mod descriptors;
 pub(crate) mod inject;
 pub(crate) mod program;
+pub(crate) mod shadow;
 pub(crate) mod transfer;
 
 use crate::gpu::sync::Hazards;

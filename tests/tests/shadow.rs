@@ -1,0 +1,145 @@
+//! Shadows against the CPU reference: hard edges land on the reference's pixels, and a
+//! sphere light's penumbra has the reference's width and values.
+mod common;
+use ash::vk;
+use common::*;
+use glam::{Affine3A, Vec3};
+use hybrid_rt::{InitSettings, LightInfo, LightType, TraceShadowTask};
+use hybrid_rt_testkit::reference::*;
+use hybrid_rt_testkit::sdk_scene::*;
+use hybrid_rt_testkit::stats;
+
+const W: u32 = 64;
+const H: u32 = 64;
+
+/// A box floating above the ground, seen from above.
+fn scene() -> (Scene, Camera) {
+    let mut s = Scene::default();
+    let ground = s.add_mesh(Mesh::grid(8.0, 4));
+    let cube = s.add_mesh(Mesh::cuboid(Vec3::new(0.6, 0.1, 0.6)));
+    s.add_instance(ground, Affine3A::IDENTITY);
+    s.add_instance(cube, Affine3A::from_translation(Vec3::new(0.0, 1.0, 0.0)));
+    (s, Camera::look_at(Vec3::new(0.0, 5.0, 0.01), Vec3::ZERO))
+}
+
+/// Renders `frames` shadow frames; returns (mean visibility G, last R) per pixel.
+fn gpu_shadow(light: LightInfo, rays: u32, frames: u32) -> (Vec<f32>, Vec<f32>, GBuffer, Scene, Camera) {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let (scene, camera) = scene();
+    let g = GBuffer::render(&Tracer::new(&scene), &camera, W, H);
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let out = host.image_cleared(vk::Format::R32G32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
+    let mut frame = ctx.create_task_container();
+    let s = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    let task = TraceShadowTask {
+        common: images.trace_common(&camera),
+        light,
+        output: out.input(vk::ImageLayout::GENERAL),
+        rays_per_pixel: rays,
+    };
+    let mut vis = vec![0.0f32; (W * H) as usize];
+    let mut dist = Vec::new();
+    for _ in 0..frames {
+        frame.schedule_shadow(&task).unwrap();
+        let done = run_frame(&host, &ctx, &mut frame).unwrap();
+        assert!(done.timings.iter().any(|t| t.kind == hybrid_rt::TaskKind::Shadow));
+        let texels: Vec<[f32; 2]> = bytemuck::cast_slice(&host.read_image(&out, vk::ImageLayout::GENERAL).unwrap()).to_vec();
+        for (v, t) in vis.iter_mut().zip(&texels) {
+            *v += t[1] / frames as f32;
+        }
+        dist = texels.iter().map(|t| t[0]).collect();
+    }
+    host.destroy_image(out);
+    images.destroy(&host);
+    s.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+    (vis, dist, g, scene, camera)
+}
+
+#[test]
+fn hard_shadow_edge_lands_on_the_reference_pixels() {
+    let sun = LightInfo { light_type: LightType::Directional, direction: Vec3::new(1.2, -1.0, 0.6), ..Default::default() };
+    let (vis, dist, g, scene, camera) = gpu_shadow(sun, 1, 1);
+    let tracer = Tracer::new(&scene);
+    let offset = hybrid_rt::RayOffset::default();
+    let mut rng = Rng::new(1);
+    let reference: Vec<(f32, Option<f32>)> = (0..g.depth.len())
+        .map(|i| if g.hit[i] { shadow_visibility(&tracer, g.position[i], g.normal[i], camera.eye, &sun, &offset, 1, &mut rng) } else { (1.0, None) })
+        .collect();
+    let shadowed = |i: usize| reference[i].0 < 0.5;
+    let (mut mismatched, mut in_shadow) = (0, 0);
+    for y in 0..H as i32 {
+        for x in 0..W as i32 {
+            let i = (y * W as i32 + x) as usize;
+            in_shadow += shadowed(i) as usize;
+            if (vis[i] < 0.5) != shadowed(i) {
+                mismatched += 1;
+                // Only at the edge: some 8-neighbour of the pixel is on the other side.
+                let edge = (-1..=1).flat_map(|dy| (-1..=1).map(move |dx| (x + dx, y + dy))).any(|(nx, ny)| {
+                    nx >= 0 && ny >= 0 && nx < W as i32 && ny < H as i32 && shadowed((ny * W as i32 + nx) as usize) != shadowed(i)
+                });
+                assert!(edge, "pixel ({x}, {y}) disagrees away from the shadow edge");
+            } else if let (true, Some(t)) = (shadowed(i), reference[i].1) {
+                assert!((dist[i] - t).abs() < 1e-3 * t.max(1.0), "occluder distance {} vs {t}", dist[i]);
+            } else if !shadowed(i) {
+                assert!(dist[i] < 0.0, "visible pixels are negative");
+            }
+        }
+    }
+    eprintln!("hard shadow: {in_shadow} shadowed pixels, {mismatched} differ (all on the edge)");
+    assert!(in_shadow > 100, "enough shadow in view: {in_shadow}");
+    assert!(mismatched * 20 < in_shadow);
+}
+
+#[test]
+fn sphere_light_penumbra_matches_the_reference() {
+    let light = LightInfo { light_type: LightType::Point, position: Vec3::new(0.3, 3.0, 0.0), radius: 0.5, ..Default::default() };
+    let (rays, frames) = (16, 4);
+    let (vis, _, g, scene, camera) = gpu_shadow(light, rays, frames);
+    let tracer = Tracer::new(&scene);
+    let offset = hybrid_rt::RayOffset::default();
+    let strata = 16;
+    let mut rng = Rng::new(2);
+    let reference: Vec<f32> = (0..g.depth.len())
+        .map(|i| if g.hit[i] { shadow_visibility(&tracer, g.position[i], g.normal[i], camera.eye, &light, &offset, strata, &mut rng).0 } else { 1.0 })
+        .collect();
+    // Visibility is a mean of rays x frames Bernoulli samples: sigma <= sqrt(1/4N + 1/4M).
+    let sigma = stats::sample_sigma(rays * frames, strata * strata);
+    let report = stats::compare_blocks(&vis, &reference, W, H, 4, sigma, 0.02);
+    eprintln!("penumbra: worst 4x4 block error {:.4} (tolerance {:.4}), mean |err| {:.4}", report.worst_block_error, report.tolerance, report.mean_abs_error);
+    assert!(report.worst_block_error <= report.tolerance);
+    // Penumbra width along the row through the light: pixels with 0.1 < visibility < 0.9.
+    let row = |v: &[f32]| (0..W).filter(|x| { let s = v[(H / 2 * W + x) as usize]; s > 0.1 && s < 0.9 }).count() as i32;
+    let (gw, rw) = (row(&vis), row(&reference));
+    eprintln!("penumbra width on the centre row: GPU {gw} px, reference {rw} px");
+    assert!(rw >= 4, "the test has a real penumbra");
+    assert!((gw - rw).abs() <= 2, "penumbra width GPU {gw} vs reference {rw}");
+}
+
+#[test]
+fn bad_lights_are_refused() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let (scene, camera) = scene();
+    let g = GBuffer::render(&Tracer::new(&scene), &camera, 16, 16);
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let mut frame = ctx.create_task_container();
+    let good = TraceShadowTask { common: images.trace_common(&camera), output: images.output.input(vk::ImageLayout::GENERAL), ..Default::default() };
+    frame.schedule_shadow(&good).unwrap();
+    for bad in [
+        LightInfo { position: Vec3::new(f32::NAN, 0.0, 0.0), ..Default::default() },
+        LightInfo { direction: Vec3::ZERO, ..Default::default() },
+        LightInfo { light_type: LightType::Point, radius: -1.0, ..Default::default() },
+        LightInfo { angular_extent: 4.0, ..Default::default() },
+    ] {
+        assert!(matches!(frame.schedule_shadow(&TraceShadowTask { light: bad, ..good }), Err(hybrid_rt::Error::InvalidInput { .. })));
+    }
+    let mut wrong_format = good;
+    wrong_format.output.format = vk::Format::R8_UNORM; // distances need a float format
+    assert!(matches!(frame.schedule_shadow(&wrong_format), Err(hybrid_rt::Error::UnsupportedFormat { .. })));
+    frame.clear();
+    images.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+}
