@@ -522,6 +522,25 @@ int main(void) {
     EXPECT(rg[0] < 0.0f && rg[1] == 1.0f, "the corner sees the light");
     free_image(shadow);
 
+    /* ---- Diffuse GI under a constant sky: the open corner sees the sky's radiance. */
+    Image gi = make_image(VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT);
+    cmd = begin();
+    transition(cmd, gi.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL);
+    submit_and_wait(cmd);
+    HrtTraceDiffuseTask diffuse = hrt_trace_diffuse_task_default();
+    diffuse.common = ao.common;
+    diffuse.output = sdk_image(&gi, VK_IMAGE_LAYOUT_GENERAL);
+    diffuse.rays_per_pixel = 8;
+    diffuse.ray_length = 1.0f;
+    diffuse.miss_radiance[0] = diffuse.miss_radiance[1] = diffuse.miss_radiance[2] = 0.5f;
+    CHECK_HRT(hrt_schedule_diffuse(frame, &diffuse));
+    float gi_px[W * H * 4];
+    printf("diffuse frame:\n");
+    run_frame(ctx, frame, &gi, 16, gi_px);
+    printf("diffuse at the corner: %.3f %.3f %.3f\n", gi_px[0], gi_px[1], gi_px[2]);
+    EXPECT(fabsf(gi_px[0] - 0.5f) < 1e-4f && fabsf(gi_px[2] - 0.5f) < 1e-4f, "the open corner sees the sky");
+    free_image(gi);
+
     /* ---- Frame 2: the ceiling instance removed: open everywhere. */
     HrtInstanceTask remove = hrt_instance_task_default();
     remove.handle = instances[1];

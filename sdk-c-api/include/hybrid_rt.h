@@ -95,6 +95,7 @@ typedef enum HrtTaskKind {
   HRT_TASK_CACHE_UPDATE = 5,
   HRT_TASK_CACHE_TRANSFER = 6,
   HRT_TASK_SHADOW = 7,
+  HRT_TASK_DIFFUSE = 8,
 } HrtTaskKind;
 
 typedef enum HrtDebugOutput {
@@ -526,6 +527,30 @@ typedef struct HrtTraceShadowTask {
   uint32_t rays_per_pixel;
 } HrtTraceShadowTask;
 
+/**
+ * Diffuse GI shaded from the cache: RGB = mean incoming radiance (E/pi, multiply by albedo),
+ * A = mean hit distance.
+ */
+typedef struct HrtTraceDiffuseTask {
+  struct HrtTraceCommon common;
+  /**
+   * GENERAL layout, STORAGE usage, RGBA16F or RGBA32F.
+   */
+  struct HrtImageInput output;
+  /**
+   * 1..=64. Default 1.
+   */
+  uint32_t rays_per_pixel;
+  /**
+   * Default 1000.
+   */
+  float ray_length;
+  /**
+   * Radiance of rays that hit nothing. Default black.
+   */
+  float miss_radiance[3];
+} HrtTraceDiffuseTask;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -712,6 +737,11 @@ struct HrtTraceShadowTask hrt_trace_shadow_task_default(void);
 
 enum HrtStatus hrt_schedule_shadow(struct HrtTaskContainer *container,
                                    const struct HrtTraceShadowTask *task);
+
+struct HrtTraceDiffuseTask hrt_trace_diffuse_task_default(void);
+
+enum HrtStatus hrt_schedule_diffuse(struct HrtTaskContainer *container,
+                                    const struct HrtTraceDiffuseTask *task);
 
 #ifdef __cplusplus
 }  // extern "C"

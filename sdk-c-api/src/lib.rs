@@ -425,6 +425,7 @@ pub unsafe extern "C" fn hrt_mark_gpu_task_completed(
                         rt::TaskKind::CacheUpdate => HrtTaskKind::HRT_TASK_CACHE_UPDATE,
                         rt::TaskKind::CacheTransfer => HrtTaskKind::HRT_TASK_CACHE_TRANSFER,
                         rt::TaskKind::Shadow => HrtTaskKind::HRT_TASK_SHADOW,
+                        rt::TaskKind::Diffuse => HrtTaskKind::HRT_TASK_DIFFUSE,
                     },
                     task_index: t.task_index,
                     gpu_ms: t.gpu_ms,
@@ -558,5 +559,35 @@ pub unsafe extern "C" fn hrt_schedule_shadow(container: *mut HrtTaskContainer, t
     guard(|| {
         let c = get_mut(container, "container")?;
         Ok(c.inner.schedule_shadow(&types::shadow_task(get(task, "task")?)?)?)
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn hrt_trace_diffuse_task_default() -> HrtTraceDiffuseTask {
+    let d = rt::TraceDiffuseTask::default();
+    let ao = types::ao_task_default();
+    HrtTraceDiffuseTask {
+        common: types::trace_common_default(),
+        output: ao.output,
+        rays_per_pixel: d.rays_per_pixel,
+        ray_length: d.ray_length,
+        miss_radiance: d.miss_radiance,
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_schedule_diffuse(container: *mut HrtTaskContainer, task: *const HrtTraceDiffuseTask) -> HrtStatus {
+    guard(|| {
+        let c = get_mut(container, "container")?;
+        let t = get(task, "task")?;
+        let common = types::trace_common(&t.common)?;
+        let ao = types::ao_task(&HrtTraceAmbientOcclusionTask { output: t.output, ..types::ao_task_default() })?;
+        Ok(c.inner.schedule_diffuse(&rt::TraceDiffuseTask {
+            common,
+            output: ao.output,
+            rays_per_pixel: t.rays_per_pixel,
+            ray_length: t.ray_length,
+            miss_radiance: t.miss_radiance,
+        })?)
     })
 }

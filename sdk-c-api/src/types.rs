@@ -369,6 +369,22 @@ pub struct HrtTraceShadowTask {
     pub rays_per_pixel: u32,
 }
 
+/// Diffuse GI shaded from the cache: RGB = mean incoming radiance (E/pi, multiply by albedo),
+/// A = mean hit distance.
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtTraceDiffuseTask {
+    pub common: HrtTraceCommon,
+    /// GENERAL layout, STORAGE usage, RGBA16F or RGBA32F.
+    pub output: HrtImageInput,
+    /// 1..=64. Default 1.
+    pub rays_per_pixel: u32,
+    /// Default 1000.
+    pub ray_length: f32,
+    /// Radiance of rays that hit nothing. Default black.
+    pub miss_radiance: [f32; 3],
+}
+
 /// Resets an instance's cache to its initial colour.
 #[repr(C)]
 #[derive(Clone, Copy)]
@@ -404,6 +420,7 @@ pub enum HrtTaskKind {
     HRT_TASK_CACHE_UPDATE = 5,
     HRT_TASK_CACHE_TRANSFER = 6,
     HRT_TASK_SHADOW = 7,
+    HRT_TASK_DIFFUSE = 8,
 }
 
 #[repr(C)]

@@ -19,6 +19,7 @@ pub(crate) enum Task {
     ClearCache(ClearCacheTask),
     DirectLightTransfer(DirectLightTransferTask),
     Shadow(TraceShadowTask),
+    Diffuse(TraceDiffuseTask),
 }
 
 /// Holds only a weak reference to its context: dropping the `ExecuteContext` frees the SDK's
@@ -74,6 +75,14 @@ impl TaskContainer {
         self.shared()?;
         validate::shadow(task)?;
         self.tasks.push(Task::Shadow(*task));
+        Ok(())
+    }
+
+    /// Diffuse GI shaded from the cache (see `TraceDiffuseTask`).
+    pub fn schedule_diffuse(&mut self, task: &TraceDiffuseTask) -> Result<()> {
+        self.shared()?;
+        validate::diffuse(task)?;
+        self.tasks.push(Task::Diffuse(*task));
         Ok(())
     }
 

@@ -603,3 +603,34 @@ impl Default for TraceShadowTask {
         }
     }
 }
+
+// ---------------------------------------------------------------- diffuse GI
+
+/// One bounce of diffuse GI shaded from the direct-lighting cache. Output (RGBA float):
+/// RGB = the mean incoming radiance over the cosine-weighted hemisphere (E/pi: multiply by
+/// your albedo for Lambertian outgoing light), A = the mean hit distance (misses count as
+/// `ray_length`), which the denoiser uses.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TraceDiffuseTask {
+    pub common: TraceCommon,
+    /// GENERAL layout, STORAGE usage: R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT.
+    pub output: ImageInput,
+    /// Rays per pixel, 1..=64. Default 1.
+    pub rays_per_pixel: u32,
+    /// Longest ray in world units (> 0). Default 1000.
+    pub ray_length: f32,
+    /// Radiance of rays that hit nothing (a constant sky). Default black.
+    pub miss_radiance: [f32; 3],
+}
+
+impl Default for TraceDiffuseTask {
+    fn default() -> Self {
+        TraceDiffuseTask {
+            common: TraceCommon::default(),
+            output: ImageInput { layout: vk::ImageLayout::GENERAL, ..Default::default() },
+            rays_per_pixel: 1,
+            ray_length: 1000.0,
+            miss_radiance: [0.0; 3],
+        }
+    }
+}

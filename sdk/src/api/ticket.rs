@@ -46,6 +46,7 @@ pub enum TaskKind {
     /// A cache transfer between two instances.
     CacheTransfer = 6,
     Shadow = 7,
+    Diffuse = 8,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]

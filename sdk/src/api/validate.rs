@@ -305,3 +305,24 @@ pub(crate) fn shadow(t: &TraceShadowTask) -> Result<()> {
     }
     Ok(())
 }
+
+pub(crate) fn diffuse(t: &TraceDiffuseTask) -> Result<()> {
+    trace_common(&t.common)?;
+    image("TraceDiffuseTask.output", &t.output, &t.common.viewport, &[vk::ImageLayout::GENERAL])?;
+    format_in(
+        "TraceDiffuseTask.output",
+        t.output.format,
+        &[vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT],
+        "R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT",
+    )?;
+    if !(1..=64).contains(&t.rays_per_pixel) {
+        return Err(Error::invalid("TraceDiffuseTask.rays_per_pixel", format!("{} is not in 1..=64", t.rays_per_pixel)));
+    }
+    if !(t.ray_length.is_finite() && t.ray_length > 0.0) {
+        return Err(Error::invalid("TraceDiffuseTask.ray_length", "must be finite and > 0"));
+    }
+    if t.miss_radiance.iter().any(|c| !c.is_finite() || *c < 0.0) {
+        return Err(Error::invalid("TraceDiffuseTask.miss_radiance", "must be finite and >= 0"));
+    }
+    Ok(())
+}

@@ -6,6 +6,7 @@ pub(crate) mod cache_ops;
 pub(crate) mod constants;
 pub(crate) mod debug;
 pub(crate) mod descriptors;
+pub(crate) mod diffuse;
 pub(crate) mod inject;
 pub(crate) mod program;
 pub(crate) mod shadow;

@@ -22,7 +22,7 @@ use crate::scene::geometry::{self, BlasState, GeometryLayout, GeometryRecord};
 use crate::scene::instance::{self, InstanceRecord, Placement};
 use crate::scene::tlas::{self, Tlas};
 use crate::cache::pool::{CachePool, CacheRange};
-use crate::passes::{cache_ops::CacheOps, debug::DebugPass, inject::InjectPass, shadow::ShadowPass, transfer::TransferPass};
+use crate::passes::{cache_ops::CacheOps, debug::DebugPass, diffuse::DiffusePass, inject::InjectPass, shadow::ShadowPass, transfer::TransferPass};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 use parking_lot::Mutex;
@@ -85,6 +85,7 @@ struct State {
     inject: Option<InjectPass>,
     transfer: Option<TransferPass>,
     shadow: Option<ShadowPass>,
+    diffuse: Option<DiffusePass>,
     cache_ops: Option<CacheOps>,
     cache_pool: CachePool,
     /// Cache ranges of destroyed/changed instances: (newest serial issued then, range).
@@ -146,6 +147,7 @@ impl ExecuteContext {
                 inject: None,
                 transfer: None,
                 shadow: None,
+                diffuse: None,
                 cache_ops: None,
                 cache_pool: CachePool::default(),
                 cache_frees: Vec::new(),
@@ -163,6 +165,7 @@ impl ExecuteContext {
             st.inject = Some(InjectPass::new(&shared.device, &shared.memory, sampler)?);
             st.transfer = Some(TransferPass::new(&shared.device, &shared.memory)?);
             st.shadow = Some(ShadowPass::new(&shared.device, &shared.memory, sampler)?);
+            st.diffuse = Some(DiffusePass::new(&shared.device, &shared.memory, sampler)?);
             st.cache_ops = Some(CacheOps::new(&shared.device)?);
             for _ in 0..settings.supported_working_sets {
                 let ws = shared.new_working_set(settings)?;
@@ -432,7 +435,7 @@ fn validate_handles(st: &State, tasks: &[Task]) -> Result<()> {
                 st.instances.get(t.source)?;
                 st.instances.get(t.target)?;
             }
-            Task::BvhBuild(_) | Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) | Task::Shadow(_) => {}
+            Task::BvhBuild(_) | Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) | Task::Shadow(_) | Task::Diffuse(_) => {}
         }
     }
     Ok(())
@@ -531,7 +534,7 @@ impl Shared {
             .map(|i| i as u32);
         let has_render = tasks
             .iter()
-            .any(|t| matches!(t, Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) | Task::DirectLightTransfer(_) | Task::Shadow(_)));
+            .any(|t| matches!(t, Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) | Task::DirectLightTransfer(_) | Task::Shadow(_) | Task::Diffuse(_)));
         let bvh_span = first_bvh.map(|i| timer(st, ws_index).begin(d, cmd, TaskKind::Bvh, i));
         self.apply_scene_tasks(st, ws_index, tasks, cmd, serial, &mut hazards)?;
         let max_builds: Option<u32> = tasks
@@ -574,6 +577,7 @@ impl Shared {
             .max(passes::inject::UPLOAD_BYTES)
             .max(passes::transfer::UPLOAD_BYTES)
             .max(passes::shadow::UPLOAD_BYTES)
+            .max(passes::diffuse::UPLOAD_BYTES)
             + device.ubo_alignment;
         self.ensure_ring(st, ws_index, Self::instance_table_bytes(st) + tasks.len() as u64 * per_task)?;
         let instance_table = self.push_instance_table(st, ws_index);
@@ -583,6 +587,7 @@ impl Shared {
                 Task::DirectLightingInjection(_) => TaskKind::DirectLightingInjection,
                 Task::DirectLightTransfer(_) => TaskKind::CacheTransfer,
                 Task::Shadow(_) => TaskKind::Shadow,
+                Task::Diffuse(_) => TaskKind::Diffuse,
                 _ => continue,
             };
             let transfer_job = match task {
@@ -608,6 +613,10 @@ impl Shared {
                     st.debug.as_ref().expect("created in new").record(&mut r, &t.common, &t.output);
                 }
                 Task::Shadow(t) => st.shadow.as_ref().expect("created in new").record(&mut r, t),
+                Task::Diffuse(t) if t.common.debug_output != DebugOutput::Default => {
+                    st.debug.as_ref().expect("created in new").record(&mut r, &t.common, &t.output);
+                }
+                Task::Diffuse(t) => st.diffuse.as_ref().expect("created in new").record(&mut r, t),
                 Task::AmbientOcclusion(t) => {
                     let inline = t.common.use_inline_rt && device.ray_query;
                     if t.common.use_inline_rt && !device.ray_query && !self.warned_inline.swap(true, Ordering::Relaxed) {
@@ -936,6 +945,9 @@ impl Drop for Shared {
             p.destroy(device, memory);
         }
         if let Some(p) = st.shadow.take() {
+            p.destroy(device, memory);
+        }
+        if let Some(p) = st.diffuse.take() {
             p.destroy(device, memory);
         }
         if let Some(p) = st.cache_ops.take() {

@@ -1,0 +1,75 @@
+//! Diffuse GI (`TraceDiffuseTask`): cosine-distributed rays shaded from the direct-lighting
+//! cache (shaders/diffuse.rgen).
+use super::constants::TraceCommonGpu;
+use super::descriptors::Slot;
+use super::program::{RtProgram, Shaders};
+use super::Recording;
+use crate::api::tasks::{InstanceInclusionMask, TraceDiffuseTask};
+use crate::error::Result;
+use crate::gpu::device::Device;
+use crate::gpu::memory::Memory;
+use crate::gpu::pipeline::Binding;
+use crate::gpu::sync;
+use crate::shaders;
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+
+/// `DiffuseConstants` in shaders/diffuse.rgen.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+struct DiffuseConstantsGpu {
+    common: TraceCommonGpu,
+    miss: [f32; 4],
+    params: [u32; 4],
+}
+
+pub(crate) const UPLOAD_BYTES: u64 = std::mem::size_of::<DiffuseConstantsGpu>() as u64;
+
+pub(crate) struct DiffusePass {
+    program: RtProgram,
+}
+
+impl DiffusePass {
+    pub fn new(device: &Device, memory: &Memory, sampler: vk::Sampler) -> Result<DiffusePass> {
+        let program = RtProgram::new(
+            device,
+            memory,
+            &[
+                Binding { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, sampler: None },
+                Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
+                Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
+                Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
+                Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
+            ],
+            vk::ShaderStageFlags::RAYGEN_KHR,
+            Shaders { raygen: shaders::DIFFUSE_RGEN, misses: &[shaders::HIT_RECORD_RMISS], closest_hits: &[shaders::HIT_RECORD_RCHIT], any_hit: None },
+        )?;
+        Ok(DiffusePass { program })
+    }
+
+    pub fn record(&self, r: &mut Recording<'_>, task: &TraceDiffuseTask) {
+        let table = r.instance_table;
+        let m = task.miss_radiance;
+        let constants = DiffuseConstantsGpu {
+            common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::DIFFUSE_GI.0),
+            miss: [m[0], m[1], m[2], task.ray_length],
+            params: [task.rays_per_pixel, task.common.enable_bilinear_sampling as u32, table as u32, (table >> 32) as u32],
+        };
+        let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
+        let stage = vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR;
+        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
+        let slots = [
+            Slot::Tlas(r.tlas),
+            Slot::Sampled(&task.common.depth.image),
+            Slot::Sampled(&task.common.normals.image),
+            Slot::Storage(&task.output),
+            Slot::Uniform(ubo),
+        ];
+        let vp = &task.common.viewport;
+        self.program.trace(r, &slots, vp.width, vp.height);
+    }
+
+    pub fn destroy(self, device: &Device, memory: &Memory) {
+        self.program.destroy(device, memory);
+    }
+}
