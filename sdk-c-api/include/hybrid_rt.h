@@ -96,6 +96,7 @@ typedef enum HrtTaskKind {
   HRT_TASK_CACHE_TRANSFER = 6,
   HRT_TASK_SHADOW = 7,
   HRT_TASK_DIFFUSE = 8,
+  HRT_TASK_SPECULAR = 9,
 } HrtTaskKind;
 
 typedef enum HrtDebugOutput {
@@ -376,12 +377,32 @@ typedef struct HrtRayOffset {
   float cam_quadratic;
 } HrtRayOffset;
 
+/**
+ * Roughness: global_roughness * dot(texel, channel_mask) with an image (image != 0),
+ * global_roughness without.
+ */
+typedef struct HrtRoughnessInput {
+  /**
+   * Optional (image = VK_NULL_HANDLE for none).
+   */
+  struct HrtImageInput image;
+  /**
+   * Default {1, 0, 0, 0}.
+   */
+  float channel_mask[4];
+  /**
+   * Default 1.0.
+   */
+  float global_roughness;
+} HrtRoughnessInput;
+
 typedef struct HrtTraceCommon {
   struct HrtDepthInput depth;
   struct HrtNormalInput normals;
   struct HrtViewport viewport;
   struct HrtCamera camera;
   struct HrtRayOffset ray_offset;
+  struct HrtRoughnessInput roughness;
   /**
    * Default false.
    */
@@ -550,6 +571,33 @@ typedef struct HrtTraceDiffuseTask {
    */
   float miss_radiance[3];
 } HrtTraceDiffuseTask;
+
+/**
+ * Specular reflections shaded from the cache (see the Rust docs of TraceSpecularTask).
+ */
+typedef struct HrtTraceSpecularTask {
+  struct HrtTraceCommon common;
+  /**
+   * GENERAL layout, STORAGE usage, RGBA16F or RGBA32F.
+   */
+  struct HrtImageInput output;
+  /**
+   * 1..=64 (mirrors trace one). Default 1.
+   */
+  uint32_t rays_per_pixel;
+  /**
+   * Default 1000.
+   */
+  float ray_length;
+  /**
+   * Default black.
+   */
+  float miss_radiance[3];
+  /**
+   * Largest luminance of one sample; 0 = off (default).
+   */
+  float firefly_clamp;
+} HrtTraceSpecularTask;
 
 #ifdef __cplusplus
 extern "C" {
@@ -742,6 +790,11 @@ struct HrtTraceDiffuseTask hrt_trace_diffuse_task_default(void);
 
 enum HrtStatus hrt_schedule_diffuse(struct HrtTaskContainer *container,
                                     const struct HrtTraceDiffuseTask *task);
+
+struct HrtTraceSpecularTask hrt_trace_specular_task_default(void);
+
+enum HrtStatus hrt_schedule_specular(struct HrtTaskContainer *container,
+                                     const struct HrtTraceSpecularTask *task);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -426,6 +426,7 @@ pub unsafe extern "C" fn hrt_mark_gpu_task_completed(
                         rt::TaskKind::CacheTransfer => HrtTaskKind::HRT_TASK_CACHE_TRANSFER,
                         rt::TaskKind::Shadow => HrtTaskKind::HRT_TASK_SHADOW,
                         rt::TaskKind::Diffuse => HrtTaskKind::HRT_TASK_DIFFUSE,
+                        rt::TaskKind::Specular => HrtTaskKind::HRT_TASK_SPECULAR,
                     },
                     task_index: t.task_index,
                     gpu_ms: t.gpu_ms,
@@ -588,6 +589,36 @@ pub unsafe extern "C" fn hrt_schedule_diffuse(container: *mut HrtTaskContainer, 
             rays_per_pixel: t.rays_per_pixel,
             ray_length: t.ray_length,
             miss_radiance: t.miss_radiance,
+        })?)
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn hrt_trace_specular_task_default() -> HrtTraceSpecularTask {
+    let d = rt::TraceSpecularTask::default();
+    HrtTraceSpecularTask {
+        common: types::trace_common_default(),
+        output: types::ao_task_default().output,
+        rays_per_pixel: d.rays_per_pixel,
+        ray_length: d.ray_length,
+        miss_radiance: d.miss_radiance,
+        firefly_clamp: d.firefly_clamp,
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_schedule_specular(container: *mut HrtTaskContainer, task: *const HrtTraceSpecularTask) -> HrtStatus {
+    guard(|| {
+        let c = get_mut(container, "container")?;
+        let t = get(task, "task")?;
+        let ao = types::ao_task(&HrtTraceAmbientOcclusionTask { common: t.common, output: t.output, ..types::ao_task_default() })?;
+        Ok(c.inner.schedule_specular(&rt::TraceSpecularTask {
+            common: ao.common,
+            output: ao.output,
+            rays_per_pixel: t.rays_per_pixel,
+            ray_length: t.ray_length,
+            miss_radiance: t.miss_radiance,
+            firefly_clamp: t.firefly_clamp,
         })?)
     })
 }

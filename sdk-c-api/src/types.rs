@@ -287,6 +287,19 @@ pub enum HrtDebugOutput {
     HRT_DEBUG_BARYCENTRICS = 5,
 }
 
+/// Roughness: global_roughness * dot(texel, channel_mask) with an image (image != 0),
+/// global_roughness without.
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtRoughnessInput {
+    /// Optional (image = VK_NULL_HANDLE for none).
+    pub image: HrtImageInput,
+    /// Default {1, 0, 0, 0}.
+    pub channel_mask: [f32; 4],
+    /// Default 1.0.
+    pub global_roughness: f32,
+}
+
 #[repr(C)]
 #[derive(Clone, Copy)]
 pub struct HrtTraceCommon {
@@ -295,6 +308,7 @@ pub struct HrtTraceCommon {
     pub viewport: HrtViewport,
     pub camera: HrtCamera,
     pub ray_offset: HrtRayOffset,
+    pub roughness: HrtRoughnessInput,
     /// Default false.
     pub use_inline_rt: bool,
     /// Interpolate mesh-colors caches. Default true.
@@ -385,6 +399,23 @@ pub struct HrtTraceDiffuseTask {
     pub miss_radiance: [f32; 3],
 }
 
+/// Specular reflections shaded from the cache (see the Rust docs of TraceSpecularTask).
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtTraceSpecularTask {
+    pub common: HrtTraceCommon,
+    /// GENERAL layout, STORAGE usage, RGBA16F or RGBA32F.
+    pub output: HrtImageInput,
+    /// 1..=64 (mirrors trace one). Default 1.
+    pub rays_per_pixel: u32,
+    /// Default 1000.
+    pub ray_length: f32,
+    /// Default black.
+    pub miss_radiance: [f32; 3],
+    /// Largest luminance of one sample; 0 = off (default).
+    pub firefly_clamp: f32,
+}
+
 /// Resets an instance's cache to its initial colour.
 #[repr(C)]
 #[derive(Clone, Copy)]
@@ -421,6 +452,7 @@ pub enum HrtTaskKind {
     HRT_TASK_CACHE_TRANSFER = 6,
     HRT_TASK_SHADOW = 7,
     HRT_TASK_DIFFUSE = 8,
+    HRT_TASK_SPECULAR = 9,
 }
 
 #[repr(C)]
@@ -613,6 +645,11 @@ pub(crate) fn trace_common(c: &HrtTraceCommon) -> Result<rt::TraceCommon, Failur
             cam_linear: o.cam_linear,
             cam_quadratic: o.cam_quadratic,
         },
+        roughness: rt::RoughnessInput {
+            image: image(&c.roughness.image),
+            channel_mask: c.roughness.channel_mask,
+            global_roughness: c.roughness.global_roughness,
+        },
         use_inline_rt: c.use_inline_rt,
         enable_bilinear_sampling: c.enable_bilinear_sampling,
         debug_output: pick(
@@ -646,6 +683,11 @@ pub(crate) fn trace_common_default() -> HrtTraceCommon {
             cam_constant: o.cam_constant,
             cam_linear: o.cam_linear,
             cam_quadratic: o.cam_quadratic,
+        },
+        roughness: HrtRoughnessInput {
+            image: image_c(&d.roughness.image),
+            channel_mask: d.roughness.channel_mask,
+            global_roughness: d.roughness.global_roughness,
         },
         use_inline_rt: d.use_inline_rt,
         enable_bilinear_sampling: d.enable_bilinear_sampling,

@@ -20,6 +20,7 @@ pub(crate) enum Task {
     DirectLightTransfer(DirectLightTransferTask),
     Shadow(TraceShadowTask),
     Diffuse(TraceDiffuseTask),
+    Specular(TraceSpecularTask),
 }
 
 /// Holds only a weak reference to its context: dropping the `ExecuteContext` frees the SDK's
@@ -83,6 +84,14 @@ impl TaskContainer {
         self.shared()?;
         validate::diffuse(task)?;
         self.tasks.push(Task::Diffuse(*task));
+        Ok(())
+    }
+
+    /// Specular reflections shaded from the cache (see `TraceSpecularTask`).
+    pub fn schedule_specular(&mut self, task: &TraceSpecularTask) -> Result<()> {
+        self.shared()?;
+        validate::specular(task)?;
+        self.tasks.push(Task::Specular(*task));
         Ok(())
     }
 

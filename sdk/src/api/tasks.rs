@@ -376,6 +376,31 @@ impl Default for RayOffset {
     }
 }
 
+/// Surface roughness (perceptual, 0 = mirror .. 1), read by specular traces:
+/// `global_roughness * dot(texel, channel_mask)` with an image, `global_roughness` without.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RoughnessInput {
+    /// Optional: leave `image` null to use `global_roughness` everywhere.
+    pub image: ImageInput,
+    /// Which channels hold roughness. Default R: [1, 0, 0, 0].
+    pub channel_mask: [f32; 4],
+    /// Multiplier of the image's roughness, or the roughness itself without an image.
+    /// Default 1.0 (the guide: set it to 0 to debug mirror reflections first).
+    pub global_roughness: f32,
+}
+
+impl Default for RoughnessInput {
+    fn default() -> Self {
+        RoughnessInput { image: ImageInput::default(), channel_mask: [1.0, 0.0, 0.0, 0.0], global_roughness: 1.0 }
+    }
+}
+
+impl RoughnessInput {
+    pub fn has_image(&self) -> bool {
+        self.image.image != vk::Image::null()
+    }
+}
+
 /// Debug visualisations. Any mode but `Default` replaces the task's output with an image made
 /// by primary rays from the task's camera through the SDK's TLAS (one per pixel centre of the
 /// viewport; the G-buffer is not read), into an output with four channels.
@@ -406,6 +431,8 @@ pub struct TraceCommon {
     pub viewport: Viewport,
     pub camera: Camera,
     pub ray_offset: RayOffset,
+    /// Roughness, for specular traces.
+    pub roughness: RoughnessInput,
     /// Trace with inline ray queries (a compute shader) when the device has them; otherwise
     /// (e.g. NVIDIA's Vulkan driver today) the ray-tracing pipeline is used and a warning is
     /// logged once. Both give the same image. Default false.
@@ -425,6 +452,7 @@ impl Default for TraceCommon {
             viewport: Viewport::default(),
             camera: Camera::default(),
             ray_offset: RayOffset::default(),
+            roughness: RoughnessInput::default(),
             use_inline_rt: false,
             enable_bilinear_sampling: true,
             debug_output: DebugOutput::Default,
@@ -631,6 +659,41 @@ impl Default for TraceDiffuseTask {
             rays_per_pixel: 1,
             ray_length: 1000.0,
             miss_radiance: [0.0; 3],
+        }
+    }
+}
+
+// ---------------------------------------------------------------- specular
+
+/// Specular reflections shaded from the direct-lighting cache. Roughness (from
+/// `common.roughness`) 0 traces the exact mirror direction; otherwise GGX visible normals are
+/// sampled. Output (RGBA float): RGB = reflected radiance weighted by the Smith-GGX lobe and
+/// demodulated by Fresnel (multiply by your F or specular albedo), A = hit distance of the
+/// first ray (misses: `ray_length`), for the denoiser.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TraceSpecularTask {
+    pub common: TraceCommon,
+    /// GENERAL layout, STORAGE usage: R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT.
+    pub output: ImageInput,
+    /// Rays per pixel for rough surfaces, 1..=64 (mirrors always trace one). Default 1.
+    pub rays_per_pixel: u32,
+    /// Longest ray (> 0). Default 1000.
+    pub ray_length: f32,
+    /// Radiance of rays that hit nothing. Default black.
+    pub miss_radiance: [f32; 3],
+    /// Largest luminance one sample may carry (fireflies); 0 = no clamp. Default 0.
+    pub firefly_clamp: f32,
+}
+
+impl Default for TraceSpecularTask {
+    fn default() -> Self {
+        TraceSpecularTask {
+            common: TraceCommon::default(),
+            output: ImageInput { layout: vk::ImageLayout::GENERAL, ..Default::default() },
+            rays_per_pixel: 1,
+            ray_length: 1000.0,
+            miss_radiance: [0.0; 3],
+            firefly_clamp: 0.0,
         }
     }
 }

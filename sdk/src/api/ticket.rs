@@ -47,6 +47,7 @@ pub enum TaskKind {
     CacheTransfer = 6,
     Shadow = 7,
     Diffuse = 8,
+    Specular = 9,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]

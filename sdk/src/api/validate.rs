@@ -195,6 +195,22 @@ pub(crate) fn trace_common(c: &TraceCommon) -> Result<()> {
             expected: "a colour format with the channels the NormalType reads",
         });
     }
+    let r = &c.roughness;
+    if r.has_image() {
+        image("TraceCommon.roughness.image", &r.image, vp, INPUT_LAYOUTS)?;
+        if !NORMAL_FORMATS_4.contains(&r.image.format) && !NORMAL_FORMATS_2.contains(&r.image.format)
+            && !matches!(r.image.format, vk::Format::R8_UNORM | vk::Format::R16_UNORM | vk::Format::R16_SFLOAT | vk::Format::R32_SFLOAT)
+        {
+            return Err(Error::UnsupportedFormat {
+                what: "TraceCommon.roughness.image.format",
+                format: r.image.format,
+                expected: "a 1-, 2- or 4-channel unorm/float format",
+            });
+        }
+    }
+    if !(r.global_roughness.is_finite() && r.global_roughness >= 0.0) || r.channel_mask.iter().any(|m| !m.is_finite()) {
+        return Err(Error::invalid("TraceCommon.roughness", "global_roughness must be finite and >= 0, the mask finite"));
+    }
     matrix("TraceCommon.camera.world_to_view", &c.camera.world_to_view)?;
     matrix("TraceCommon.camera.view_to_clip", &c.camera.view_to_clip)?;
     matrix("TraceCommon.camera (view_to_clip * world_to_view)", &(c.camera.view_to_clip * c.camera.world_to_view))?;
@@ -323,6 +339,27 @@ pub(crate) fn diffuse(t: &TraceDiffuseTask) -> Result<()> {
     }
     if t.miss_radiance.iter().any(|c| !c.is_finite() || *c < 0.0) {
         return Err(Error::invalid("TraceDiffuseTask.miss_radiance", "must be finite and >= 0"));
+    }
+    Ok(())
+}
+
+pub(crate) fn specular(t: &TraceSpecularTask) -> Result<()> {
+    trace_common(&t.common)?;
+    image("TraceSpecularTask.output", &t.output, &t.common.viewport, &[vk::ImageLayout::GENERAL])?;
+    let formats = [vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT];
+    if t.common.debug_output == DebugOutput::Default {
+        format_in("TraceSpecularTask.output", t.output.format, &formats, "R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT")?;
+    } else {
+        format_in("TraceSpecularTask.output (debug output)", t.output.format, COLOR_OUTPUT_FORMATS, "an RGBA format")?;
+    }
+    if !(1..=64).contains(&t.rays_per_pixel) {
+        return Err(Error::invalid("TraceSpecularTask.rays_per_pixel", format!("{} is not in 1..=64", t.rays_per_pixel)));
+    }
+    if !(t.ray_length.is_finite() && t.ray_length > 0.0) {
+        return Err(Error::invalid("TraceSpecularTask.ray_length", "must be finite and > 0"));
+    }
+    if t.miss_radiance.iter().any(|c| !c.is_finite() || *c < 0.0) || !(t.firefly_clamp.is_finite() && t.firefly_clamp >= 0.0) {
+        return Err(Error::invalid("TraceSpecularTask", "miss_radiance and firefly_clamp must be finite and >= 0"));
     }
     Ok(())
 }

@@ -10,6 +10,7 @@ pub(crate) mod diffuse;
 pub(crate) mod inject;
 pub(crate) mod program;
 pub(crate) mod shadow;
+pub(crate) mod specular;
 pub(crate) mod transfer;
 
 use crate::gpu::sync::Hazards;

@@ -22,7 +22,7 @@ use crate::scene::geometry::{self, BlasState, GeometryLayout, GeometryRecord};
 use crate::scene::instance::{self, InstanceRecord, Placement};
 use crate::scene::tlas::{self, Tlas};
 use crate::cache::pool::{CachePool, CacheRange};
-use crate::passes::{cache_ops::CacheOps, debug::DebugPass, diffuse::DiffusePass, inject::InjectPass, shadow::ShadowPass, transfer::TransferPass};
+use crate::passes::{cache_ops::CacheOps, debug::DebugPass, diffuse::DiffusePass, inject::InjectPass, shadow::ShadowPass, specular::SpecularPass, transfer::TransferPass};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 use parking_lot::Mutex;
@@ -86,6 +86,7 @@ struct State {
     transfer: Option<TransferPass>,
     shadow: Option<ShadowPass>,
     diffuse: Option<DiffusePass>,
+    specular: Option<SpecularPass>,
     cache_ops: Option<CacheOps>,
     cache_pool: CachePool,
     /// Cache ranges of destroyed/changed instances: (newest serial issued then, range).
@@ -148,6 +149,7 @@ impl ExecuteContext {
                 transfer: None,
                 shadow: None,
                 diffuse: None,
+                specular: None,
                 cache_ops: None,
                 cache_pool: CachePool::default(),
                 cache_frees: Vec::new(),
@@ -166,6 +168,7 @@ impl ExecuteContext {
             st.transfer = Some(TransferPass::new(&shared.device, &shared.memory)?);
             st.shadow = Some(ShadowPass::new(&shared.device, &shared.memory, sampler)?);
             st.diffuse = Some(DiffusePass::new(&shared.device, &shared.memory, sampler)?);
+            st.specular = Some(SpecularPass::new(&shared.device, &shared.memory, sampler)?);
             st.cache_ops = Some(CacheOps::new(&shared.device)?);
             for _ in 0..settings.supported_working_sets {
                 let ws = shared.new_working_set(settings)?;
@@ -435,7 +438,7 @@ fn validate_handles(st: &State, tasks: &[Task]) -> Result<()> {
                 st.instances.get(t.source)?;
                 st.instances.get(t.target)?;
             }
-            Task::BvhBuild(_) | Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) | Task::Shadow(_) | Task::Diffuse(_) => {}
+            Task::BvhBuild(_) | Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) | Task::Shadow(_) | Task::Diffuse(_) | Task::Specular(_) => {}
         }
     }
     Ok(())
@@ -534,7 +537,7 @@ impl Shared {
             .map(|i| i as u32);
         let has_render = tasks
             .iter()
-            .any(|t| matches!(t, Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) | Task::DirectLightTransfer(_) | Task::Shadow(_) | Task::Diffuse(_)));
+            .any(|t| matches!(t, Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) | Task::DirectLightTransfer(_) | Task::Shadow(_) | Task::Diffuse(_) | Task::Specular(_)));
         let bvh_span = first_bvh.map(|i| timer(st, ws_index).begin(d, cmd, TaskKind::Bvh, i));
         self.apply_scene_tasks(st, ws_index, tasks, cmd, serial, &mut hazards)?;
         let max_builds: Option<u32> = tasks
@@ -578,6 +581,7 @@ impl Shared {
             .max(passes::transfer::UPLOAD_BYTES)
             .max(passes::shadow::UPLOAD_BYTES)
             .max(passes::diffuse::UPLOAD_BYTES)
+            .max(passes::specular::UPLOAD_BYTES)
             + device.ubo_alignment;
         self.ensure_ring(st, ws_index, Self::instance_table_bytes(st) + tasks.len() as u64 * per_task)?;
         let instance_table = self.push_instance_table(st, ws_index);
@@ -588,6 +592,7 @@ impl Shared {
                 Task::DirectLightTransfer(_) => TaskKind::CacheTransfer,
                 Task::Shadow(_) => TaskKind::Shadow,
                 Task::Diffuse(_) => TaskKind::Diffuse,
+                Task::Specular(_) => TaskKind::Specular,
                 _ => continue,
             };
             let transfer_job = match task {
@@ -617,6 +622,10 @@ impl Shared {
                     st.debug.as_ref().expect("created in new").record(&mut r, &t.common, &t.output);
                 }
                 Task::Diffuse(t) => st.diffuse.as_ref().expect("created in new").record(&mut r, t),
+                Task::Specular(t) if t.common.debug_output != DebugOutput::Default => {
+                    st.debug.as_ref().expect("created in new").record(&mut r, &t.common, &t.output);
+                }
+                Task::Specular(t) => st.specular.as_ref().expect("created in new").record(&mut r, t),
                 Task::AmbientOcclusion(t) => {
                     let inline = t.common.use_inline_rt && device.ray_query;
                     if t.common.use_inline_rt && !device.ray_query && !self.warned_inline.swap(true, Ordering::Relaxed) {
@@ -948,6 +957,9 @@ impl Drop for Shared {
             p.destroy(device, memory);
         }
         if let Some(p) = st.diffuse.take() {
+            p.destroy(device, memory);
+        }
+        if let Some(p) = st.specular.take() {
             p.destroy(device, memory);
         }
         if let Some(p) = st.cache_ops.take() {

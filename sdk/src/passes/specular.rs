@@ -1,0 +1,85 @@
+//! Specular reflections (`TraceSpecularTask`): mirror or GGX-VNDF rays shaded from the cache
+//! (shaders/specular.rgen).
+use super::constants::TraceCommonGpu;
+use super::descriptors::Slot;
+use super::program::{RtProgram, Shaders};
+use super::Recording;
+use crate::api::tasks::{InstanceInclusionMask, TraceSpecularTask};
+use crate::error::Result;
+use crate::gpu::device::Device;
+use crate::gpu::memory::Memory;
+use crate::gpu::pipeline::Binding;
+use crate::gpu::sync;
+use crate::shaders;
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+
+/// `SpecularConstants` in shaders/specular.rgen.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+struct SpecularConstantsGpu {
+    common: TraceCommonGpu,
+    roughness_mask: [f32; 4],
+    params: [f32; 4],
+    miss: [f32; 4],
+    counts: [u32; 4],
+}
+
+pub(crate) const UPLOAD_BYTES: u64 = std::mem::size_of::<SpecularConstantsGpu>() as u64;
+
+pub(crate) struct SpecularPass {
+    program: RtProgram,
+}
+
+impl SpecularPass {
+    pub fn new(device: &Device, memory: &Memory, sampler: vk::Sampler) -> Result<SpecularPass> {
+        let sampled = || Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) };
+        let program = RtProgram::new(
+            device,
+            memory,
+            &[
+                Binding { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, sampler: None },
+                sampled(),
+                sampled(),
+                sampled(),
+                Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
+                Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
+            ],
+            vk::ShaderStageFlags::RAYGEN_KHR,
+            Shaders { raygen: shaders::SPECULAR_RGEN, misses: &[shaders::HIT_RECORD_RMISS], closest_hits: &[shaders::HIT_RECORD_RCHIT], any_hit: None },
+        )?;
+        Ok(SpecularPass { program })
+    }
+
+    pub fn record(&self, r: &mut Recording<'_>, task: &TraceSpecularTask) {
+        let c = &task.common;
+        let table = r.instance_table;
+        let m = task.miss_radiance;
+        let constants = SpecularConstantsGpu {
+            common: TraceCommonGpu::new(c, r.seed, InstanceInclusionMask::REFLECTIONS.0),
+            roughness_mask: c.roughness.channel_mask,
+            params: [c.roughness.global_roughness, c.roughness.has_image() as u32 as f32, task.ray_length, task.firefly_clamp],
+            miss: [m[0], m[1], m[2], 0.0],
+            counts: [task.rays_per_pixel, c.enable_bilinear_sampling as u32, table as u32, (table >> 32) as u32],
+        };
+        let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
+        let stage = vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR;
+        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
+        // Without a roughness image the binding still needs a valid view: the normals stand in
+        // (the shader does not read it then).
+        let roughness = if c.roughness.has_image() { &c.roughness.image } else { &c.normals.image };
+        let slots = [
+            Slot::Tlas(r.tlas),
+            Slot::Sampled(&c.depth.image),
+            Slot::Sampled(&c.normals.image),
+            Slot::Sampled(roughness),
+            Slot::Storage(&task.output),
+            Slot::Uniform(ubo),
+        ];
+        self.program.trace(r, &slots, c.viewport.width, c.viewport.height);
+    }
+
+    pub fn destroy(self, device: &Device, memory: &Memory) {
+        self.program.destroy(device, memory);
+    }
+}
