@@ -415,6 +415,10 @@ typedef struct HrtTraceCommon {
    * An HrtDebugOutput. Default HRT_DEBUG_DEFAULT.
    */
   uint32_t debug_output;
+  /**
+   * Checkerboard: half the pixels per ticket, alternating. Default false.
+   */
+  bool half_resolution_mode;
 } HrtTraceCommon;
 
 typedef struct HrtTraceAmbientOcclusionTask {

@@ -315,6 +315,8 @@ pub struct HrtTraceCommon {
     pub enable_bilinear_sampling: bool,
     /// An HrtDebugOutput. Default HRT_DEBUG_DEFAULT.
     pub debug_output: u32,
+    /// Checkerboard: half the pixels per ticket, alternating. Default false.
+    pub half_resolution_mode: bool,
 }
 
 /// Bakes a lit view into the direct-lighting caches (see the Rust docs of
@@ -664,6 +666,7 @@ pub(crate) fn trace_common(c: &HrtTraceCommon) -> Result<rt::TraceCommon, Failur
                 rt::DebugOutput::Barycentrics,
             ],
         )?,
+        half_resolution_mode: c.half_resolution_mode,
     })
 }
 
@@ -692,6 +695,7 @@ pub(crate) fn trace_common_default() -> HrtTraceCommon {
         use_inline_rt: d.use_inline_rt,
         enable_bilinear_sampling: d.enable_bilinear_sampling,
         debug_output: d.debug_output as u32,
+        half_resolution_mode: d.half_resolution_mode,
     }
 }
 

@@ -25,6 +25,7 @@ void hrt_ao_main(uvec2 local) {
     TraceCommon c = u_c.common_;
     if (any(greaterThanEqual(local, uvec2(c.viewport.zw)))) return;
     uvec2 pixel = local + uvec2(c.viewport.xy);
+    if (hrt_checkerboard_skip(c, pixel)) return;
 
     vec4 depth_texel = texelFetch(u_depth, ivec2(pixel), 0);
     vec3 p;

@@ -31,7 +31,7 @@ struct TraceCommon {
     uvec4 modes;          // depth type, normal type, normals in view space (0/1), ray offset type
     vec4 offset_world;    // threshold, float scale, int scale, unused
     vec4 offset_camera;   // constant, linear, quadratic, unused
-    uvec4 frame;          // random seed, TLAS instance mask, unused, unused
+    uvec4 frame;          // random seed, TLAS instance mask, half-resolution checkerboard (0/1), unused
 };
 
 // PCG hash (Jarzynski & Olano 2020): good quality, one multiply-add chain per call.
@@ -84,6 +84,12 @@ vec3 hrt_decode_normal(vec4 texel, uint normal_type) {
     case HRT_NORMAL_RG_NORMALIZED_OCTAHEDRON: return hrt_oct_decode(texel.xy * 2.0 - 1.0);
     default: return hrt_oct_decode(texel.zw * 2.0 - 1.0);
     }
+}
+
+// Checkerboard (half-resolution) mode: this ticket traces the pixels where x + y + seed is
+// even; the next ticket (seed + 1) traces the others. Skipped pixels are left untouched.
+bool hrt_checkerboard_skip(TraceCommon c, uvec2 pixel) {
+    return c.frame.z != 0u && ((pixel.x + pixel.y + c.frame.x) & 1u) != 0u;
 }
 
 // Pixel centre -> clip space for this viewport (Vulkan: y down, z in [0, 1]).

@@ -302,3 +302,46 @@ fn viewport_offsets_are_honoured() {
     drop(ctx);
     assert_no_validation_errors();
 }
+
+/// Half-resolution mode traces only its checkerboard, alternating between tickets.
+#[test]
+fn half_resolution_traces_only_its_checkerboard() {
+    use ash::vk;
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let (scene, camera) = sphere_on_plane();
+    let g = GBuffer::render(&Tracer::new(&scene), &camera, W, H);
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let mut frame = ctx.create_task_container();
+    let s = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    run_frame(&host, &ctx, &mut frame).unwrap();
+    let sentinel = -7.0f32;
+    let mut parities = Vec::new();
+    for _ in 0..2 {
+        let fill = vec![sentinel; (W * H) as usize];
+        let out = host
+            .image_with_data(vk::Format::R32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, bytemuck::cast_slice(&fill), vk::ImageLayout::GENERAL)
+            .unwrap();
+        let mut task = images.ao_task(&camera, 1.0, 1);
+        task.common.half_resolution_mode = true;
+        task.output = out.input(vk::ImageLayout::GENERAL);
+        frame.schedule_ambient_occlusion(&task).unwrap();
+        run_frame(&host, &ctx, &mut frame).unwrap();
+        let ao = host.read_image_f32(&out, vk::ImageLayout::GENERAL).unwrap();
+        // Written pixels form one colour of a checkerboard.
+        let parity = ((0..W * H).find(|&i| ao[i as usize] != sentinel).unwrap() / W + (0..W * H).find(|&i| ao[i as usize] != sentinel).unwrap() % W) % 2;
+        for y in 0..H {
+            for x in 0..W {
+                let written = ao[(y * W + x) as usize] != sentinel;
+                assert_eq!(written, (x + y) % 2 == parity, "pixel ({x}, {y})");
+            }
+        }
+        parities.push(parity);
+        host.destroy_image(out);
+    }
+    assert_ne!(parities[0], parities[1], "successive tickets trace the other half");
+    images.destroy(&host);
+    s.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+}

@@ -442,6 +442,10 @@ pub struct TraceCommon {
     pub enable_bilinear_sampling: bool,
     /// Default `DebugOutput::Default`.
     pub debug_output: DebugOutput,
+    /// Checkerboard: trace only the pixels where x + y + ticket serial is even (half the
+    /// rays); the others keep their previous contents, for the denoiser to fill. Successive
+    /// tickets alternate the pattern. Default false.
+    pub half_resolution_mode: bool,
 }
 
 impl Default for TraceCommon {
@@ -456,6 +460,7 @@ impl Default for TraceCommon {
             use_inline_rt: false,
             enable_bilinear_sampling: true,
             debug_output: DebugOutput::Default,
+            half_resolution_mode: false,
         }
     }
 }

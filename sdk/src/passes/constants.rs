@@ -55,7 +55,7 @@ impl TraceCommonGpu {
             ],
             offset_world: [o.world_threshold, o.world_float_scale, o.world_int_scale, 0.0],
             offset_camera: [o.cam_constant, o.cam_linear, o.cam_quadratic, 0.0],
-            frame: [seed, mask as u32, 0, 0],
+            frame: [seed, mask as u32, c.half_resolution_mode as u32, 0],
         }
     }
 }
