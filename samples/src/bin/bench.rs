@@ -27,6 +27,27 @@ fn main() {
     }
 }
 
+/// Median GPU time of `kind` over `frames` frames (after 3 warm-up frames), each frame
+/// scheduled by `schedule`.
+fn time_frames(
+    host: &Host,
+    ctx: &ExecuteContext,
+    frame: &mut hybrid_rt::TaskContainer,
+    frames: usize,
+    kind: TaskKind,
+    mut schedule: impl FnMut(&mut hybrid_rt::TaskContainer) -> Result<(), String>,
+) -> Result<f64, String> {
+    let mut times = Vec::new();
+    for i in 0..frames + 3 {
+        schedule(frame)?;
+        let ms = run_frame(host, ctx, frame)?.gpu_ms(kind);
+        if i >= 3 {
+            times.push(ms);
+        }
+    }
+    Ok(median(times))
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     if v.is_empty() {
@@ -231,15 +252,9 @@ fn run() -> Result<(), String> {
         camera: camera.sdk_camera(width, height),
         ..Default::default()
     };
-    let mut inject_ms = Vec::new();
-    for i in 0..frames + 3 {
-        frame.schedule_direct_lighting_injection(&inject).map_err(e)?;
-        let ms = run_frame(&host, &ctx, &mut frame)?.gpu_ms(TaskKind::DirectLightingInjection);
-        if i >= 3 {
-            inject_ms.push(ms);
-        }
-    }
-    let inject_ms = median(inject_ms);
+    let inject_ms = time_frames(&host, &ctx, &mut frame, frames, TaskKind::DirectLightingInjection, |f| {
+        f.schedule_direct_lighting_injection(&inject).map_err(e)
+    })?;
     let cache_bytes: Vec<u64> = gpu_scene.instances.iter().map(|h| ctx.instance_cache_bytes(*h).unwrap_or(0)).collect();
     let cache_total: u64 = cache_bytes.iter().sum();
     let cache_mean = cache_total as f64 / cache_bytes.len().max(1) as f64;
@@ -253,6 +268,38 @@ fn run() -> Result<(), String> {
         "  \"injection\": {{\"width\": {width}, \"height\": {height}, \"gpu_ms\": {inject_ms:.4}, \"tile_unit_length\": {tile_unit}, \"cache_bytes_total\": {cache_total}, \"cache_bytes_mean_per_instance\": {cache_mean:.0}}},"
     );
     host.destroy_image(lit);
+
+    // ---- 5. Shadows, diffuse GI and specular at one ray per pixel.
+    let rgba = host.image_cleared(
+        ash::vk::Format::R16G16B16A16_SFLOAT,
+        width,
+        height,
+        ash::vk::ImageUsageFlags::STORAGE,
+        ash::vk::ImageLayout::GENERAL,
+    )?;
+    let common = gbuffer.trace_common(&camera);
+    let output = rgba.input(ash::vk::ImageLayout::GENERAL);
+    let shadow = hybrid_rt::TraceShadowTask {
+        common,
+        light: hybrid_rt::LightInfo { direction: glam::Vec3::new(0.5, -1.0, 0.3), angular_extent: 0.02, ..Default::default() },
+        output,
+        rays_per_pixel: 1,
+    };
+    let shadow_ms = time_frames(&host, &ctx, &mut frame, frames, TaskKind::Shadow, |f| f.schedule_shadow(&shadow).map_err(e))?;
+    let diffuse = hybrid_rt::TraceDiffuseTask { common, output, ray_length: 100.0, ..Default::default() };
+    let diffuse_ms = time_frames(&host, &ctx, &mut frame, frames, TaskKind::Diffuse, |f| f.schedule_diffuse(&diffuse).map_err(e))?;
+    let mut glossy = common;
+    glossy.roughness.global_roughness = 0.3;
+    let specular = hybrid_rt::TraceSpecularTask { common: glossy, output, ray_length: 100.0, ..Default::default() };
+    let specular_ms = time_frames(&host, &ctx, &mut frame, frames, TaskKind::Specular, |f| f.schedule_specular(&specular).map_err(e))?;
+    for (name, ms) in [("Shadow (sun, 1 ray/pixel)", shadow_ms), ("Diffuse GI (1 ray/pixel)", diffuse_ms), ("Specular (roughness 0.3, 1 ray/pixel)", specular_ms)] {
+        rows.push((format!("{name} {width}x{height}"), format!("{ms:.3} ms")));
+    }
+    let _ = writeln!(
+        json,
+        "  \"traces\": {{\"width\": {width}, \"height\": {height}, \"shadow_gpu_ms\": {shadow_ms:.4}, \"diffuse_gpu_ms\": {diffuse_ms:.4}, \"specular_gpu_ms\": {specular_ms:.4}}},"
+    );
+    host.destroy_image(rgba);
     let mem = ctx.resource_allocations();
     let _ = writeln!(
         json,
