@@ -42,12 +42,12 @@ impl AoPass {
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
             ],
             vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE,
-            Shaders { raygen: shaders::AO_RGEN, misses: &[shaders::HIT_T_RMISS], closest_hits: &[shaders::HIT_T_RCHIT], any_hit: None },
+            Shaders { raygen: shaders::AO_RGEN, misses: &[shaders::HIT_T_RMISS], closest_hits: &[shaders::HIT_T_RCHIT], any_hit: None, inline: None },
         )?;
         let floor = program.variant(
             device,
             memory,
-            Shaders { raygen: shaders::AO_RGEN, misses: &[shaders::EMPTY_RMISS], closest_hits: &[shaders::EMPTY_RCHIT], any_hit: None },
+            Shaders { raygen: shaders::AO_RGEN, misses: &[shaders::EMPTY_RMISS], closest_hits: &[shaders::EMPTY_RCHIT], any_hit: None, inline: None },
         )?;
         let inline =
             if device.ray_query { Some(pipeline::compute_pipeline(&device.raw, program.layout, shaders::AO_COMP)?) } else { None };

@@ -41,13 +41,19 @@ impl DiffusePass {
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
             ],
-            vk::ShaderStageFlags::RAYGEN_KHR,
-            Shaders { raygen: shaders::DIFFUSE_RGEN, misses: &[shaders::HIT_RECORD_RMISS], closest_hits: &[shaders::HIT_RECORD_RCHIT], any_hit: None },
+            vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE,
+            Shaders {
+                raygen: shaders::DIFFUSE_RGEN,
+                misses: &[shaders::HIT_RECORD_RMISS],
+                closest_hits: &[shaders::HIT_RECORD_RCHIT],
+                any_hit: None,
+                inline: Some(shaders::DIFFUSE_COMP),
+            },
         )?;
         Ok(DiffusePass { program })
     }
 
-    pub fn record(&self, r: &mut Recording<'_>, task: &TraceDiffuseTask) {
+    pub fn record(&self, r: &mut Recording<'_>, inline: bool, task: &TraceDiffuseTask) {
         let table = r.instance_table;
         let m = task.miss_radiance;
         let constants = DiffuseConstantsGpu {
@@ -56,7 +62,7 @@ impl DiffusePass {
             params: [task.rays_per_pixel, task.common.enable_bilinear_sampling as u32, table as u32, (table >> 32) as u32],
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
-        let stage = vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR;
+        let stage = self.program.stage(inline);
         r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
         let slots = [
             Slot::Tlas(r.tlas),
@@ -66,7 +72,7 @@ impl DiffusePass {
             Slot::Uniform(ubo),
         ];
         let vp = &task.common.viewport;
-        self.program.trace(r, &slots, vp.width, vp.height);
+        self.program.run(r, &slots, vp.width, vp.height, inline);
     }
 
     pub fn destroy(self, device: &Device, memory: &Memory) {

@@ -13,6 +13,8 @@ pub(crate) struct RtProgram {
     set_layout: vk::DescriptorSetLayout,
     pub layout: vk::PipelineLayout,
     pub rt: RtPipeline,
+    /// The same body as a compute shader with ray queries (devices that have them).
+    inline: Option<vk::Pipeline>,
 }
 
 /// The shaders of a program.
@@ -21,6 +23,8 @@ pub(crate) struct Shaders<'a> {
     pub misses: &'a [&'a [u8]],
     pub closest_hits: &'a [&'a [u8]],
     pub any_hit: Option<&'a [u8]>,
+    /// The compute + ray-query twin of the raygen (same bindings), if the pass has one.
+    pub inline: Option<&'a [u8]>,
 }
 
 impl RtProgram {
@@ -29,7 +33,34 @@ impl RtProgram {
         let set_layout = pipeline::push_set_layout(d, bindings, stages)?;
         let layout = pipeline::pipeline_layout(d, set_layout)?;
         let rt = pipeline::rt_pipeline(device, memory, layout, shaders.raygen, shaders.misses, shaders.closest_hits, shaders.any_hit)?;
-        Ok(RtProgram { set_layout, layout, rt })
+        let inline = match (shaders.inline, device.ray_query) {
+            (Some(spirv), true) => Some(pipeline::compute_pipeline(d, layout, spirv)?),
+            _ => None,
+        };
+        Ok(RtProgram { set_layout, layout, rt, inline })
+    }
+
+    /// The stage the pass's shaders run in (for its barriers).
+    pub fn stage(&self, inline: bool) -> vk::PipelineStageFlags2 {
+        if inline && self.inline.is_some() {
+            vk::PipelineStageFlags2::COMPUTE_SHADER
+        } else {
+            vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR
+        }
+    }
+
+    /// Traces width x height through the pipeline, or with ray queries when `inline` is
+    /// asked for and available (8x8 compute groups); both give the same image.
+    pub fn run(&self, r: &mut Recording<'_>, slots: &[Slot<'_>], width: u32, height: u32, inline: bool) {
+        match self.inline.filter(|_| inline) {
+            Some(p) => {
+                let bind = vk::PipelineBindPoint::COMPUTE;
+                unsafe { r.device.raw.cmd_bind_pipeline(r.cmd, bind, p) };
+                descriptors::push(r.device, r.cmd, bind, self.layout, slots);
+                unsafe { r.device.raw.cmd_dispatch(r.cmd, width.div_ceil(8), height.div_ceil(8), 1) };
+            }
+            None => self.trace(r, slots, width, height),
+        }
     }
 
     /// Another pipeline over the same layout (e.g. a variant with other hit shaders).
@@ -57,6 +88,9 @@ impl RtProgram {
     }
 
     pub fn destroy(self, device: &Device, memory: &Memory) {
+        if let Some(p) = self.inline {
+            unsafe { device.raw.destroy_pipeline(p, None) };
+        }
         Self::destroy_pipeline(device, memory, self.rt);
         unsafe {
             device.raw.destroy_pipeline_layout(self.layout, None);

@@ -43,13 +43,19 @@ impl ShadowPass {
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
             ],
-            vk::ShaderStageFlags::RAYGEN_KHR,
-            Shaders { raygen: shaders::SHADOW_RGEN, misses: &[shaders::HIT_T_RMISS], closest_hits: &[shaders::HIT_T_RCHIT], any_hit: None },
+            vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE,
+            Shaders {
+                raygen: shaders::SHADOW_RGEN,
+                misses: &[shaders::HIT_RECORD_RMISS],
+                closest_hits: &[shaders::HIT_RECORD_RCHIT],
+                any_hit: None,
+                inline: Some(shaders::SHADOW_COMP),
+            },
         )?;
         Ok(ShadowPass { program })
     }
 
-    pub fn record(&self, r: &mut Recording<'_>, task: &TraceShadowTask) {
+    pub fn record(&self, r: &mut Recording<'_>, inline: bool, task: &TraceShadowTask) {
         let l = &task.light;
         let constants = ShadowConstantsGpu {
             common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::SHADOWS.0),
@@ -59,7 +65,7 @@ impl ShadowPass {
             counts: [task.rays_per_pixel, 0, 0, 0],
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
-        let stage = vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR;
+        let stage = self.program.stage(inline);
         r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
         let slots = [
             Slot::Tlas(r.tlas),
@@ -69,7 +75,7 @@ impl ShadowPass {
             Slot::Uniform(ubo),
         ];
         let vp = &task.common.viewport;
-        self.program.trace(r, &slots, vp.width, vp.height);
+        self.program.run(r, &slots, vp.width, vp.height, inline);
     }
 
     pub fn destroy(self, device: &Device, memory: &Memory) {

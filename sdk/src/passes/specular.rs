@@ -45,13 +45,19 @@ impl SpecularPass {
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
             ],
-            vk::ShaderStageFlags::RAYGEN_KHR,
-            Shaders { raygen: shaders::SPECULAR_RGEN, misses: &[shaders::HIT_RECORD_RMISS], closest_hits: &[shaders::HIT_RECORD_RCHIT], any_hit: None },
+            vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE,
+            Shaders {
+                raygen: shaders::SPECULAR_RGEN,
+                misses: &[shaders::HIT_RECORD_RMISS],
+                closest_hits: &[shaders::HIT_RECORD_RCHIT],
+                any_hit: None,
+                inline: Some(shaders::SPECULAR_COMP),
+            },
         )?;
         Ok(SpecularPass { program })
     }
 
-    pub fn record(&self, r: &mut Recording<'_>, task: &TraceSpecularTask) {
+    pub fn record(&self, r: &mut Recording<'_>, inline: bool, task: &TraceSpecularTask) {
         let c = &task.common;
         let table = r.instance_table;
         let m = task.miss_radiance;
@@ -63,7 +69,7 @@ impl SpecularPass {
             counts: [task.rays_per_pixel, c.enable_bilinear_sampling as u32, table as u32, (table >> 32) as u32],
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
-        let stage = vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR;
+        let stage = self.program.stage(inline);
         r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
         // Without a roughness image the binding still needs a valid view: the normals stand in
         // (the shader does not read it then).
@@ -76,7 +82,7 @@ impl SpecularPass {
             Slot::Storage(&task.output),
             Slot::Uniform(ubo),
         ];
-        self.program.trace(r, &slots, c.viewport.width, c.viewport.height);
+        self.program.run(r, &slots, c.viewport.width, c.viewport.height, inline);
     }
 
     pub fn destroy(self, device: &Device, memory: &Memory) {

@@ -54,6 +54,7 @@ impl TransferPass {
                 misses: &[shaders::TRANSFER_RMISS],
                 closest_hits: &[shaders::TRANSFER_RCHIT],
                 any_hit: Some(shaders::TRANSFER_RAHIT),
+                inline: None,
             },
         )?;
         Ok(TransferPass { program })

@@ -610,6 +610,19 @@ impl Shared {
             let tlas = ws.tlas.accel.as_ref().map(|a| a.accel).unwrap_or_default();
             let mut r =
                 Recording { device, cmd, ring: &mut ws.ring, hazards: &mut hazards, tlas, seed: serial as u32, instance_table };
+            // Inline ray queries where asked for and available; otherwise the pipeline (once
+            // a warning says so).
+            let wants_inline = match task {
+                Task::AmbientOcclusion(t) => t.common.use_inline_rt,
+                Task::Shadow(t) => t.common.use_inline_rt,
+                Task::Diffuse(t) => t.common.use_inline_rt,
+                Task::Specular(t) => t.common.use_inline_rt,
+                _ => false,
+            };
+            if wants_inline && !device.ray_query && !self.warned_inline.swap(true, Ordering::Relaxed) {
+                log::warn!("use_inline_rt: the device has no VK_KHR_ray_query enabled; using the ray-tracing pipeline");
+            }
+            let inline = wants_inline && device.ray_query;
             match task {
                 Task::AmbientOcclusion(t) if t.common.debug_output != DebugOutput::Default => {
                     st.debug.as_ref().expect("created in new").record(&mut r, &t.common, &t.output);
@@ -617,22 +630,16 @@ impl Shared {
                 Task::Shadow(t) if t.common.debug_output != DebugOutput::Default => {
                     st.debug.as_ref().expect("created in new").record(&mut r, &t.common, &t.output);
                 }
-                Task::Shadow(t) => st.shadow.as_ref().expect("created in new").record(&mut r, t),
+                Task::Shadow(t) => st.shadow.as_ref().expect("created in new").record(&mut r, inline, t),
                 Task::Diffuse(t) if t.common.debug_output != DebugOutput::Default => {
                     st.debug.as_ref().expect("created in new").record(&mut r, &t.common, &t.output);
                 }
-                Task::Diffuse(t) => st.diffuse.as_ref().expect("created in new").record(&mut r, t),
+                Task::Diffuse(t) => st.diffuse.as_ref().expect("created in new").record(&mut r, inline, t),
                 Task::Specular(t) if t.common.debug_output != DebugOutput::Default => {
                     st.debug.as_ref().expect("created in new").record(&mut r, &t.common, &t.output);
                 }
-                Task::Specular(t) => st.specular.as_ref().expect("created in new").record(&mut r, t),
-                Task::AmbientOcclusion(t) => {
-                    let inline = t.common.use_inline_rt && device.ray_query;
-                    if t.common.use_inline_rt && !device.ray_query && !self.warned_inline.swap(true, Ordering::Relaxed) {
-                        log::warn!("use_inline_rt: the device has no VK_KHR_ray_query enabled; using the ray-tracing pipeline");
-                    }
-                    st.ao.as_ref().expect("created in new").record(&mut r, t, inline, floor);
-                }
+                Task::Specular(t) => st.specular.as_ref().expect("created in new").record(&mut r, inline, t),
+                Task::AmbientOcclusion(t) => st.ao.as_ref().expect("created in new").record(&mut r, t, inline, floor),
                 Task::DirectLightingInjection(t) => cache::record_injection(
                     &mut r,
                     st.inject.as_ref().expect("created in new"),

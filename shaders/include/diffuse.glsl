@@ -1,0 +1,59 @@
+#ifndef HRT_DIFFUSE_GLSL
+#define HRT_DIFFUSE_GLSL
+// The body of the diffuse task; the includer provides hrt_trace_record and HRT_LAUNCH_ID
+// (include/trace_rt.glsl or include/trace_rq.glsl).
+// Diffuse GI: cosine-distributed rays from the G-buffer surface; each hit is shaded from the
+// direct-lighting cache of what it hits (bilinear for mesh colors), each miss takes the miss
+// radiance. Output is demodulated — the mean incoming radiance, E/pi, for the engine to
+// multiply by its albedo — with the mean hit distance (misses count as the ray length) in A,
+// for the denoiser.
+#include "common.glsl"
+#include "cache.glsl"
+
+layout(set = 0, binding = 0) uniform accelerationStructureEXT u_tlas;
+layout(set = 0, binding = 1) uniform sampler2D u_depth;
+layout(set = 0, binding = 2) uniform sampler2D u_normals;
+layout(set = 0, binding = 3) uniform writeonly image2D u_out;
+layout(set = 0, binding = 4, std140) uniform DiffuseConstants {
+    TraceCommon common_;
+    vec4 miss;        // miss radiance rgb, ray length
+    uvec4 params;     // rays per pixel, bilinear, instance table (uvec2)
+} u_c;
+
+
+void hrt_diffuse_main() {
+    TraceCommon c = u_c.common_;
+    if (any(greaterThanEqual(HRT_LAUNCH_ID, uvec2(c.viewport.zw)))) return;
+    uvec2 pixel = HRT_LAUNCH_ID + uvec2(c.viewport.xy);
+    if (hrt_checkerboard_skip(c, pixel)) return;
+    vec3 p;
+    if (!hrt_world_position(c, pixel, texelFetch(u_depth, ivec2(pixel), 0), p)) {
+        imageStore(u_out, ivec2(pixel), vec4(0.0));
+        return;
+    }
+    vec3 n = hrt_world_normal(c, texelFetch(u_normals, ivec2(pixel), 0));
+    vec3 origin = hrt_offset_ray(c, p, n);
+    mat3 basis = hrt_basis(n);
+    uint rays = u_c.params.x;
+    bool bilinear = u_c.params.y != 0u;
+    InstanceTable table = InstanceTable(u_c.params.zw);
+    float ray_length = u_c.miss.w;
+    uint seed = hrt_pcg(pixel.x ^ hrt_pcg(pixel.y ^ hrt_pcg(c.frame.x ^ 0xd1ffu)));
+    vec2 shift = vec2(hrt_u01(seed), hrt_u01(hrt_pcg(seed)));
+
+    vec3 sum = vec3(0.0);
+    float dist = 0.0;
+    for (uint i = 0u; i < rays; ++i) {
+        vec3 dir = basis * hrt_cosine_hemisphere(hrt_r2(i, shift));
+        HitRecord p_hit = hrt_trace_record(u_tlas, c.frame.y & 0xffu, origin, dir, ray_length);
+        if (p_hit.t < 0.0) {
+            sum += u_c.miss.rgb;
+            dist += ray_length;
+        } else {
+            sum += hrt_cache_radiance(table.v[p_hit.instance], p_hit.prim, p_hit.bary, bilinear);
+            dist += p_hit.t;
+        }
+    }
+    imageStore(u_out, ivec2(pixel), vec4(sum / float(rays), dist / float(rays)));
+}
+#endif

@@ -1,0 +1,102 @@
+#ifndef HRT_SPECULAR_GLSL
+#define HRT_SPECULAR_GLSL
+// The body of the specular task; the includer provides hrt_trace_record and HRT_LAUNCH_ID
+// (include/trace_rt.glsl or include/trace_rq.glsl).
+// Specular reflections shaded from the direct-lighting cache. Roughness 0 traces the exact
+// mirror direction (no noise, seeds/000); otherwise GGX visible normals are sampled (Heitz
+// 2018) and each sample weighs G1(L), the VNDF estimator of the Smith-GGX lobe with F = 1:
+// the output is demodulated by Fresnel — the engine multiplies by its F (or split-sum
+// specular albedo). RGB = mean weighted radiance, A = hit distance of the first ray (misses:
+// the ray length). An optional firefly clamp limits each sample's luminance (seeds/003).
+#include "common.glsl"
+#include "cache.glsl"
+
+layout(set = 0, binding = 0) uniform accelerationStructureEXT u_tlas;
+layout(set = 0, binding = 1) uniform sampler2D u_depth;
+layout(set = 0, binding = 2) uniform sampler2D u_normals;
+layout(set = 0, binding = 3) uniform sampler2D u_roughness;
+layout(set = 0, binding = 4) uniform writeonly image2D u_out;
+layout(set = 0, binding = 5, std140) uniform SpecularConstants {
+    TraceCommon common_;
+    vec4 roughness_mask;   // channel weights of the roughness image
+    vec4 params;           // global roughness, has image (0/1), ray length, firefly clamp (0 = off)
+    vec4 miss;             // miss radiance rgb, unused
+    uvec4 counts;          // rays per pixel, bilinear, instance table (uvec2)
+} u_c;
+
+
+// GGX visible normal in the local frame (z = normal), Heitz 2018, isotropic alpha.
+vec3 hrt_ggx_vndf(vec3 v, float alpha, vec2 u) {
+    vec3 vh = normalize(vec3(alpha * v.x, alpha * v.y, v.z));
+    float lensq = vh.x * vh.x + vh.y * vh.y;
+    vec3 t1 = lensq > 0.0 ? vec3(-vh.y, vh.x, 0.0) * inversesqrt(lensq) : vec3(1.0, 0.0, 0.0);
+    vec3 t2 = cross(vh, t1);
+    float r = sqrt(u.x);
+    float phi = 2.0 * HRT_PI * u.y;
+    float s = 0.5 * (1.0 + vh.z);
+    float p1 = r * cos(phi);
+    float p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * r * sin(phi);
+    vec3 nh = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh;
+    return normalize(vec3(alpha * nh.x, alpha * nh.y, max(0.0, nh.z)));
+}
+
+float hrt_smith_g1(float ndotx, float alpha) {
+    float a2 = alpha * alpha;
+    return 2.0 * ndotx / (ndotx + sqrt(a2 + (1.0 - a2) * ndotx * ndotx));
+}
+
+void hrt_specular_main() {
+    TraceCommon c = u_c.common_;
+    if (any(greaterThanEqual(HRT_LAUNCH_ID, uvec2(c.viewport.zw)))) return;
+    uvec2 pixel = HRT_LAUNCH_ID + uvec2(c.viewport.xy);
+    if (hrt_checkerboard_skip(c, pixel)) return;
+    vec3 p;
+    if (!hrt_world_position(c, pixel, texelFetch(u_depth, ivec2(pixel), 0), p)) {
+        imageStore(u_out, ivec2(pixel), vec4(0.0));
+        return;
+    }
+    vec3 n = hrt_world_normal(c, texelFetch(u_normals, ivec2(pixel), 0));
+    vec3 eye = c.view_to_world[3].xyz;
+    vec3 v = normalize(eye - p);
+    if (dot(v, n) <= 0.0) n = normalize(n + v * (1e-3 - dot(v, n))); // back-facing normal map
+    float roughness = u_c.params.x;
+    if (u_c.params.y != 0.0) roughness *= dot(texelFetch(u_roughness, ivec2(pixel), 0), u_c.roughness_mask);
+    roughness = clamp(roughness, 0.0, 1.0);
+    float alpha = roughness * roughness;
+    vec3 origin = hrt_offset_ray(c, p, n);
+    mat3 basis = hrt_basis(n);
+    vec3 v_local = transpose(basis) * v;
+    uint rays = alpha < 1e-4 ? 1u : u_c.counts.x;
+    bool bilinear = u_c.counts.y != 0u;
+    InstanceTable table = InstanceTable(u_c.counts.zw);
+    float ray_length = u_c.params.z;
+    float clamp_lum = u_c.params.w;
+    uint seed = hrt_pcg(pixel.x ^ hrt_pcg(pixel.y ^ hrt_pcg(c.frame.x ^ 0x5bec7u)));
+    vec2 shift = vec2(hrt_u01(seed), hrt_u01(hrt_pcg(seed)));
+
+    vec3 sum = vec3(0.0);
+    float first_t = ray_length;
+    for (uint i = 0u; i < rays; ++i) {
+        vec3 dir;
+        float weight = 1.0;
+        if (alpha < 1e-4) {
+            dir = reflect(-v, n);
+        } else {
+            vec3 h = basis * hrt_ggx_vndf(v_local, alpha, hrt_r2(i, shift));
+            dir = reflect(-v, h);
+            float ndotl = dot(n, dir);
+            if (ndotl <= 0.0) continue; // reflected below the surface: no light
+            weight = hrt_smith_g1(ndotl, alpha);
+        }
+        HitRecord p_hit = hrt_trace_record(u_tlas, c.frame.y & 0xffu, origin, dir, ray_length);
+        vec3 radiance = p_hit.t < 0.0 ? u_c.miss.rgb : hrt_cache_radiance(table.v[p_hit.instance], p_hit.prim, p_hit.bary, bilinear);
+        if (clamp_lum > 0.0) {
+            float lum = dot(radiance, vec3(0.2126, 0.7152, 0.0722));
+            if (lum > clamp_lum) radiance *= clamp_lum / lum;
+        }
+        sum += radiance * weight;
+        if (i == 0u && p_hit.t >= 0.0) first_t = p_hit.t;
+    }
+    imageStore(u_out, ivec2(pixel), vec4(sum / float(rays), first_t));
+}
+#endif

@@ -1,0 +1,14 @@
+// hrt_trace_record through the ray-tracing pipeline (raygen shaders): closest hit and miss are
+// shaders/hit_record.rchit / .rmiss.
+#ifndef HRT_TRACE_RT_GLSL
+#define HRT_TRACE_RT_GLSL
+#include "hit_record.glsl"
+layout(location = 0) rayPayloadEXT HitRecord p_hit;
+
+HitRecord hrt_trace_record(accelerationStructureEXT tlas, uint mask, vec3 origin, vec3 dir, float tmax) {
+    p_hit.t = -1.0;
+    traceRayEXT(tlas, gl_RayFlagsOpaqueEXT, mask, 0, 0, 0, origin, 0.0, dir, tmax, 0);
+    return p_hit;
+}
+#define HRT_LAUNCH_ID gl_LaunchIDEXT.xy
+#endif
