@@ -99,6 +99,11 @@ typedef enum HrtTaskKind {
   HRT_TASK_SPECULAR = 9,
 } HrtTaskKind;
 
+typedef enum HrtDiffuseBrdfType {
+  HRT_DIFFUSE_LAMBERTIAN = 0,
+  HRT_DIFFUSE_NORMALIZED_DISNEY = 1,
+} HrtDiffuseBrdfType;
+
 typedef enum HrtDebugOutput {
   HRT_DEBUG_DEFAULT = 0,
   HRT_DEBUG_DIRECT_LIGHTING_CACHE = 1,
@@ -574,6 +579,10 @@ typedef struct HrtTraceDiffuseTask {
    * Radiance of rays that hit nothing. Default black.
    */
   float miss_radiance[3];
+  /**
+   * An HrtDiffuseBrdfType. Default HRT_DIFFUSE_LAMBERTIAN.
+   */
+  uint32_t brdf;
 } HrtTraceDiffuseTask;
 
 /**

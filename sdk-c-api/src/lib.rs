@@ -573,6 +573,7 @@ pub extern "C" fn hrt_trace_diffuse_task_default() -> HrtTraceDiffuseTask {
         rays_per_pixel: d.rays_per_pixel,
         ray_length: d.ray_length,
         miss_radiance: d.miss_radiance,
+        brdf: d.brdf as u32,
     }
 }
 
@@ -589,6 +590,11 @@ pub unsafe extern "C" fn hrt_schedule_diffuse(container: *mut HrtTaskContainer, 
             rays_per_pixel: t.rays_per_pixel,
             ray_length: t.ray_length,
             miss_radiance: t.miss_radiance,
+            brdf: match t.brdf {
+                0 => rt::DiffuseBrdfType::Lambertian,
+                1 => rt::DiffuseBrdfType::NormalizedDisney,
+                v => return Err(Failure(HrtStatus::HRT_ERROR_INVALID_INPUT, format!("invalid HrtTraceDiffuseTask.brdf: {v}"))),
+            },
         })?)
     })
 }

@@ -399,6 +399,15 @@ pub struct HrtTraceDiffuseTask {
     pub ray_length: f32,
     /// Radiance of rays that hit nothing. Default black.
     pub miss_radiance: [f32; 3],
+    /// An HrtDiffuseBrdfType. Default HRT_DIFFUSE_LAMBERTIAN.
+    pub brdf: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtDiffuseBrdfType {
+    HRT_DIFFUSE_LAMBERTIAN = 0,
+    HRT_DIFFUSE_NORMALIZED_DISNEY = 1,
 }
 
 /// Specular reflections shaded from the cache (see the Rust docs of TraceSpecularTask).

@@ -18,7 +18,21 @@ layout(set = 0, binding = 4, std140) uniform DiffuseConstants {
     TraceCommon common_;
     vec4 miss;        // miss radiance rgb, ray length
     uvec4 params;     // rays per pixel, bilinear, instance table (uvec2)
+    vec4 roughness_mask;
+    vec4 brdf;        // BRDF type (0 Lambert, 1 normalized Disney), global roughness, has image, unused
 } u_c;
+layout(set = 0, binding = 5) uniform sampler2D u_roughness;
+
+// Normalized Disney diffuse relative to Lambert (Burley 2012 with Frostbite's energy
+// normalisation, Lagarde & de Rousiers 2014): 1 for a Lambertian surface.
+float hrt_disney_factor(float ndotl, float ndotv, float ldoth, float roughness) {
+    float energy_bias = mix(0.0, 0.5, roughness);
+    float energy_factor = mix(1.0, 1.0 / 1.51, roughness);
+    float fd90 = energy_bias + 2.0 * ldoth * ldoth * roughness;
+    float light = 1.0 + (fd90 - 1.0) * pow(1.0 - ndotl, 5.0);
+    float view = 1.0 + (fd90 - 1.0) * pow(1.0 - ndotv, 5.0);
+    return light * view * energy_factor;
+}
 
 
 void hrt_diffuse_main() {
@@ -34,6 +48,12 @@ void hrt_diffuse_main() {
     vec3 n = hrt_world_normal(c, texelFetch(u_normals, ivec2(pixel), 0));
     vec3 origin = hrt_offset_ray(c, p, n);
     mat3 basis = hrt_basis(n);
+    bool disney = u_c.brdf.x != 0.0;
+    float roughness = u_c.brdf.y;
+    if (u_c.brdf.z != 0.0) roughness *= dot(texelFetch(u_roughness, ivec2(pixel), 0), u_c.roughness_mask);
+    roughness = clamp(roughness, 0.0, 1.0);
+    vec3 v = normalize(c.view_to_world[3].xyz - p);
+    float ndotv = clamp(dot(n, v), 1e-4, 1.0);
     uint rays = u_c.params.x;
     bool bilinear = u_c.params.y != 0u;
     InstanceTable table = InstanceTable(u_c.params.zw);
@@ -45,12 +65,13 @@ void hrt_diffuse_main() {
     float dist = 0.0;
     for (uint i = 0u; i < rays; ++i) {
         vec3 dir = basis * hrt_cosine_hemisphere(hrt_r2(i, shift));
+        float w = disney ? hrt_disney_factor(max(dot(n, dir), 0.0), ndotv, dot(dir, normalize(dir + v)), roughness) : 1.0;
         HitRecord p_hit = hrt_trace_record(u_tlas, c.frame.y & 0xffu, origin, dir, ray_length);
         if (p_hit.t < 0.0) {
-            sum += u_c.miss.rgb;
+            sum += u_c.miss.rgb * w;
             dist += ray_length;
         } else {
-            sum += hrt_cache_radiance(table.v[p_hit.instance], p_hit.prim, p_hit.bary, bilinear);
+            sum += hrt_cache_radiance(table.v[p_hit.instance], p_hit.prim, p_hit.bary, bilinear) * w;
             dist += p_hit.t;
         }
     }

@@ -33,8 +33,27 @@ fn room() -> (Scene, Vec<[f32; 3]>, Camera) {
     (s, colours, Camera::look_at(Vec3::new(0.0, 1.8, 1.9), Vec3::new(0.0, 0.6, -1.0)))
 }
 
+/// Normalized Disney diffuse relative to Lambert (Frostbite / Burley), for the reference.
+fn disney_factor(ndotl: f32, ndotv: f32, ldoth: f32, roughness: f32) -> f32 {
+    let energy_bias = 0.5 * roughness;
+    let energy_factor = 1.0 + (1.0 / 1.51 - 1.0) * roughness;
+    let fd90 = energy_bias + 2.0 * ldoth * ldoth * roughness;
+    let light = 1.0 + (fd90 - 1.0) * (1.0 - ndotl).powi(5);
+    let view = 1.0 + (fd90 - 1.0) * (1.0 - ndotv).powi(5);
+    light * view * energy_factor
+}
+
 #[test]
 fn diffuse_gi_in_a_coloured_box_matches_the_reference() {
+    check_room(hybrid_rt::DiffuseBrdfType::Lambertian, 0.0);
+}
+
+#[test]
+fn normalized_disney_diffuse_matches_the_reference() {
+    check_room(hybrid_rt::DiffuseBrdfType::NormalizedDisney, 0.8);
+}
+
+fn check_room(brdf: hybrid_rt::DiffuseBrdfType, roughness: f32) {
     let (host, ctx) = host_and_context(InitSettings::default());
     let (scene, colours, camera) = room();
     let tracer = Tracer::new(&scene);
@@ -64,13 +83,10 @@ fn diffuse_gi_in_a_coloured_box_matches_the_reference() {
     run_frame(&host, &ctx, &mut frame).unwrap();
 
     let (rays, frames) = (16u32, 4u32);
-    let task = TraceDiffuseTask {
-        common: images.trace_common(&camera),
-        output: out.input(vk::ImageLayout::GENERAL),
-        rays_per_pixel: rays,
-        ray_length: 100.0,
-        miss_radiance: SKY,
-    };
+    let mut common = images.trace_common(&camera);
+    common.roughness.global_roughness = roughness;
+    let task = TraceDiffuseTask { common, output: out.input(vk::ImageLayout::GENERAL), rays_per_pixel: rays, ray_length: 100.0, miss_radiance: SKY, brdf };
+    let disney = brdf == hybrid_rt::DiffuseBrdfType::NormalizedDisney;
     let mut gpu = vec![[0.0f32; 4]; (W * H) as usize];
     for _ in 0..frames {
         frame.schedule_diffuse(&task).unwrap();
@@ -105,19 +121,23 @@ fn diffuse_gi_in_a_coloured_box_matches_the_reference() {
                     Some(h) => colours[h.instance as usize],
                     None => SKY,
                 };
+                let v = (camera.eye - p).normalize();
+                let w = if disney { disney_factor(n.dot(dir).max(0.0), n.dot(v).clamp(1e-4, 1.0), dir.dot((dir + v).normalize()), roughness) } else { 1.0 };
                 for k in 0..3 {
-                    reference[i][k] += c[k] / (strata * strata) as f32;
+                    reference[i][k] += c[k] * w / (strata * strata) as f32;
                 }
             }
         }
     }
-    // Each channel of a sample lies in [0, 0.9]: variance <= 0.9^2 / 4 per sample.
-    let sigma = 0.9 * stats::sample_sigma(rays * frames, strata * strata);
+    // Each channel of a sample lies in [0, 0.9 x max weight]: variance <= (that)^2 / 4 per
+    // sample. Disney's weight at roughness 0.8 is at most (1 + 1)^2 x 0.69 < 2.8.
+    let max_weight = if disney { 2.8 } else { 1.0 };
+    let sigma = 0.9 * max_weight * stats::sample_sigma(rays * frames, strata * strata);
     for k in 0..3 {
         let gpu_k: Vec<f32> = gpu.iter().map(|v| v[k]).collect();
         let ref_k: Vec<f32> = reference.iter().map(|v| v[k]).collect();
         let report = stats::compare_blocks(&gpu_k, &ref_k, W, H, 8, sigma, 0.01);
-        eprintln!("channel {k}: worst 8x8 block error {:.4} (tolerance {:.4}), mean |err| {:.4}", report.worst_block_error, report.tolerance, report.mean_abs_error);
+        eprintln!("{brdf:?} channel {k}: worst 8x8 block error {:.4} (tolerance {:.4}), mean |err| {:.4}", report.worst_block_error, report.tolerance, report.mean_abs_error);
         assert!(report.worst_block_error <= report.tolerance, "channel {k}");
     }
     // Colour bleeding is visible: the floor near the red wall is redder than near the green.

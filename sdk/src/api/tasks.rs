@@ -639,6 +639,18 @@ impl Default for TraceShadowTask {
 
 // ---------------------------------------------------------------- diffuse GI
 
+/// The diffuse BRDF that weighs each GI ray (both are normalized to Lambert's albedo).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum DiffuseBrdfType {
+    /// Lambertian: every direction weighs the same. Default.
+    #[default]
+    Lambertian = 0,
+    /// Burley's Disney diffuse with Frostbite's energy normalisation: rough surfaces
+    /// retro-reflect, smooth ones darken at grazing angles. Reads `common.roughness`.
+    NormalizedDisney = 1,
+}
+
 /// One bounce of diffuse GI shaded from the direct-lighting cache. Output (RGBA float):
 /// RGB = the mean incoming radiance over the cosine-weighted hemisphere (E/pi: multiply by
 /// your albedo for Lambertian outgoing light), A = the mean hit distance (misses count as
@@ -654,6 +666,8 @@ pub struct TraceDiffuseTask {
     pub ray_length: f32,
     /// Radiance of rays that hit nothing (a constant sky). Default black.
     pub miss_radiance: [f32; 3],
+    /// Default Lambertian.
+    pub brdf: DiffuseBrdfType,
 }
 
 impl Default for TraceDiffuseTask {
@@ -664,6 +678,7 @@ impl Default for TraceDiffuseTask {
             rays_per_pixel: 1,
             ray_length: 1000.0,
             miss_radiance: [0.0; 3],
+            brdf: DiffuseBrdfType::Lambertian,
         }
     }
 }

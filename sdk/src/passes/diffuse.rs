@@ -21,6 +21,8 @@ struct DiffuseConstantsGpu {
     common: TraceCommonGpu,
     miss: [f32; 4],
     params: [u32; 4],
+    roughness_mask: [f32; 4],
+    brdf: [f32; 4],
 }
 
 pub(crate) const UPLOAD_BYTES: u64 = std::mem::size_of::<DiffuseConstantsGpu>() as u64;
@@ -40,6 +42,7 @@ impl DiffusePass {
                 Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
+                Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
             ],
             vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE,
             Shaders {
@@ -60,6 +63,13 @@ impl DiffusePass {
             common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::DIFFUSE_GI.0),
             miss: [m[0], m[1], m[2], task.ray_length],
             params: [task.rays_per_pixel, task.common.enable_bilinear_sampling as u32, table as u32, (table >> 32) as u32],
+            roughness_mask: task.common.roughness.channel_mask,
+            brdf: [
+                task.brdf as u32 as f32,
+                task.common.roughness.global_roughness,
+                task.common.roughness.has_image() as u32 as f32,
+                0.0,
+            ],
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
         let stage = self.program.stage(inline);
@@ -70,6 +80,8 @@ impl DiffusePass {
             Slot::Sampled(&task.common.normals.image),
             Slot::Storage(&task.output),
             Slot::Uniform(ubo),
+            // Without a roughness image the normals stand in (not read then).
+            Slot::Sampled(if task.common.roughness.has_image() { &task.common.roughness.image } else { &task.common.normals.image }),
         ];
         let vp = &task.common.viewport;
         self.program.run(r, &slots, vp.width, vp.height, inline);
