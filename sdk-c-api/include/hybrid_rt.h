@@ -409,6 +409,11 @@ typedef struct HrtTraceCommon {
   struct HrtRayOffset ray_offset;
   struct HrtRoughnessInput roughness;
   /**
+   * Optional lit frame (image = VK_NULL_HANDLE for none): secondary hits on screen take
+   * its radiance, others the cache's.
+   */
+  struct HrtImageInput direct_lighting;
+  /**
    * Default false.
    */
   bool use_inline_rt;

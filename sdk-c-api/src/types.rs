@@ -309,6 +309,9 @@ pub struct HrtTraceCommon {
     pub camera: HrtCamera,
     pub ray_offset: HrtRayOffset,
     pub roughness: HrtRoughnessInput,
+    /// Optional lit frame (image = VK_NULL_HANDLE for none): secondary hits on screen take
+    /// its radiance, others the cache's.
+    pub direct_lighting: HrtImageInput,
     /// Default false.
     pub use_inline_rt: bool,
     /// Interpolate mesh-colors caches. Default true.
@@ -661,6 +664,7 @@ pub(crate) fn trace_common(c: &HrtTraceCommon) -> Result<rt::TraceCommon, Failur
             channel_mask: c.roughness.channel_mask,
             global_roughness: c.roughness.global_roughness,
         },
+        direct_lighting: image(&c.direct_lighting),
         use_inline_rt: c.use_inline_rt,
         enable_bilinear_sampling: c.enable_bilinear_sampling,
         debug_output: pick(
@@ -701,6 +705,7 @@ pub(crate) fn trace_common_default() -> HrtTraceCommon {
             channel_mask: d.roughness.channel_mask,
             global_roughness: d.roughness.global_roughness,
         },
+        direct_lighting: image_c(&d.direct_lighting),
         use_inline_rt: d.use_inline_rt,
         enable_bilinear_sampling: d.enable_bilinear_sampling,
         debug_output: d.debug_output as u32,

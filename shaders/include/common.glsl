@@ -22,7 +22,7 @@
 #define HRT_RAY_OFFSET_WORLD_POSITION 1u
 #define HRT_RAY_OFFSET_CAMERA_DISTANCE 2u
 
-// Camera and G-buffer description shared by every trace task (std140, 224 bytes).
+// Camera and G-buffer description shared by every trace task (std140, 288 bytes).
 struct TraceCommon {
     mat4 clip_to_world;   // inverse(view_to_clip * world_to_view)
     mat4 view_to_world;
@@ -31,7 +31,8 @@ struct TraceCommon {
     uvec4 modes;          // depth type, normal type, normals in view space (0/1), ray offset type
     vec4 offset_world;    // threshold, float scale, int scale, unused
     vec4 offset_camera;   // constant, linear, quadratic, unused
-    uvec4 frame;          // random seed, TLAS instance mask, half-resolution checkerboard (0/1), unused
+    uvec4 frame;          // random seed, TLAS instance mask, half-resolution checkerboard (0/1), has direct-lighting image (0/1)
+    mat4 world_to_clip;   // view_to_clip * world_to_view
 };
 
 // PCG hash (Jarzynski & Olano 2020): good quality, one multiply-add chain per call.

@@ -35,6 +35,15 @@ float hrt_disney_factor(float ndotl, float ndotv, float ldoth, float roughness) 
 }
 
 
+layout(set = 0, binding = 6) uniform sampler2D u_direct;
+#include "screen_lighting.glsl"
+
+vec3 hrt_hit_radiance(TraceCommon c, vec3 hit, InstanceGpu inst, uint prim, vec2 bary, bool bilinear) {
+    vec3 r;
+    if (hrt_screen_radiance(c, hit, r)) return r;
+    return hrt_cache_radiance(inst, prim, bary, bilinear);
+}
+
 void hrt_diffuse_main() {
     TraceCommon c = u_c.common_;
     if (any(greaterThanEqual(HRT_LAUNCH_ID, uvec2(c.viewport.zw)))) return;
@@ -71,7 +80,7 @@ void hrt_diffuse_main() {
             sum += u_c.miss.rgb * w;
             dist += ray_length;
         } else {
-            sum += hrt_cache_radiance(table.v[p_hit.instance], p_hit.prim, p_hit.bary, bilinear) * w;
+            sum += hrt_hit_radiance(c, origin + dir * p_hit.t, table.v[p_hit.instance], p_hit.prim, p_hit.bary, bilinear) * w;
             dist += p_hit.t;
         }
     }

@@ -45,6 +45,15 @@ float hrt_smith_g1(float ndotx, float alpha) {
     return 2.0 * ndotx / (ndotx + sqrt(a2 + (1.0 - a2) * ndotx * ndotx));
 }
 
+layout(set = 0, binding = 6) uniform sampler2D u_direct;
+#include "screen_lighting.glsl"
+
+vec3 hrt_hit_radiance(TraceCommon c, vec3 hit, InstanceGpu inst, uint prim, vec2 bary, bool bilinear) {
+    vec3 r;
+    if (hrt_screen_radiance(c, hit, r)) return r;
+    return hrt_cache_radiance(inst, prim, bary, bilinear);
+}
+
 void hrt_specular_main() {
     TraceCommon c = u_c.common_;
     if (any(greaterThanEqual(HRT_LAUNCH_ID, uvec2(c.viewport.zw)))) return;
@@ -89,7 +98,7 @@ void hrt_specular_main() {
             weight = hrt_smith_g1(ndotl, alpha);
         }
         HitRecord p_hit = hrt_trace_record(u_tlas, c.frame.y & 0xffu, origin, dir, ray_length);
-        vec3 radiance = p_hit.t < 0.0 ? u_c.miss.rgb : hrt_cache_radiance(table.v[p_hit.instance], p_hit.prim, p_hit.bary, bilinear);
+        vec3 radiance = p_hit.t < 0.0 ? u_c.miss.rgb : hrt_hit_radiance(c, origin + dir * p_hit.t, table.v[p_hit.instance], p_hit.prim, p_hit.bary, bilinear);
         if (clamp_lum > 0.0) {
             float lum = dot(radiance, vec3(0.2126, 0.7152, 0.0722));
             if (lum > clamp_lum) radiance *= clamp_lum / lum;

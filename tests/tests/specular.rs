@@ -229,3 +229,70 @@ fn glossy_reflections_converge_to_the_reference_and_read_the_roughness_channel()
     f.host.destroy_image(rough);
     f.finish();
 }
+
+/// With the lit image as direct-lighting input, a mirror shows the lit pixels where its
+/// reflection lands on screen, and the cache elsewhere.
+#[test]
+fn the_lit_image_lights_reflections_that_land_on_screen() {
+    let mut f = fixture();
+    // The lit image: the complement of each surface's cache colour, so the source is visible.
+    let lit_texels: Vec<[f32; 4]> = (0..f.g.depth.len())
+        .map(|i| {
+            if f.g.hit[i] {
+                let c = f.colours[f.g.instance[i] as usize];
+                [1.0 - c[0], 1.0 - c[1], 1.0 - c[2], 1.0]
+            } else {
+                [0.0; 4]
+            }
+        })
+        .collect();
+    let lit = f
+        .host
+        .image_with_data(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::SAMPLED, bytemuck::cast_slice(&lit_texels), READ)
+        .unwrap();
+    let mut mirror = f.task(RoughnessInput { global_roughness: 0.0, ..Default::default() }, 1);
+    mirror.common.direct_lighting = lit.input(READ);
+    let gpu = f.trace(&mirror, 1);
+    let world_to_clip = f.camera.view_to_clip(W as f32 / H as f32) * f.camera.world_to_view();
+    let offset = hybrid_rt::RayOffset::default();
+    let (mut same, mut total, mut from_screen) = (0, 0, 0);
+    for i in (0..f.g.depth.len()).filter(|&i| f.g.hit[i]) {
+        let (p, n) = (f.g.position[i], f.g.normal[i]);
+        let v = (f.camera.eye - p).normalize();
+        let dir = (-v) - 2.0 * (-v).dot(n) * n;
+        let origin = offset_origin(p, n, f.camera.eye, &offset);
+        let want = match f.tracer.closest_hit(origin, dir, 0.0, 100.0) {
+            None => SKY,
+            Some(h) => {
+                let hit = origin + dir * h.t;
+                let c = world_to_clip * hit.extend(1.0);
+                let ndc = c.truncate() / c.w;
+                let on_screen = c.w > 0.0 && ndc.x.abs() <= 1.0 && ndc.y.abs() <= 1.0;
+                let j = if on_screen {
+                    let px = ((ndc.x * 0.5 + 0.5) * W as f32).min(W as f32 - 1.0) as u32;
+                    let py = ((ndc.y * 0.5 + 0.5) * H as f32).min(H as f32 - 1.0) as u32;
+                    Some((py * W + px) as usize)
+                } else {
+                    None
+                };
+                match j.filter(|&j| f.g.hit[j] && f.g.position[j].distance(hit) <= 0.01 * hit.distance(f.camera.eye) + 1e-3) {
+                    Some(j) => {
+                        from_screen += 1;
+                        [lit_texels[j][0], lit_texels[j][1], lit_texels[j][2]]
+                    }
+                    None => f.colours[h.instance as usize],
+                }
+            }
+        };
+        total += 1;
+        if (0..3).all(|c| (gpu[i][c] - want[c]).abs() < 1e-4) {
+            same += 1;
+        }
+    }
+    eprintln!("lit input: {same} of {total} pixels as the reference; {from_screen} reflections from the screen");
+    assert!(from_screen > 100, "the test exercises on-screen hits");
+    // Pixels whose reflection lands on a screen pixel's edge may pick the neighbouring texel.
+    assert!(same as f32 >= 0.97 * total as f32);
+    f.host.destroy_image(lit);
+    f.finish();
+}

@@ -433,6 +433,11 @@ pub struct TraceCommon {
     pub ray_offset: RayOffset,
     /// Roughness, for specular traces.
     pub roughness: RoughnessInput,
+    /// Optional (leave `image` null for none): the lit frame of this view, as a direct-lighting
+    /// source for secondary hits. A diffuse or specular hit that lands in the viewport where the
+    /// depth shows that surface takes this image's radiance, any other hit the cache's (the
+    /// guide's "Direct Lighting Input"). Same formats and layouts as injection's lit image.
+    pub direct_lighting: ImageInput,
     /// Trace with inline ray queries (a compute shader) when the device has them; otherwise
     /// (e.g. NVIDIA's Vulkan driver today) the ray-tracing pipeline is used and a warning is
     /// logged once. Both give the same image. Default false.
@@ -457,6 +462,7 @@ impl Default for TraceCommon {
             camera: Camera::default(),
             ray_offset: RayOffset::default(),
             roughness: RoughnessInput::default(),
+            direct_lighting: ImageInput::default(),
             use_inline_rt: false,
             enable_bilinear_sampling: true,
             debug_output: DebugOutput::Default,

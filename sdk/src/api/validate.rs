@@ -195,6 +195,10 @@ pub(crate) fn trace_common(c: &TraceCommon) -> Result<()> {
             expected: "a colour format with the channels the NormalType reads",
         });
     }
+    if c.direct_lighting.image != vk::Image::null() {
+        image("TraceCommon.direct_lighting", &c.direct_lighting, vp, INPUT_LAYOUTS)?;
+        format_in("TraceCommon.direct_lighting.format", c.direct_lighting.format, LIT_FORMATS, "an RGB(A) colour format")?;
+    }
     let r = &c.roughness;
     if r.has_image() {
         image("TraceCommon.roughness.image", &r.image, vp, INPUT_LAYOUTS)?;

@@ -15,6 +15,7 @@ pub(crate) struct TraceCommonGpu {
     pub offset_world: [f32; 4],
     pub offset_camera: [f32; 4],
     pub frame: [u32; 4],
+    pub world_to_clip: [f32; 16],
 }
 
 /// `AoConstants` in shaders/include/ao.glsl.
@@ -55,7 +56,8 @@ impl TraceCommonGpu {
             ],
             offset_world: [o.world_threshold, o.world_float_scale, o.world_int_scale, 0.0],
             offset_camera: [o.cam_constant, o.cam_linear, o.cam_quadratic, 0.0],
-            frame: [seed, mask as u32, c.half_resolution_mode as u32, 0],
+            frame: [seed, mask as u32, c.half_resolution_mode as u32, (c.direct_lighting.image != ash::vk::Image::null()) as u32],
+            world_to_clip: (c.camera.view_to_clip * c.camera.world_to_view).to_cols_array(),
         }
     }
 }
@@ -90,9 +92,10 @@ mod tests {
         assert_eq!(offset_of!(TraceCommonGpu, offset_world), 176);
         assert_eq!(offset_of!(TraceCommonGpu, offset_camera), 192);
         assert_eq!(offset_of!(TraceCommonGpu, frame), 208);
-        assert_eq!(size_of::<TraceCommonGpu>(), 224);
-        assert_eq!(offset_of!(AoConstantsGpu, params), 224);
-        assert_eq!(offset_of!(AoConstantsGpu, counts), 240);
-        assert_eq!(size_of::<AoConstantsGpu>(), 256);
+        assert_eq!(offset_of!(TraceCommonGpu, world_to_clip), 224);
+        assert_eq!(size_of::<TraceCommonGpu>(), 288);
+        assert_eq!(offset_of!(AoConstantsGpu, params), 288);
+        assert_eq!(offset_of!(AoConstantsGpu, counts), 304);
+        assert_eq!(size_of::<AoConstantsGpu>(), 320);
     }
 }

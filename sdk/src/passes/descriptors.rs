@@ -66,3 +66,13 @@ pub(crate) fn push(
     // SAFETY: every referenced array outlives this call; the layout has these bindings.
     unsafe { device.push.cmd_push_descriptor_set(cmd, bind_point, layout, 0, &writes) };
 }
+
+/// The direct-lighting image of a trace, or a stand-in view when there is none (the binding
+/// must hold a valid image; the shader does not read it then).
+pub(crate) fn direct_or(c: &crate::api::tasks::TraceCommon) -> &ImageInput {
+    if c.direct_lighting.image != vk::Image::null() {
+        &c.direct_lighting
+    } else {
+        &c.normals.image
+    }
+}

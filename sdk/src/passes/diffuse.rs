@@ -3,6 +3,7 @@
 use super::constants::TraceCommonGpu;
 use super::descriptors::Slot;
 use super::program::{RtProgram, Shaders};
+use super::descriptors::direct_or;
 use super::Recording;
 use crate::api::tasks::{InstanceInclusionMask, TraceDiffuseTask};
 use crate::error::Result;
@@ -43,6 +44,7 @@ impl DiffusePass {
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
                 Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
+                Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
             ],
             vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE,
             Shaders {
@@ -82,6 +84,7 @@ impl DiffusePass {
             Slot::Uniform(ubo),
             // Without a roughness image the normals stand in (not read then).
             Slot::Sampled(if task.common.roughness.has_image() { &task.common.roughness.image } else { &task.common.normals.image }),
+            Slot::Sampled(direct_or(&task.common)),
         ];
         let vp = &task.common.viewport;
         self.program.run(r, &slots, vp.width, vp.height, inline);

@@ -3,6 +3,7 @@
 use super::constants::TraceCommonGpu;
 use super::descriptors::Slot;
 use super::program::{RtProgram, Shaders};
+use super::descriptors::direct_or;
 use super::Recording;
 use crate::api::tasks::{InstanceInclusionMask, TraceSpecularTask};
 use crate::error::Result;
@@ -44,6 +45,7 @@ impl SpecularPass {
                 sampled(),
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
+                sampled(),
             ],
             vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE,
             Shaders {
@@ -81,6 +83,7 @@ impl SpecularPass {
             Slot::Sampled(roughness),
             Slot::Storage(&task.output),
             Slot::Uniform(ubo),
+            Slot::Sampled(direct_or(c)),
         ];
         self.program.run(r, &slots, c.viewport.width, c.viewport.height, inline);
     }
