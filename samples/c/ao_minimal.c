@@ -541,6 +541,28 @@ int main(void) {
     EXPECT(fabsf(gi_px[0] - 0.5f) < 1e-4f && fabsf(gi_px[2] - 0.5f) < 1e-4f, "the open corner sees the sky");
     free_image(gi);
 
+    /* ---- Specular: a mirror ground reflects the ceiling (its cache: magenta) at the centre
+     * and the sky at the corner. */
+    Image spec = make_image(VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT);
+    cmd = begin();
+    transition(cmd, spec.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL);
+    submit_and_wait(cmd);
+    HrtTraceSpecularTask mirror = hrt_trace_specular_task_default();
+    mirror.common = ao.common;
+    mirror.common.roughness.global_roughness = 0.0f;
+    mirror.output = sdk_image(&spec, VK_IMAGE_LAYOUT_GENERAL);
+    mirror.ray_length = 10.0f;
+    mirror.miss_radiance[1] = 0.25f;
+    CHECK_HRT(hrt_schedule_specular(frame, &mirror));
+    float spec_px[W * H * 4];
+    printf("specular frame:\n");
+    run_frame(ctx, frame, &spec, 16, spec_px);
+    const float *m = &spec_px[((H / 2) * W + W / 2) * 4];
+    printf("mirror at the centre: %.3f %.3f %.3f at %.3f; corner %.3f %.3f %.3f\n", m[0], m[1], m[2], m[3], spec_px[0], spec_px[1], spec_px[2]);
+    EXPECT(m[0] == 1.0f && m[1] == 0.0f && m[2] == 1.0f && fabsf(m[3] - 0.2f) < 0.01f, "the centre mirrors the ceiling");
+    EXPECT(spec_px[0] == 0.0f && spec_px[1] == 0.25f && spec_px[3] == 10.0f, "the corner mirrors the sky");
+    free_image(spec);
+
     /* ---- Frame 2: the ceiling instance removed: open everywhere. */
     HrtInstanceTask remove = hrt_instance_task_default();
     remove.handle = instances[1];
