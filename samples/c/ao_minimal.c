@@ -522,6 +522,32 @@ int main(void) {
     EXPECT(rg[0] < 0.0f && rg[1] == 1.0f, "the corner sees the light");
     free_image(shadow);
 
+    /* ---- Two lights in one pass: the same light twice gives the same visibility twice. */
+    Image vis = make_image(VK_FORMAT_R32_UINT, VK_IMAGE_USAGE_STORAGE_BIT);
+    Image packed = make_image(VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT);
+    cmd = begin();
+    transition(cmd, vis.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL);
+    transition(cmd, packed.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL);
+    submit_and_wait(cmd);
+    HrtLightInfo two[2] = {shadow_task.light, shadow_task.light};
+    two[1].position[0] = 50.0f; /* far to the side: the ceiling does not shadow the centre */
+    two[1].position[1] = 0.5f;
+    HrtTraceMultiShadowTask multi = hrt_trace_multi_shadow_task_default();
+    multi.common = ao.common;
+    multi.lights = two;
+    multi.light_count = 2;
+    multi.visibility = sdk_image(&vis, VK_IMAGE_LAYOUT_GENERAL);
+    multi.packed = sdk_image(&packed, VK_IMAGE_LAYOUT_GENERAL);
+    CHECK_HRT(hrt_schedule_multi_shadow(frame, &multi));
+    uint32_t words[W * H];
+    printf("multi-shadow frame:\n");
+    run_frame(ctx, frame, &vis, 4, (float *)words);
+    uint32_t centre_word = words[(H / 2) * W + W / 2];
+    printf("visibility at the centre: light 0 %u/255, light 1 %u/255\n", centre_word & 255u, (centre_word >> 8) & 255u);
+    EXPECT((centre_word & 255u) == 0u && ((centre_word >> 8) & 255u) == 255u, "light 0 blocked, light 1 visible");
+    free_image(vis);
+    free_image(packed);
+
     /* ---- Diffuse GI under a constant sky: the open corner sees the sky's radiance. */
     Image gi = make_image(VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT);
     cmd = begin();

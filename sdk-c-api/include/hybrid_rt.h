@@ -97,6 +97,7 @@ typedef enum HrtTaskKind {
   HRT_TASK_SHADOW = 7,
   HRT_TASK_DIFFUSE = 8,
   HRT_TASK_SPECULAR = 9,
+  HRT_TASK_MULTI_SHADOW = 10,
 } HrtTaskKind;
 
 typedef enum HrtDiffuseBrdfType {
@@ -617,6 +618,28 @@ typedef struct HrtTraceSpecularTask {
   float firefly_clamp;
 } HrtTraceSpecularTask;
 
+/**
+ * Shadows from 1..=16 lights in one pass (see the Rust docs of TraceMultiShadowTask): the
+ * lights are copied when the task is scheduled.
+ */
+typedef struct HrtTraceMultiShadowTask {
+  struct HrtTraceCommon common;
+  const struct HrtLightInfo *lights;
+  uint32_t light_count;
+  /**
+   * R32_UINT (<= 4 lights) or R32G32B32A32_UINT: 8 bits of visible fraction per light.
+   */
+  struct HrtImageInput visibility;
+  /**
+   * RGBA16F/32F for the multi-shadow denoiser.
+   */
+  struct HrtImageInput packed;
+  /**
+   * 1..=64. Default 1.
+   */
+  uint32_t rays_per_pixel;
+} HrtTraceMultiShadowTask;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -813,6 +836,11 @@ struct HrtTraceSpecularTask hrt_trace_specular_task_default(void);
 
 enum HrtStatus hrt_schedule_specular(struct HrtTaskContainer *container,
                                      const struct HrtTraceSpecularTask *task);
+
+struct HrtTraceMultiShadowTask hrt_trace_multi_shadow_task_default(void);
+
+enum HrtStatus hrt_schedule_multi_shadow(struct HrtTaskContainer *container,
+                                         const struct HrtTraceMultiShadowTask *task);
 
 #ifdef __cplusplus
 }  // extern "C"

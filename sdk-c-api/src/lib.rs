@@ -427,6 +427,7 @@ pub unsafe extern "C" fn hrt_mark_gpu_task_completed(
                         rt::TaskKind::Shadow => HrtTaskKind::HRT_TASK_SHADOW,
                         rt::TaskKind::Diffuse => HrtTaskKind::HRT_TASK_DIFFUSE,
                         rt::TaskKind::Specular => HrtTaskKind::HRT_TASK_SPECULAR,
+                        rt::TaskKind::MultiShadow => HrtTaskKind::HRT_TASK_MULTI_SHADOW,
                     },
                     task_index: t.task_index,
                     gpu_ms: t.gpu_ms,
@@ -626,5 +627,28 @@ pub unsafe extern "C" fn hrt_schedule_specular(container: *mut HrtTaskContainer,
             miss_radiance: t.miss_radiance,
             firefly_clamp: t.firefly_clamp,
         })?)
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn hrt_trace_multi_shadow_task_default() -> HrtTraceMultiShadowTask {
+    let out = types::ao_task_default().output;
+    HrtTraceMultiShadowTask {
+        common: types::trace_common_default(),
+        lights: std::ptr::null(),
+        light_count: 0,
+        visibility: out,
+        packed: out,
+        rays_per_pixel: 1,
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_schedule_multi_shadow(container: *mut HrtTaskContainer, task: *const HrtTraceMultiShadowTask) -> HrtStatus {
+    guard(|| {
+        let c = get_mut(container, "container")?;
+        let t = get(task, "task")?;
+        let lights = slice(t.lights, t.light_count, "task->lights")?;
+        Ok(c.inner.schedule_multi_shadow(&types::multi_shadow_task(t, lights)?)?)
     })
 }

@@ -430,6 +430,22 @@ pub struct HrtTraceSpecularTask {
     pub firefly_clamp: f32,
 }
 
+/// Shadows from 1..=16 lights in one pass (see the Rust docs of TraceMultiShadowTask): the
+/// lights are copied when the task is scheduled.
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtTraceMultiShadowTask {
+    pub common: HrtTraceCommon,
+    pub lights: *const HrtLightInfo,
+    pub light_count: u32,
+    /// R32_UINT (<= 4 lights) or R32G32B32A32_UINT: 8 bits of visible fraction per light.
+    pub visibility: HrtImageInput,
+    /// RGBA16F/32F for the multi-shadow denoiser.
+    pub packed: HrtImageInput,
+    /// 1..=64. Default 1.
+    pub rays_per_pixel: u32,
+}
+
 /// Resets an instance's cache to its initial colour.
 #[repr(C)]
 #[derive(Clone, Copy)]
@@ -467,6 +483,7 @@ pub enum HrtTaskKind {
     HRT_TASK_SHADOW = 7,
     HRT_TASK_DIFFUSE = 8,
     HRT_TASK_SPECULAR = 9,
+    HRT_TASK_MULTI_SHADOW = 10,
 }
 
 #[repr(C)]
@@ -782,20 +799,28 @@ impl From<rt::ResourceAllocations> for HrtResourceAllocations {
     }
 }
 
+pub(crate) fn light(l: &HrtLightInfo) -> Result<rt::LightInfo, Failure> {
+    Ok(rt::LightInfo {
+        light_type: pick("HrtLightInfo.light_type", l.light_type, &[rt::LightType::Directional, rt::LightType::Point, rt::LightType::Spot])?,
+        position: glam::Vec3::from_array(l.position),
+        direction: glam::Vec3::from_array(l.direction),
+        angular_extent: l.angular_extent,
+        radius: l.radius,
+        inner_cone: l.inner_cone,
+        outer_cone: l.outer_cone,
+    })
+}
+
 pub(crate) fn shadow_task(t: &HrtTraceShadowTask) -> Result<rt::TraceShadowTask, Failure> {
-    let l = &t.light;
-    Ok(rt::TraceShadowTask {
+    Ok(rt::TraceShadowTask { common: trace_common(&t.common)?, light: light(&t.light)?, output: image(&t.output), rays_per_pixel: t.rays_per_pixel })
+}
+
+pub(crate) fn multi_shadow_task(t: &HrtTraceMultiShadowTask, lights: &[HrtLightInfo]) -> Result<rt::TraceMultiShadowTask, Failure> {
+    Ok(rt::TraceMultiShadowTask {
         common: trace_common(&t.common)?,
-        light: rt::LightInfo {
-            light_type: pick("HrtLightInfo.light_type", l.light_type, &[rt::LightType::Directional, rt::LightType::Point, rt::LightType::Spot])?,
-            position: glam::Vec3::from_array(l.position),
-            direction: glam::Vec3::from_array(l.direction),
-            angular_extent: l.angular_extent,
-            radius: l.radius,
-            inner_cone: l.inner_cone,
-            outer_cone: l.outer_cone,
-        },
-        output: image(&t.output),
+        lights: lights.iter().map(light).collect::<Result<_, _>>()?,
+        visibility: image(&t.visibility),
+        packed: image(&t.packed),
         rays_per_pixel: t.rays_per_pixel,
     })
 }

@@ -9,9 +9,7 @@
 // negative where every ray reached the light; G (if present) = the fraction of rays that did.
 #include "common.glsl"
 
-#define HRT_LIGHT_DIRECTIONAL 0u
-#define HRT_LIGHT_POINT 1u
-#define HRT_LIGHT_SPOT 2u
+#include "light_sampling.glsl"
 
 layout(set = 0, binding = 0) uniform accelerationStructureEXT u_tlas;
 layout(set = 0, binding = 1) uniform sampler2D u_depth;
@@ -19,22 +17,10 @@ layout(set = 0, binding = 2) uniform sampler2D u_normals;
 layout(set = 0, binding = 3) uniform writeonly image2D u_out;
 layout(set = 0, binding = 4, std140) uniform ShadowConstants {
     TraceCommon common_;
-    vec4 position;    // xyz, light type in w (as float)
-    vec4 direction;   // direction the light travels (xyz), tan of half the angular extent (w)
-    vec4 shape;       // radius, unused...
+    LightGpu light;
     uvec4 counts;     // rays per pixel
 } u_c;
 
-
-// A uniform point in the unit disk (concentric map, Shirley & Chiu 1997).
-vec2 hrt_disk(vec2 u) {
-    vec2 o = 2.0 * u - 1.0;
-    if (o.x == 0.0 && o.y == 0.0) return vec2(0.0);
-    float r, phi;
-    if (abs(o.x) > abs(o.y)) { r = o.x; phi = (HRT_PI / 4.0) * (o.y / o.x); }
-    else { r = o.y; phi = (HRT_PI / 2.0) - (HRT_PI / 4.0) * (o.x / o.y); }
-    return r * vec2(cos(phi), sin(phi));
-}
 
 void hrt_shadow_main() {
     TraceCommon c = u_c.common_;
@@ -48,7 +34,6 @@ void hrt_shadow_main() {
     }
     vec3 n = hrt_world_normal(c, texelFetch(u_normals, ivec2(pixel), 0));
     vec3 origin = hrt_offset_ray(c, p, n);
-    uint type = uint(u_c.position.w);
     uint rays = u_c.counts.x;
     uint seed = hrt_pcg(pixel.x ^ hrt_pcg(pixel.y ^ hrt_pcg(c.frame.x ^ 0x5badu)));
     vec2 shift = vec2(hrt_u01(seed), hrt_u01(hrt_pcg(seed)));
@@ -56,23 +41,9 @@ void hrt_shadow_main() {
     float closest = 1e30;
     uint visible = 0u;
     for (uint i = 0u; i < rays; ++i) {
-        vec2 d = hrt_disk(hrt_r2(i, shift));
         vec3 dir;
         float tmax;
-        if (type == HRT_LIGHT_DIRECTIONAL) {
-            vec3 to_light = -normalize(u_c.direction.xyz);
-            mat3 b = hrt_basis(to_light);
-            dir = normalize(to_light + (b[0] * d.x + b[1] * d.y) * u_c.direction.w);
-            tmax = 1e30;
-        } else {
-            vec3 to_centre = u_c.position.xyz - origin;
-            mat3 b = hrt_basis(normalize(to_centre));
-            vec3 target = u_c.position.xyz + (b[0] * d.x + b[1] * d.y) * u_c.shape.x;
-            vec3 v = target - origin;
-            float len = length(v);
-            dir = v / max(len, 1e-20);
-            tmax = len * 0.9999;
-        }
+        hrt_light_ray(u_c.light, origin, hrt_r2(i, shift), dir, tmax);
         // Any occluder will do for visibility, but the guide's output wants the closest one.
         float t = hrt_trace_record(u_tlas, c.frame.y & 0xffu, origin, dir, tmax).t;
         if (t < 0.0) visible += 1u;

@@ -463,10 +463,10 @@ pub fn texel_size(format: vk::Format) -> usize {
     match format {
         vk::Format::R8_UNORM => 1,
         vk::Format::R16_SFLOAT | vk::Format::R16_UNORM | vk::Format::D16_UNORM | vk::Format::R8G8_UNORM => 2,
-        vk::Format::R32_SFLOAT | vk::Format::D32_SFLOAT | vk::Format::R8G8B8A8_UNORM | vk::Format::R16G16_SFLOAT
+        vk::Format::R32_SFLOAT | vk::Format::R32_UINT | vk::Format::D32_SFLOAT | vk::Format::R8G8B8A8_UNORM | vk::Format::R16G16_SFLOAT
         | vk::Format::A2B10G10R10_UNORM_PACK32 => 4,
         vk::Format::R16G16B16A16_SFLOAT | vk::Format::R32G32_SFLOAT => 8,
-        vk::Format::R32G32B32A32_SFLOAT => 16,
+        vk::Format::R32G32B32A32_SFLOAT | vk::Format::R32G32B32A32_UINT => 16,
         f => panic!("texel_size: add {f:?}"),
     }
 }

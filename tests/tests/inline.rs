@@ -34,7 +34,11 @@ fn pipeline_and_inline_ray_queries_give_the_same_images() {
     run_frame(&host, &ctx, &mut frame).unwrap(); // caches exist from here on
 
     let rgba = || host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
-    let outs: Vec<_> = (0..6).map(|_| rgba()).collect();
+    let mut outs: Vec<_> = (0..6).map(|_| rgba()).collect();
+    outs.extend((0..2).map(|_| rgba())); // multi-shadow packed outputs
+    let vis: Vec<_> = (0..2)
+        .map(|_| host.image_cleared(vk::Format::R32_UINT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap())
+        .collect();
     let mut common = images.trace_common(&camera);
     common.roughness = RoughnessInput { global_roughness: 0.4, ..Default::default() };
     for (k, inline) in [(0usize, false), (1, true)] {
@@ -45,16 +49,28 @@ fn pipeline_and_inline_ray_queries_give_the_same_images() {
         frame.schedule_shadow(&TraceShadowTask { common: c, light, output: out(k), rays_per_pixel: 4 }).unwrap();
         frame.schedule_diffuse(&TraceDiffuseTask { common: c, output: out(2 + k), rays_per_pixel: 4, miss_radiance: [0.2; 3], ..Default::default() }).unwrap();
         frame.schedule_specular(&TraceSpecularTask { common: c, output: out(4 + k), rays_per_pixel: 4, miss_radiance: [0.2; 3], ..Default::default() }).unwrap();
+        let sun = LightInfo { direction: Vec3::new(0.3, -1.0, 0.2), angular_extent: 0.1, ..Default::default() };
+        frame
+            .schedule_multi_shadow(&hybrid_rt::TraceMultiShadowTask {
+                common: c,
+                lights: vec![light, sun],
+                visibility: vis[k].input(vk::ImageLayout::GENERAL),
+                packed: out(6 + k),
+                rays_per_pixel: 4,
+            })
+            .unwrap();
     }
     run_frame(&host, &ctx, &mut frame).unwrap();
-    for (name, a, b) in [("shadow", 0, 1), ("diffuse", 2, 3), ("specular", 4, 5)] {
+    let words = |i: usize| -> Vec<u32> { bytemuck::cast_slice(&host.read_image(&vis[i], vk::ImageLayout::GENERAL).unwrap()).to_vec() };
+    assert_eq!(words(0), words(1), "multi-shadow visibility");
+    for (name, a, b) in [("shadow", 0, 1), ("diffuse", 2, 3), ("specular", 4, 5), ("multi-shadow packed", 6, 7)] {
         let read = |i: usize| -> Vec<[f32; 4]> { bytemuck::cast_slice(&host.read_image(&outs[i], vk::ImageLayout::GENERAL).unwrap()).to_vec() };
         let (pa, pb) = (read(a), read(b));
         let differ = pa.iter().zip(&pb).filter(|(x, y)| (0..4).any(|c| (x[c] - y[c]).abs() > 1e-4 * (1.0 + x[c].abs()))).count();
         eprintln!("{name}: {differ} of {} pixels differ between pipeline and inline", pa.len());
         assert!(differ * 100 <= pa.len(), "{name}: {differ} pixels differ");
     }
-    for o in outs {
+    for o in outs.into_iter().chain(vis) {
         host.destroy_image(o);
     }
     images.destroy(&host);

@@ -143,3 +143,71 @@ fn bad_lights_are_refused() {
     drop(ctx);
     assert_no_validation_errors();
 }
+
+/// Multi-light visibility equals the single-light results, light by light.
+#[test]
+fn multi_light_visibility_equals_single_light_results() {
+    use hybrid_rt::TraceMultiShadowTask;
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let (scene, camera) = scene();
+    let g = GBuffer::render(&Tracer::new(&scene), &camera, W, H);
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let mut frame = ctx.create_task_container();
+    let s = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    run_frame(&host, &ctx, &mut frame).unwrap();
+    let lights = vec![
+        LightInfo { light_type: LightType::Directional, direction: Vec3::new(1.2, -1.0, 0.6), ..Default::default() },
+        LightInfo { light_type: LightType::Point, position: Vec3::new(0.3, 3.0, 0.0), radius: 0.5, ..Default::default() },
+        LightInfo { light_type: LightType::Spot, position: Vec3::new(-1.5, 2.5, 0.5), direction: Vec3::new(0.5, -1.0, 0.0), radius: 0.1, ..Default::default() },
+    ];
+    let rays = 8;
+    let rg = || host.image_cleared(vk::Format::R32G32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
+    let singles: Vec<_> = lights.iter().map(|_| rg()).collect();
+    let visibility = host.image_cleared(vk::Format::R32_UINT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
+    let packed = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
+    let common = images.trace_common(&camera);
+    for (l, out) in lights.iter().zip(&singles) {
+        frame.schedule_shadow(&TraceShadowTask { common, light: *l, output: out.input(vk::ImageLayout::GENERAL), rays_per_pixel: rays }).unwrap();
+    }
+    frame
+        .schedule_multi_shadow(&TraceMultiShadowTask {
+            common,
+            lights: lights.clone(),
+            visibility: visibility.input(vk::ImageLayout::GENERAL),
+            packed: packed.input(vk::ImageLayout::GENERAL),
+            rays_per_pixel: rays,
+        })
+        .unwrap();
+    let done = run_frame(&host, &ctx, &mut frame).unwrap();
+    assert!(done.timings.iter().any(|t| t.kind == hybrid_rt::TaskKind::MultiShadow));
+    let words: Vec<u32> = bytemuck::cast_slice(&host.read_image(&visibility, vk::ImageLayout::GENERAL).unwrap()).to_vec();
+    let pk: Vec<[f32; 4]> = bytemuck::cast_slice(&host.read_image(&packed, vk::ImageLayout::GENERAL).unwrap()).to_vec();
+    let mut mean = vec![0.0f32; words.len()];
+    let mut partial = 0;
+    for (k, out) in singles.iter().enumerate() {
+        let single: Vec<[f32; 2]> = bytemuck::cast_slice(&host.read_image(out, vk::ImageLayout::GENERAL).unwrap()).to_vec();
+        for i in 0..words.len() {
+            let byte = (words[i] >> (8 * k)) & 255;
+            assert_eq!(byte, (single[i][1] * 255.0).round() as u32, "light {k}, pixel {i}");
+            mean[i] += single[i][1] / lights.len() as f32;
+            partial += (single[i][1] > 0.0 && single[i][1] < 1.0) as usize;
+        }
+    }
+    for i in 0..words.len() {
+        assert!((pk[i][0] - mean[i]).abs() < 1e-5, "packed mean visibility at {i}");
+    }
+    assert!(partial > 20, "soft lights give partial visibility somewhere ({partial} pixels)");
+    // Too many lights, or too few channels for them, are refused.
+    let mut bad = TraceMultiShadowTask { common, lights: vec![lights[0]; 17], visibility: visibility.input(vk::ImageLayout::GENERAL), packed: packed.input(vk::ImageLayout::GENERAL), rays_per_pixel: 1 };
+    assert!(frame.schedule_multi_shadow(&bad).is_err());
+    bad.lights.truncate(5);
+    assert!(matches!(frame.schedule_multi_shadow(&bad), Err(hybrid_rt::Error::UnsupportedFormat { .. })), "5 lights need RGBA32_UINT");
+    for o in singles.into_iter().chain([visibility, packed]) {
+        host.destroy_image(o);
+    }
+    images.destroy(&host);
+    s.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+}

@@ -21,6 +21,7 @@ pub(crate) enum Task {
     Shadow(TraceShadowTask),
     Diffuse(TraceDiffuseTask),
     Specular(TraceSpecularTask),
+    MultiShadow(TraceMultiShadowTask),
 }
 
 /// Holds only a weak reference to its context: dropping the `ExecuteContext` frees the SDK's
@@ -76,6 +77,14 @@ impl TaskContainer {
         self.shared()?;
         validate::shadow(task)?;
         self.tasks.push(Task::Shadow(*task));
+        Ok(())
+    }
+
+    /// Shadows from several lights in one pass (see `TraceMultiShadowTask`).
+    pub fn schedule_multi_shadow(&mut self, task: &TraceMultiShadowTask) -> Result<()> {
+        self.shared()?;
+        validate::multi_shadow(task)?;
+        self.tasks.push(Task::MultiShadow(task.clone()));
         Ok(())
     }
 

@@ -643,6 +643,33 @@ impl Default for TraceShadowTask {
     }
 }
 
+/// Most lights one `TraceMultiShadowTask` traces.
+pub const MAX_SHADOW_LIGHTS: usize = 16;
+
+/// Shadows from several lights in one pass (1..=16; each light gets `rays_per_pixel` rays,
+/// sampled as in `TraceShadowTask`).
+/// - `visibility` (R32_UINT for up to 4 lights, R32G32B32A32_UINT for up to 16): per light, the
+///   visible fraction x 255 in 8 bits; light i is in channel i / 4 at bits 8 * (i % 4).
+/// - `packed` (RGBA16F/32F), for the multi-shadow denoiser (its layout may change with it):
+///   mean visibility over the lights, mean and min occluder distance (0 if none), and the
+///   surface's distance to the camera.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TraceMultiShadowTask {
+    pub common: TraceCommon,
+    pub lights: Vec<LightInfo>,
+    pub visibility: ImageInput,
+    pub packed: ImageInput,
+    /// Rays per pixel and light, 1..=64. Default 1.
+    pub rays_per_pixel: u32,
+}
+
+impl Default for TraceMultiShadowTask {
+    fn default() -> Self {
+        let general = ImageInput { layout: vk::ImageLayout::GENERAL, ..Default::default() };
+        TraceMultiShadowTask { common: TraceCommon::default(), lights: Vec::new(), visibility: general, packed: general, rays_per_pixel: 1 }
+    }
+}
+
 // ---------------------------------------------------------------- diffuse GI
 
 /// The diffuse BRDF that weighs each GI ray (both are normalized to Lambert's albedo).

@@ -48,6 +48,7 @@ pub enum TaskKind {
     Shadow = 7,
     Diffuse = 8,
     Specular = 9,
+    MultiShadow = 10,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]

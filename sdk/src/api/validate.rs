@@ -307,19 +307,7 @@ pub(crate) fn shadow(t: &TraceShadowTask) -> Result<()> {
     }
     image("TraceShadowTask.output", &t.output, &t.common.viewport, &[vk::ImageLayout::GENERAL])?;
     format_in("TraceShadowTask.output", t.output.format, SHADOW_OUTPUT_FORMATS, "a signed float format (R16/R32, RG or RGBA)")?;
-    let l = &t.light;
-    if !l.position.is_finite() || !l.direction.is_finite() {
-        return Err(Error::invalid("TraceShadowTask.light", "position or direction is not finite"));
-    }
-    if l.light_type != LightType::Point && l.direction.length_squared() < 1e-12 {
-        return Err(Error::invalid("TraceShadowTask.light.direction", "is zero"));
-    }
-    if !(l.angular_extent.is_finite() && (0.0..3.0).contains(&l.angular_extent)) {
-        return Err(Error::invalid("TraceShadowTask.light.angular_extent", "must be in [0, 3) radians"));
-    }
-    if !(l.radius.is_finite() && l.radius >= 0.0) {
-        return Err(Error::invalid("TraceShadowTask.light.radius", "must be finite and >= 0"));
-    }
+    light("TraceShadowTask.light", &t.light)?;
     if !(1..=64).contains(&t.rays_per_pixel) {
         return Err(Error::invalid("TraceShadowTask.rays_per_pixel", format!("{} is not in 1..=64", t.rays_per_pixel)));
     }
@@ -364,6 +352,48 @@ pub(crate) fn specular(t: &TraceSpecularTask) -> Result<()> {
     }
     if t.miss_radiance.iter().any(|c| !c.is_finite() || *c < 0.0) || !(t.firefly_clamp.is_finite() && t.firefly_clamp >= 0.0) {
         return Err(Error::invalid("TraceSpecularTask", "miss_radiance and firefly_clamp must be finite and >= 0"));
+    }
+    Ok(())
+}
+
+fn light(what: &'static str, l: &LightInfo) -> Result<()> {
+    if !l.position.is_finite() || !l.direction.is_finite() {
+        return Err(Error::invalid(what, "position or direction is not finite"));
+    }
+    if l.light_type != LightType::Point && l.direction.length_squared() < 1e-12 {
+        return Err(Error::invalid(what, "direction is zero"));
+    }
+    if !(l.angular_extent.is_finite() && (0.0..3.0).contains(&l.angular_extent)) {
+        return Err(Error::invalid(what, "angular_extent must be in [0, 3) radians"));
+    }
+    if !(l.radius.is_finite() && l.radius >= 0.0) {
+        return Err(Error::invalid(what, "radius must be finite and >= 0"));
+    }
+    Ok(())
+}
+
+pub(crate) fn multi_shadow(t: &TraceMultiShadowTask) -> Result<()> {
+    trace_common(&t.common)?;
+    if t.lights.is_empty() || t.lights.len() > MAX_SHADOW_LIGHTS {
+        return Err(Error::invalid("TraceMultiShadowTask.lights", format!("{} lights: 1..={MAX_SHADOW_LIGHTS} are supported", t.lights.len())));
+    }
+    for l in &t.lights {
+        light("TraceMultiShadowTask.lights[]", l)?;
+    }
+    let vp = &t.common.viewport;
+    image("TraceMultiShadowTask.visibility", &t.visibility, vp, &[vk::ImageLayout::GENERAL])?;
+    let vis_formats: &[vk::Format] =
+        if t.lights.len() <= 4 { &[vk::Format::R32_UINT, vk::Format::R32G32B32A32_UINT] } else { &[vk::Format::R32G32B32A32_UINT] };
+    format_in("TraceMultiShadowTask.visibility", t.visibility.format, vis_formats, "R32_UINT (up to 4 lights) or R32G32B32A32_UINT")?;
+    image("TraceMultiShadowTask.packed", &t.packed, vp, &[vk::ImageLayout::GENERAL])?;
+    format_in(
+        "TraceMultiShadowTask.packed",
+        t.packed.format,
+        &[vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT],
+        "R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT",
+    )?;
+    if !(1..=64).contains(&t.rays_per_pixel) {
+        return Err(Error::invalid("TraceMultiShadowTask.rays_per_pixel", format!("{} is not in 1..=64", t.rays_per_pixel)));
     }
     Ok(())
 }

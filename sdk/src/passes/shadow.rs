@@ -4,7 +4,7 @@ use super::constants::TraceCommonGpu;
 use super::descriptors::Slot;
 use super::program::{RtProgram, Shaders};
 use super::Recording;
-use crate::api::tasks::{InstanceInclusionMask, LightType, TraceShadowTask};
+use crate::api::tasks::{InstanceInclusionMask, LightInfo, LightType, TraceMultiShadowTask, TraceShadowTask};
 use crate::error::Result;
 use crate::gpu::device::Device;
 use crate::gpu::memory::Memory;
@@ -14,14 +14,31 @@ use crate::shaders;
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
-/// `ShadowConstants` in shaders/shadow.rgen.
+/// `LightGpu` in shaders/include/light_sampling.glsl.
+#[derive(Clone, Copy, Pod, Zeroable, Default)]
+#[repr(C)]
+pub(crate) struct LightGpu {
+    position: [f32; 4],
+    direction: [f32; 4],
+    shape: [f32; 4],
+}
+
+impl LightGpu {
+    pub fn new(l: &LightInfo) -> LightGpu {
+        LightGpu {
+            position: [l.position.x, l.position.y, l.position.z, l.light_type as u32 as f32],
+            direction: [l.direction.x, l.direction.y, l.direction.z, (l.angular_extent * 0.5).tan()],
+            shape: [if l.light_type == LightType::Directional { 0.0 } else { l.radius }, 0.0, 0.0, 0.0],
+        }
+    }
+}
+
+/// `ShadowConstants` in shaders/include/shadow.glsl.
 #[derive(Clone, Copy, Pod, Zeroable)]
 #[repr(C)]
 struct ShadowConstantsGpu {
     common: TraceCommonGpu,
-    position: [f32; 4],
-    direction: [f32; 4],
-    shape: [f32; 4],
+    light: LightGpu,
     counts: [u32; 4],
 }
 
@@ -56,12 +73,9 @@ impl ShadowPass {
     }
 
     pub fn record(&self, r: &mut Recording<'_>, inline: bool, task: &TraceShadowTask) {
-        let l = &task.light;
         let constants = ShadowConstantsGpu {
             common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::SHADOWS.0),
-            position: [l.position.x, l.position.y, l.position.z, l.light_type as u32 as f32],
-            direction: [l.direction.x, l.direction.y, l.direction.z, (l.angular_extent * 0.5).tan()],
-            shape: [if l.light_type == LightType::Directional { 0.0 } else { l.radius }, 0.0, 0.0, 0.0],
+            light: LightGpu::new(&task.light),
             counts: [task.rays_per_pixel, 0, 0, 0],
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
@@ -72,6 +86,77 @@ impl ShadowPass {
             Slot::Sampled(&task.common.depth.image),
             Slot::Sampled(&task.common.normals.image),
             Slot::Storage(&task.output),
+            Slot::Uniform(ubo),
+        ];
+        let vp = &task.common.viewport;
+        self.program.run(r, &slots, vp.width, vp.height, inline);
+    }
+
+    pub fn destroy(self, device: &Device, memory: &Memory) {
+        self.program.destroy(device, memory);
+    }
+}
+
+/// `MultiShadowConstants` in shaders/include/multi_shadow.glsl.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+struct MultiShadowConstantsGpu {
+    common: TraceCommonGpu,
+    counts: [u32; 4],
+    lights: [LightGpu; crate::api::tasks::MAX_SHADOW_LIGHTS],
+}
+
+pub(crate) const MULTI_UPLOAD_BYTES: u64 = std::mem::size_of::<MultiShadowConstantsGpu>() as u64;
+
+/// Shadows from several lights in one pass (`TraceMultiShadowTask`).
+pub(crate) struct MultiShadowPass {
+    program: RtProgram,
+}
+
+impl MultiShadowPass {
+    pub fn new(device: &Device, memory: &Memory, sampler: vk::Sampler) -> Result<MultiShadowPass> {
+        let program = RtProgram::new(
+            device,
+            memory,
+            &[
+                Binding { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, sampler: None },
+                Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
+                Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
+                Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
+                Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
+                Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
+            ],
+            vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE,
+            Shaders {
+                raygen: shaders::MULTI_SHADOW_RGEN,
+                misses: &[shaders::HIT_RECORD_RMISS],
+                closest_hits: &[shaders::HIT_RECORD_RCHIT],
+                any_hit: None,
+                inline: Some(shaders::MULTI_SHADOW_COMP),
+            },
+        )?;
+        Ok(MultiShadowPass { program })
+    }
+
+    pub fn record(&self, r: &mut Recording<'_>, inline: bool, task: &TraceMultiShadowTask) {
+        let mut lights = [LightGpu::default(); crate::api::tasks::MAX_SHADOW_LIGHTS];
+        for (g, l) in lights.iter_mut().zip(&task.lights) {
+            *g = LightGpu::new(l);
+        }
+        let constants = MultiShadowConstantsGpu {
+            common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::SHADOWS.0),
+            counts: [task.rays_per_pixel, task.lights.len() as u32, 0, 0],
+            lights,
+        };
+        let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
+        let stage = self.program.stage(inline);
+        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
+        let slots = [
+            Slot::Tlas(r.tlas),
+            Slot::Sampled(&task.common.depth.image),
+            Slot::Sampled(&task.common.normals.image),
+            Slot::Storage(&task.visibility),
+            Slot::Storage(&task.packed),
             Slot::Uniform(ubo),
         ];
         let vp = &task.common.viewport;

@@ -22,7 +22,7 @@ use crate::scene::geometry::{self, BlasState, GeometryLayout, GeometryRecord};
 use crate::scene::instance::{self, InstanceRecord, Placement};
 use crate::scene::tlas::{self, Tlas};
 use crate::cache::pool::{CachePool, CacheRange};
-use crate::passes::{cache_ops::CacheOps, debug::DebugPass, diffuse::DiffusePass, inject::InjectPass, shadow::ShadowPass, specular::SpecularPass, transfer::TransferPass};
+use crate::passes::{cache_ops::CacheOps, debug::DebugPass, diffuse::DiffusePass, inject::InjectPass, shadow::{MultiShadowPass, ShadowPass}, specular::SpecularPass, transfer::TransferPass};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 use parking_lot::Mutex;
@@ -87,6 +87,7 @@ struct State {
     shadow: Option<ShadowPass>,
     diffuse: Option<DiffusePass>,
     specular: Option<SpecularPass>,
+    multi_shadow: Option<MultiShadowPass>,
     cache_ops: Option<CacheOps>,
     cache_pool: CachePool,
     /// Cache ranges of destroyed/changed instances: (newest serial issued then, range).
@@ -150,6 +151,7 @@ impl ExecuteContext {
                 shadow: None,
                 diffuse: None,
                 specular: None,
+                multi_shadow: None,
                 cache_ops: None,
                 cache_pool: CachePool::default(),
                 cache_frees: Vec::new(),
@@ -169,6 +171,7 @@ impl ExecuteContext {
             st.shadow = Some(ShadowPass::new(&shared.device, &shared.memory, sampler)?);
             st.diffuse = Some(DiffusePass::new(&shared.device, &shared.memory, sampler)?);
             st.specular = Some(SpecularPass::new(&shared.device, &shared.memory, sampler)?);
+            st.multi_shadow = Some(MultiShadowPass::new(&shared.device, &shared.memory, sampler)?);
             st.cache_ops = Some(CacheOps::new(&shared.device)?);
             for _ in 0..settings.supported_working_sets {
                 let ws = shared.new_working_set(settings)?;
@@ -438,7 +441,7 @@ fn validate_handles(st: &State, tasks: &[Task]) -> Result<()> {
                 st.instances.get(t.source)?;
                 st.instances.get(t.target)?;
             }
-            Task::BvhBuild(_) | Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) | Task::Shadow(_) | Task::Diffuse(_) | Task::Specular(_) => {}
+            Task::BvhBuild(_) | Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) | Task::Shadow(_) | Task::Diffuse(_) | Task::Specular(_) | Task::MultiShadow(_) => {}
         }
     }
     Ok(())
@@ -537,7 +540,7 @@ impl Shared {
             .map(|i| i as u32);
         let has_render = tasks
             .iter()
-            .any(|t| matches!(t, Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) | Task::DirectLightTransfer(_) | Task::Shadow(_) | Task::Diffuse(_) | Task::Specular(_)));
+            .any(|t| matches!(t, Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) | Task::DirectLightTransfer(_) | Task::Shadow(_) | Task::Diffuse(_) | Task::Specular(_) | Task::MultiShadow(_)));
         let bvh_span = first_bvh.map(|i| timer(st, ws_index).begin(d, cmd, TaskKind::Bvh, i));
         self.apply_scene_tasks(st, ws_index, tasks, cmd, serial, &mut hazards)?;
         let max_builds: Option<u32> = tasks
@@ -582,6 +585,7 @@ impl Shared {
             .max(passes::shadow::UPLOAD_BYTES)
             .max(passes::diffuse::UPLOAD_BYTES)
             .max(passes::specular::UPLOAD_BYTES)
+            .max(passes::shadow::MULTI_UPLOAD_BYTES)
             + device.ubo_alignment;
         self.ensure_ring(st, ws_index, Self::instance_table_bytes(st) + tasks.len() as u64 * per_task)?;
         let instance_table = self.push_instance_table(st, ws_index);
@@ -593,6 +597,7 @@ impl Shared {
                 Task::Shadow(_) => TaskKind::Shadow,
                 Task::Diffuse(_) => TaskKind::Diffuse,
                 Task::Specular(_) => TaskKind::Specular,
+                Task::MultiShadow(_) => TaskKind::MultiShadow,
                 _ => continue,
             };
             let transfer_job = match task {
@@ -617,6 +622,7 @@ impl Shared {
                 Task::Shadow(t) => t.common.use_inline_rt,
                 Task::Diffuse(t) => t.common.use_inline_rt,
                 Task::Specular(t) => t.common.use_inline_rt,
+                Task::MultiShadow(t) => t.common.use_inline_rt,
                 _ => false,
             };
             if wants_inline && !device.ray_query && !self.warned_inline.swap(true, Ordering::Relaxed) {
@@ -639,6 +645,7 @@ impl Shared {
                     st.debug.as_ref().expect("created in new").record(&mut r, &t.common, &t.output);
                 }
                 Task::Specular(t) => st.specular.as_ref().expect("created in new").record(&mut r, inline, t),
+                Task::MultiShadow(t) => st.multi_shadow.as_ref().expect("created in new").record(&mut r, inline, t),
                 Task::AmbientOcclusion(t) => st.ao.as_ref().expect("created in new").record(&mut r, t, inline, floor),
                 Task::DirectLightingInjection(t) => cache::record_injection(
                     &mut r,
@@ -967,6 +974,9 @@ impl Drop for Shared {
             p.destroy(device, memory);
         }
         if let Some(p) = st.specular.take() {
+            p.destroy(device, memory);
+        }
+        if let Some(p) = st.multi_shadow.take() {
             p.destroy(device, memory);
         }
         if let Some(p) = st.cache_ops.take() {

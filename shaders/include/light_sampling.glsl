@@ -1,0 +1,44 @@
+// Rays towards a sized light, shared by the single- and multi-light shadow tasks.
+#ifndef HRT_LIGHT_SAMPLING_GLSL
+#define HRT_LIGHT_SAMPLING_GLSL
+#define HRT_LIGHT_DIRECTIONAL 0u
+#define HRT_LIGHT_POINT 1u
+#define HRT_LIGHT_SPOT 2u
+
+// A light as shaders see it (std140, 48 bytes).
+struct LightGpu {
+    vec4 position;   // xyz, light type (as float)
+    vec4 direction;  // direction the light travels, tan of half the angular extent
+    vec4 shape;      // radius, unused...
+};
+
+// A uniform point in the unit disk (concentric map, Shirley & Chiu 1997).
+vec2 hrt_disk(vec2 u) {
+    vec2 o = 2.0 * u - 1.0;
+    if (o.x == 0.0 && o.y == 0.0) return vec2(0.0);
+    float r, phi;
+    if (abs(o.x) > abs(o.y)) { r = o.x; phi = (HRT_PI / 4.0) * (o.y / o.x); }
+    else { r = o.y; phi = (HRT_PI / 2.0) - (HRT_PI / 4.0) * (o.x / o.y); }
+    return r * vec2(cos(phi), sin(phi));
+}
+
+// A ray from `origin` to a point of the light's extent picked by `u`: a cone of directions for
+// a directional light of angular size, a disk facing the origin for a point or spot light.
+void hrt_light_ray(LightGpu l, vec3 origin, vec2 u, out vec3 dir, out float tmax) {
+    vec2 d = hrt_disk(u);
+    if (uint(l.position.w) == HRT_LIGHT_DIRECTIONAL) {
+        vec3 to_light = -normalize(l.direction.xyz);
+        mat3 b = hrt_basis(to_light);
+        dir = normalize(to_light + (b[0] * d.x + b[1] * d.y) * l.direction.w);
+        tmax = 1e30;
+    } else {
+        vec3 to_centre = l.position.xyz - origin;
+        mat3 b = hrt_basis(normalize(to_centre));
+        vec3 target = l.position.xyz + (b[0] * d.x + b[1] * d.y) * l.shape.x;
+        vec3 v = target - origin;
+        float len = length(v);
+        dir = v / max(len, 1e-20);
+        tmax = len * 0.9999;
+    }
+}
+#endif
