@@ -402,6 +402,17 @@ typedef struct HrtRoughnessInput {
   float global_roughness;
 } HrtRoughnessInput;
 
+/**
+ * Specular colour: global_metalness * image.rgb (image != 0), global_metalness without.
+ */
+typedef struct HrtSpecularInput {
+  struct HrtImageInput image;
+  /**
+   * Default 1.0.
+   */
+  float global_metalness;
+} HrtSpecularInput;
+
 typedef struct HrtTraceCommon {
   struct HrtDepthInput depth;
   struct HrtNormalInput normals;
@@ -409,6 +420,7 @@ typedef struct HrtTraceCommon {
   struct HrtCamera camera;
   struct HrtRayOffset ray_offset;
   struct HrtRoughnessInput roughness;
+  struct HrtSpecularInput specular;
   /**
    * Optional lit frame (image = VK_NULL_HANDLE for none): secondary hits on screen take
    * its radiance, others the cache's.
@@ -616,6 +628,10 @@ typedef struct HrtTraceSpecularTask {
    * Largest luminance of one sample; 0 = off (default).
    */
   float firefly_clamp;
+  /**
+   * Optional (image = VK_NULL_HANDLE for none): the output without the specular colour.
+   */
+  struct HrtImageInput demodulated_output;
 } HrtTraceSpecularTask;
 
 /**

@@ -610,6 +610,7 @@ pub extern "C" fn hrt_trace_specular_task_default() -> HrtTraceSpecularTask {
         ray_length: d.ray_length,
         miss_radiance: d.miss_radiance,
         firefly_clamp: d.firefly_clamp,
+        demodulated_output: types::ao_task_default().output,
     }
 }
 
@@ -619,6 +620,7 @@ pub unsafe extern "C" fn hrt_schedule_specular(container: *mut HrtTaskContainer,
         let c = get_mut(container, "container")?;
         let t = get(task, "task")?;
         let ao = types::ao_task(&HrtTraceAmbientOcclusionTask { common: t.common, output: t.output, ..types::ao_task_default() })?;
+        let demod = types::ao_task(&HrtTraceAmbientOcclusionTask { output: t.demodulated_output, ..types::ao_task_default() })?.output;
         Ok(c.inner.schedule_specular(&rt::TraceSpecularTask {
             common: ao.common,
             output: ao.output,
@@ -626,6 +628,7 @@ pub unsafe extern "C" fn hrt_schedule_specular(container: *mut HrtTaskContainer,
             ray_length: t.ray_length,
             miss_radiance: t.miss_radiance,
             firefly_clamp: t.firefly_clamp,
+            demodulated_output: demod,
         })?)
     })
 }

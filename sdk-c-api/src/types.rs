@@ -300,6 +300,15 @@ pub struct HrtRoughnessInput {
     pub global_roughness: f32,
 }
 
+/// Specular colour: global_metalness * image.rgb (image != 0), global_metalness without.
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtSpecularInput {
+    pub image: HrtImageInput,
+    /// Default 1.0.
+    pub global_metalness: f32,
+}
+
 #[repr(C)]
 #[derive(Clone, Copy)]
 pub struct HrtTraceCommon {
@@ -309,6 +318,7 @@ pub struct HrtTraceCommon {
     pub camera: HrtCamera,
     pub ray_offset: HrtRayOffset,
     pub roughness: HrtRoughnessInput,
+    pub specular: HrtSpecularInput,
     /// Optional lit frame (image = VK_NULL_HANDLE for none): secondary hits on screen take
     /// its radiance, others the cache's.
     pub direct_lighting: HrtImageInput,
@@ -428,6 +438,8 @@ pub struct HrtTraceSpecularTask {
     pub miss_radiance: [f32; 3],
     /// Largest luminance of one sample; 0 = off (default).
     pub firefly_clamp: f32,
+    /// Optional (image = VK_NULL_HANDLE for none): the output without the specular colour.
+    pub demodulated_output: HrtImageInput,
 }
 
 /// Shadows from 1..=16 lights in one pass (see the Rust docs of TraceMultiShadowTask): the
@@ -681,6 +693,7 @@ pub(crate) fn trace_common(c: &HrtTraceCommon) -> Result<rt::TraceCommon, Failur
             channel_mask: c.roughness.channel_mask,
             global_roughness: c.roughness.global_roughness,
         },
+        specular: rt::SpecularInput { image: image(&c.specular.image), global_metalness: c.specular.global_metalness },
         direct_lighting: image(&c.direct_lighting),
         use_inline_rt: c.use_inline_rt,
         enable_bilinear_sampling: c.enable_bilinear_sampling,
@@ -722,6 +735,7 @@ pub(crate) fn trace_common_default() -> HrtTraceCommon {
             channel_mask: d.roughness.channel_mask,
             global_roughness: d.roughness.global_roughness,
         },
+        specular: HrtSpecularInput { image: image_c(&d.specular.image), global_metalness: d.specular.global_metalness },
         direct_lighting: image_c(&d.direct_lighting),
         use_inline_rt: d.use_inline_rt,
         enable_bilinear_sampling: d.enable_bilinear_sampling,

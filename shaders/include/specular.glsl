@@ -22,6 +22,7 @@ layout(set = 0, binding = 5, std140) uniform SpecularConstants {
     vec4 params;           // global roughness, has image (0/1), ray length, firefly clamp (0 = off)
     vec4 miss;             // miss radiance rgb, unused
     uvec4 counts;          // rays per pixel, bilinear, instance table (uvec2)
+    vec4 specular;         // global metalness, has specular image, has demodulated output, unused
 } u_c;
 
 
@@ -46,6 +47,8 @@ float hrt_smith_g1(float ndotx, float alpha) {
 }
 
 layout(set = 0, binding = 6) uniform sampler2D u_direct;
+layout(set = 0, binding = 7) uniform sampler2D u_specular;
+layout(set = 0, binding = 8) uniform writeonly image2D u_demodulated;
 #include "screen_lighting.glsl"
 
 vec3 hrt_hit_radiance(TraceCommon c, vec3 hit, InstanceGpu inst, uint prim, vec2 bary, bool bilinear) {
@@ -62,6 +65,7 @@ void hrt_specular_main() {
     vec3 p;
     if (!hrt_world_position(c, pixel, texelFetch(u_depth, ivec2(pixel), 0), p)) {
         imageStore(u_out, ivec2(pixel), vec4(0.0));
+        if (u_c.specular.z != 0.0) imageStore(u_demodulated, ivec2(pixel), vec4(0.0));
         return;
     }
     vec3 n = hrt_world_normal(c, texelFetch(u_normals, ivec2(pixel), 0));
@@ -106,6 +110,10 @@ void hrt_specular_main() {
         sum += radiance * weight;
         if (i == 0u && p_hit.t >= 0.0) first_t = p_hit.t;
     }
-    imageStore(u_out, ivec2(pixel), vec4(sum / float(rays), first_t));
+    vec3 demodulated = sum / float(rays);
+    vec3 spec = vec3(u_c.specular.x);
+    if (u_c.specular.y != 0.0) spec *= texelFetch(u_specular, ivec2(pixel), 0).rgb;
+    imageStore(u_out, ivec2(pixel), vec4(demodulated * spec, first_t));
+    if (u_c.specular.z != 0.0) imageStore(u_demodulated, ivec2(pixel), vec4(demodulated, first_t));
 }
 #endif

@@ -94,7 +94,7 @@ impl Fixture {
     fn task(&self, roughness: RoughnessInput, rays: u32) -> TraceSpecularTask {
         let mut common = self.images.trace_common(&self.camera);
         common.roughness = roughness;
-        TraceSpecularTask { common, output: self.out.input(vk::ImageLayout::GENERAL), rays_per_pixel: rays, ray_length: 100.0, miss_radiance: SKY, firefly_clamp: 0.0 }
+        TraceSpecularTask { common, output: self.out.input(vk::ImageLayout::GENERAL), rays_per_pixel: rays, ray_length: 100.0, miss_radiance: SKY, ..Default::default() }
     }
 
     fn radiance(&self, origin: Vec3, dir: Vec3) -> [f32; 3] {
@@ -294,5 +294,82 @@ fn the_lit_image_lights_reflections_that_land_on_screen() {
     // Pixels whose reflection lands on a screen pixel's edge may pick the neighbouring texel.
     assert!(same as f32 >= 0.97 * total as f32);
     f.host.destroy_image(lit);
+    f.finish();
+}
+
+/// The output is the demodulated radiance times the specular colour, channel by channel.
+#[test]
+fn specular_colour_modulates_and_the_demodulated_output_does_not() {
+    let mut f = fixture();
+    let spec_texels = vec![[0.9f32, 0.5, 0.1, 0.7]; (W * H) as usize];
+    let spec = f
+        .host
+        .image_with_data(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::SAMPLED, bytemuck::cast_slice(&spec_texels), READ)
+        .unwrap();
+    let demod = f.host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
+    let mut task = f.task(RoughnessInput { global_roughness: 0.3, ..Default::default() }, 4);
+    task.common.specular = hybrid_rt::SpecularInput { image: spec.input(READ), global_metalness: 0.5 };
+    task.demodulated_output = demod.input(vk::ImageLayout::GENERAL);
+    let main = f.trace(&task, 1);
+    let plain: Vec<[f32; 4]> = bytemuck::cast_slice(&f.host.read_image(&demod, vk::ImageLayout::GENERAL).unwrap()).to_vec();
+    let want = [0.45f32, 0.25, 0.05];
+    let mut lit = 0;
+    for (m, d) in main.iter().zip(&plain) {
+        for c in 0..3 {
+            assert!((m[c] - d[c] * want[c]).abs() <= 1e-5 * (1.0 + d[c]), "{m:?} vs {d:?}");
+        }
+        assert_eq!(m[3], d[3], "same hit distance");
+        lit += (d[0] > 0.01) as usize;
+    }
+    assert!(lit > 100);
+    f.host.destroy_image(spec);
+    f.host.destroy_image(demod);
+    f.finish();
+}
+
+/// Reflections off clear glass: a second specular task whose G-buffer is the glass pane's
+/// own (the pane is not in the TLAS, as transparent geometry usually is not).
+#[test]
+fn a_glass_pane_reflects_from_its_own_gbuffer() {
+    let mut f = fixture();
+    // A horizontal pane 0.5 above the floor, seen from the fixture's camera.
+    let mut pane = Scene::default();
+    let quad = pane.add_mesh(Mesh::grid(3.0, 1));
+    pane.add_instance(quad, Affine3A::from_translation(Vec3::new(0.0, 0.5, 0.0)));
+    let gp = GBuffer::render(&Tracer::new(&pane), &f.camera, W, H);
+    let glass = GBufferImages::upload(&f.host, &gp).unwrap();
+    let mut task = f.task(RoughnessInput { global_roughness: 0.0, ..Default::default() }, 1);
+    task.common = glass.trace_common(&f.camera);
+    task.common.roughness.global_roughness = 0.0;
+    let gpu = f.trace(&task, 1);
+    let offset = hybrid_rt::RayOffset::default();
+    let (mut same, mut total) = (0, 0);
+    for i in (0..gp.depth.len()).filter(|&i| gp.hit[i]) {
+        let (p, n) = (gp.position[i], gp.normal[i]);
+        let v = (f.camera.eye - p).normalize();
+        let dir = (-v) - 2.0 * (-v).dot(n) * n;
+        let want = f.radiance(offset_origin(p, n, f.camera.eye, &offset), dir);
+        total += 1;
+        same += (0..3).all(|c| (gpu[i][c] - want[c]).abs() < 1e-4) as usize;
+    }
+    eprintln!("glass: {same} of {total} pane pixels as the reference");
+    assert!(total > 300 && same as f32 >= 0.98 * total as f32);
+    glass.destroy(&f.host);
+    f.finish();
+}
+
+/// The firefly clamp caps each sample's luminance.
+#[test]
+fn the_firefly_clamp_caps_sample_luminance() {
+    let mut f = fixture();
+    let mut task = f.task(RoughnessInput { global_roughness: 0.5, ..Default::default() }, 4);
+    task.firefly_clamp = 0.05;
+    let clamped = f.trace(&task, 1);
+    let luminance = |c: &[f32; 4]| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+    // A mean of samples each at most 0.05 (times a lobe weight <= 1).
+    assert!(clamped.iter().all(|c| luminance(c) <= 0.05 + 1e-5));
+    task.firefly_clamp = 0.0;
+    let free = f.trace(&task, 1);
+    assert!(free.iter().any(|c| luminance(c) > 0.1), "without the clamp the walls are brighter");
     f.finish();
 }

@@ -292,12 +292,29 @@ fn run() -> Result<(), String> {
     glossy.roughness.global_roughness = 0.3;
     let specular = hybrid_rt::TraceSpecularTask { common: glossy, output, ray_length: 100.0, ..Default::default() };
     let specular_ms = time_frames(&host, &ctx, &mut frame, frames, TaskKind::Specular, |f| f.schedule_specular(&specular).map_err(e))?;
-    for (name, ms) in [("Shadow (sun, 1 ray/pixel)", shadow_ms), ("Diffuse GI (1 ray/pixel)", diffuse_ms), ("Specular (roughness 0.3, 1 ray/pixel)", specular_ms)] {
+    let vis = host.image_cleared(ash::vk::Format::R32_UINT, width, height, ash::vk::ImageUsageFlags::STORAGE, ash::vk::ImageLayout::GENERAL)?;
+    let multi = hybrid_rt::TraceMultiShadowTask {
+        common,
+        lights: (0..4)
+            .map(|k| hybrid_rt::LightInfo {
+                light_type: hybrid_rt::LightType::Point,
+                position: glam::Vec3::new(-6.0 + 4.0 * k as f32, 4.0, 0.0),
+                radius: 0.3,
+                ..Default::default()
+            })
+            .collect(),
+        visibility: vis.input(ash::vk::ImageLayout::GENERAL),
+        packed: output,
+        rays_per_pixel: 1,
+    };
+    let multi_ms = time_frames(&host, &ctx, &mut frame, frames, TaskKind::MultiShadow, |f| f.schedule_multi_shadow(&multi).map_err(e))?;
+    host.destroy_image(vis);
+    for (name, ms) in [("Multi-light shadows (4 point lights, 1 ray/pixel each)", multi_ms), ("Shadow (sun, 1 ray/pixel)", shadow_ms), ("Diffuse GI (1 ray/pixel)", diffuse_ms), ("Specular (roughness 0.3, 1 ray/pixel)", specular_ms)] {
         rows.push((format!("{name} {width}x{height}"), format!("{ms:.3} ms")));
     }
     let _ = writeln!(
         json,
-        "  \"traces\": {{\"width\": {width}, \"height\": {height}, \"shadow_gpu_ms\": {shadow_ms:.4}, \"diffuse_gpu_ms\": {diffuse_ms:.4}, \"specular_gpu_ms\": {specular_ms:.4}}},"
+        "  \"traces\": {{\"width\": {width}, \"height\": {height}, \"shadow_gpu_ms\": {shadow_ms:.4}, \"diffuse_gpu_ms\": {diffuse_ms:.4}, \"specular_gpu_ms\": {specular_ms:.4}, \"multi_shadow_4_lights_gpu_ms\": {multi_ms:.4}}},"
     );
     host.destroy_image(rgba);
     let mem = ctx.resource_allocations();

@@ -401,6 +401,22 @@ impl RoughnessInput {
     }
 }
 
+/// The specular colour the specular output is multiplied by (Kickstart RT's convention):
+/// `global_metalness * image.rgb`, or `global_metalness` without an image.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpecularInput {
+    /// Optional RGB specular colour (F0); leave `image` null for white.
+    pub image: ImageInput,
+    /// A scalar factor; 1.0 (default) in most cases, other values to debug without an image.
+    pub global_metalness: f32,
+}
+
+impl Default for SpecularInput {
+    fn default() -> Self {
+        SpecularInput { image: ImageInput::default(), global_metalness: 1.0 }
+    }
+}
+
 /// Debug visualisations. Any mode but `Default` replaces the task's output with an image made
 /// by primary rays from the task's camera through the SDK's TLAS (one per pixel centre of the
 /// viewport; the G-buffer is not read), into an output with four channels.
@@ -433,6 +449,8 @@ pub struct TraceCommon {
     pub ray_offset: RayOffset,
     /// Roughness, for specular traces.
     pub roughness: RoughnessInput,
+    /// Specular colour, for specular traces.
+    pub specular: SpecularInput,
     /// Optional (leave `image` null for none): the lit frame of this view, as a direct-lighting
     /// source for secondary hits. A diffuse or specular hit that lands in the viewport where the
     /// depth shows that surface takes this image's radiance, any other hit the cache's (the
@@ -462,6 +480,7 @@ impl Default for TraceCommon {
             camera: Camera::default(),
             ray_offset: RayOffset::default(),
             roughness: RoughnessInput::default(),
+            specular: SpecularInput::default(),
             direct_lighting: ImageInput::default(),
             use_inline_rt: false,
             enable_bilinear_sampling: true,
@@ -720,9 +739,12 @@ impl Default for TraceDiffuseTask {
 
 /// Specular reflections shaded from the direct-lighting cache. Roughness (from
 /// `common.roughness`) 0 traces the exact mirror direction; otherwise GGX visible normals are
-/// sampled. Output (RGBA float): RGB = reflected radiance weighted by the Smith-GGX lobe and
-/// demodulated by Fresnel (multiply by your F or specular albedo), A = hit distance of the
-/// first ray (misses: `ray_length`), for the denoiser.
+/// sampled. Output (RGBA float): RGB = reflected radiance weighted by the Smith-GGX lobe (no
+/// Fresnel) times the specular colour of `common.specular`; A = hit distance of the first ray
+/// (misses: `ray_length`), for the denoiser. `demodulated_output`, if set, receives the same
+/// without the specular colour (denoise that, then multiply back).
+/// Reflections off clear glass: a second task with the glass's own depth, normals and
+/// roughness as its G-buffer.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TraceSpecularTask {
     pub common: TraceCommon,
@@ -736,6 +758,8 @@ pub struct TraceSpecularTask {
     pub miss_radiance: [f32; 3],
     /// Largest luminance one sample may carry (fireflies); 0 = no clamp. Default 0.
     pub firefly_clamp: f32,
+    /// Optional (image null = none): same format rules as `output`.
+    pub demodulated_output: ImageInput,
 }
 
 impl Default for TraceSpecularTask {
@@ -747,6 +771,7 @@ impl Default for TraceSpecularTask {
             ray_length: 1000.0,
             miss_radiance: [0.0; 3],
             firefly_clamp: 0.0,
+            demodulated_output: ImageInput { layout: vk::ImageLayout::GENERAL, ..Default::default() },
         }
     }
 }

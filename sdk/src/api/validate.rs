@@ -344,6 +344,18 @@ pub(crate) fn specular(t: &TraceSpecularTask) -> Result<()> {
     } else {
         format_in("TraceSpecularTask.output (debug output)", t.output.format, COLOR_OUTPUT_FORMATS, "an RGBA format")?;
     }
+    if t.demodulated_output.image != vk::Image::null() {
+        image("TraceSpecularTask.demodulated_output", &t.demodulated_output, &t.common.viewport, &[vk::ImageLayout::GENERAL])?;
+        format_in("TraceSpecularTask.demodulated_output", t.demodulated_output.format, &formats, "R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT")?;
+    }
+    let s = &t.common.specular;
+    if s.image.image != vk::Image::null() {
+        image("TraceCommon.specular.image", &s.image, &t.common.viewport, INPUT_LAYOUTS)?;
+        format_in("TraceCommon.specular.image.format", s.image.format, LIT_FORMATS, "an RGB(A) colour format")?;
+    }
+    if !(s.global_metalness.is_finite() && s.global_metalness >= 0.0) {
+        return Err(Error::invalid("TraceCommon.specular.global_metalness", "must be finite and >= 0"));
+    }
     if !(1..=64).contains(&t.rays_per_pixel) {
         return Err(Error::invalid("TraceSpecularTask.rays_per_pixel", format!("{} is not in 1..=64", t.rays_per_pixel)));
     }
@@ -374,6 +386,12 @@ fn light(what: &'static str, l: &LightInfo) -> Result<()> {
 
 pub(crate) fn multi_shadow(t: &TraceMultiShadowTask) -> Result<()> {
     trace_common(&t.common)?;
+    if t.common.debug_output != DebugOutput::Default {
+        return Err(Error::invalid(
+            "TraceMultiShadowTask.common.debug_output",
+            "debug visualisations need a colour output: use them on a shadow, AO, diffuse or specular task",
+        ));
+    }
     if t.lights.is_empty() || t.lights.len() > MAX_SHADOW_LIGHTS {
         return Err(Error::invalid("TraceMultiShadowTask.lights", format!("{} lights: 1..={MAX_SHADOW_LIGHTS} are supported", t.lights.len())));
     }

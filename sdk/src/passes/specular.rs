@@ -24,6 +24,7 @@ struct SpecularConstantsGpu {
     params: [f32; 4],
     miss: [f32; 4],
     counts: [u32; 4],
+    specular: [f32; 4],
 }
 
 pub(crate) const UPLOAD_BYTES: u64 = std::mem::size_of::<SpecularConstantsGpu>() as u64;
@@ -46,6 +47,8 @@ impl SpecularPass {
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
                 sampled(),
+                sampled(),
+                Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
             ],
             vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE,
             Shaders {
@@ -69,6 +72,12 @@ impl SpecularPass {
             params: [c.roughness.global_roughness, c.roughness.has_image() as u32 as f32, task.ray_length, task.firefly_clamp],
             miss: [m[0], m[1], m[2], 0.0],
             counts: [task.rays_per_pixel, c.enable_bilinear_sampling as u32, table as u32, (table >> 32) as u32],
+            specular: [
+                c.specular.global_metalness,
+                (c.specular.image.image != vk::Image::null()) as u32 as f32,
+                (task.demodulated_output.image != vk::Image::null()) as u32 as f32,
+                0.0,
+            ],
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
         let stage = self.program.stage(inline);
@@ -84,6 +93,9 @@ impl SpecularPass {
             Slot::Storage(&task.output),
             Slot::Uniform(ubo),
             Slot::Sampled(direct_or(c)),
+            // Stand-ins where there is no specular image / demodulated output (not accessed).
+            Slot::Sampled(if c.specular.image.image != vk::Image::null() { &c.specular.image } else { &c.normals.image }),
+            Slot::Storage(if task.demodulated_output.image != vk::Image::null() { &task.demodulated_output } else { &task.output }),
         ];
         self.program.run(r, &slots, c.viewport.width, c.viewport.height, inline);
     }
