@@ -28,6 +28,19 @@ impl SceneOnGpu {
         surfels: SurfelSettings,
         initial_tile_color: [f32; 3],
     ) -> HostResult<SceneOnGpu> {
+        Self::register_coloured(host, ctx, container, scene, surfels, &vec![initial_tile_color; scene.instances.len()])
+    }
+
+    /// `register_with` with one initial cache colour per instance (its cache holds that colour
+    /// until something is injected: a known radiance for tests).
+    pub fn register_coloured(
+        host: &Host,
+        ctx: &ExecuteContext,
+        container: &mut TaskContainer,
+        scene: &Scene,
+        surfels: SurfelSettings,
+        colours: &[[f32; 3]],
+    ) -> HostResult<SceneOnGpu> {
         let geometries = ctx.create_geometry_handles(scene.meshes.len());
         let mut buffers = Vec::new();
         for (mesh, &handle) in scene.meshes.iter().zip(&geometries) {
@@ -46,7 +59,7 @@ impl SceneOnGpu {
             buffers.push((vb, ib));
         }
         let instances = ctx.create_instance_handles(scene.instances.len());
-        for (inst, &handle) in scene.instances.iter().zip(&instances) {
+        for ((inst, &handle), &initial_tile_color) in scene.instances.iter().zip(&instances).zip(colours) {
             let input = InstanceInput { geometry: geometries[inst.mesh], transform: inst.transform, initial_tile_color, ..Default::default() };
             container
                 .schedule_instance(&InstanceTask { handle, operation: InstanceOperation::Register, input })

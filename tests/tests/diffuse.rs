@@ -4,7 +4,7 @@ mod common;
 use ash::vk;
 use common::*;
 use glam::{Affine3A, Quat, Vec3};
-use hybrid_rt::{GeometryInput, GeometryTask, IndexBufferInput, InitSettings, InstanceInput, InstanceTask, TraceDiffuseTask, VertexBufferInput};
+use hybrid_rt::{InitSettings, TraceDiffuseTask};
 use hybrid_rt_testkit::reference::*;
 use hybrid_rt_testkit::sdk_scene::*;
 use hybrid_rt_testkit::stats;
@@ -61,24 +61,9 @@ fn check_room(brdf: hybrid_rt::DiffuseBrdfType, roughness: f32) {
     let images = GBufferImages::upload(&host, &g).unwrap();
     let out = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
 
-    // Register by hand: each instance's cache holds its wall's colour (its initial colour).
-    let mesh = &scene.meshes[0];
-    let usage = vk::BufferUsageFlags::TRANSFER_SRC;
-    let vb = host.buffer_with_data(bytemuck::cast_slice(&mesh.positions), usage).unwrap();
-    let ib = host.buffer_with_data(bytemuck::cast_slice(&mesh.indices), usage).unwrap();
-    let geo = ctx.create_geometry_handles(1)[0];
-    let instances = ctx.create_instance_handles(scene.instances.len());
+    // Each instance's cache holds its wall's colour (its initial colour).
     let mut frame = ctx.create_task_container();
-    let input = GeometryInput {
-        vertices: VertexBufferInput { buffer: vb.buffer, count: mesh.positions.len() as u32, ..Default::default() },
-        indices: IndexBufferInput { buffer: ib.buffer, count: mesh.indices.len() as u32, ..Default::default() },
-        ..Default::default()
-    };
-    frame.schedule_geometry(&GeometryTask { handle: geo, input, ..Default::default() }).unwrap();
-    for (i, inst) in scene.instances.iter().enumerate() {
-        let input = InstanceInput { geometry: geo, transform: inst.transform, initial_tile_color: colours[i], ..Default::default() };
-        frame.schedule_instance(&InstanceTask { handle: instances[i], input, ..Default::default() }).unwrap();
-    }
+    let gpu_scene = SceneOnGpu::register_coloured(&host, &ctx, &mut frame, &scene, Default::default(), &colours).unwrap();
     frame.schedule_bvh_build(&Default::default()).unwrap();
     run_frame(&host, &ctx, &mut frame).unwrap();
 
@@ -151,8 +136,7 @@ fn check_room(brdf: hybrid_rt::DiffuseBrdfType, roughness: f32) {
 
     host.destroy_image(out);
     images.destroy(&host);
-    host.destroy_buffer(vb);
-    host.destroy_buffer(ib);
+    gpu_scene.destroy(&host);
     drop(ctx);
     assert_no_validation_errors();
 }

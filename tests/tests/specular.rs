@@ -5,7 +5,7 @@ mod common;
 use ash::vk;
 use common::*;
 use glam::{Affine3A, Quat, Vec3};
-use hybrid_rt::{GeometryInput, GeometryTask, IndexBufferInput, InitSettings, InstanceInput, InstanceTask, RoughnessInput, TraceSpecularTask, VertexBufferInput};
+use hybrid_rt::{InitSettings, RoughnessInput, TraceSpecularTask};
 use hybrid_rt_testkit::host::Host;
 use hybrid_rt_testkit::reference::*;
 use hybrid_rt_testkit::sdk_scene::*;
@@ -39,7 +39,7 @@ struct Fixture {
     frame: hybrid_rt::TaskContainer,
     images: GBufferImages,
     out: hybrid_rt_testkit::host::HostImage,
-    buffers: Vec<hybrid_rt_testkit::host::HostBuffer>,
+    gpu_scene: SceneOnGpu,
     g: GBuffer,
     tracer: Tracer,
     colours: Vec<[f32; 3]>,
@@ -53,25 +53,11 @@ fn fixture() -> Fixture {
     let g = GBuffer::render(&tracer, &camera, W, H);
     let images = GBufferImages::upload(&host, &g).unwrap();
     let out = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
-    let mesh = &scene.meshes[0];
-    let vb = host.buffer_with_data(bytemuck::cast_slice(&mesh.positions), vk::BufferUsageFlags::TRANSFER_SRC).unwrap();
-    let ib = host.buffer_with_data(bytemuck::cast_slice(&mesh.indices), vk::BufferUsageFlags::TRANSFER_SRC).unwrap();
-    let geo = ctx.create_geometry_handles(1)[0];
-    let instances = ctx.create_instance_handles(scene.instances.len());
     let mut frame = ctx.create_task_container();
-    let input = GeometryInput {
-        vertices: VertexBufferInput { buffer: vb.buffer, count: mesh.positions.len() as u32, ..Default::default() },
-        indices: IndexBufferInput { buffer: ib.buffer, count: mesh.indices.len() as u32, ..Default::default() },
-        ..Default::default()
-    };
-    frame.schedule_geometry(&GeometryTask { handle: geo, input, ..Default::default() }).unwrap();
-    for (i, inst) in scene.instances.iter().enumerate() {
-        let input = InstanceInput { geometry: geo, transform: inst.transform, initial_tile_color: colours[i], ..Default::default() };
-        frame.schedule_instance(&InstanceTask { handle: instances[i], input, ..Default::default() }).unwrap();
-    }
+    let gpu_scene = SceneOnGpu::register_coloured(&host, &ctx, &mut frame, &scene, Default::default(), &colours).unwrap();
     frame.schedule_bvh_build(&Default::default()).unwrap();
     run_frame(&host, &ctx, &mut frame).unwrap();
-    Fixture { host, ctx, frame, images, out, buffers: vec![vb, ib], g, tracer, colours, camera }
+    Fixture { host, ctx, frame, images, out, gpu_scene, g, tracer, colours, camera }
 }
 
 impl Fixture {
@@ -104,9 +90,7 @@ impl Fixture {
     fn finish(self) {
         self.host.destroy_image(self.out);
         self.images.destroy(&self.host);
-        for b in self.buffers {
-            self.host.destroy_buffer(b);
-        }
+        self.gpu_scene.destroy(&self.host);
         drop(self.ctx);
         assert_no_validation_errors();
     }

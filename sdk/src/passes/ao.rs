@@ -14,8 +14,8 @@ use crate::api::tasks::{InstanceInclusionMask, TraceAmbientOcclusionTask};
 use crate::error::Result;
 use crate::gpu::device::Device;
 use crate::gpu::memory::Memory;
-use crate::gpu::pipeline::{self, Binding, RtPipeline};
-use super::descriptors::{self, Slot};
+use crate::gpu::pipeline::{self, RtPipeline};
+use super::descriptors;
 use super::program::{RtProgram, Shaders};
 use crate::gpu::sync;
 use crate::shaders;
@@ -34,13 +34,7 @@ impl AoPass {
         let program = RtProgram::new(
             device,
             memory,
-            &[
-                Binding { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, sampler: None },
-                Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
-                Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
-                Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
-                Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
-            ],
+            &super::gbuffer_bindings(sampler, &[]),
             vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE,
             Shaders { raygen: shaders::AO_RGEN, misses: &[shaders::HIT_T_RMISS], closest_hits: &[shaders::HIT_T_RCHIT], any_hit: None, inline: None },
         )?;
@@ -68,13 +62,7 @@ impl AoPass {
             vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR
         };
         r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
-        let slots = [
-            Slot::Tlas(r.tlas),
-            Slot::Sampled(&task.common.depth.image),
-            Slot::Sampled(&task.common.normals.image),
-            Slot::Storage(&task.output),
-            Slot::Uniform(ubo),
-        ];
+        let slots = super::gbuffer_slots(r.tlas, &task.common, &task.output, ubo);
         let vp = &task.common.viewport;
         match (inline_pipeline, floor.then_some(self.floor.as_ref()).flatten()) {
             (Some(p), _) => {

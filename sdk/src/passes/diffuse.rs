@@ -34,18 +34,12 @@ pub(crate) struct DiffusePass {
 
 impl DiffusePass {
     pub fn new(device: &Device, memory: &Memory, sampler: vk::Sampler) -> Result<DiffusePass> {
+        let sampled = || Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) };
         let program = RtProgram::new(
             device,
             memory,
-            &[
-                Binding { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, sampler: None },
-                Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
-                Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
-                Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
-                Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
-                Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
-                Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
-            ],
+            // + roughness, direct lighting
+            &super::gbuffer_bindings(sampler, &[sampled(), sampled()]),
             vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE,
             Shaders {
                 raygen: shaders::DIFFUSE_RGEN,
@@ -76,16 +70,10 @@ impl DiffusePass {
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
         let stage = self.program.stage(inline);
         r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
-        let slots = [
-            Slot::Tlas(r.tlas),
-            Slot::Sampled(&task.common.depth.image),
-            Slot::Sampled(&task.common.normals.image),
-            Slot::Storage(&task.output),
-            Slot::Uniform(ubo),
-            // Without a roughness image the normals stand in (not read then).
-            Slot::Sampled(if task.common.roughness.has_image() { &task.common.roughness.image } else { &task.common.normals.image }),
-            Slot::Sampled(direct_or(&task.common)),
-        ];
+        let mut slots = super::gbuffer_slots(r.tlas, &task.common, &task.output, ubo);
+        // Without a roughness image the normals stand in (not read then).
+        slots.push(Slot::Sampled(if task.common.roughness.has_image() { &task.common.roughness.image } else { &task.common.normals.image }));
+        slots.push(Slot::Sampled(direct_or(&task.common)));
         let vp = &task.common.viewport;
         self.program.run(r, &slots, vp.width, vp.height, inline);
     }

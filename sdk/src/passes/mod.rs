@@ -29,3 +29,30 @@ pub(crate) struct Recording<'a> {
     /// Device address of this recording's instance table (0 when the recording has none).
     pub instance_table: u64,
 }
+
+/// The bindings a G-buffer trace starts with: TLAS, depth, normals, output image, constants;
+/// a pass appends its own after them.
+pub(crate) fn gbuffer_bindings(sampler: ash::vk::Sampler, extra: &[crate::gpu::pipeline::Binding]) -> Vec<crate::gpu::pipeline::Binding> {
+    use crate::gpu::pipeline::Binding;
+    use ash::vk::DescriptorType as T;
+    let mut b = vec![
+        Binding { ty: T::ACCELERATION_STRUCTURE_KHR, sampler: None },
+        Binding { ty: T::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
+        Binding { ty: T::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
+        Binding { ty: T::STORAGE_IMAGE, sampler: None },
+        Binding { ty: T::UNIFORM_BUFFER, sampler: None },
+    ];
+    b.extend(extra.iter().map(|x| Binding { ty: x.ty, sampler: x.sampler }));
+    b
+}
+
+/// The slots matching `gbuffer_bindings`.
+pub(crate) fn gbuffer_slots<'a>(
+    tlas: ash::vk::AccelerationStructureKHR,
+    common: &'a crate::api::tasks::TraceCommon,
+    output: &'a crate::api::tasks::ImageInput,
+    constants: crate::gpu::upload::Upload,
+) -> Vec<descriptors::Slot<'a>> {
+    use descriptors::Slot;
+    vec![Slot::Tlas(tlas), Slot::Sampled(&common.depth.image), Slot::Sampled(&common.normals.image), Slot::Storage(output), Slot::Uniform(constants)]
+}

@@ -53,13 +53,7 @@ impl ShadowPass {
         let program = RtProgram::new(
             device,
             memory,
-            &[
-                Binding { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, sampler: None },
-                Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
-                Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
-                Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
-                Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
-            ],
+            &super::gbuffer_bindings(sampler, &[]),
             vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE,
             Shaders {
                 raygen: shaders::SHADOW_RGEN,
@@ -81,13 +75,7 @@ impl ShadowPass {
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
         let stage = self.program.stage(inline);
         r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
-        let slots = [
-            Slot::Tlas(r.tlas),
-            Slot::Sampled(&task.common.depth.image),
-            Slot::Sampled(&task.common.normals.image),
-            Slot::Storage(&task.output),
-            Slot::Uniform(ubo),
-        ];
+        let slots = super::gbuffer_slots(r.tlas, &task.common, &task.output, ubo);
         let vp = &task.common.viewport;
         self.program.run(r, &slots, vp.width, vp.height, inline);
     }
