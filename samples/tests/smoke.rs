@@ -13,7 +13,7 @@ fn sample_writes_a_plausible_ao_image() {
     let text = String::from_utf8_lossy(&run.stdout).to_string() + &String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success(), "{text}");
     assert!(text.contains("GPU time") && text.contains("wrote"), "{text}");
-    for name in ["ao.png", "lit.png", "debug_cache.png", "debug_cache_overview.png", "debug_random_tile.png", "debug_random_mesh.png", "debug_hit_t.png", "debug_barycentrics.png"] {
+    for name in ["ao.png", "lit.png", "debug_cache.png", "debug_cache_overview.png", "debug_random_tile.png", "debug_random_mesh.png", "debug_hit_t.png", "debug_barycentrics.png", "shadow.png", "diffuse_gi.png", "specular.png"] {
         assert!(out.join(name).metadata().map_or(0, |m| m.len()) > 100, "{name} written");
     }
     assert!(text.contains("injection"), "{text}");

@@ -2,7 +2,8 @@
 //!
 //! Each frame: BVH tasks, direct-lighting injection of the "rasterized" lit frame from the main
 //! camera and from a low-resolution secondary ("lidar") camera that looks back at the room,
-//! and ray-traced AO. Then one image per debug visualisation. Writes EXR + PNG, prints per-task
+//! and ray-traced AO. Then one image per debug visualisation, and the soft sun shadow, diffuse
+//! GI and glossy reflections shaded from the cache and the lit frame (not yet denoised). Writes EXR + PNG, prints per-task
 //! GPU times (from the SDK's timestamp queries) and the SDK's memory.
 //!
 //! The G-buffer and the lit frame come from the CPU reference renderer for now (the full
@@ -95,6 +96,14 @@ fn run() -> Result<(), String> {
     // surfaces the main camera misses get lit too (the integration guide's advice).
     let lidar_camera = Camera { fov_y_radians: 100f32.to_radians(), ..Camera::look_at(Vec3::new(-2.5, 4.5, 2.5), Vec3::new(1.0, 0.5, -1.5)) };
     let lidar = view(&host, &tracer, lidar_camera, 256, 256, sun)?;
+    // A second lidar view sweeps the ceiling, which no other camera sees but every GI ray
+    // from the floor does.
+    let ceiling_camera = Camera {
+        fov_y_radians: 120f32.to_radians(),
+        up: Vec3::Z,
+        ..Camera::look_at(Vec3::new(0.0, 0.3, 0.5), Vec3::new(0.0, 6.0, -0.5))
+    };
+    let ceiling = view(&host, &tracer, ceiling_camera, 256, 256, sun)?;
 
     let mut frame = ctx.create_task_container();
     let surfels = SurfelSettings { tile_unit_length: unit, ..Default::default() };
@@ -106,6 +115,7 @@ fn run() -> Result<(), String> {
         if i >= 1 {
             frame.schedule_direct_lighting_injection(&main.injection()).map_err(e)?;
             frame.schedule_direct_lighting_injection(&lidar.injection()).map_err(e)?;
+            frame.schedule_direct_lighting_injection(&ceiling.injection()).map_err(e)?;
         }
         frame.schedule_ambient_occlusion(&main.gbuffer.ao_task(&camera, ray_length, rays)).map_err(e)?;
         let done = run_frame(&host, &ctx, &mut frame)?;
@@ -147,11 +157,52 @@ fn run() -> Result<(), String> {
         written.push(path.display().to_string());
     }
 
+    // The ray-traced outputs, shaded from the cache and the lit frame (16 rays per pixel so
+    // the raw images read well without a denoiser).
+    let mut common = main.gbuffer.trace_common(&camera);
+    common.direct_lighting = main.lit.input(READ);
+    let traced = [
+        ("shadow", 1.0),
+        ("diffuse_gi", 1.0),
+        ("specular", 1.0),
+    ];
+    let mut glossy = common;
+    glossy.roughness.global_roughness = 0.25;
+    for (name, scale) in traced {
+        let output = debug_out.input(vk::ImageLayout::GENERAL);
+        match name {
+            "shadow" => frame
+                .schedule_shadow(&hybrid_rt::TraceShadowTask {
+                    common,
+                    light: hybrid_rt::LightInfo { direction: -sun.to_light, angular_extent: 0.05, ..Default::default() },
+                    output,
+                    rays_per_pixel: 16,
+                })
+                .map_err(e)?,
+            "diffuse_gi" => frame
+                .schedule_diffuse(&hybrid_rt::TraceDiffuseTask { common, output, rays_per_pixel: 16, ray_length: 20.0, ..Default::default() })
+                .map_err(e)?,
+            _ => frame
+                .schedule_specular(&hybrid_rt::TraceSpecularTask { common: glossy, output, rays_per_pixel: 16, ray_length: 20.0, ..Default::default() })
+                .map_err(e)?,
+        }
+        run_frame(&host, &ctx, &mut frame)?;
+        let bytes = host.read_image(&debug_out, vk::ImageLayout::GENERAL)?;
+        let mut texels: Vec<[f32; 4]> = bytemuck::cast_slice(&bytes).to_vec();
+        if name == "shadow" {
+            // G holds the visible fraction: show it as grey.
+            texels.iter_mut().for_each(|t| *t = [t[1], t[1], t[1], 1.0]);
+        }
+        let path = out.join(format!("{name}.png"));
+        images::write_png_rgb(&path, width, height, &texels, scale)?;
+        written.push(path.display().to_string());
+    }
+
     let mean = |v: &[f64]| if v.is_empty() { f64::NAN } else { v.iter().sum::<f64>() / v.len() as f64 };
     let mem = ctx.resource_allocations();
     let cache_bytes: u64 = gpu_scene.instances.iter().map(|h| ctx.instance_cache_bytes(*h).unwrap_or(0)).sum();
     println!(
-        "GPU time: BVH build (first frame) {bvh_ms:.3} ms; AO {width}x{height} x {rays} rays {:.3} ms; injection (main {width}x{height} + lidar 256x256, with resolves) {:.3} ms (means of {} frames)",
+        "GPU time: BVH build (first frame) {bvh_ms:.3} ms; AO {width}x{height} x {rays} rays {:.3} ms; injection (main {width}x{height} + two lidar views of 256x256, with resolves) {:.3} ms (means of {} frames)",
         mean(&ao_ms),
         mean(&inject_ms),
         ao_ms.len()
@@ -165,8 +216,9 @@ fn run() -> Result<(), String> {
         gpu_scene.instances.len()
     );
     println!("wrote {}", written.join(", "));
+    println!("(magenta in the cache, GI and reflections: surfaces no camera has lit yet — their initial colour, as the guide suggests while integrating)");
     host.destroy_image(debug_out);
-    for v in [main, lidar] {
+    for v in [main, lidar, ceiling] {
         v.gbuffer.destroy(&host);
         host.destroy_image(v.lit);
     }
