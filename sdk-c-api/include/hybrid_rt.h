@@ -13,7 +13,7 @@
 /**
  * The API version this header describes: (major << 22) | (minor << 12) | patch.
  */
-#define HRT_API_VERSION ((0 << 22) | (1 << 12))
+#define HRT_API_VERSION (1 << 12)
 
 /**
  * Bits of HrtInstanceInput::mask.

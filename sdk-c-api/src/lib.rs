@@ -22,7 +22,7 @@ use std::ffi::{c_char, c_void, CStr};
 pub use types::*;
 
 /// The API version this header describes: (major << 22) | (minor << 12) | patch.
-pub const HRT_API_VERSION: u32 = (0 << 22) | (1 << 12);
+pub const HRT_API_VERSION: u32 = 1 << 12; // (major 0 << 22) | (minor 1 << 12) | patch 0
 
 /// Opaque context.
 pub struct HrtContext {
@@ -58,7 +58,7 @@ fn slice<'a, T>(p: *const T, n: u32, what: &str) -> Result<&'a [T], Failure> {
 
 /// Writes the library version.
 #[no_mangle]
-pub extern "C" fn hrt_version(major: *mut u32, minor: *mut u32, patch: *mut u32) {
+pub unsafe extern "C" fn hrt_version(major: *mut u32, minor: *mut u32, patch: *mut u32) {
     let (a, b, c) = rt::VERSION;
     unsafe {
         if let Some(m) = major.as_mut() {
@@ -76,7 +76,7 @@ pub extern "C" fn hrt_version(major: *mut u32, minor: *mut u32, patch: *mut u32)
 /// The calling thread's last error message (NUL-terminated, truncated to `capacity`).
 /// Returns the full length in bytes, without the NUL.
 #[no_mangle]
-pub extern "C" fn hrt_last_error_message(buffer: *mut c_char, capacity: u32) -> u32 {
+pub unsafe extern "C" fn hrt_last_error_message(buffer: *mut c_char, capacity: u32) -> u32 {
     let msg = status::last_error();
     if !buffer.is_null() && capacity > 0 {
         let n = msg.len().min(capacity as usize - 1);
@@ -92,7 +92,7 @@ pub extern "C" fn hrt_last_error_message(buffer: *mut c_char, capacity: u32) -> 
 /// (NULL removes it). Returns false if another logger of the Rust `log` crate already owns
 /// the process.
 #[no_mangle]
-pub extern "C" fn hrt_set_log_callback(callback: HrtLogCallback, min_severity: HrtLogSeverity, user_data: *mut c_void) -> bool {
+pub unsafe extern "C" fn hrt_set_log_callback(callback: HrtLogCallback, min_severity: HrtLogSeverity, user_data: *mut c_void) -> bool {
     std::panic::catch_unwind(|| log_bridge::install(callback, min_severity, user_data)).unwrap_or(false)
 }
 
@@ -101,7 +101,7 @@ pub extern "C" fn hrt_set_log_callback(callback: HrtLogCallback, min_severity: H
 /// features: bufferDeviceAddress (1.2), synchronization2 (1.3), accelerationStructure,
 /// rayTracingPipeline, shaderStorageImageWriteWithoutFormat (and rayQuery if enabled).
 #[no_mangle]
-pub extern "C" fn hrt_required_device_extensions(names: *mut *const *const c_char, count: *mut u32) {
+pub unsafe extern "C" fn hrt_required_device_extensions(names: *mut *const *const c_char, count: *mut u32) {
     static NAMES: std::sync::OnceLock<Vec<usize>> = std::sync::OnceLock::new();
     let v = NAMES.get_or_init(|| rt::REQUIRED_DEVICE_EXTENSIONS.iter().map(|n| n.as_ptr() as usize).collect());
     unsafe {
@@ -116,7 +116,7 @@ pub extern "C" fn hrt_required_device_extensions(names: *mut *const *const c_cha
 
 /// Optional extensions (VK_KHR_ray_query), same form as hrt_required_device_extensions.
 #[no_mangle]
-pub extern "C" fn hrt_optional_device_extensions(names: *mut *const *const c_char, count: *mut u32) {
+pub unsafe extern "C" fn hrt_optional_device_extensions(names: *mut *const *const c_char, count: *mut u32) {
     static NAMES: std::sync::OnceLock<Vec<usize>> = std::sync::OnceLock::new();
     let v = NAMES.get_or_init(|| rt::OPTIONAL_DEVICE_EXTENSIONS.iter().map(|n| n.as_ptr() as usize).collect());
     unsafe {

@@ -172,7 +172,7 @@ pub(crate) fn check_region(
     bytes: u64,
 ) -> Result<()> {
     let available = buffer_capacity(device, buffer);
-    let needed = offset.checked_add(bytes).unwrap_or(u64::MAX);
+    let needed = offset.saturating_add(bytes);
     if needed > available {
         return Err(Error::BufferTooSmall { what, needed, available });
     }

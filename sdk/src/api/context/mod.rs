@@ -722,7 +722,7 @@ impl Shared {
                         }
                     }
                     st.unplace(old);
-                    let placement = (t.operation != InstanceOperation::Remove).then(|| Placement {
+                    let placement = (t.operation != InstanceOperation::Remove).then_some(Placement {
                         geometry: t.input.geometry,
                         transform: t.input.transform,
                         mask: t.input.mask.0,
