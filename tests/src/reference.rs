@@ -557,3 +557,30 @@ pub fn shadow_visibility(
     }
     (visible as f32 / (strata * strata) as f32, closest)
 }
+
+// ---------------------------------------------------------------- test scenes
+
+/// A 4 m room: a grey floor and red (left), green (right) and blue (back) walls, each carrying
+/// its colour as a known cache radiance; `with_ceiling` adds a grey ceiling. The front is open.
+/// Returns the scene, each instance's colour, and a camera looking into the room.
+pub fn coloured_room(with_ceiling: bool) -> (Scene, Vec<[f32; 3]>, Camera) {
+    use glam::Quat;
+    let mut s = Scene::default();
+    let quad = s.add_mesh(Mesh::grid(4.0, 2));
+    let q = std::f32::consts::FRAC_PI_2;
+    let mut placements = vec![
+        (Affine3A::IDENTITY, [0.3, 0.3, 0.3]),
+        (Affine3A::from_rotation_translation(Quat::from_rotation_z(-q), Vec3::new(-2.0, 2.0, 0.0)), [0.9, 0.1, 0.1]),
+        (Affine3A::from_rotation_translation(Quat::from_rotation_z(q), Vec3::new(2.0, 2.0, 0.0)), [0.1, 0.9, 0.1]),
+        (Affine3A::from_rotation_translation(Quat::from_rotation_x(q), Vec3::new(0.0, 2.0, -2.0)), [0.1, 0.1, 0.9]),
+    ];
+    if with_ceiling {
+        placements.push((Affine3A::from_rotation_translation(Quat::from_rotation_x(2.0 * q), Vec3::new(0.0, 4.0, 0.0)), [0.5, 0.5, 0.5]));
+    }
+    let mut colours = Vec::new();
+    for (t, c) in placements {
+        s.add_instance(quad, t);
+        colours.push(c);
+    }
+    (s, colours, Camera::look_at(Vec3::new(0.0, 1.8, 1.9), Vec3::new(0.0, 0.6, -1.0)))
+}

@@ -3,7 +3,7 @@
 mod common;
 use ash::vk;
 use common::*;
-use glam::{Affine3A, Quat, Vec3};
+use glam::Vec3;
 use hybrid_rt::{InitSettings, TraceDiffuseTask};
 use hybrid_rt_testkit::reference::*;
 use hybrid_rt_testkit::sdk_scene::*;
@@ -13,24 +13,8 @@ const W: u32 = 48;
 const H: u32 = 48;
 const SKY: [f32; 3] = [0.1, 0.2, 0.3];
 
-/// Floor, left (red), right (green), back (blue) walls and a grey ceiling; the front is open.
 fn room() -> (Scene, Vec<[f32; 3]>, Camera) {
-    let mut s = Scene::default();
-    let quad = s.add_mesh(Mesh::grid(4.0, 2));
-    let q = std::f32::consts::FRAC_PI_2;
-    let placements = [
-        (Affine3A::IDENTITY, [0.3, 0.3, 0.3]),
-        (Affine3A::from_rotation_translation(Quat::from_rotation_z(-q), Vec3::new(-2.0, 2.0, 0.0)), [0.9, 0.1, 0.1]),
-        (Affine3A::from_rotation_translation(Quat::from_rotation_z(q), Vec3::new(2.0, 2.0, 0.0)), [0.1, 0.9, 0.1]),
-        (Affine3A::from_rotation_translation(Quat::from_rotation_x(q), Vec3::new(0.0, 2.0, -2.0)), [0.1, 0.1, 0.9]),
-        (Affine3A::from_rotation_translation(Quat::from_rotation_x(2.0 * q), Vec3::new(0.0, 4.0, 0.0)), [0.5, 0.5, 0.5]),
-    ];
-    let mut colours = Vec::new();
-    for (t, c) in placements {
-        s.add_instance(quad, t);
-        colours.push(c);
-    }
-    (s, colours, Camera::look_at(Vec3::new(0.0, 1.8, 1.9), Vec3::new(0.0, 0.6, -1.0)))
+    coloured_room(true)
 }
 
 /// Normalized Disney diffuse relative to Lambert (Frostbite / Burley), for the reference.

@@ -4,7 +4,7 @@
 mod common;
 use ash::vk;
 use common::*;
-use glam::{Affine3A, Quat, Vec3};
+use glam::{Affine3A, Vec3};
 use hybrid_rt::{InitSettings, RoughnessInput, TraceSpecularTask};
 use hybrid_rt_testkit::host::Host;
 use hybrid_rt_testkit::reference::*;
@@ -14,22 +14,9 @@ const W: u32 = 48;
 const H: u32 = 48;
 const SKY: [f32; 3] = [0.1, 0.2, 0.3];
 
-/// The floor and four coloured walls (front open); colours live in each wall's cache.
+/// The coloured room without its ceiling, seen looking down at the floor.
 fn room() -> (Scene, Vec<[f32; 3]>, Camera) {
-    let mut s = Scene::default();
-    let quad = s.add_mesh(Mesh::grid(4.0, 2));
-    let q = std::f32::consts::FRAC_PI_2;
-    let placements = [
-        (Affine3A::IDENTITY, [0.3, 0.3, 0.3]),
-        (Affine3A::from_rotation_translation(Quat::from_rotation_z(-q), Vec3::new(-2.0, 2.0, 0.0)), [0.9, 0.1, 0.1]),
-        (Affine3A::from_rotation_translation(Quat::from_rotation_z(q), Vec3::new(2.0, 2.0, 0.0)), [0.1, 0.9, 0.1]),
-        (Affine3A::from_rotation_translation(Quat::from_rotation_x(q), Vec3::new(0.0, 2.0, -2.0)), [0.1, 0.1, 0.9]),
-    ];
-    let mut colours = Vec::new();
-    for (t, c) in placements {
-        s.add_instance(quad, t);
-        colours.push(c);
-    }
+    let (s, colours, _) = coloured_room(false);
     (s, colours, Camera::look_at(Vec3::new(0.0, 1.6, 1.9), Vec3::new(0.0, 0.0, -0.8)))
 }
 
