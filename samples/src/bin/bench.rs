@@ -48,6 +48,31 @@ fn time_frames(
     Ok(median(times))
 }
 
+/// Median GPU times of `kind` with the real shaders and with the bare-ray floor (empty hit and
+/// miss shaders), alternating frame by frame after 4 warm-up frames.
+fn time_vs_floor(
+    host: &Host,
+    ctx: &ExecuteContext,
+    frame: &mut hybrid_rt::TaskContainer,
+    frames: usize,
+    kind: TaskKind,
+    mut schedule: impl FnMut(&mut hybrid_rt::TaskContainer) -> Result<(), String>,
+) -> Result<(f64, f64), String> {
+    let mut times = [Vec::new(), Vec::new()];
+    for i in 0..2 * frames + 4 {
+        let floor = i % 2 == 1;
+        ctx.set_bench_floor_mode(floor).map_err(|e| e.to_string())?;
+        schedule(frame)?;
+        let ms = run_frame(host, ctx, frame)?.gpu_ms(kind);
+        if i >= 4 {
+            times[floor as usize].push(ms);
+        }
+    }
+    ctx.set_bench_floor_mode(false).map_err(|e| e.to_string())?;
+    let [t, f] = times;
+    Ok((median(t), median(f)))
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     if v.is_empty() {
@@ -200,7 +225,7 @@ fn run() -> Result<(), String> {
         }
         for i in 0..(2 * frames + 8) {
             let floor = i % 2 == 1;
-            ctx.set_bench_floor_mode(floor);
+            ctx.set_bench_floor_mode(floor).map_err(e)?;
             frame.schedule_ambient_occlusion(&gbuffer.ao_task(&camera, 1.0, rays)).map_err(e)?;
             let cmd = host.allocate_command_buffer()?;
             host.begin(cmd)?;
@@ -217,7 +242,7 @@ fn run() -> Result<(), String> {
                 }
             }
         }
-        ctx.set_bench_floor_mode(false);
+        ctx.set_bench_floor_mode(false).map_err(e)?;
         let (ao, fl) = (median(times[0].clone()), median(times[1].clone()));
         let rays_total = width as f64 * height as f64 * rays as f64;
         rows.push((
@@ -285,13 +310,13 @@ fn run() -> Result<(), String> {
         output,
         rays_per_pixel: 1,
     };
-    let shadow_ms = time_frames(&host, &ctx, &mut frame, frames, TaskKind::Shadow, |f| f.schedule_shadow(&shadow).map_err(e))?;
+    let (shadow_ms, shadow_floor) = time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::Shadow, |f| f.schedule_shadow(&shadow).map_err(e))?;
     let diffuse = hybrid_rt::TraceDiffuseTask { common, output, ray_length: 100.0, ..Default::default() };
-    let diffuse_ms = time_frames(&host, &ctx, &mut frame, frames, TaskKind::Diffuse, |f| f.schedule_diffuse(&diffuse).map_err(e))?;
+    let (diffuse_ms, diffuse_floor) = time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::Diffuse, |f| f.schedule_diffuse(&diffuse).map_err(e))?;
     let mut glossy = common;
     glossy.roughness.global_roughness = 0.3;
     let specular = hybrid_rt::TraceSpecularTask { common: glossy, output, ray_length: 100.0, ..Default::default() };
-    let specular_ms = time_frames(&host, &ctx, &mut frame, frames, TaskKind::Specular, |f| f.schedule_specular(&specular).map_err(e))?;
+    let (specular_ms, specular_floor) = time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::Specular, |f| f.schedule_specular(&specular).map_err(e))?;
     let vis = host.image_cleared(ash::vk::Format::R32_UINT, width, height, ash::vk::ImageUsageFlags::STORAGE, ash::vk::ImageLayout::GENERAL)?;
     let multi = hybrid_rt::TraceMultiShadowTask {
         common,
@@ -307,14 +332,19 @@ fn run() -> Result<(), String> {
         packed: output,
         rays_per_pixel: 1,
     };
-    let multi_ms = time_frames(&host, &ctx, &mut frame, frames, TaskKind::MultiShadow, |f| f.schedule_multi_shadow(&multi).map_err(e))?;
+    let (multi_ms, multi_floor) = time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::MultiShadow, |f| f.schedule_multi_shadow(&multi).map_err(e))?;
     host.destroy_image(vis);
-    for (name, ms) in [("Multi-light shadows (4 point lights, 1 ray/pixel each)", multi_ms), ("Shadow (sun, 1 ray/pixel)", shadow_ms), ("Diffuse GI (1 ray/pixel)", diffuse_ms), ("Specular (roughness 0.3, 1 ray/pixel)", specular_ms)] {
-        rows.push((format!("{name} {width}x{height}"), format!("{ms:.3} ms")));
+    for (name, ms, fl) in [
+        ("Multi-light shadows (4 point lights, 1 ray/pixel each)", multi_ms, multi_floor),
+        ("Shadow (sun, 1 ray/pixel)", shadow_ms, shadow_floor),
+        ("Diffuse GI (1 ray/pixel)", diffuse_ms, diffuse_floor),
+        ("Specular (roughness 0.3, 1 ray/pixel)", specular_ms, specular_floor),
+    ] {
+        rows.push((format!("{name} {width}x{height}"), format!("{ms:.3} ms; floor {fl:.3} ms; ratio {:.2}", ms / fl)));
     }
     let _ = writeln!(
         json,
-        "  \"traces\": {{\"width\": {width}, \"height\": {height}, \"shadow_gpu_ms\": {shadow_ms:.4}, \"diffuse_gpu_ms\": {diffuse_ms:.4}, \"specular_gpu_ms\": {specular_ms:.4}, \"multi_shadow_4_lights_gpu_ms\": {multi_ms:.4}}},"
+        "  \"traces\": {{\"width\": {width}, \"height\": {height}, \"shadow_gpu_ms\": {shadow_ms:.4}, \"shadow_floor_gpu_ms\": {shadow_floor:.4}, \"diffuse_gpu_ms\": {diffuse_ms:.4}, \"diffuse_floor_gpu_ms\": {diffuse_floor:.4}, \"specular_gpu_ms\": {specular_ms:.4}, \"specular_floor_gpu_ms\": {specular_floor:.4}, \"multi_shadow_4_lights_gpu_ms\": {multi_ms:.4}, \"multi_shadow_floor_gpu_ms\": {multi_floor:.4}}},"
     );
     host.destroy_image(rgba);
     let mem = ctx.resource_allocations();

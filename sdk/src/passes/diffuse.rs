@@ -33,6 +33,10 @@ pub(crate) struct DiffusePass {
 }
 
 impl DiffusePass {
+    pub fn program_mut(&mut self) -> &mut RtProgram {
+        &mut self.program
+    }
+
     pub fn new(device: &Device, memory: &Memory, sampler: vk::Sampler) -> Result<DiffusePass> {
         let sampled = || Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) };
         let program = RtProgram::new(

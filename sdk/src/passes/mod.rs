@@ -28,6 +28,8 @@ pub(crate) struct Recording<'a> {
     pub seed: u32,
     /// Device address of this recording's instance table (0 when the recording has none).
     pub instance_table: u64,
+    /// Bench only: trace with the programs' floor pipelines (empty hit and miss shaders).
+    pub floor: bool,
 }
 
 /// The bindings a G-buffer trace starts with: TLAS, depth, normals, output image, constants;

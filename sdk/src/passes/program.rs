@@ -15,11 +15,15 @@ pub(crate) struct RtProgram {
     pub rt: RtPipeline,
     /// The same body as a compute shader with ray queries (devices that have them).
     inline: Option<vk::Pipeline>,
+    raygen: &'static [u8],
+    /// Bench only: the raygen with empty hit and miss shaders (every ray reads as a miss),
+    /// built on demand by `ExecuteContext::set_bench_floor_mode`.
+    floor: Option<RtPipeline>,
 }
 
 /// The shaders of a program.
 pub(crate) struct Shaders<'a> {
-    pub raygen: &'a [u8],
+    pub raygen: &'static [u8],
     pub misses: &'a [&'a [u8]],
     pub closest_hits: &'a [&'a [u8]],
     pub any_hit: Option<&'a [u8]>,
@@ -37,7 +41,22 @@ impl RtProgram {
             (Some(spirv), true) => Some(pipeline::compute_pipeline(d, layout, spirv)?),
             _ => None,
         };
-        Ok(RtProgram { set_layout, layout, rt, inline })
+        Ok(RtProgram { set_layout, layout, rt, inline, raygen: shaders.raygen, floor: None })
+    }
+
+    /// Builds the bench's floor pipeline (programs whose hits are HitRecord payloads).
+    pub fn ensure_floor(&mut self, device: &Device, memory: &Memory) -> Result<()> {
+        if self.floor.is_none() {
+            let s = Shaders {
+                raygen: self.raygen,
+                misses: &[crate::shaders::EMPTY_RECORD_RMISS],
+                closest_hits: &[crate::shaders::EMPTY_RECORD_RCHIT],
+                any_hit: None,
+                inline: None,
+            };
+            self.floor = Some(self.variant(device, memory, s)?);
+        }
+        Ok(())
     }
 
     /// The stage the pass's shaders run in (for its barriers).
@@ -52,6 +71,9 @@ impl RtProgram {
     /// Traces width x height through the pipeline, or with ray queries when `inline` is
     /// asked for and available (8x8 compute groups); both give the same image.
     pub fn run(&self, r: &mut Recording<'_>, slots: &[Slot<'_>], width: u32, height: u32, inline: bool) {
+        if let (true, Some(floor)) = (r.floor, self.floor.as_ref()) {
+            return self.trace_with(r, floor, slots, width, height);
+        }
         match self.inline.filter(|_| inline) {
             Some(p) => {
                 let bind = vk::PipelineBindPoint::COMPUTE;
@@ -90,6 +112,9 @@ impl RtProgram {
     pub fn destroy(self, device: &Device, memory: &Memory) {
         if let Some(p) = self.inline {
             unsafe { device.raw.destroy_pipeline(p, None) };
+        }
+        if let Some(p) = self.floor {
+            Self::destroy_pipeline(device, memory, p);
         }
         Self::destroy_pipeline(device, memory, self.rt);
         unsafe {

@@ -49,6 +49,10 @@ pub(crate) struct ShadowPass {
 }
 
 impl ShadowPass {
+    pub fn program_mut(&mut self) -> &mut RtProgram {
+        &mut self.program
+    }
+
     pub fn new(device: &Device, memory: &Memory, sampler: vk::Sampler) -> Result<ShadowPass> {
         let program = RtProgram::new(
             device,
@@ -102,6 +106,10 @@ pub(crate) struct MultiShadowPass {
 }
 
 impl MultiShadowPass {
+    pub fn program_mut(&mut self) -> &mut RtProgram {
+        &mut self.program
+    }
+
     pub fn new(device: &Device, memory: &Memory, sampler: vk::Sampler) -> Result<MultiShadowPass> {
         let program = RtProgram::new(
             device,

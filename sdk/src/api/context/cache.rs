@@ -178,7 +178,7 @@ impl Shared {
         }
         let ws = &mut st.working_sets[ws_index];
         let tlas = ws.tlas.accel.as_ref().map(|a| a.accel).unwrap_or_default();
-        let mut r = Recording { device, cmd, ring: &mut ws.ring, hazards, tlas, seed: serial as u32, instance_table: 0 };
+        let mut r = Recording { device, cmd, ring: &mut ws.ring, hazards, tlas, seed: serial as u32, instance_table: 0, floor: false };
         let ops = st.cache_ops.as_ref().expect("created in new");
         for (address, count, color) in fills {
             ops.fill(&mut r, address, count, color);

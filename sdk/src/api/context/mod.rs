@@ -301,10 +301,28 @@ impl ExecuteContext {
         Ok(())
     }
 
-    /// Bench only: trace AO with empty hit/miss shaders (the bare-ray floor).
+    /// Bench only: trace with empty hit/miss shaders (the bare-ray floor) — AO, shadows,
+    /// diffuse and specular. The floor pipelines are built on first use.
     #[doc(hidden)]
-    pub fn set_bench_floor_mode(&self, on: bool) {
+    pub fn set_bench_floor_mode(&self, on: bool) -> Result<()> {
+        if on {
+            let mut st = self.shared.state.lock();
+            let (d, m) = (&self.shared.device, &self.shared.memory);
+            if let Some(p) = st.shadow.as_mut() {
+                p.program_mut().ensure_floor(d, m)?;
+            }
+            if let Some(p) = st.multi_shadow.as_mut() {
+                p.program_mut().ensure_floor(d, m)?;
+            }
+            if let Some(p) = st.diffuse.as_mut() {
+                p.program_mut().ensure_floor(d, m)?;
+            }
+            if let Some(p) = st.specular.as_mut() {
+                p.program_mut().ensure_floor(d, m)?;
+            }
+        }
         self.shared.bench_floor.store(on, Ordering::Relaxed);
+        Ok(())
     }
 
     /// Records every task of `container` into `cmd`, which the engine has begun and will end,
@@ -614,7 +632,7 @@ impl Shared {
             let ws = &mut st.working_sets[ws_index];
             let tlas = ws.tlas.accel.as_ref().map(|a| a.accel).unwrap_or_default();
             let mut r =
-                Recording { device, cmd, ring: &mut ws.ring, hazards: &mut hazards, tlas, seed: serial as u32, instance_table };
+                Recording { device, cmd, ring: &mut ws.ring, hazards: &mut hazards, tlas, seed: serial as u32, instance_table, floor };
             // Inline ray queries where asked for and available; otherwise the pipeline (once
             // a warning says so).
             let wants_inline = match task {
