@@ -16,6 +16,16 @@
 #define HRT_API_VERSION (1 << 12)
 
 /**
+ * Most lights one HrtTraceMultiShadowTask traces.
+ */
+#define HRT_MAX_SHADOW_LIGHTS 16
+
+/**
+ * Largest HrtSurfelSettings.tile_resolution_limit.
+ */
+#define HRT_MAX_TILE_RESOLUTION 256
+
+/**
  * Bits of HrtInstanceInput::mask.
  */
 #define HRT_MASK_REFLECTIONS 1

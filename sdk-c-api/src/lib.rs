@@ -24,6 +24,11 @@ pub use types::*;
 /// The API version this header describes: (major << 22) | (minor << 12) | patch.
 pub const HRT_API_VERSION: u32 = 1 << 12; // (major 0 << 22) | (minor 1 << 12) | patch 0
 
+/// Most lights one HrtTraceMultiShadowTask traces.
+pub const HRT_MAX_SHADOW_LIGHTS: u32 = 16;
+/// Largest HrtSurfelSettings.tile_resolution_limit.
+pub const HRT_MAX_TILE_RESOLUTION: u32 = 256;
+
 /// Opaque context.
 pub struct HrtContext {
     ctx: rt::ExecuteContext,
@@ -654,4 +659,14 @@ pub unsafe extern "C" fn hrt_schedule_multi_shadow(container: *mut HrtTaskContai
         let lights = slice(t.lights, t.light_count, "task->lights")?;
         Ok(c.inner.schedule_multi_shadow(&types::multi_shadow_task(t, lights)?)?)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    /// The C constants are the Rust SDK's limits.
+    #[test]
+    fn limits_match_the_sdk() {
+        assert_eq!(super::HRT_MAX_SHADOW_LIGHTS as usize, hybrid_rt::MAX_SHADOW_LIGHTS);
+        assert_eq!(super::HRT_MAX_TILE_RESOLUTION, hybrid_rt::MAX_TILE_RESOLUTION);
+    }
 }

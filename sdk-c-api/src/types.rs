@@ -613,6 +613,12 @@ pub(crate) fn geometry_task_default() -> HrtGeometryTask {
 }
 
 pub(crate) fn instance_task(t: &HrtInstanceTask) -> Result<rt::InstanceTask, Failure> {
+    if t.input.mask > HRT_MASK_ALL {
+        return Err(Failure(
+            crate::status::HrtStatus::HRT_ERROR_INVALID_INPUT,
+            format!("invalid HrtInstanceInput.mask: {:#x} has bits outside HRT_MASK_ALL", t.input.mask),
+        ));
+    }
     let m = &t.input.transform;
     // Row-major 3x4 -> glam's columns.
     let transform = glam::Affine3A::from_cols_array(&[m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10], m[3], m[7], m[11]]);
@@ -626,7 +632,7 @@ pub(crate) fn instance_task(t: &HrtInstanceTask) -> Result<rt::InstanceTask, Fai
         input: rt::InstanceInput {
             geometry: rt::GeometryHandle(t.input.geometry),
             transform,
-            mask: rt::InstanceInclusionMask((t.input.mask & 0xff) as u8),
+            mask: rt::InstanceInclusionMask(t.input.mask as u8),
             initial_tile_color: t.input.initial_tile_color,
         },
     })

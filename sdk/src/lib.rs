@@ -41,6 +41,9 @@ pub use gpu::device::{
 };
 pub use gpu::memory::{AllocationCount, ResourceAllocations};
 
+/// Largest `SurfelSettings::tile_resolution_limit`.
+pub const MAX_TILE_RESOLUTION: u32 = cache::layout::MAX_RESOLUTION;
+
 /// Version of the SDK (the C ABI checks it at context creation).
 pub const VERSION: (u32, u32, u32) = (0, 1, 0);
 

@@ -23,17 +23,14 @@ float hrt_trace_hit_t(vec3 origin, vec3 dir, float tmax);
 // cosine-weighted visibility integral (1/pi) * integral V(w) cos(theta) dw.
 void hrt_ao_main(uvec2 local) {
     TraceCommon c = u_c.common_;
-    if (any(greaterThanEqual(local, uvec2(c.viewport.zw)))) return;
-    uvec2 pixel = local + uvec2(c.viewport.xy);
-    if (hrt_checkerboard_skip(c, pixel)) return;
-
-    vec4 depth_texel = texelFetch(u_depth, ivec2(pixel), 0);
-    vec3 p;
-    if (!hrt_world_position(c, pixel, depth_texel, p)) {
+    uvec2 pixel;
+    vec3 p, n;
+    int kind = hrt_gbuffer_pixel(c, local, u_depth, u_normals, pixel, p, n);
+    if (kind == HRT_PIXEL_SKIP) return;
+    if (kind == HRT_PIXEL_BACKGROUND) {
         imageStore(u_out, ivec2(pixel), vec4(1.0));
         return;
     }
-    vec3 n = hrt_world_normal(c, texelFetch(u_normals, ivec2(pixel), 0));
     vec3 origin = hrt_offset_ray(c, p, n);
     mat3 basis = hrt_basis(n);
 

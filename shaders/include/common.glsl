@@ -121,6 +121,21 @@ vec3 hrt_world_normal(TraceCommon c, vec4 normal_texel) {
     return n;
 }
 
+// What every G-buffer trace starts with: the pixel of this launch, and the surface under it.
+#define HRT_PIXEL_SKIP 0        // outside the viewport, or the other half of the checkerboard
+#define HRT_PIXEL_BACKGROUND 1  // nothing was rasterized here: write the "nothing" value
+#define HRT_PIXEL_SURFACE 2     // p and n hold the surface's world position and normal
+int hrt_gbuffer_pixel(TraceCommon c, uvec2 launch, sampler2D depth, sampler2D normals,
+                      out uvec2 pixel, out vec3 p, out vec3 n) {
+    pixel = launch + uvec2(c.viewport.xy);
+    p = vec3(0.0);
+    n = vec3(0.0, 0.0, 1.0);
+    if (any(greaterThanEqual(launch, uvec2(c.viewport.zw))) || hrt_checkerboard_skip(c, pixel)) return HRT_PIXEL_SKIP;
+    if (!hrt_world_position(c, pixel, texelFetch(depth, ivec2(pixel), 0), p)) return HRT_PIXEL_BACKGROUND;
+    n = hrt_world_normal(c, texelFetch(normals, ivec2(pixel), 0));
+    return HRT_PIXEL_SURFACE;
+}
+
 // Moves a ray origin off the surface so the secondary ray does not hit the surface it starts
 // from. World position: Wächter & Binder, "A Fast and Robust Method for Avoiding
 // Self-Intersection" (Ray Tracing Gems ch. 6) — exact in the float's own precision.

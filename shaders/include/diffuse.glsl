@@ -38,23 +38,16 @@ float hrt_disney_factor(float ndotl, float ndotv, float ldoth, float roughness) 
 layout(set = 0, binding = 6) uniform sampler2D u_direct;
 #include "screen_lighting.glsl"
 
-vec3 hrt_hit_radiance(TraceCommon c, vec3 hit, InstanceGpu inst, uint prim, vec2 bary, bool bilinear) {
-    vec3 r;
-    if (hrt_screen_radiance(c, hit, r)) return r;
-    return hrt_cache_radiance(inst, prim, bary, bilinear);
-}
-
 void hrt_diffuse_main() {
     TraceCommon c = u_c.common_;
-    if (any(greaterThanEqual(HRT_LAUNCH_ID, uvec2(c.viewport.zw)))) return;
-    uvec2 pixel = HRT_LAUNCH_ID + uvec2(c.viewport.xy);
-    if (hrt_checkerboard_skip(c, pixel)) return;
-    vec3 p;
-    if (!hrt_world_position(c, pixel, texelFetch(u_depth, ivec2(pixel), 0), p)) {
+    uvec2 pixel;
+    vec3 p, n;
+    int kind = hrt_gbuffer_pixel(c, HRT_LAUNCH_ID, u_depth, u_normals, pixel, p, n);
+    if (kind == HRT_PIXEL_SKIP) return;
+    if (kind == HRT_PIXEL_BACKGROUND) {
         imageStore(u_out, ivec2(pixel), vec4(0.0));
         return;
     }
-    vec3 n = hrt_world_normal(c, texelFetch(u_normals, ivec2(pixel), 0));
     vec3 origin = hrt_offset_ray(c, p, n);
     mat3 basis = hrt_basis(n);
     bool disney = u_c.brdf.x != 0.0;

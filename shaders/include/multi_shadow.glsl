@@ -23,16 +23,15 @@ layout(set = 0, binding = 5, std140) uniform MultiShadowConstants {
 
 void hrt_multi_shadow_main() {
     TraceCommon c = u_c.common_;
-    if (any(greaterThanEqual(HRT_LAUNCH_ID, uvec2(c.viewport.zw)))) return;
-    uvec2 pixel = HRT_LAUNCH_ID + uvec2(c.viewport.xy);
-    if (hrt_checkerboard_skip(c, pixel)) return;
-    vec3 p;
-    if (!hrt_world_position(c, pixel, texelFetch(u_depth, ivec2(pixel), 0), p)) {
+    uvec2 pixel;
+    vec3 p, n;
+    int kind = hrt_gbuffer_pixel(c, HRT_LAUNCH_ID, u_depth, u_normals, pixel, p, n);
+    if (kind == HRT_PIXEL_SKIP) return;
+    if (kind == HRT_PIXEL_BACKGROUND) {
         imageStore(u_visibility, ivec2(pixel), uvec4(0xffffffffu));
         imageStore(u_packed, ivec2(pixel), vec4(1.0, 0.0, 0.0, 0.0));
         return;
     }
-    vec3 n = hrt_world_normal(c, texelFetch(u_normals, ivec2(pixel), 0));
     vec3 origin = hrt_offset_ray(c, p, n);
     uint rays = u_c.counts.x, count = u_c.counts.y;
     // The same per-pixel sequence as the single-light task, so one light gives its image.

@@ -22,4 +22,12 @@ bool hrt_screen_radiance(TraceCommon c, vec3 hit, out vec3 radiance) {
     radiance = texelFetch(u_direct, ivec2(pixel), 0).rgb;
     return true;
 }
+
+// A secondary hit's incoming radiance: the lit pixel where the screen shows that surface,
+// the instance's cache elsewhere (the includer has included cache.glsl).
+vec3 hrt_hit_radiance(TraceCommon c, vec3 hit, InstanceGpu inst, uint prim, vec2 bary, bool bilinear) {
+    vec3 r;
+    if (hrt_screen_radiance(c, hit, r)) return r;
+    return hrt_cache_radiance(inst, prim, bary, bilinear);
+}
 #endif

@@ -24,15 +24,14 @@ layout(set = 0, binding = 4, std140) uniform ShadowConstants {
 
 void hrt_shadow_main() {
     TraceCommon c = u_c.common_;
-    if (any(greaterThanEqual(HRT_LAUNCH_ID, uvec2(c.viewport.zw)))) return;
-    uvec2 pixel = HRT_LAUNCH_ID + uvec2(c.viewport.xy);
-    if (hrt_checkerboard_skip(c, pixel)) return;
-    vec3 p;
-    if (!hrt_world_position(c, pixel, texelFetch(u_depth, ivec2(pixel), 0), p)) {
+    uvec2 pixel;
+    vec3 p, n;
+    int kind = hrt_gbuffer_pixel(c, HRT_LAUNCH_ID, u_depth, u_normals, pixel, p, n);
+    if (kind == HRT_PIXEL_SKIP) return;
+    if (kind == HRT_PIXEL_BACKGROUND) {
         imageStore(u_out, ivec2(pixel), vec4(-1.0, 1.0, 0.0, 0.0));
         return;
     }
-    vec3 n = hrt_world_normal(c, texelFetch(u_normals, ivec2(pixel), 0));
     vec3 origin = hrt_offset_ray(c, p, n);
     uint rays = u_c.counts.x;
     uint seed = hrt_pcg(pixel.x ^ hrt_pcg(pixel.y ^ hrt_pcg(c.frame.x ^ 0x5badu)));

@@ -51,24 +51,17 @@ layout(set = 0, binding = 7) uniform sampler2D u_specular;
 layout(set = 0, binding = 8) uniform writeonly image2D u_demodulated;
 #include "screen_lighting.glsl"
 
-vec3 hrt_hit_radiance(TraceCommon c, vec3 hit, InstanceGpu inst, uint prim, vec2 bary, bool bilinear) {
-    vec3 r;
-    if (hrt_screen_radiance(c, hit, r)) return r;
-    return hrt_cache_radiance(inst, prim, bary, bilinear);
-}
-
 void hrt_specular_main() {
     TraceCommon c = u_c.common_;
-    if (any(greaterThanEqual(HRT_LAUNCH_ID, uvec2(c.viewport.zw)))) return;
-    uvec2 pixel = HRT_LAUNCH_ID + uvec2(c.viewport.xy);
-    if (hrt_checkerboard_skip(c, pixel)) return;
-    vec3 p;
-    if (!hrt_world_position(c, pixel, texelFetch(u_depth, ivec2(pixel), 0), p)) {
+    uvec2 pixel;
+    vec3 p, n;
+    int kind = hrt_gbuffer_pixel(c, HRT_LAUNCH_ID, u_depth, u_normals, pixel, p, n);
+    if (kind == HRT_PIXEL_SKIP) return;
+    if (kind == HRT_PIXEL_BACKGROUND) {
         imageStore(u_out, ivec2(pixel), vec4(0.0));
         if (u_c.specular.z != 0.0) imageStore(u_demodulated, ivec2(pixel), vec4(0.0));
         return;
     }
-    vec3 n = hrt_world_normal(c, texelFetch(u_normals, ivec2(pixel), 0));
     vec3 eye = c.view_to_world[3].xyz;
     vec3 v = normalize(eye - p);
     if (dot(v, n) <= 0.0) n = normalize(n + v * (1e-3 - dot(v, n))); // back-facing normal map

@@ -27,6 +27,32 @@ pub(crate) enum Task {
 /// Holds only a weak reference to its context: dropping the `ExecuteContext` frees the SDK's
 /// GPU objects at once, whatever containers are still around (they then refuse to schedule
 /// with `Error::ContextDestroyed`).
+impl Task {
+    /// The shared trace inputs, for tasks that trace from the G-buffer.
+    pub(crate) fn trace_common(&self) -> Option<&TraceCommon> {
+        match self {
+            Task::AmbientOcclusion(t) => Some(&t.common),
+            Task::Shadow(t) => Some(&t.common),
+            Task::Diffuse(t) => Some(&t.common),
+            Task::Specular(t) => Some(&t.common),
+            Task::MultiShadow(t) => Some(&t.common),
+            _ => None,
+        }
+    }
+
+    /// The image a debug visualisation replaces (tasks with one colour output).
+    pub(crate) fn debug_target(&self) -> Option<(&TraceCommon, &ImageInput)> {
+        let (common, output) = match self {
+            Task::AmbientOcclusion(t) => (&t.common, &t.output),
+            Task::Shadow(t) => (&t.common, &t.output),
+            Task::Diffuse(t) => (&t.common, &t.output),
+            Task::Specular(t) => (&t.common, &t.output),
+            _ => return None,
+        };
+        (common.debug_output != DebugOutput::Default).then_some((common, output))
+    }
+}
+
 pub struct TaskContainer {
     pub(crate) shared: Weak<Shared>,
     pub(crate) tasks: Vec<Task>,

@@ -381,6 +381,9 @@ fn light(what: &'static str, l: &LightInfo) -> Result<()> {
     if !(l.radius.is_finite() && l.radius >= 0.0) {
         return Err(Error::invalid(what, "radius must be finite and >= 0"));
     }
+    if !(l.inner_cone.is_finite() && l.outer_cone.is_finite()) {
+        return Err(Error::invalid(what, "inner_cone and outer_cone must be finite"));
+    }
     Ok(())
 }
 

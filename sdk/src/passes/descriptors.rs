@@ -67,12 +67,12 @@ pub(crate) fn push(
     unsafe { device.push.cmd_push_descriptor_set(cmd, bind_point, layout, 0, &writes) };
 }
 
-/// The direct-lighting image of a trace, or a stand-in view when there is none (the binding
-/// must hold a valid image; the shader does not read it then).
-pub(crate) fn direct_or(c: &crate::api::tasks::TraceCommon) -> &ImageInput {
-    if c.direct_lighting.image != vk::Image::null() {
-        &c.direct_lighting
+/// An optional input image, or a stand-in when it is absent: a push-descriptor binding must
+/// hold a valid view even when the shader (told by a flag) does not read it.
+pub(crate) fn optional_or<'a>(image: &'a ImageInput, stand_in: &'a ImageInput) -> &'a ImageInput {
+    if image.image != vk::Image::null() {
+        image
     } else {
-        &c.normals.image
+        stand_in
     }
 }

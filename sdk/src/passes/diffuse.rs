@@ -3,7 +3,7 @@
 use super::constants::TraceCommonGpu;
 use super::descriptors::Slot;
 use super::program::{RtProgram, Shaders};
-use super::descriptors::direct_or;
+use super::descriptors::optional_or;
 use super::Recording;
 use crate::api::tasks::{InstanceInclusionMask, TraceDiffuseTask};
 use crate::error::Result;
@@ -76,8 +76,8 @@ impl DiffusePass {
         r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
         let mut slots = super::gbuffer_slots(r.tlas, &task.common, &task.output, ubo);
         // Without a roughness image the normals stand in (not read then).
-        slots.push(Slot::Sampled(if task.common.roughness.has_image() { &task.common.roughness.image } else { &task.common.normals.image }));
-        slots.push(Slot::Sampled(direct_or(&task.common)));
+        slots.push(Slot::Sampled(optional_or(&task.common.roughness.image, &task.common.normals.image)));
+        slots.push(Slot::Sampled(optional_or(&task.common.direct_lighting, &task.common.normals.image)));
         let vp = &task.common.viewport;
         self.program.run(r, &slots, vp.width, vp.height, inline);
     }

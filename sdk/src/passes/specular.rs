@@ -3,7 +3,7 @@
 use super::constants::TraceCommonGpu;
 use super::descriptors::Slot;
 use super::program::{RtProgram, Shaders};
-use super::descriptors::direct_or;
+use super::descriptors::optional_or;
 use super::Recording;
 use crate::api::tasks::{InstanceInclusionMask, TraceSpecularTask};
 use crate::error::Result;
@@ -88,7 +88,7 @@ impl SpecularPass {
         r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
         // Without a roughness image the binding still needs a valid view: the normals stand in
         // (the shader does not read it then).
-        let roughness = if c.roughness.has_image() { &c.roughness.image } else { &c.normals.image };
+        let roughness = optional_or(&c.roughness.image, &c.normals.image);
         let slots = [
             Slot::Tlas(r.tlas),
             Slot::Sampled(&c.depth.image),
@@ -96,10 +96,10 @@ impl SpecularPass {
             Slot::Sampled(roughness),
             Slot::Storage(&task.output),
             Slot::Uniform(ubo),
-            Slot::Sampled(direct_or(c)),
+            Slot::Sampled(optional_or(&c.direct_lighting, &c.normals.image)),
             // Stand-ins where there is no specular image / demodulated output (not accessed).
-            Slot::Sampled(if c.specular.image.image != vk::Image::null() { &c.specular.image } else { &c.normals.image }),
-            Slot::Storage(if task.demodulated_output.image != vk::Image::null() { &task.demodulated_output } else { &task.output }),
+            Slot::Sampled(optional_or(&c.specular.image, &c.normals.image)),
+            Slot::Storage(optional_or(&task.demodulated_output, &task.output)),
         ];
         self.program.run(r, &slots, c.viewport.width, c.viewport.height, inline);
     }

@@ -635,33 +635,20 @@ impl Shared {
                 Recording { device, cmd, ring: &mut ws.ring, hazards: &mut hazards, tlas, seed: serial as u32, instance_table, floor };
             // Inline ray queries where asked for and available; otherwise the pipeline (once
             // a warning says so).
-            let wants_inline = match task {
-                Task::AmbientOcclusion(t) => t.common.use_inline_rt,
-                Task::Shadow(t) => t.common.use_inline_rt,
-                Task::Diffuse(t) => t.common.use_inline_rt,
-                Task::Specular(t) => t.common.use_inline_rt,
-                Task::MultiShadow(t) => t.common.use_inline_rt,
-                _ => false,
-            };
+            let wants_inline = task.trace_common().is_some_and(|c| c.use_inline_rt);
             if wants_inline && !device.ray_query && !self.warned_inline.swap(true, Ordering::Relaxed) {
                 log::warn!("use_inline_rt: the device has no VK_KHR_ray_query enabled; using the ray-tracing pipeline");
             }
             let inline = wants_inline && device.ray_query;
+            if let Some((common, output)) = task.debug_target() {
+                // Any trace task with a debug mode records the visualisation instead.
+                st.debug.as_ref().expect("created in new").record(&mut r, common, output);
+                timer(st, ws_index).end(d, cmd, span);
+                continue;
+            }
             match task {
-                Task::AmbientOcclusion(t) if t.common.debug_output != DebugOutput::Default => {
-                    st.debug.as_ref().expect("created in new").record(&mut r, &t.common, &t.output);
-                }
-                Task::Shadow(t) if t.common.debug_output != DebugOutput::Default => {
-                    st.debug.as_ref().expect("created in new").record(&mut r, &t.common, &t.output);
-                }
                 Task::Shadow(t) => st.shadow.as_ref().expect("created in new").record(&mut r, inline, t),
-                Task::Diffuse(t) if t.common.debug_output != DebugOutput::Default => {
-                    st.debug.as_ref().expect("created in new").record(&mut r, &t.common, &t.output);
-                }
                 Task::Diffuse(t) => st.diffuse.as_ref().expect("created in new").record(&mut r, inline, t),
-                Task::Specular(t) if t.common.debug_output != DebugOutput::Default => {
-                    st.debug.as_ref().expect("created in new").record(&mut r, &t.common, &t.output);
-                }
                 Task::Specular(t) => st.specular.as_ref().expect("created in new").record(&mut r, inline, t),
                 Task::MultiShadow(t) => st.multi_shadow.as_ref().expect("created in new").record(&mut r, inline, t),
                 Task::AmbientOcclusion(t) => st.ao.as_ref().expect("created in new").record(&mut r, t, inline, floor),
