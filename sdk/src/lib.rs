@@ -30,7 +30,8 @@ pub mod shaders;
 
 pub use api::container::TaskContainer;
 pub use api::context::ExecuteContext;
-pub use api::handles::{GeometryHandle, InstanceHandle};
+pub use api::denoising::*;
+pub use api::handles::{DenoisingContextHandle, GeometryHandle, InstanceHandle};
 pub use api::settings::InitSettings;
 pub use api::tasks::*;
 pub use api::ticket::{CompletedTask, GpuTicket, TaskKind, TaskTiming};

@@ -41,4 +41,13 @@ void hrt_light_ray(LightGpu l, vec3 origin, vec2 u, out vec3 dir, out float tmax
         tmax = len * 0.9999;
     }
 }
+
+// Width (world units) of the penumbra that an occluder `t` away along the shadow ray casts
+// on the surface at p: the light's angular diameter seen from p times t (similar triangles
+// through the occluder's edge). The shadow denoisers blur by it.
+float hrt_penumbra_width(LightGpu l, vec3 p, float t) {
+    if (uint(l.position.w) == HRT_LIGHT_DIRECTIONAL) return 2.0 * l.direction.w * t;
+    float d = distance(l.position.xyz, p);
+    return 2.0 * l.shape.x * t / max(d - t, 1e-3 * d);
+}
 #endif

@@ -29,7 +29,7 @@ void hrt_multi_shadow_main() {
     if (kind == HRT_PIXEL_SKIP) return;
     if (kind == HRT_PIXEL_BACKGROUND) {
         imageStore(u_visibility, ivec2(pixel), uvec4(0xffffffffu));
-        imageStore(u_packed, ivec2(pixel), vec4(1.0, 0.0, 0.0, 0.0));
+        imageStore(u_packed, ivec2(pixel), vec4(1.0, -1.0, 0.0, 0.0));
         return;
     }
     vec3 origin = hrt_offset_ray(c, p, n);
@@ -38,7 +38,7 @@ void hrt_multi_shadow_main() {
     uint seed = hrt_pcg(pixel.x ^ hrt_pcg(pixel.y ^ hrt_pcg(c.frame.x ^ 0x5badu)));
     vec2 shift = vec2(hrt_u01(seed), hrt_u01(hrt_pcg(seed)));
     uvec4 words = uvec4(0u);
-    float vis_sum = 0.0, dist_sum = 0.0, dist_min = 1e30;
+    float vis_sum = 0.0, width_sum = 0.0, dist_min = 1e30;
     uint occluded = 0u;
     for (uint l = 0u; l < count; ++l) {
         uint visible = 0u;
@@ -50,7 +50,7 @@ void hrt_multi_shadow_main() {
             if (t < 0.0) {
                 visible += 1u;
             } else {
-                dist_sum += t;
+                width_sum += hrt_penumbra_width(u_c.lights[l], p, t);
                 dist_min = min(dist_min, t);
                 occluded += 1u;
             }
@@ -60,7 +60,7 @@ void hrt_multi_shadow_main() {
         words[l >> 2] |= uint(fraction * 255.0 + 0.5) << (8u * (l & 3u));
     }
     imageStore(u_visibility, ivec2(pixel), words);
-    imageStore(u_packed, ivec2(pixel), vec4(vis_sum / float(count), occluded > 0u ? dist_sum / float(occluded) : 0.0,
+    imageStore(u_packed, ivec2(pixel), vec4(vis_sum / float(count), occluded > 0u ? width_sum / float(occluded) : -1.0,
                                             occluded > 0u ? dist_min : 0.0, distance(p, c.view_to_world[3].xyz)));
 }
 #endif

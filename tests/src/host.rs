@@ -384,6 +384,21 @@ impl Host {
         Ok(img)
     }
 
+    /// Replaces the texels of an image that is in `layout` (and stays in it).
+    pub fn write_image(&self, img: &HostImage, texels: &[u8], layout: vk::ImageLayout) -> HostResult<()> {
+        let staging = self.buffer_with_data(texels, vk::BufferUsageFlags::TRANSFER_SRC)?;
+        self.run(|cmd| {
+            self.transition(cmd, img, layout, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
+            let region = copy_region(img);
+            unsafe {
+                self.device.cmd_copy_buffer_to_image(cmd, staging.buffer, img.image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[region])
+            };
+            self.transition(cmd, img, vk::ImageLayout::TRANSFER_DST_OPTIMAL, layout);
+        })?;
+        self.destroy_buffer(staging);
+        Ok(())
+    }
+
     /// An image cleared to zero, in `layout` (outputs: GENERAL).
     pub fn image_cleared(&self, format: vk::Format, width: u32, height: u32, usage: vk::ImageUsageFlags, layout: vk::ImageLayout) -> HostResult<HostImage> {
         let bytes = width as usize * height as usize * texel_size(format);

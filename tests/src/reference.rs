@@ -584,3 +584,37 @@ pub fn coloured_room(with_ceiling: bool) -> (Scene, Vec<[f32; 3]>, Camera) {
     }
     (s, colours, Camera::look_at(Vec3::new(0.0, 1.8, 1.9), Vec3::new(0.0, 0.6, -1.0)))
 }
+
+// ---------------------------------------------------------------- diffuse GI
+
+/// Reference mean incoming radiance over the cosine-weighted hemisphere (E/pi, what
+/// `TraceDiffuseTask` estimates with Lambertian weights): a hit takes its instance's
+/// radiance from `colours`, a miss `sky`; `strata`² stratified samples per pixel.
+pub fn diffuse_reference(tracer: &Tracer, g: &GBuffer, eye: Vec3, colours: &[[f32; 3]], sky: [f32; 3], ray_length: f32, strata: u32) -> Vec<[f32; 3]> {
+    let offset = hybrid_rt::RayOffset::default();
+    let mut rng = Rng::new(3);
+    (0..g.depth.len())
+        .map(|i| {
+            if !g.hit[i] {
+                return [0.0; 3];
+            }
+            let (p, n) = (g.position[i], g.normal[i]);
+            let origin = offset_origin(p, n, eye, &offset);
+            let (t, b) = basis(n);
+            let mut sum = [0.0f32; 3];
+            for sy in 0..strata {
+                for sx in 0..strata {
+                    let u1 = (sx as f32 + rng.next_f32()) / strata as f32;
+                    let u2 = (sy as f32 + rng.next_f32()) / strata as f32;
+                    let (r, phi) = (u1.sqrt(), 2.0 * std::f32::consts::PI * u2);
+                    let dir = (t * r * phi.cos() + b * r * phi.sin() + n * (1.0 - u1).max(0.0).sqrt()).normalize();
+                    let c = tracer.closest_hit(origin, dir, 0.0, ray_length).map_or(sky, |h| colours[h.instance as usize]);
+                    for k in 0..3 {
+                        sum[k] += c[k] / (strata * strata) as f32;
+                    }
+                }
+            }
+            sum
+        })
+        .collect()
+}

@@ -117,6 +117,13 @@ impl GBufferImages {
         }
     }
 
+    /// The denoisers' common inputs for this G-buffer (no motion vectors: the cameras
+    /// reproject).
+    pub fn denoising_common(&self, camera: &Camera) -> DenoisingCommon {
+        let t = self.trace_common(camera);
+        DenoisingCommon { depth: t.depth, normals: t.normals, viewport: t.viewport, camera: t.camera, ..Default::default() }
+    }
+
     pub fn read_output(&self, host: &Host) -> HostResult<Vec<f32>> {
         host.read_image_f32(&self.output, vk::ImageLayout::GENERAL)
     }

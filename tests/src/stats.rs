@@ -51,3 +51,18 @@ pub fn masked_mean(v: &[f32], mask: &[bool]) -> f32 {
     let (s, n) = v.iter().zip(mask).filter(|(_, m)| **m).fold((0.0, 0usize), |(s, n), (x, _)| (s + x, n + 1));
     s / n.max(1) as f32
 }
+
+/// Relative RMSE over the masked pixels: sqrt(mean((x - r)²)) / mean(r), the usual
+/// denoiser-quality measure (NRD's and SVGF's papers report it).
+pub fn relative_rmse(x: &[f32], reference: &[f32], mask: &[bool]) -> f32 {
+    let (mut se, mut sum, mut n) = (0.0f64, 0.0f64, 0usize);
+    for ((a, r), m) in x.iter().zip(reference).zip(mask) {
+        if *m {
+            se += ((a - r) as f64).powi(2);
+            sum += *r as f64;
+            n += 1;
+        }
+    }
+    let n = n.max(1) as f64;
+    ((se / n).sqrt() / (sum / n).max(1e-12)) as f32
+}

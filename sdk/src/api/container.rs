@@ -4,6 +4,7 @@
 //! frame refused for lack of a working set can be built again later.
 use super::context::Shared;
 use super::handles::{GeometryHandle, InstanceHandle};
+use super::denoising::*;
 use super::tasks::*;
 use super::validate;
 use crate::error::Result;
@@ -22,6 +23,7 @@ pub(crate) enum Task {
     Diffuse(TraceDiffuseTask),
     Specular(TraceSpecularTask),
     MultiShadow(TraceMultiShadowTask),
+    Denoise(DenoiseJob),
 }
 
 /// Holds only a weak reference to its context: dropping the `ExecuteContext` frees the SDK's
@@ -128,6 +130,43 @@ impl TaskContainer {
         validate::specular(task)?;
         self.tasks.push(Task::Specular(*task));
         Ok(())
+    }
+
+    fn schedule_denoise(&mut self, job: DenoiseJob) -> Result<()> {
+        self.shared()?.check_denoising_context_alive(job.context)?;
+        validate::denoise(&job)?;
+        self.tasks.push(Task::Denoise(job));
+        Ok(())
+    }
+
+    /// Denoises a specular trace (see `DenoiseSpecularTask`).
+    pub fn schedule_denoise_specular(&mut self, task: &DenoiseSpecularTask) -> Result<()> {
+        self.schedule_denoise(task.into())
+    }
+
+    /// Denoises a diffuse GI trace (see `DenoiseDiffuseTask`).
+    pub fn schedule_denoise_diffuse(&mut self, task: &DenoiseDiffuseTask) -> Result<()> {
+        self.schedule_denoise(task.into())
+    }
+
+    /// Denoises specular and diffuse traces in one set of passes.
+    pub fn schedule_denoise_specular_and_diffuse(&mut self, task: &DenoiseSpecularAndDiffuseTask) -> Result<()> {
+        self.schedule_denoise(task.into())
+    }
+
+    /// Denoises an ambient-occlusion trace.
+    pub fn schedule_denoise_diffuse_occlusion(&mut self, task: &DenoiseDiffuseOcclusionTask) -> Result<()> {
+        self.schedule_denoise(task.into())
+    }
+
+    /// Denoises a single-light shadow trace.
+    pub fn schedule_denoise_shadow(&mut self, task: &DenoiseShadowTask) -> Result<()> {
+        self.schedule_denoise(task.into())
+    }
+
+    /// Denoises a multi-light shadow trace's packed output.
+    pub fn schedule_denoise_multi_shadow(&mut self, task: &DenoiseMultiShadowTask) -> Result<()> {
+        self.schedule_denoise(task.into())
     }
 
     /// Bakes a lit view into the direct-lighting caches (see `DirectLightingInjectionTask`).

@@ -11,6 +11,7 @@ macro_rules! handle_type {
 
         impl $name {
             pub const NULL: $name = $name(0);
+            #[allow(dead_code)]
             pub(crate) const KIND: &'static str = $kind;
             pub fn is_null(self) -> bool { self.0 == 0 }
         }
@@ -28,6 +29,9 @@ handle_type!(
 handle_type!(
     /// A placed geometry: a TLAS entry (and, later, its direct-lighting cache).
     InstanceHandle, "instance");
+handle_type!(
+    /// A denoiser's state: its history images and the previous camera.
+    DenoisingContextHandle, "denoising context");
 
 pub(crate) trait RawHandle: Copy {
     const KIND: &'static str;

@@ -49,6 +49,12 @@ pub enum TaskKind {
     Diffuse = 8,
     Specular = 9,
     MultiShadow = 10,
+    DenoiseSpecular = 11,
+    DenoiseDiffuse = 12,
+    DenoiseSpecularAndDiffuse = 13,
+    DenoiseDiffuseOcclusion = 14,
+    DenoiseShadow = 15,
+    DenoiseMultiShadow = 16,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -1,6 +1,7 @@
 //! Input checks run when a task is scheduled, so a mistake is reported at the call that made
 //! it, with the field's name. Handle *states* (registered or not) are checked again when the
 //! container is built, since handles can be destroyed in between.
+use super::denoising::{DenoiseJob, MotionType, SignalType};
 use super::tasks::*;
 use crate::error::{Error, Result};
 use crate::scene::geometry::{check_region, GeometryLayout};
@@ -415,6 +416,77 @@ pub(crate) fn multi_shadow(t: &TraceMultiShadowTask) -> Result<()> {
     )?;
     if !(1..=64).contains(&t.rays_per_pixel) {
         return Err(Error::invalid("TraceMultiShadowTask.rays_per_pixel", format!("{} is not in 1..=64", t.rays_per_pixel)));
+    }
+    Ok(())
+}
+
+/// Channels of the formats denoise inputs may have (None: not one of them).
+pub(crate) fn channel_count(f: vk::Format) -> Option<u32> {
+    use vk::Format as F;
+    Some(match f {
+        F::R8_UNORM | F::R16_UNORM | F::R16_SFLOAT | F::R32_SFLOAT => 1,
+        F::R16G16_SFLOAT | F::R32G32_SFLOAT => 2,
+        F::R8G8B8A8_UNORM | F::R16G16B16A16_SFLOAT | F::R32G32B32A32_SFLOAT => 4,
+        _ => return None,
+    })
+}
+
+const RADIANCE_FORMATS: &[vk::Format] = &[vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT];
+const MOTION_FORMATS_2: &[vk::Format] =
+    &[vk::Format::R16G16_SFLOAT, vk::Format::R32G32_SFLOAT, vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT];
+
+/// A denoise task, normalised (see `DenoiseJob`): G-buffer, cameras, motion, settings, and the
+/// formats its signal reads and writes.
+pub(crate) fn denoise(j: &DenoiseJob) -> Result<()> {
+    let c = &j.common;
+    let as_trace = TraceCommon { depth: c.depth, normals: c.normals, viewport: c.viewport, camera: c.camera, roughness: c.roughness, ..Default::default() };
+    trace_common(&as_trace)?;
+    if let Some(p) = &c.previous_camera {
+        matrix("DenoisingCommon.previous_camera.world_to_view", &p.world_to_view)?;
+        matrix("DenoisingCommon.previous_camera (view_to_clip * world_to_view)", &(p.view_to_clip * p.world_to_view))?;
+    }
+    if c.camera_jitter.iter().any(|v| !v.is_finite()) {
+        return Err(Error::invalid("DenoisingCommon.camera_jitter", "is not finite"));
+    }
+    let vp = &c.viewport;
+    let m = &c.motion;
+    if m.has_image() {
+        image("DenoisingCommon.motion.image", &m.image, vp, INPUT_LAYOUTS)?;
+        let formats = if m.motion_type == MotionType::RgbWorldSpace { RADIANCE_FORMATS } else { MOTION_FORMATS_2 };
+        format_in("DenoisingCommon.motion.image.format", m.image.format, formats, "a float format with the channels the MotionType reads")?;
+    }
+    if m.scale.iter().any(|v| !v.is_finite()) {
+        return Err(Error::invalid("DenoisingCommon.motion.scale", "is not finite"));
+    }
+    let s = &c.settings;
+    let checks: [(&'static str, bool); 9] = [
+        ("DenoiserSettings.max_history_frames (1..=255)", (1..=255).contains(&s.max_history_frames)),
+        ("DenoiserSettings.fast_history_frames (1..=max_history_frames)", (1..=s.max_history_frames).contains(&s.fast_history_frames)),
+        ("DenoiserSettings.history_clamp_sigma (> 0)", s.history_clamp_sigma.is_finite() && s.history_clamp_sigma > 0.0),
+        ("DenoiserSettings.spatial_passes (0..=6)", s.spatial_passes <= 6),
+        ("DenoiserSettings.luminance_sigma (> 0)", s.luminance_sigma.is_finite() && s.luminance_sigma > 0.0),
+        ("DenoiserSettings.normal_power (>= 0)", s.normal_power.is_finite() && s.normal_power >= 0.0),
+        ("DenoiserSettings.plane_distance_sigma (> 0)", s.plane_distance_sigma.is_finite() && s.plane_distance_sigma > 0.0),
+        ("DenoiserSettings.max_shadow_blur_radius (0..=64)", (0.0..=64.0).contains(&s.max_shadow_blur_radius)),
+        ("DenoiserSettings", true),
+    ];
+    if let Some((what, _)) = checks.iter().find(|(_, ok)| !ok) {
+        return Err(Error::invalid(what, "is out of range"));
+    }
+    let (inputs, outputs): (&[vk::Format], &[vk::Format]) = match j.signal {
+        SignalType::Specular | SignalType::Diffuse | SignalType::SpecularAndDiffuse => (RADIANCE_FORMATS, RADIANCE_FORMATS),
+        SignalType::DiffuseOcclusion => (SCALAR_OUTPUT_FORMATS, SCALAR_OUTPUT_FORMATS),
+        SignalType::Shadow => (SHADOW_OUTPUT_FORMATS, SCALAR_OUTPUT_FORMATS),
+        SignalType::MultiShadow => (RADIANCE_FORMATS, SCALAR_OUTPUT_FORMATS),
+    };
+    for k in 0..j.count {
+        image("denoise task input", &j.inputs[k], vp, INPUT_LAYOUTS)?;
+        format_in("denoise task input", j.inputs[k].format, inputs, "the format of the trace task's output for this signal")?;
+        image("denoise task output", &j.outputs[k], vp, &[vk::ImageLayout::GENERAL])?;
+        format_in("denoise task output", j.outputs[k].format, outputs, "an RGBA16F/32F (radiance) or scalar/RGBA (visibility) format")?;
+    }
+    if j.signal == SignalType::Shadow {
+        light("DenoiseShadowTask.light", &j.light)?;
     }
     Ok(())
 }

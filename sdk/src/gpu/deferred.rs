@@ -6,6 +6,7 @@ use ash::vk;
 pub(crate) enum Garbage {
     Buffer(Buffer),
     AccelerationStructure(vk::AccelerationStructureKHR, Buffer),
+    Image(super::memory::Image),
 }
 
 #[derive(Default)]
@@ -37,6 +38,7 @@ impl DeferredFrees {
 pub(crate) fn destroy(device: &super::device::Device, memory: &Memory, g: Garbage) {
     match g {
         Garbage::Buffer(b) => memory.destroy_buffer(b),
+        Garbage::Image(i) => memory.destroy_image(i),
         Garbage::AccelerationStructure(a, b) => {
             // SAFETY: no in-flight ticket uses it (see collect).
             unsafe { device.accel.destroy_acceleration_structure(a, None) };

@@ -26,9 +26,11 @@ pub enum MemoryKind {
     Cache = 6,
     /// Read-back copies of geometry, alive from registration until their ticket returns.
     Readback = 7,
+    /// Denoising contexts' history and intermediate images.
+    Denoiser = 8,
 }
 
-pub const MEMORY_KIND_COUNT: usize = 8;
+pub const MEMORY_KIND_COUNT: usize = 9;
 
 /// Bytes and counts of live SDK allocations, per kind.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -50,11 +52,12 @@ pub struct ResourceAllocations {
     pub pipelines: AllocationCount,
     pub cache: AllocationCount,
     pub readback: AllocationCount,
+    pub denoiser: AllocationCount,
 }
 
 impl ResourceAllocations {
     pub fn total_bytes(&self) -> u64 {
-        [self.geometry_copies, self.blas, self.build_scratch, self.tlas, self.upload_rings, self.pipelines, self.cache, self.readback]
+        [self.geometry_copies, self.blas, self.build_scratch, self.tlas, self.upload_rings, self.pipelines, self.cache, self.readback, self.denoiser]
             .iter()
             .map(|c| c.bytes)
             .sum()
@@ -81,6 +84,35 @@ impl Buffer {
             .as_mut()
             .and_then(|a| a.mapped_slice_mut())
             .expect("buffer is host visible")
+    }
+}
+
+/// The one subresource of the SDK's images.
+pub(crate) const COLOR_RANGE: vk::ImageSubresourceRange =
+    vk::ImageSubresourceRange { aspect_mask: vk::ImageAspectFlags::COLOR, base_mip_level: 0, level_count: 1, base_array_layer: 0, layer_count: 1 };
+
+/// An SDK-owned image (denoiser history), always used in GENERAL layout after creation.
+pub(crate) struct Image {
+    pub raw: vk::Image,
+    pub view: vk::ImageView,
+    pub format: vk::Format,
+    pub width: u32,
+    pub height: u32,
+    pub kind: MemoryKind,
+    allocation: Option<Allocation>,
+}
+
+impl Image {
+    /// As an `ImageInput` in GENERAL layout, for descriptor slots.
+    pub fn input(&self) -> crate::api::tasks::ImageInput {
+        crate::api::tasks::ImageInput {
+            image: self.raw,
+            view: self.view,
+            format: self.format,
+            width: self.width,
+            height: self.height,
+            layout: vk::ImageLayout::GENERAL,
+        }
     }
 }
 
@@ -171,6 +203,83 @@ impl Memory {
         unsafe { self.device.destroy_buffer(buffer.raw, None) };
     }
 
+    /// A 2D storage image in device memory, with its view (layout UNDEFINED until its first
+    /// recording transitions it).
+    pub fn create_image(&self, name: &'static str, format: vk::Format, width: u32, height: u32, kind: MemoryKind) -> Result<Image> {
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(format)
+            .extent(vk::Extent3D { width, height, depth: 1 })
+            .mip_levels(1)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: valid create info; destroyed in `destroy_image`.
+        let raw = unsafe { self.device.create_image(&info, None) }.map_err(Error::vk("vkCreateImage"))?;
+        let requirements = unsafe { self.device.get_image_memory_requirements(raw) };
+        let allocation = self.allocator.lock().as_mut().ok_or_else(|| Error::Internal("allocator gone".into())).and_then(|a| {
+            a.allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location: MemoryLocation::GpuOnly,
+                linear: false,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|e| Error::OutOfMemory { what: name, detail: e.to_string() })
+        });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(e) => {
+                unsafe { self.device.destroy_image(raw, None) };
+                return Err(e);
+            }
+        };
+        let bound = unsafe { self.device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }
+            .map_err(Error::vk("vkBindImageMemory"))
+            .and_then(|_| {
+                let view_info = vk::ImageViewCreateInfo::default()
+                    .image(raw)
+                    .view_type(vk::ImageViewType::TYPE_2D)
+                    .format(format)
+                    .subresource_range(COLOR_RANGE);
+                unsafe { self.device.create_image_view(&view_info, None) }.map_err(Error::vk("vkCreateImageView"))
+            });
+        let view = match bound {
+            Ok(v) => v,
+            Err(e) => {
+                unsafe { self.device.destroy_image(raw, None) };
+                let _ = self.allocator.lock().as_mut().map(|a| a.free(allocation));
+                return Err(e);
+            }
+        };
+        let mut counts = self.counts.lock();
+        counts[kind as usize].count += 1;
+        counts[kind as usize].bytes += allocation.size();
+        Ok(Image { raw, view, format, width, height, kind, allocation: Some(allocation) })
+    }
+
+    pub fn destroy_image(&self, mut image: Image) {
+        if let Some(allocation) = image.allocation.take() {
+            let mut counts = self.counts.lock();
+            let c = &mut counts[image.kind as usize];
+            c.count = c.count.saturating_sub(1);
+            c.bytes = c.bytes.saturating_sub(allocation.size());
+            drop(counts);
+            if let Some(a) = self.allocator.lock().as_mut() {
+                if let Err(e) = a.free(allocation) {
+                    log::error!("freeing an image failed: {e}");
+                }
+            }
+        }
+        // SAFETY: the caller guarantees no pending GPU use (deferred destruction).
+        unsafe {
+            self.device.destroy_image_view(image.view, None);
+            self.device.destroy_image(image.raw, None);
+        }
+    }
+
     pub fn allocations(&self) -> ResourceAllocations {
         let c = *self.counts.lock();
         ResourceAllocations {
@@ -182,6 +291,7 @@ impl Memory {
             pipelines: c[MemoryKind::Pipeline as usize],
             cache: c[MemoryKind::Cache as usize],
             readback: c[MemoryKind::Readback as usize],
+            denoiser: c[MemoryKind::Denoiser as usize],
         }
     }
 

@@ -53,6 +53,14 @@ pub(crate) fn pipeline_layout(device: &ash::Device, set: vk::DescriptorSetLayout
     unsafe { device.create_pipeline_layout(&info, None) }.map_err(Error::vk("vkCreatePipelineLayout"))
 }
 
+/// A push-descriptor set plus `bytes` of push constants (per-dispatch parameters).
+pub(crate) fn pipeline_layout_with_push(device: &ash::Device, set: vk::DescriptorSetLayout, bytes: u32, stages: vk::ShaderStageFlags) -> Result<vk::PipelineLayout> {
+    let sets = [set];
+    let ranges = [vk::PushConstantRange { stage_flags: stages, offset: 0, size: bytes }];
+    let info = vk::PipelineLayoutCreateInfo::default().set_layouts(&sets).push_constant_ranges(&ranges);
+    unsafe { device.create_pipeline_layout(&info, None) }.map_err(Error::vk("vkCreatePipelineLayout"))
+}
+
 /// A layout with only push constants (passes that reach their data by device address).
 pub(crate) fn push_constant_layout(device: &ash::Device, bytes: u32, stages: vk::ShaderStageFlags) -> Result<vk::PipelineLayout> {
     let ranges = [vk::PushConstantRange { stage_flags: stages, offset: 0, size: bytes }];

@@ -5,6 +5,7 @@ pub(crate) mod ao;
 pub(crate) mod cache_ops;
 pub(crate) mod constants;
 pub(crate) mod debug;
+pub(crate) mod denoise;
 pub(crate) mod descriptors;
 pub(crate) mod diffuse;
 pub(crate) mod inject;

@@ -5,8 +5,9 @@
 //! likes and hands the ticket back when its fence says the GPU is done. Everything the GPU may
 //! still use is freed only after the tickets that could use it have come back.
 use super::container::{Task, TaskContainer};
-use super::handles::{GeometryHandle, InstanceHandle, Registry};
+use super::handles::{DenoisingContextHandle, GeometryHandle, InstanceHandle, Registry};
 use super::settings::InitSettings;
+use super::denoising::SignalType;
 use super::tasks::*;
 use super::ticket::{CompletedTask, GpuTicket, TaskKind};
 use crate::error::{Error, HandleProblem, Result};
@@ -28,6 +29,8 @@ use gpu_allocator::MemoryLocation;
 use parking_lot::Mutex;
 
 mod cache;
+mod denoise;
+pub use denoise::MAX_DENOISING_EXTENT;
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, AtomicU16, Ordering};
 use std::sync::Arc;
@@ -88,6 +91,8 @@ struct State {
     diffuse: Option<DiffusePass>,
     specular: Option<SpecularPass>,
     multi_shadow: Option<MultiShadowPass>,
+    denoise: Option<crate::passes::denoise::DenoisePass>,
+    denoisers: Registry<DenoisingContextHandle, crate::passes::denoise::DenoiserState>,
     cache_ops: Option<CacheOps>,
     cache_pool: CachePool,
     /// Cache ranges of destroyed/changed instances: (newest serial issued then, range).
@@ -152,6 +157,8 @@ impl ExecuteContext {
                 diffuse: None,
                 specular: None,
                 multi_shadow: None,
+                denoise: None,
+                denoisers: Registry::new(id),
                 cache_ops: None,
                 cache_pool: CachePool::default(),
                 cache_frees: Vec::new(),
@@ -173,6 +180,7 @@ impl ExecuteContext {
             st.specular = Some(SpecularPass::new(&shared.device, &shared.memory, sampler)?);
             st.multi_shadow = Some(MultiShadowPass::new(&shared.device, &shared.memory, sampler)?);
             st.cache_ops = Some(CacheOps::new(&shared.device)?);
+            st.denoise = Some(crate::passes::denoise::DenoisePass::new(&shared.device, sampler)?);
             for _ in 0..settings.supported_working_sets {
                 let ws = shared.new_working_set(settings)?;
                 st.working_sets.push(ws);
@@ -459,6 +467,7 @@ fn validate_handles(st: &State, tasks: &[Task]) -> Result<()> {
                 st.instances.get(t.source)?;
                 st.instances.get(t.target)?;
             }
+            Task::Denoise(j) => denoise::check_job(&st.denoisers, j)?,
             Task::BvhBuild(_) | Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) | Task::Shadow(_) | Task::Diffuse(_) | Task::Specular(_) | Task::MultiShadow(_) => {}
         }
     }
@@ -558,7 +567,7 @@ impl Shared {
             .map(|i| i as u32);
         let has_render = tasks
             .iter()
-            .any(|t| matches!(t, Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) | Task::DirectLightTransfer(_) | Task::Shadow(_) | Task::Diffuse(_) | Task::Specular(_) | Task::MultiShadow(_)));
+            .any(|t| matches!(t, Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) | Task::DirectLightTransfer(_) | Task::Shadow(_) | Task::Diffuse(_) | Task::Specular(_) | Task::MultiShadow(_) | Task::Denoise(_)));
         let bvh_span = first_bvh.map(|i| timer(st, ws_index).begin(d, cmd, TaskKind::Bvh, i));
         self.apply_scene_tasks(st, ws_index, tasks, cmd, serial, &mut hazards)?;
         let max_builds: Option<u32> = tasks
@@ -604,6 +613,7 @@ impl Shared {
             .max(passes::diffuse::UPLOAD_BYTES)
             .max(passes::specular::UPLOAD_BYTES)
             .max(passes::shadow::MULTI_UPLOAD_BYTES)
+            .max(passes::denoise::UPLOAD_BYTES)
             + device.ubo_alignment;
         self.ensure_ring(st, ws_index, Self::instance_table_bytes(st) + tasks.len() as u64 * per_task)?;
         let instance_table = self.push_instance_table(st, ws_index);
@@ -616,6 +626,14 @@ impl Shared {
                 Task::Diffuse(_) => TaskKind::Diffuse,
                 Task::Specular(_) => TaskKind::Specular,
                 Task::MultiShadow(_) => TaskKind::MultiShadow,
+                Task::Denoise(j) => match j.signal {
+                    SignalType::Specular => TaskKind::DenoiseSpecular,
+                    SignalType::Diffuse => TaskKind::DenoiseDiffuse,
+                    SignalType::SpecularAndDiffuse => TaskKind::DenoiseSpecularAndDiffuse,
+                    SignalType::DiffuseOcclusion => TaskKind::DenoiseDiffuseOcclusion,
+                    SignalType::Shadow => TaskKind::DenoiseShadow,
+                    SignalType::MultiShadow => TaskKind::DenoiseMultiShadow,
+                },
                 _ => continue,
             };
             let transfer_job = match task {
@@ -651,6 +669,11 @@ impl Shared {
                 Task::Diffuse(t) => st.diffuse.as_ref().expect("created in new").record(&mut r, inline, t),
                 Task::Specular(t) => st.specular.as_ref().expect("created in new").record(&mut r, inline, t),
                 Task::MultiShadow(t) => st.multi_shadow.as_ref().expect("created in new").record(&mut r, inline, t),
+                Task::Denoise(j) => {
+                    if let Ok(state) = st.denoisers.get_mut(j.context) {
+                        st.denoise.as_ref().expect("created in new").record(&mut r, state, j);
+                    }
+                }
                 Task::AmbientOcclusion(t) => st.ao.as_ref().expect("created in new").record(&mut r, t, inline, floor),
                 Task::DirectLightingInjection(t) => cache::record_injection(
                     &mut r,
@@ -986,6 +1009,17 @@ impl Drop for Shared {
         }
         if let Some(p) = st.cache_ops.take() {
             p.destroy(device);
+        }
+        if let Some(p) = st.denoise.take() {
+            p.destroy(device);
+        }
+        let denoisers: Vec<DenoisingContextHandle> = st.denoisers.iter().map(|(h, _)| h).collect();
+        for h in denoisers {
+            if let Ok(state) = st.denoisers.remove(h) {
+                for image in state.into_images() {
+                    memory.destroy_image(image);
+                }
+            }
         }
         st.cache_pool.destroy(memory);
         unsafe { device.raw.destroy_sampler(st.sampler, None) };

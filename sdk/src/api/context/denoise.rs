@@ -1,0 +1,62 @@
+//! Denoising contexts: created and destroyed by the engine, their history images owned here
+//! and freed only after the tickets that could still use them come back.
+use super::{ExecuteContext, Shared};
+use crate::api::denoising::{DenoiseJob, DenoisingContextInput};
+use crate::api::handles::DenoisingContextHandle;
+use crate::error::{Error, Result};
+use crate::gpu::deferred::Garbage;
+use crate::passes::denoise::DenoiserState;
+
+/// Largest `max_width` / `max_height` of a denoising context.
+pub const MAX_DENOISING_EXTENT: u32 = 16384;
+
+impl ExecuteContext {
+    /// Creates a denoising context and allocates its history (see `DenoisingContextInput`).
+    /// Memory shows under `ResourceAllocations::denoiser`.
+    pub fn create_denoising_context(&self, input: &DenoisingContextInput) -> Result<DenoisingContextHandle> {
+        for (what, v) in [("DenoisingContextInput.max_width", input.max_width), ("DenoisingContextInput.max_height", input.max_height)] {
+            if !(1..=MAX_DENOISING_EXTENT).contains(&v) {
+                return Err(Error::invalid(what, format!("{v} is not in 1..={MAX_DENOISING_EXTENT}")));
+            }
+        }
+        let state = DenoiserState::new(&self.shared.memory, input)?;
+        Ok(self.shared.state.lock().denoisers.insert(state))
+    }
+
+    /// Destroys a denoising context. Tasks still scheduled with it fail at build; its images
+    /// are freed once the tickets issued so far have come back.
+    pub fn destroy_denoising_context(&self, handle: DenoisingContextHandle) -> Result<()> {
+        let mut st = self.shared.state.lock();
+        let state = st.denoisers.remove(handle)?;
+        let serial = st.last_issued();
+        for image in state.into_images() {
+            st.deferred.retire(serial, Garbage::Image(image));
+        }
+        Ok(())
+    }
+}
+
+impl Shared {
+    pub(crate) fn check_denoising_context_alive(&self, h: DenoisingContextHandle) -> Result<()> {
+        self.state.lock().denoisers.check(h).map(|_| ())
+    }
+}
+
+/// At build: the context still exists, denoises this task's signal and is large enough.
+pub(super) fn check_job(denoisers: &crate::api::handles::Registry<DenoisingContextHandle, DenoiserState>, job: &DenoiseJob) -> Result<()> {
+    let state = denoisers.get(job.context)?;
+    if state.input.signal != job.signal {
+        return Err(Error::invalid(
+            "denoise task context",
+            format!("the context denoises {:?}, the task is {:?}", state.input.signal, job.signal),
+        ));
+    }
+    let vp = &job.common.viewport;
+    if vp.width > state.input.max_width || vp.height > state.input.max_height {
+        return Err(Error::invalid(
+            "denoise task viewport",
+            format!("{}x{} exceeds the context's {}x{}", vp.width, vp.height, state.input.max_width, state.input.max_height),
+        ));
+    }
+    Ok(())
+}

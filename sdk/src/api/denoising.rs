@@ -1,0 +1,366 @@
+//! Denoising: contexts that own a denoiser's history, and the tasks that filter trace outputs.
+//!
+//! Kickstart RT hands its noisy images to NVIDIA's NRD (REBLUR/RELAX for radiance, SIGMA for
+//! shadows) behind a reduced API. Ours are built in, in the same command buffer and with the
+//! same hazard tracking as the trace tasks, so a trace task's output image can be a denoise
+//! task's input in the same container with no barrier of the engine's. What the filters do:
+//!
+//! - **Radiance** (specular, diffuse, both in one pass, and diffuse occlusion), a
+//!   ReLAX-like chain of compute passes: temporal accumulation along reprojected history with
+//!   disocclusion tests on plane distance and normals and a per-pixel history length; a fast
+//!   (few-frame) history beside the slow one, whose local mean ± σ box clamps the slow one so a
+//!   moving light or object does not ghost; specular history that follows the *reflected*
+//!   point (the virtual position at the hit distance) and accumulates fewer frames the
+//!   smoother the surface (a mirror is passed through, sharp); luminance variance from the
+//!   temporal moments, or from the neighbourhood while history is short; then an edge-aware
+//!   à-trous wavelet filter (plane, normal, luminance-variance and roughness stops) whose radius
+//!   shrinks as a pixel's history grows; and an anti-firefly clamp of each new sample to its
+//!   neighbourhood.
+//! - **Shadows** (one light or many), SIGMA-like: the penumbra's width is derived per pixel
+//!   from the occluder distance and the light's size (hit distance × angular size), spread to
+//!   the lit side of the edge by a neighbourhood search, and the visibility is blurred over a
+//!   disk of that width with plane and normal stops — contact shadows (small occluder
+//!   distance) and hard lights keep hard edges — then stabilised temporally with a
+//!   neighbourhood clamp.
+//!
+//! `half_resolution_mode` resolves a checkerboard trace to full resolution; with no motion
+//! vectors the camera matrices reproject (static geometry only: the guide's debugging mode);
+//! `DenoisingMethod::SpatialOnly` filters each frame alone (no history), to tell a temporal
+//! problem from a spatial one.
+use super::handles::DenoisingContextHandle;
+use super::tasks::{Camera, DepthInput, ImageInput, LightInfo, NormalInput, RoughnessInput, Viewport};
+use ash::vk;
+
+/// Which filter chain a denoising context runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum DenoisingMethod {
+    /// Temporal accumulation with reprojection, then spatial filtering (see the module doc).
+    /// Default.
+    #[default]
+    Temporal = 0,
+    /// This frame only: the spatial filters with no history (debugging, or content whose
+    /// motion cannot be reprojected).
+    SpatialOnly = 1,
+}
+
+/// What a denoising context filters; each denoise task needs a context of its signal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum SignalType {
+    /// `TraceSpecularTask` output (RGB radiance, A = hit distance).
+    Specular = 0,
+    /// `TraceDiffuseTask` output (RGB radiance, A = hit distance). Default.
+    #[default]
+    Diffuse = 1,
+    /// Both, denoised in one pass (`DenoiseSpecularAndDiffuseTask`).
+    SpecularAndDiffuse = 2,
+    /// `TraceAmbientOcclusionTask` output (R = visibility).
+    DiffuseOcclusion = 3,
+    /// `TraceShadowTask` output (R = occluder distance, G = visible fraction).
+    Shadow = 4,
+    /// `TraceMultiShadowTask`'s `packed` output.
+    MultiShadow = 5,
+}
+
+/// Creates a denoising context: it owns the history images (allocated at `max_width` x
+/// `max_height`; a larger viewport needs a new context) of one signal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(C)]
+pub struct DenoisingContextInput {
+    /// 1..=16384 each.
+    pub max_width: u32,
+    pub max_height: u32,
+    pub method: DenoisingMethod,
+    pub signal: SignalType,
+}
+
+impl Default for DenoisingContextInput {
+    fn default() -> Self {
+        DenoisingContextInput { max_width: 0, max_height: 0, method: DenoisingMethod::Temporal, signal: SignalType::Diffuse }
+    }
+}
+
+/// How the motion image encodes where each pixel's surface was in the previous frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum MotionType {
+    /// RG = screen-space motion in pixels of the viewport (Kickstart RT's RG_ViewSpace).
+    /// Default.
+    #[default]
+    RgViewSpace = 0,
+    /// RG = motion in normalized device coordinates (the viewport spans [-1, 1]).
+    RgClipSpace = 1,
+    /// RGB = world-space motion of the surface.
+    RgbWorldSpace = 2,
+}
+
+/// Per-pixel motion vectors. After multiplying by `scale` a vector points from the current
+/// position to the previous one (previous − current); engines that store current − previous
+/// set a scale of -1 (and flip y for a y-up convention).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MotionInput {
+    /// Optional: leave `image` null to reproject with the camera matrices (static scenes
+    /// only, the guide's check that the matrices are right). Read-only layout or GENERAL,
+    /// SAMPLED usage; a float format with the channels `motion_type` needs.
+    pub image: ImageInput,
+    pub motion_type: MotionType,
+    /// Per-component factor. Default [1, 1, 1].
+    pub scale: [f32; 3],
+}
+
+impl Default for MotionInput {
+    fn default() -> Self {
+        MotionInput { image: ImageInput::default(), motion_type: MotionType::RgViewSpace, scale: [1.0; 3] }
+    }
+}
+
+impl MotionInput {
+    pub fn has_image(&self) -> bool {
+        self.image.image != vk::Image::null()
+    }
+}
+
+/// Tuning shared by the denoisers. The defaults suit 1 ray per pixel at 30-120 frames per
+/// second.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct DenoiserSettings {
+    /// Longest history, in frames (1..=255): the slow history's running average window.
+    /// Default 32. Specular surfaces use fewer as they get smoother (a mirror: 1).
+    pub max_history_frames: u32,
+    /// Window of the fast history whose neighbourhood clamps the slow one (1..=max). Default 4.
+    pub fast_history_frames: u32,
+    /// Width of the clamping box in standard deviations of the fast history's 3x3
+    /// neighbourhood (> 0). Larger: steadier, more lag. Default 2.0.
+    pub history_clamp_sigma: f32,
+    /// À-trous iterations (0..=6; the footprint is 2^(n+1) + 1 pixels). Default 5.
+    pub spatial_passes: u32,
+    /// Luminance stop in standard deviations of the local variance (> 0). Default 4.0.
+    pub luminance_sigma: f32,
+    /// Normal stop: weights go as dot(n, n')^power (>= 0). Default 64.
+    pub normal_power: f32,
+    /// Plane-distance stop, relative to the view distance (> 0): also the disocclusion
+    /// threshold. Default 0.02.
+    pub plane_distance_sigma: f32,
+    /// Clamp each new radiance sample's luminance to its 8 neighbours' largest (removes
+    /// fireflies, slightly biased). Not applied to mirrors. Default true.
+    pub anti_firefly: bool,
+    /// Shadows: widest penumbra blur radius in pixels (0..=64). Default 24.
+    pub max_shadow_blur_radius: f32,
+}
+
+impl Default for DenoiserSettings {
+    fn default() -> Self {
+        DenoiserSettings {
+            max_history_frames: 32,
+            fast_history_frames: 4,
+            history_clamp_sigma: 2.0,
+            spatial_passes: 5,
+            luminance_sigma: 4.0,
+            normal_power: 64.0,
+            plane_distance_sigma: 0.02,
+            anti_firefly: true,
+            max_shadow_blur_radius: 24.0,
+        }
+    }
+}
+
+/// Inputs every denoise task shares: the G-buffer the noisy image was traced from, motion,
+/// and the cameras.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DenoisingCommon {
+    pub depth: DepthInput,
+    pub normals: NormalInput,
+    /// Specular: the roughness the trace used (same rules as `TraceCommon::roughness`).
+    pub roughness: RoughnessInput,
+    pub motion: MotionInput,
+    pub viewport: Viewport,
+    /// The camera of this frame, as rendered (jitter included in `view_to_clip`).
+    pub camera: Camera,
+    /// The camera of the frame the history was made in. None (default): the camera of the
+    /// previous task this denoising context recorded.
+    pub previous_camera: Option<Camera>,
+    /// Sub-pixel offset (pixels) by which this frame's image content is shifted by jitter;
+    /// the context remembers the previous one. Only motion vectors need it (engines write
+    /// them without jitter). Default [0, 0].
+    pub camera_jitter: [f32; 2],
+    /// The noisy input was traced in checkerboard mode in *this* container (the pattern
+    /// follows the ticket): the other half of the pixels is reconstructed, giving a full
+    /// image. Default false.
+    pub half_resolution_mode: bool,
+    /// Drop the history (a camera cut, a teleport, a new level). Default false.
+    pub reset_history: bool,
+    pub settings: DenoiserSettings,
+}
+
+impl Default for DenoisingCommon {
+    fn default() -> Self {
+        DenoisingCommon {
+            depth: DepthInput::default(),
+            normals: NormalInput::default(),
+            roughness: RoughnessInput::default(),
+            motion: MotionInput::default(),
+            viewport: Viewport::default(),
+            camera: Camera::default(),
+            previous_camera: None,
+            camera_jitter: [0.0; 2],
+            half_resolution_mode: false,
+            reset_history: false,
+            settings: DenoiserSettings::default(),
+        }
+    }
+}
+
+/// The noisy input image: the trace task's output as it wrote it (GENERAL layout, or a
+/// read-only one), with SAMPLED usage. The output image (GENERAL, STORAGE usage) may be the
+/// input image itself; its RGB receives the denoised radiance, A = 1.
+fn general() -> ImageInput {
+    ImageInput { layout: vk::ImageLayout::GENERAL, ..Default::default() }
+}
+
+/// Denoises `TraceSpecularTask` output (RGBA16F/32F in and out).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DenoiseSpecularTask {
+    pub context: DenoisingContextHandle,
+    pub common: DenoisingCommon,
+    pub input: ImageInput,
+    pub output: ImageInput,
+}
+
+/// Denoises `TraceDiffuseTask` output (RGBA16F/32F in and out).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DenoiseDiffuseTask {
+    pub context: DenoisingContextHandle,
+    pub common: DenoisingCommon,
+    pub input: ImageInput,
+    pub output: ImageInput,
+}
+
+/// Denoises specular and diffuse together: one reprojection and one set of passes for both.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DenoiseSpecularAndDiffuseTask {
+    pub context: DenoisingContextHandle,
+    pub common: DenoisingCommon,
+    pub input_specular: ImageInput,
+    pub input_diffuse: ImageInput,
+    pub output_specular: ImageInput,
+    pub output_diffuse: ImageInput,
+}
+
+/// Denoises `TraceAmbientOcclusionTask` output (R of the input; every channel of the output
+/// gets the visibility, A = 1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DenoiseDiffuseOcclusionTask {
+    pub context: DenoisingContextHandle,
+    pub common: DenoisingCommon,
+    pub input: ImageInput,
+    pub output: ImageInput,
+}
+
+/// Denoises `TraceShadowTask` output. `light` must be the light that was traced (its size
+/// sets the penumbra widths). Output: visibility in every channel (A = 1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DenoiseShadowTask {
+    pub context: DenoisingContextHandle,
+    pub common: DenoisingCommon,
+    pub light: LightInfo,
+    pub input: ImageInput,
+    pub output: ImageInput,
+}
+
+/// Denoises `TraceMultiShadowTask`'s `packed` output into one visibility per pixel (the mean
+/// over the lights) in every channel of `output` (A = 1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DenoiseMultiShadowTask {
+    pub context: DenoisingContextHandle,
+    pub common: DenoisingCommon,
+    pub input: ImageInput,
+    pub output: ImageInput,
+}
+
+macro_rules! default_task {
+    ($t:ident { $($img:ident),* }) => {
+        impl Default for $t {
+            fn default() -> Self {
+                $t { context: DenoisingContextHandle::NULL, common: DenoisingCommon::default(), $($img: general()),* }
+            }
+        }
+    };
+}
+default_task!(DenoiseSpecularTask { input, output });
+default_task!(DenoiseDiffuseTask { input, output });
+default_task!(DenoiseSpecularAndDiffuseTask { input_specular, input_diffuse, output_specular, output_diffuse });
+default_task!(DenoiseDiffuseOcclusionTask { input, output });
+default_task!(DenoiseMultiShadowTask { input, output });
+
+impl Default for DenoiseShadowTask {
+    fn default() -> Self {
+        DenoiseShadowTask {
+            context: DenoisingContextHandle::NULL,
+            common: DenoisingCommon::default(),
+            light: LightInfo::default(),
+            input: general(),
+            output: general(),
+        }
+    }
+}
+
+/// Every denoise task, normalised for recording: one or two (input, output) pairs of one
+/// signal type, and the light for single-light shadows.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct DenoiseJob {
+    pub context: DenoisingContextHandle,
+    pub signal: SignalType,
+    pub common: DenoisingCommon,
+    pub inputs: [ImageInput; 2],
+    pub outputs: [ImageInput; 2],
+    /// 1, or 2 for specular + diffuse (index 0 specular, 1 diffuse).
+    pub count: usize,
+    pub light: LightInfo,
+}
+
+impl DenoiseJob {
+    fn one(context: DenoisingContextHandle, signal: SignalType, common: &DenoisingCommon, input: &ImageInput, output: &ImageInput) -> DenoiseJob {
+        DenoiseJob { context, signal, common: *common, inputs: [*input; 2], outputs: [*output; 2], count: 1, light: LightInfo::default() }
+    }
+}
+
+impl From<&DenoiseSpecularTask> for DenoiseJob {
+    fn from(t: &DenoiseSpecularTask) -> Self {
+        DenoiseJob::one(t.context, SignalType::Specular, &t.common, &t.input, &t.output)
+    }
+}
+impl From<&DenoiseDiffuseTask> for DenoiseJob {
+    fn from(t: &DenoiseDiffuseTask) -> Self {
+        DenoiseJob::one(t.context, SignalType::Diffuse, &t.common, &t.input, &t.output)
+    }
+}
+impl From<&DenoiseSpecularAndDiffuseTask> for DenoiseJob {
+    fn from(t: &DenoiseSpecularAndDiffuseTask) -> Self {
+        DenoiseJob {
+            context: t.context,
+            signal: SignalType::SpecularAndDiffuse,
+            common: t.common,
+            inputs: [t.input_specular, t.input_diffuse],
+            outputs: [t.output_specular, t.output_diffuse],
+            count: 2,
+            light: LightInfo::default(),
+        }
+    }
+}
+impl From<&DenoiseDiffuseOcclusionTask> for DenoiseJob {
+    fn from(t: &DenoiseDiffuseOcclusionTask) -> Self {
+        DenoiseJob::one(t.context, SignalType::DiffuseOcclusion, &t.common, &t.input, &t.output)
+    }
+}
+impl From<&DenoiseShadowTask> for DenoiseJob {
+    fn from(t: &DenoiseShadowTask) -> Self {
+        DenoiseJob { light: t.light, ..DenoiseJob::one(t.context, SignalType::Shadow, &t.common, &t.input, &t.output) }
+    }
+}
+impl From<&DenoiseMultiShadowTask> for DenoiseJob {
+    fn from(t: &DenoiseMultiShadowTask) -> Self {
+        DenoiseJob::one(t.context, SignalType::MultiShadow, &t.common, &t.input, &t.output)
+    }
+}

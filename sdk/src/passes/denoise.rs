@@ -1,0 +1,379 @@
+//! The denoisers' GPU side: the history a denoising context owns, and the compute passes that
+//! filter (what they do and why: `api::denoising`). Every pass shares one push-descriptor
+//! layout (shaders/include/denoise.glsl); a pass's step size travels as a push constant.
+//!
+//! Radiance: temporal → clamp → à-trous × `spatial_passes` (the last writes the output).
+//! Shadows: prep → penumbra blur → temporal (writes the output).
+use super::constants::TraceCommonGpu;
+use super::descriptors::{self, Slot};
+use super::shadow::LightGpu;
+use super::Recording;
+use crate::api::denoising::{DenoiseJob, DenoisingContextInput, DenoisingMethod, MotionType, SignalType};
+use crate::api::tasks::{Camera, ImageInput, TraceCommon};
+use crate::error::Result;
+use crate::gpu::device::Device;
+use crate::gpu::memory::{Image, Memory, MemoryKind, COLOR_RANGE};
+use crate::gpu::pipeline::{self, Binding};
+use crate::gpu::sync;
+use crate::shaders;
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+
+/// `DenoiseConstants` in shaders/include/denoise.glsl.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+pub(crate) struct DenoiseConstantsGpu {
+    common: TraceCommonGpu,
+    prev_world_to_clip: [f32; 16],
+    prev_clip_to_world: [f32; 16],
+    eye: [f32; 4],
+    prev_eye: [f32; 4],
+    flags: [u32; 4],
+    kinds: [u32; 4],
+    motion_scale: [f32; 4],
+    jitter_delta: [f32; 4],
+    history: [f32; 4],
+    stops: [f32; 4],
+    roughness_mask: [f32; 4],
+    roughness: [f32; 4],
+    light: LightGpu,
+}
+
+pub(crate) const UPLOAD_BYTES: u64 = std::mem::size_of::<DenoiseConstantsGpu>() as u64;
+
+/// Smallest à-trous spacing scale, reached once a pixel has a quarter of the longest history.
+const MIN_RADIUS_SCALE: f32 = 0.25;
+
+const HISTORY_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+/// Packed normal (two halves) + view distance (f32).
+const GBUFFER_FORMAT: vk::Format = vk::Format::R32G32_UINT;
+
+/// What a denoising context owns: ping-pong pairs of history images (element `newest` holds
+/// the latest), the denoiser's own G-buffer for disocclusion tests, the previous camera.
+pub(crate) struct DenoiserState {
+    pub input: DenoisingContextInput,
+    gbuffer: [Image; 2],
+    /// Per signal: slow history (RGB + 2nd moment; shadows: visibility + length).
+    history: Vec<[Image; 2]>,
+    /// Per radiance signal: fast history (RGB + history length).
+    fast: Vec<[Image; 2]>,
+    /// Per signal: intermediate images of the passes.
+    temp: Vec<[Image; 2]>,
+    newest: usize,
+    initialized: bool,
+    previous_camera: Option<Camera>,
+    previous_jitter: [f32; 2],
+    previous_extent: (u32, u32),
+}
+
+fn is_shadow(signal: SignalType) -> bool {
+    matches!(signal, SignalType::Shadow | SignalType::MultiShadow)
+}
+
+impl DenoiserState {
+    pub fn new(memory: &Memory, input: &DenoisingContextInput) -> Result<DenoiserState> {
+        let signals = if input.signal == SignalType::SpecularAndDiffuse { 2 } else { 1 };
+        let fast_pairs = if is_shadow(input.signal) { 0 } else { signals };
+        // G-buffer pair first, then history, fast and temp pairs of HISTORY_FORMAT.
+        let count = 2 * (1 + signals + fast_pairs + signals);
+        let mut made = Vec::with_capacity(count);
+        for i in 0..count {
+            let format = if i < 2 { GBUFFER_FORMAT } else { HISTORY_FORMAT };
+            match memory.create_image("denoiser", format, input.max_width, input.max_height, MemoryKind::Denoiser) {
+                Ok(image) => made.push(image),
+                Err(e) => {
+                    for image in made {
+                        memory.destroy_image(image);
+                    }
+                    return Err(e);
+                }
+            }
+        }
+        let mut images = made.into_iter();
+        let mut pairs = |n: usize| -> Vec<[Image; 2]> {
+            (0..n).map(|_| [images.next().expect("counted"), images.next().expect("counted")]).collect()
+        };
+        let [gbuffer] = <[[Image; 2]; 1]>::try_from(pairs(1)).ok().expect("one pair");
+        let history = pairs(signals);
+        let fast = pairs(fast_pairs);
+        let temp = pairs(signals);
+        Ok(DenoiserState {
+            input: *input,
+            gbuffer,
+            history,
+            fast,
+            temp,
+            newest: 0,
+            initialized: false,
+            previous_camera: None,
+            previous_jitter: [0.0; 2],
+            previous_extent: (0, 0),
+        })
+    }
+
+    /// Every image, for (deferred) destruction.
+    pub fn into_images(self) -> Vec<Image> {
+        let DenoiserState { gbuffer, history, fast, temp, .. } = self;
+        gbuffer.into_iter().chain(history.into_iter().chain(fast).chain(temp).flatten()).collect()
+    }
+
+    fn images(&self) -> impl Iterator<Item = &Image> {
+        self.gbuffer.iter().chain(self.history.iter().chain(&self.fast).chain(&self.temp).flatten())
+    }
+}
+
+pub(crate) struct DenoisePass {
+    set_layout: vk::DescriptorSetLayout,
+    layout: vk::PipelineLayout,
+    temporal: vk::Pipeline,
+    clamp: vk::Pipeline,
+    atrous: vk::Pipeline,
+    shadow_prep: vk::Pipeline,
+    shadow_blur: vk::Pipeline,
+    shadow_temporal: vk::Pipeline,
+}
+
+/// Binding order of shaders/include/denoise.glsl: 6 sampled (depth, normals, roughness,
+/// motion, input 0/1), 16 storage, 1 uniform buffer.
+const SAMPLED_BINDINGS: usize = 6;
+const STORAGE_BINDINGS: usize = 16;
+
+impl DenoisePass {
+    pub fn new(device: &Device, sampler: vk::Sampler) -> Result<DenoisePass> {
+        let d = &device.raw;
+        let mut bindings: Vec<Binding> =
+            (0..SAMPLED_BINDINGS).map(|_| Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) }).collect();
+        bindings.extend((0..STORAGE_BINDINGS).map(|_| Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None }));
+        bindings.push(Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None });
+        let set_layout = pipeline::push_set_layout(d, &bindings, vk::ShaderStageFlags::COMPUTE)?;
+        let layout = pipeline::pipeline_layout_with_push(d, set_layout, 16, vk::ShaderStageFlags::COMPUTE)?;
+        let mut made = Vec::new();
+        let mut build = |spirv: &[u8]| -> Result<vk::Pipeline> {
+            let p = pipeline::compute_pipeline(d, layout, spirv)?;
+            made.push(p);
+            Ok(p)
+        };
+        let all = (|| {
+            Ok::<_, crate::Error>([
+                build(shaders::DENOISE_TEMPORAL_COMP)?,
+                build(shaders::DENOISE_CLAMP_COMP)?,
+                build(shaders::DENOISE_ATROUS_COMP)?,
+                build(shaders::DENOISE_SHADOW_PREP_COMP)?,
+                build(shaders::DENOISE_SHADOW_BLUR_COMP)?,
+                build(shaders::DENOISE_SHADOW_TEMPORAL_COMP)?,
+            ])
+        })();
+        match all {
+            Ok([temporal, clamp, atrous, shadow_prep, shadow_blur, shadow_temporal]) => {
+                Ok(DenoisePass { set_layout, layout, temporal, clamp, atrous, shadow_prep, shadow_blur, shadow_temporal })
+            }
+            Err(e) => {
+                unsafe {
+                    for p in made {
+                        d.destroy_pipeline(p, None);
+                    }
+                    d.destroy_pipeline_layout(layout, None);
+                    d.destroy_descriptor_set_layout(set_layout, None);
+                }
+                Err(e)
+            }
+        }
+    }
+
+    /// Records one denoise task against its context's state (and advances that state).
+    pub fn record(&self, r: &mut Recording<'_>, state: &mut DenoiserState, job: &DenoiseJob) {
+        let d = &r.device.raw;
+        let stage = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        if !state.initialized {
+            // SDK-owned images start UNDEFINED; they live in GENERAL from now on. The first
+            // task resets history, so their contents are never read before written.
+            let barriers: Vec<_> = state
+                .images()
+                .map(|i| {
+                    vk::ImageMemoryBarrier2::default()
+                        .src_stage_mask(vk::PipelineStageFlags2::NONE)
+                        .dst_stage_mask(stage)
+                        .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)
+                        .old_layout(vk::ImageLayout::UNDEFINED)
+                        .new_layout(vk::ImageLayout::GENERAL)
+                        .image(i.raw)
+                        .subresource_range(COLOR_RANGE)
+                })
+                .collect();
+            unsafe { d.cmd_pipeline_barrier2(r.cmd, &vk::DependencyInfo::default().image_memory_barriers(&barriers)) };
+        } else {
+            // History was written by an earlier command buffer (submission order is the
+            // engine's); make those writes visible to this one's reads.
+            let both = sync::Use { stages: stage, access: vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE };
+            sync::barrier(d, r.cmd, both, both);
+        }
+
+        let c = &job.common;
+        let extent = (c.viewport.width, c.viewport.height);
+        let reset = c.reset_history
+            || !state.initialized
+            || state.input.method == DenoisingMethod::SpatialOnly
+            || state.previous_extent != extent;
+        let previous = c.previous_camera.or(state.previous_camera).unwrap_or(c.camera);
+        let constants = constants(job, &previous, state.previous_jitter, r.seed, reset);
+        let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
+
+        let (prev, cur) = (state.newest, 1 - state.newest);
+        let pair = |v: &Vec<[Image; 2]>, k: usize| -> [ImageInput; 2] {
+            let last = v.len() - 1;
+            [v[0][k].input(), v[last.min(1)][k].input()]
+        };
+        let shadow = is_shadow(job.signal);
+        let hist_prev = pair(&state.history, prev);
+        let hist_cur = pair(&state.history, cur);
+        // Shadows have no fast history: bind the history images (never read by their passes).
+        let (fast_prev, fast_cur) = if shadow { (hist_prev, hist_cur) } else { (pair(&state.fast, prev), pair(&state.fast, cur)) };
+        let temps = [pair(&state.temp, 0), pair(&state.temp, 1)];
+        let gb_prev = state.gbuffer[prev].input();
+        let gb_cur = state.gbuffer[cur].input();
+        let stand_in = temps[0][0];
+        let roughness = descriptors::optional_or(&c.roughness.image, &stand_in);
+        let motion = descriptors::optional_or(&c.motion.image, &stand_in);
+
+        let dispatch = |r: &mut Recording<'_>, pipeline: vk::Pipeline, src: usize, dst: usize, push: [u32; 4]| {
+            r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
+            let slots = [
+                Slot::Sampled(&c.depth.image),
+                Slot::Sampled(&c.normals.image),
+                Slot::Sampled(roughness),
+                Slot::Sampled(motion),
+                Slot::Sampled(&job.inputs[0]),
+                Slot::Sampled(&job.inputs[1]),
+                Slot::Storage(&job.outputs[0]),
+                Slot::Storage(&job.outputs[1]),
+                Slot::Storage(&gb_prev),
+                Slot::Storage(&gb_cur),
+                Slot::Storage(&hist_prev[0]),
+                Slot::Storage(&hist_prev[1]),
+                Slot::Storage(&hist_cur[0]),
+                Slot::Storage(&hist_cur[1]),
+                Slot::Storage(&fast_prev[0]),
+                Slot::Storage(&fast_prev[1]),
+                Slot::Storage(&fast_cur[0]),
+                Slot::Storage(&fast_cur[1]),
+                Slot::Storage(&temps[src][0]),
+                Slot::Storage(&temps[src][1]),
+                Slot::Storage(&temps[dst][0]),
+                Slot::Storage(&temps[dst][1]),
+                Slot::Uniform(ubo),
+            ];
+            let bind = vk::PipelineBindPoint::COMPUTE;
+            let dev = &r.device.raw;
+            // SAFETY: slots match the set layout; inputs were validated when scheduled.
+            unsafe { dev.cmd_bind_pipeline(r.cmd, bind, pipeline) };
+            descriptors::push(r.device, r.cmd, bind, self.layout, &slots);
+            unsafe {
+                dev.cmd_push_constants(r.cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&push));
+                dev.cmd_dispatch(r.cmd, extent.0.div_ceil(8), extent.1.div_ceil(8), 1);
+            }
+        };
+
+        if shadow {
+            dispatch(r, self.shadow_prep, 1, 0, [0; 4]);
+            dispatch(r, self.shadow_blur, 0, 1, [0; 4]);
+            dispatch(r, self.shadow_temporal, 1, 0, [0; 4]);
+        } else {
+            let passes = c.settings.spatial_passes;
+            dispatch(r, self.temporal, 1, 0, [0; 4]);
+            dispatch(r, self.clamp, 0, 1, [0, (passes == 0) as u32, 0, 0]);
+            for i in 0..passes {
+                let src = (1 + i as usize) % 2;
+                dispatch(r, self.atrous, src, 1 - src, [1 << i, (i + 1 == passes) as u32, 0, 0]);
+            }
+        }
+        state.newest = cur;
+        state.initialized = true;
+        state.previous_camera = Some(c.camera);
+        state.previous_jitter = c.camera_jitter;
+        state.previous_extent = extent;
+    }
+
+    pub fn destroy(self, device: &Device) {
+        let d = &device.raw;
+        unsafe {
+            for p in [self.temporal, self.clamp, self.atrous, self.shadow_prep, self.shadow_blur, self.shadow_temporal] {
+                d.destroy_pipeline(p, None);
+            }
+            d.destroy_pipeline_layout(self.layout, None);
+            d.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
+
+fn constants(job: &DenoiseJob, previous: &Camera, previous_jitter: [f32; 2], seed: u32, reset: bool) -> DenoiseConstantsGpu {
+    let c = &job.common;
+    let trace = TraceCommon {
+        depth: c.depth,
+        normals: c.normals,
+        viewport: c.viewport,
+        camera: c.camera,
+        half_resolution_mode: c.half_resolution_mode,
+        ..Default::default()
+    };
+    let eye = c.camera.world_to_view.inverse().w_axis;
+    let prev_eye = previous.world_to_view.inverse().w_axis;
+    let prev_world_to_clip = previous.view_to_clip * previous.world_to_view;
+    // World size of one pixel at unit view distance (perspective: 2 tan(fov/2) / height).
+    let pixel_size = 2.0 / (c.camera.view_to_clip.y_axis.y.abs().max(1e-12) * c.viewport.height.max(1) as f32);
+    let motion = if !c.motion.has_image() {
+        0
+    } else {
+        match c.motion.motion_type {
+            MotionType::RgViewSpace => 1,
+            MotionType::RgClipSpace => 2,
+            MotionType::RgbWorldSpace => 3,
+        }
+    };
+    let kind = |s: SignalType| match s {
+        SignalType::Diffuse => 0,
+        SignalType::Specular => 1,
+        SignalType::DiffuseOcclusion => 2,
+        SignalType::Shadow => 3,
+        SignalType::MultiShadow => 4,
+        SignalType::SpecularAndDiffuse => unreachable!("split into its two signals"),
+    };
+    let kinds = match job.signal {
+        SignalType::SpecularAndDiffuse => [1, 0, 0, 0],
+        s => [kind(s), kind(s), crate::api::validate::channel_count(job.inputs[0].format).is_some_and(|n| n >= 2) as u32, 0],
+    };
+    let s = &c.settings;
+    let m = c.roughness.channel_mask;
+    DenoiseConstantsGpu {
+        common: TraceCommonGpu::new(&trace, seed, 0),
+        prev_world_to_clip: prev_world_to_clip.to_cols_array(),
+        prev_clip_to_world: prev_world_to_clip.inverse().to_cols_array(),
+        eye: [eye.x, eye.y, eye.z, pixel_size],
+        prev_eye: [prev_eye.x, prev_eye.y, prev_eye.z, 0.0],
+        flags: [motion, job.count as u32, reset as u32, s.anti_firefly as u32],
+        kinds,
+        motion_scale: [c.motion.scale[0], c.motion.scale[1], c.motion.scale[2], 0.0],
+        jitter_delta: [previous_jitter[0] - c.camera_jitter[0], previous_jitter[1] - c.camera_jitter[1], 0.0, 0.0],
+        history: [s.max_history_frames as f32, s.fast_history_frames as f32, s.history_clamp_sigma, MIN_RADIUS_SCALE],
+        stops: [s.luminance_sigma, s.normal_power, s.plane_distance_sigma, s.max_shadow_blur_radius],
+        roughness_mask: m,
+        roughness: [c.roughness.global_roughness, c.roughness.has_image() as u32 as f32, 0.0, 0.0],
+        light: LightGpu::new(&job.light),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::mem::{offset_of, size_of};
+
+    /// std140 offsets of DenoiseConstants (TraceCommon is 288 bytes, LightGpu 48).
+    #[test]
+    fn layout_matches_glsl_std140() {
+        assert_eq!(offset_of!(DenoiseConstantsGpu, prev_world_to_clip), 288);
+        assert_eq!(offset_of!(DenoiseConstantsGpu, eye), 416);
+        assert_eq!(offset_of!(DenoiseConstantsGpu, flags), 448);
+        assert_eq!(offset_of!(DenoiseConstantsGpu, roughness), 560);
+        assert_eq!(offset_of!(DenoiseConstantsGpu, light), 576);
+        assert_eq!(size_of::<DenoiseConstantsGpu>(), 624);
+    }
+}

@@ -1,0 +1,73 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Radiance denoiser, pass 3 (repeated): one à-trous wavelet iteration (Dammertz et al. 2010,
+// with SVGF's variance-guided luminance stop, Schied et al. 2017). 5x5 B3-spline taps at a
+// spacing of step x scale, where scale shrinks from 1 to the minimum as the pixel's history
+// grows (the temporal mean needs less help) and, for specular, with the roughness (a mirror
+// is not blurred). Stops: plane distance, normal, luminance against the filtered variance,
+// and roughness for specular. u_pass.x = step, u_pass.y = 1 on the last iteration.
+#include "include/denoise.glsl"
+
+const float H[3] = float[3](0.375, 0.25, 0.0625);
+
+void main() {
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
+    if (!hrt_in_viewport(pixel)) return;
+    uint count = u_d.flags.y;
+    bool last = u_pass.y != 0u;
+    vec3 p, n;
+    bool surface = hrt_surface_at(imageLoad(u_gbuf_cur, pixel).xy, u_d.c.clip_to_world, u_d.eye.xyz, pixel, p, n);
+    float dist = distance(p, u_d.eye.xyz);
+    float roughness = hrt_denoise_roughness(pixel);
+    for (uint s = 0u; s < count; ++s) {
+        uint kind = u_d.kinds[s];
+        vec4 c = hrt_load_temp(s, pixel);
+        if (!surface) {
+            if (last) hrt_store_output(s, pixel, hrt_as_signal(kind, hrt_load_input(s, pixel)));
+            else hrt_store_temp(s, pixel, c);
+            continue;
+        }
+        float len = hrt_load_fast_cur(s, pixel).a;
+        float scale = mix(1.0, u_d.history.w, clamp((len - 1.0) / (0.25 * u_d.history.x), 0.0, 1.0));
+        bool specular = kind == HRT_SIGNAL_SPECULAR;
+        if (specular) scale *= clamp(roughness * 4.0, 0.0, 1.0);
+        int spacing = int(float(u_pass.x) * scale + 0.5);
+        if (spacing == 0) {
+            if (last) hrt_store_output(s, pixel, vec4(c.rgb, 1.0));
+            else hrt_store_temp(s, pixel, c);
+            continue;
+        }
+        // Variance, 3x3 Gaussian-filtered (one noisy estimate would make the stop erratic).
+        float variance = 0.0;
+        for (int dy = -1; dy <= 1; ++dy) {
+            for (int dx = -1; dx <= 1; ++dx) {
+                ivec2 q = clamp(pixel + ivec2(dx, dy), ivec2(u_d.c.viewport.xy), ivec2(u_d.c.viewport.xy + u_d.c.viewport.zw) - 1);
+                variance += (dx == 0 ? 0.5 : 0.25) * (dy == 0 ? 0.5 : 0.25) * hrt_load_temp(s, q).a;
+            }
+        }
+        float l_c = hrt_luminance(c.rgb);
+        float stop = u_d.stops.x * sqrt(max(variance, 0.0)) + 1e-4;
+        float w_c = H[0] * H[0];
+        vec3 sum = c.rgb * w_c;
+        float wsum = w_c, vsum = w_c * w_c * c.a;
+        for (int yy = -2; yy <= 2; ++yy) {
+            for (int xx = -2; xx <= 2; ++xx) {
+                if (xx == 0 && yy == 0) continue;
+                ivec2 q = pixel + ivec2(xx, yy) * spacing;
+                if (!hrt_in_viewport(q)) continue;
+                vec3 q_p, q_n;
+                if (!hrt_surface_at(imageLoad(u_gbuf_cur, q).xy, u_d.c.clip_to_world, u_d.eye.xyz, q, q_p, q_n)) continue;
+                vec4 t = hrt_load_temp(s, q);
+                float w = H[abs(xx)] * H[abs(yy)] * hrt_geometry_weight(p, n, dist, q_p, q_n)
+                        * exp(-abs(hrt_luminance(t.rgb) - l_c) / stop);
+                if (specular) w *= exp(-abs(hrt_denoise_roughness(q) - roughness) * 10.0);
+                sum += w * t.rgb;
+                wsum += w;
+                vsum += w * w * t.a;
+            }
+        }
+        vec3 filtered = sum / wsum;
+        if (last) hrt_store_output(s, pixel, vec4(filtered, 1.0));
+        else hrt_store_temp(s, pixel, vec4(filtered, vsum / (wsum * wsum)));
+    }
+}

@@ -1,0 +1,55 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Radiance denoiser, pass 2: history clamping and variance. The slow history is clamped to the
+// box mean ± sigma x std of the fast history's 3x3 neighbourhood (widened to hold the pixel's
+// own fast value), so lighting and objects that move are followed within the fast window
+// instead of ghosting. The clamped history is kept for the next frame. Variance (for the
+// spatial filter's luminance stop): the temporal moments divided by the history length (the
+// noise left in the mean), blended from the neighbourhood's while history is short.
+// u_pass.y = 1: no spatial passes follow, write the output.
+#include "include/denoise.glsl"
+
+void main() {
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
+    if (!hrt_in_viewport(pixel)) return;
+    uint count = u_d.flags.y;
+    bool last = u_pass.y != 0u;
+    vec3 n;
+    float dist;
+    hrt_unpack_surface(imageLoad(u_gbuf_cur, pixel).xy, n, dist);
+    for (uint s = 0u; s < count; ++s) {
+        if (dist < 0.0) {
+            hrt_store_hist_cur(s, pixel, vec4(0.0));
+            if (last) hrt_store_output(s, pixel, hrt_as_signal(u_d.kinds[s], hrt_load_input(s, pixel)));
+            else hrt_store_temp(s, pixel, vec4(0.0));
+            continue;
+        }
+        vec4 slow = hrt_load_temp(s, pixel);
+        vec4 fast_c = hrt_load_fast_cur(s, pixel);
+        float len = fast_c.a;
+        vec3 m1 = vec3(0.0), m2 = vec3(0.0);
+        float l1 = 0.0, l2 = 0.0, k = 0.0;
+        for (int dy = -1; dy <= 1; ++dy) {
+            for (int dx = -1; dx <= 1; ++dx) {
+                ivec2 q = pixel + ivec2(dx, dy);
+                if (!hrt_in_viewport(q)) continue;
+                vec4 f = hrt_load_fast_cur(s, q);
+                if (f.a <= 0.0) continue;  // background
+                float l = hrt_luminance(f.rgb);
+                m1 += f.rgb; m2 += f.rgb * f.rgb; l1 += l; l2 += l * l; k += 1.0;
+            }
+        }
+        m1 /= k; m2 /= k; l1 /= k; l2 /= k;
+        vec3 sigma = sqrt(max(m2 - m1 * m1, vec3(0.0)));
+        vec3 lo = min(m1 - u_d.history.z * sigma, fast_c.rgb);
+        vec3 hi = max(m1 + u_d.history.z * sigma, fast_c.rgb);
+        vec3 clamped = clamp(slow.rgb, lo, hi);
+        float l_slow = hrt_luminance(slow.rgb);
+        float var_temporal = max(slow.a - l_slow * l_slow, 0.0) / len;
+        float var_spatial = max(l2 - l1 * l1, 0.0);
+        float variance = mix(var_spatial, var_temporal, clamp((len - 1.0) / 3.0, 0.0, 1.0));
+        hrt_store_hist_cur(s, pixel, vec4(clamped, slow.a));
+        if (last) hrt_store_output(s, pixel, vec4(clamped, 1.0));
+        else hrt_store_temp(s, pixel, vec4(clamped, variance));
+    }
+}

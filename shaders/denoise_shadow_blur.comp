@@ -1,0 +1,60 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Shadow denoiser, pass 2: penumbra-aware blur. The blur radius is half the penumbra width
+// (world) over the world size of a pixel at this depth, where the width is the geometry-
+// weighted mean of the occluded samples in a 9x9-tap neighbourhood spanning the largest
+// radius (so lit pixels beside a penumbra find it too). Contact shadows and hard lights give a
+// radius under half a pixel: the visibility passes unchanged. Otherwise 16 taps of a rotated
+// golden-angle disk, Gaussian in the radius, with plane and normal stops.
+#include "include/denoise.glsl"
+
+void main() {
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
+    if (!hrt_in_viewport(pixel)) return;
+    vec3 p, n;
+    if (!hrt_surface_at(imageLoad(u_gbuf_cur, pixel).xy, u_d.c.clip_to_world, u_d.eye.xyz, pixel, p, n)) {
+        hrt_store_temp(0u, pixel, vec4(1.0, 0.0, 0.0, 0.0));
+        return;
+    }
+    float dist = distance(p, u_d.eye.xyz);
+    vec4 c = hrt_load_temp(0u, pixel);
+    float max_radius = u_d.stops.w;
+    float pixel_world = u_d.eye.w * dist;
+
+    float pen = 0.0, pen_w = 0.0, vis_min = c.x;
+    if (c.y >= 0.0) { pen = c.y; pen_w = 1.0; }
+    int spacing = max(1, int(max_radius / 4.0 + 0.5));
+    for (int yy = -4; yy <= 4; ++yy) {
+        for (int xx = -4; xx <= 4; ++xx) {
+            ivec2 q = pixel + ivec2(xx, yy) * spacing;
+            if ((xx == 0 && yy == 0) || !hrt_in_viewport(q)) continue;
+            vec3 q_p, q_n;
+            if (!hrt_surface_at(imageLoad(u_gbuf_cur, q).xy, u_d.c.clip_to_world, u_d.eye.xyz, q, q_p, q_n)) continue;
+            float w = hrt_geometry_weight(p, n, dist, q_p, q_n);
+            if (w < 0.1) continue;
+            vec4 t = hrt_load_temp(0u, q);
+            vis_min = min(vis_min, t.x);
+            if (t.y >= 0.0) { pen += w * t.y; pen_w += w; }
+        }
+    }
+    float radius = pen_w > 0.0 ? min(0.5 * (pen / pen_w) / pixel_world, max_radius) : 0.0;
+    if (vis_min >= 1.0 || radius < 0.5) {
+        hrt_store_temp(0u, pixel, vec4(c.x, radius, 0.0, 0.0));
+        return;
+    }
+    float rotation = hrt_u01(hrt_pcg(uint(pixel.x) ^ hrt_pcg(uint(pixel.y) ^ hrt_pcg(u_d.c.frame.x)))) * 2.0 * HRT_PI;
+    float sum = c.x, wsum = 1.0;
+    const int TAPS = 16;
+    for (int i = 0; i < TAPS; ++i) {
+        float r = sqrt((float(i) + 0.5) / float(TAPS)) * radius;
+        float a = float(i) * 2.39996323 + rotation;
+        ivec2 q = pixel + ivec2(round(r * vec2(cos(a), sin(a))));
+        if (q == pixel || !hrt_in_viewport(q)) continue;
+        vec3 q_p, q_n;
+        if (!hrt_surface_at(imageLoad(u_gbuf_cur, q).xy, u_d.c.clip_to_world, u_d.eye.xyz, q, q_p, q_n)) continue;
+        float w = exp(-2.0 * (r * r) / (radius * radius)) * hrt_geometry_weight(p, n, dist, q_p, q_n);
+        sum += w * hrt_load_temp(0u, q).x;
+        wsum += w;
+    }
+    hrt_store_temp(0u, pixel, vec4(sum / wsum, radius, 0.0, 0.0));
+}

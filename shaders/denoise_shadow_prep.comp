@@ -1,0 +1,46 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Shadow denoiser, pass 1: decode the trace output into (visibility, penumbra width in world
+// units or -1 where no ray was occluded) and write the denoiser's G-buffer. Single light: the
+// width comes from the occluder distance and the light's size; multi-light: the trace task
+// computed it (packed G). Checkerboard: untraced pixels take their traced neighbours' mean.
+#include "include/denoise.glsl"
+
+// (visibility, penumbra width or -1) of a traced texel at surface point p.
+vec2 decode_shadow(ivec2 q, vec3 p) {
+    vec4 v = hrt_load_input(0u, q);
+    if (u_d.kinds.x == HRT_SIGNAL_MULTI_SHADOW) return vec2(v.r, v.g > 0.0 ? v.g : -1.0);
+    float vis = u_d.kinds.z != 0u ? v.g : (v.r < 0.0 ? 1.0 : 0.0);
+    return vec2(vis, v.r >= 0.0 ? hrt_penumbra_width(u_d.light, p, v.r) : -1.0);
+}
+
+void main() {
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
+    if (!hrt_in_viewport(pixel)) return;
+    vec3 p, n;
+    if (!hrt_engine_surface(pixel, p, n)) {
+        imageStore(u_gbuf_cur, pixel, uvec4(hrt_pack_surface(vec3(0.0, 0.0, 1.0), -1.0), 0u, 0u));
+        hrt_store_temp(0u, pixel, vec4(1.0, -1.0, 0.0, 0.0));
+        return;
+    }
+    float dist = distance(p, u_d.eye.xyz);
+    imageStore(u_gbuf_cur, pixel, uvec4(hrt_pack_surface(n, dist), 0u, 0u));
+    vec2 result;
+    if (hrt_traced_now(pixel)) {
+        result = decode_shadow(pixel, p);
+    } else {
+        const ivec2 offs[4] = ivec2[4](ivec2(1, 0), ivec2(-1, 0), ivec2(0, 1), ivec2(0, -1));
+        float vis = 0.0, vw = 0.0, pen = 0.0, pw = 0.0;
+        for (int i = 0; i < 4; ++i) {
+            ivec2 q = pixel + offs[i];
+            vec3 q_p, q_n;
+            if (!hrt_in_viewport(q) || !hrt_engine_surface(q, q_p, q_n)) continue;
+            float w = hrt_geometry_weight(p, n, dist, q_p, q_n) + 1e-4;
+            vec2 d = decode_shadow(q, q_p);
+            vis += w * d.x; vw += w;
+            if (d.y >= 0.0) { pen += w * d.y; pw += w; }
+        }
+        result = vec2(vw > 0.0 ? vis / vw : 1.0, pw > 0.0 ? pen / pw : -1.0);
+    }
+    hrt_store_temp(0u, pixel, vec4(result, 0.0, 0.0));
+}

@@ -1,0 +1,200 @@
+// Shared by the denoiser's compute passes (sdk/src/passes/denoise): one descriptor layout for
+// all of them, the constants, G-buffer packing and reprojection helpers.
+#ifndef HRT_DENOISE_GLSL
+#define HRT_DENOISE_GLSL
+#include "common.glsl"
+#include "light_sampling.glsl"
+
+// Signal kinds (DenoiseConstants.kinds).
+#define HRT_SIGNAL_DIFFUSE 0u
+#define HRT_SIGNAL_SPECULAR 1u
+#define HRT_SIGNAL_SCALAR 2u
+#define HRT_SIGNAL_SHADOW 3u
+#define HRT_SIGNAL_MULTI_SHADOW 4u
+
+// Motion types (DenoiseConstants.flags.x).
+#define HRT_MOTION_NONE 0u
+#define HRT_MOTION_VIEW 1u
+#define HRT_MOTION_CLIP 2u
+#define HRT_MOTION_WORLD 3u
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 0, binding = 0) uniform sampler2D u_depth;
+layout(set = 0, binding = 1) uniform sampler2D u_normals;
+layout(set = 0, binding = 2) uniform sampler2D u_roughness;
+layout(set = 0, binding = 3) uniform sampler2D u_motion;
+// Two signals (specular and diffuse in one pass) have a binding each; one-signal tasks bind
+// the same image twice. The accessors below take the signal index (a constant at every call).
+layout(set = 0, binding = 4) uniform sampler2D u_input0;
+layout(set = 0, binding = 5) uniform sampler2D u_input1;
+layout(set = 0, binding = 6) uniform writeonly image2D u_output0;
+layout(set = 0, binding = 7) uniform writeonly image2D u_output1;
+layout(set = 0, binding = 8, rg32ui) uniform readonly uimage2D u_gbuf_prev;
+layout(set = 0, binding = 9, rg32ui) uniform uimage2D u_gbuf_cur;
+layout(set = 0, binding = 10, rgba16f) uniform readonly image2D u_hist_prev0;
+layout(set = 0, binding = 11, rgba16f) uniform readonly image2D u_hist_prev1;
+layout(set = 0, binding = 12, rgba16f) uniform image2D u_hist_cur0;
+layout(set = 0, binding = 13, rgba16f) uniform image2D u_hist_cur1;
+layout(set = 0, binding = 14, rgba16f) uniform readonly image2D u_fast_prev0;
+layout(set = 0, binding = 15, rgba16f) uniform readonly image2D u_fast_prev1;
+layout(set = 0, binding = 16, rgba16f) uniform image2D u_fast_cur0;
+layout(set = 0, binding = 17, rgba16f) uniform image2D u_fast_cur1;
+layout(set = 0, binding = 18, rgba16f) uniform readonly image2D u_temp_src0;
+layout(set = 0, binding = 19, rgba16f) uniform readonly image2D u_temp_src1;
+layout(set = 0, binding = 20, rgba16f) uniform writeonly image2D u_temp_dst0;
+layout(set = 0, binding = 21, rgba16f) uniform writeonly image2D u_temp_dst1;
+layout(set = 0, binding = 22, std140) uniform DenoiseConstants {
+    TraceCommon c;           // this frame's camera and G-buffer decoding; frame.x = ticket serial
+    mat4 prev_world_to_clip;
+    mat4 prev_clip_to_world;
+    vec4 eye;                // camera position, w = world size of a pixel at unit distance
+    vec4 prev_eye;           // previous camera position
+    uvec4 flags;             // motion type, signal count, reset history (0/1), anti-firefly (0/1)
+    uvec4 kinds;             // signal kind of input 0 and 1, shadow input has a visibility channel (0/1)
+    vec4 motion_scale;       // xyz
+    vec4 jitter_delta;       // previous - current jitter in pixels
+    vec4 history;            // max frames, fast frames, clamp sigma, min radius scale
+    vec4 stops;              // luminance sigma, normal power, plane-distance sigma, max shadow radius (px)
+    vec4 roughness_mask;
+    vec4 roughness;          // global roughness, has image (0/1)
+    LightGpu light;          // single-light shadows
+} u_d;
+
+layout(push_constant) uniform Pass {
+    uvec4 u_pass;            // à-trous: step in pixels, last iteration (0/1)
+};
+
+vec4 hrt_load_input(uint s, ivec2 q) { return s == 0u ? texelFetch(u_input0, q, 0) : texelFetch(u_input1, q, 0); }
+void hrt_store_output(uint s, ivec2 q, vec4 v) { if (s == 0u) imageStore(u_output0, q, v); else imageStore(u_output1, q, v); }
+vec4 hrt_load_hist_prev(uint s, ivec2 q) { return s == 0u ? imageLoad(u_hist_prev0, q) : imageLoad(u_hist_prev1, q); }
+vec4 hrt_load_hist_cur(uint s, ivec2 q) { return s == 0u ? imageLoad(u_hist_cur0, q) : imageLoad(u_hist_cur1, q); }
+void hrt_store_hist_cur(uint s, ivec2 q, vec4 v) { if (s == 0u) imageStore(u_hist_cur0, q, v); else imageStore(u_hist_cur1, q, v); }
+vec4 hrt_load_fast_prev(uint s, ivec2 q) { return s == 0u ? imageLoad(u_fast_prev0, q) : imageLoad(u_fast_prev1, q); }
+vec4 hrt_load_fast_cur(uint s, ivec2 q) { return s == 0u ? imageLoad(u_fast_cur0, q) : imageLoad(u_fast_cur1, q); }
+void hrt_store_fast_cur(uint s, ivec2 q, vec4 v) { if (s == 0u) imageStore(u_fast_cur0, q, v); else imageStore(u_fast_cur1, q, v); }
+vec4 hrt_load_temp(uint s, ivec2 q) { return s == 0u ? imageLoad(u_temp_src0, q) : imageLoad(u_temp_src1, q); }
+void hrt_store_temp(uint s, ivec2 q, vec4 v) { if (s == 0u) imageStore(u_temp_dst0, q, v); else imageStore(u_temp_dst1, q, v); }
+
+float hrt_luminance(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
+
+// The denoiser's own G-buffer (for the next frame's disocclusion tests): the octahedral normal
+// as two halves and the distance to the camera; distance < 0 marks background.
+uvec2 hrt_pack_surface(vec3 n, float dist) {
+    vec2 e = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
+    if (n.z < 0.0) e = (1.0 - abs(e.yx)) * vec2(e.x >= 0.0 ? 1.0 : -1.0, e.y >= 0.0 ? 1.0 : -1.0);
+    return uvec2(packHalf2x16(e), floatBitsToUint(dist));
+}
+void hrt_unpack_surface(uvec2 v, out vec3 n, out float dist) {
+    n = hrt_oct_decode(unpackHalf2x16(v.x));
+    dist = uintBitsToFloat(v.y);
+}
+
+bool hrt_in_viewport(ivec2 q) {
+    ivec2 lo = ivec2(u_d.c.viewport.xy);
+    return all(greaterThanEqual(q, lo)) && all(lessThan(q, lo + ivec2(u_d.c.viewport.zw)));
+}
+
+// World direction from the camera through a pixel centre (current or previous camera).
+vec3 hrt_pixel_dir(mat4 clip_to_world, vec3 eye, vec2 pixel_pos) {
+    vec2 ndc = (pixel_pos - u_d.c.viewport.xy) / u_d.c.viewport.zw * 2.0 - 1.0;
+    vec4 h = clip_to_world * vec4(ndc, 0.5, 1.0);
+    return normalize(h.xyz / h.w - eye);
+}
+
+// A surface of the denoiser's G-buffer as a world position and normal (false: background).
+bool hrt_surface_at(uvec2 packed_surface, mat4 clip_to_world, vec3 eye, ivec2 q, out vec3 p, out vec3 n) {
+    float dist;
+    hrt_unpack_surface(packed_surface, n, dist);
+    p = eye + hrt_pixel_dir(clip_to_world, eye, vec2(q) + 0.5) * dist;
+    return dist >= 0.0;
+}
+
+// Edge-stopping weight of a neighbour surface (q_p, q_n) seen from (p, n) at distance `dist`:
+// plane distance relative to the view distance, and the normal similarity.
+float hrt_geometry_weight(vec3 p, vec3 n, float dist, vec3 q_p, vec3 q_n) {
+    float plane = abs(dot(n, q_p - p)) / (u_d.stops.z * dist);
+    return exp(-plane * plane) * pow(max(dot(n, q_n), 0.0), u_d.stops.y);
+}
+
+// Where the surface at `pixel` (world position p) was in the previous frame, in pixels
+// (continuous, pixel centres at +0.5).
+vec2 hrt_previous_position(ivec2 pixel, vec3 p) {
+    uint motion = u_d.flags.x;
+    vec2 here = vec2(pixel) + 0.5;
+    if (motion == HRT_MOTION_VIEW || motion == HRT_MOTION_CLIP) {
+        vec2 mv = texelFetch(u_motion, pixel, 0).xy * u_d.motion_scale.xy;
+        if (motion == HRT_MOTION_CLIP) mv *= 0.5 * u_d.c.viewport.zw;
+        return here + mv + u_d.jitter_delta.xy;
+    }
+    vec3 prev_p = p;
+    if (motion == HRT_MOTION_WORLD) prev_p += texelFetch(u_motion, pixel, 0).xyz * u_d.motion_scale.xyz;
+    vec4 clip = u_d.prev_world_to_clip * vec4(prev_p, 1.0);
+    if (clip.w <= 0.0) return vec2(-1e9);
+    vec2 ndc = clip.xy / clip.w;
+    return (ndc * 0.5 + 0.5) * u_d.c.viewport.zw + u_d.c.viewport.xy;
+}
+
+// Bilinear taps of the previous frame around `prev_pos` that show the same surface as (p, n):
+// weights are zero for taps off screen, on background or on another surface (disocclusion).
+void hrt_history_taps(vec2 prev_pos, vec3 p, vec3 n, float dist, out ivec2 taps[4], out vec4 weights) {
+    vec2 f = prev_pos - 0.5;
+    ivec2 base = ivec2(floor(f));
+    vec2 t = f - vec2(base);
+    taps[0] = base; taps[1] = base + ivec2(1, 0); taps[2] = base + ivec2(0, 1); taps[3] = base + ivec2(1, 1);
+    vec4 bilinear = vec4((1.0 - t.x) * (1.0 - t.y), t.x * (1.0 - t.y), (1.0 - t.x) * t.y, t.x * t.y);
+    for (int i = 0; i < 4; ++i) {
+        weights[i] = 0.0;
+        if (!hrt_in_viewport(taps[i]) || bilinear[i] <= 0.0) continue;
+        vec3 q_p, q_n;
+        if (!hrt_surface_at(imageLoad(u_gbuf_prev, taps[i]).xy, u_d.prev_clip_to_world, u_d.prev_eye.xyz, taps[i], q_p, q_n)) continue;
+        float plane = abs(dot(n, q_p - p)) / dist;
+        // Disocclusion: another surface (off the plane) or a different orientation.
+        if (plane > u_d.stops.z || dot(n, q_n) < 0.8) continue;
+        weights[i] = bilinear[i];
+    }
+}
+
+// Roughness of the specular signal at a pixel (TraceCommon's rule: global x image . mask).
+float hrt_denoise_roughness(ivec2 pixel) {
+    float r = u_d.roughness.x;
+    if (u_d.roughness.y != 0.0) r *= dot(texelFetch(u_roughness, pixel, 0), u_d.roughness_mask);
+    return clamp(r, 0.0, 1.0);
+}
+
+// Checkerboard: was this pixel traced by this ticket? (the trace tasks' rule in common.glsl)
+bool hrt_traced_now(ivec2 pixel) {
+    return u_d.c.frame.z == 0u || ((uint(pixel.x + pixel.y) + u_d.c.frame.x) & 1u) == 0u;
+}
+
+// This frame's surface at a pixel from the engine's G-buffer (false: background).
+bool hrt_engine_surface(ivec2 pixel, out vec3 p, out vec3 n) {
+    n = vec3(0.0, 0.0, 1.0);
+    if (!hrt_world_position(u_d.c, uvec2(pixel), texelFetch(u_depth, pixel, 0), p)) return false;
+    n = hrt_world_normal(u_d.c, texelFetch(u_normals, pixel, 0));
+    return true;
+}
+
+// The noisy sample of a signal at a pixel; in checkerboard mode the pixels not traced this
+// ticket take the geometry-weighted mean of their four traced neighbours.
+vec4 hrt_noisy_sample(uint s, ivec2 pixel, vec3 p, vec3 n, float dist) {
+    if (hrt_traced_now(pixel)) return hrt_load_input(s, pixel);
+    const ivec2 offs[4] = ivec2[4](ivec2(1, 0), ivec2(-1, 0), ivec2(0, 1), ivec2(0, -1));
+    vec4 sum = vec4(0.0);
+    float wsum = 0.0;
+    for (int i = 0; i < 4; ++i) {
+        ivec2 q = pixel + offs[i];
+        vec3 q_p, q_n;
+        if (!hrt_in_viewport(q) || !hrt_engine_surface(q, q_p, q_n)) continue;
+        float w = hrt_geometry_weight(p, n, dist, q_p, q_n) + 1e-4;
+        sum += w * hrt_load_input(s, q);
+        wsum += w;
+    }
+    return wsum > 0.0 ? sum / wsum : hrt_load_input(s, pixel);
+}
+
+// The signal's value as radiance: scalar signals (AO) read R into every channel.
+vec4 hrt_as_signal(uint kind, vec4 v) {
+    return kind == HRT_SIGNAL_SCALAR ? vec4(v.rrr, v.a) : v;
+}
+#endif
