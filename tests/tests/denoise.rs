@@ -259,3 +259,290 @@ fn hard_shadow_edges_stay_within_one_pixel() {
     eprintln!("hard shadow: {shadowed} shadowed pixels, {changed} changed by more than 0.5 (all beside an edge)");
     assert!(shadowed > 100, "the scene has a real shadow");
 }
+
+// ---------------------------------------------------------------- synthetic inputs
+// The denoisers only see images: these tests feed known signals (a colour per surface, with
+// noise) so what must and must not appear in the output is exact.
+
+const S: u32 = 48;
+
+/// A wall facing +z at z = -3 and a box in front of it at z = -1.
+fn wall_and_box() -> Scene {
+    let mut scene = Scene::default();
+    let wall = scene.add_mesh(Mesh::grid(12.0, 4));
+    let cube = scene.add_mesh(Mesh::cuboid(Vec3::splat(0.5)));
+    scene.add_instance(wall, Affine3A::from_rotation_translation(glam::Quat::from_rotation_x(std::f32::consts::FRAC_PI_2), Vec3::new(0.0, 0.0, -3.0)));
+    scene.add_instance(cube, Affine3A::from_translation(Vec3::new(0.0, 0.0, -1.0)));
+    scene
+}
+
+fn rgba_bytes(texels: &[[f32; 4]]) -> Vec<u8> {
+    bytemuck::cast_slice(texels).to_vec()
+}
+
+/// The wall's clean green: a checker of 0.3 m cells (1.0 and 0.4), detail that a spatial
+/// filter alone blurs, so fresh pixels need history to become right.
+fn wall_green(p: Vec3) -> f32 {
+    let cell = ((p.x / 0.3).floor() + (p.y / 0.3).floor()) as i64;
+    if cell.rem_euclid(2) == 0 { 1.0 } else { 0.4 }
+}
+
+/// Each surface's colour (the wall's green checker, the box red) times noise of mean 1
+/// (uniform in [0.5, 1.5]).
+fn noisy_colours(g: &GBuffer, rng: &mut Rng) -> Vec<[f32; 4]> {
+    (0..g.depth.len())
+        .map(|i| {
+            let k = 0.5 + rng.next_f32();
+            match (g.hit[i], g.instance[i]) {
+                (false, _) => [0.0; 4],
+                (true, 0) => [0.0, k * wall_green(g.position[i]), 0.0, 1.0],
+                _ => [k, 0.0, 0.0, 1.0],
+            }
+        })
+        .collect()
+}
+
+/// Renders a G-buffer for `camera` into the images `gb` (replacing their texels).
+fn upload_gbuffer(host: &Host, gb: &GBufferImages, g: &GBuffer) {
+    host.write_image(&gb.depth, &g.depth_bytes(), READ).unwrap();
+    host.write_image(&gb.normals, &g.normal_bytes_rgba32f(), READ).unwrap();
+}
+
+/// Camera A looks at the wall and box; 16 frames; then camera B, 0.8 m to the right, for 12
+/// frames, revealing wall that the box hid. Returns per frame after the move: the largest red
+/// (box colour) in the revealed wall pixels, and their relative RMSE against the clean green,
+/// plus the RMSE of wall pixels seen by both cameras.
+fn disocclusion_run(with_motion_vectors: bool) -> Vec<(f32, f32, f32)> {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let scene = wall_and_box();
+    let tracer = Tracer::new(&scene);
+    let cam_a = Camera::look_at(Vec3::new(0.0, 0.0, 2.0), Vec3::new(0.0, 0.0, -3.0));
+    let cam_b = Camera::look_at(Vec3::new(0.8, 0.0, 2.0), Vec3::new(0.8, 0.0, -3.0));
+    let (ga, gb) = (GBuffer::render(&tracer, &cam_a, S, S), GBuffer::render(&tracer, &cam_b, S, S));
+    let images = GBufferImages::upload(&host, &ga).unwrap();
+    let noisy = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, S, S);
+    let out = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, S, S);
+    let motion = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, S, S, vk::ImageUsageFlags::SAMPLED, READ).unwrap();
+    let dn = context(&ctx, SignalType::Diffuse, S, S);
+    let mut frame = ctx.create_task_container();
+    let mut rng = Rng::new(77);
+
+    // Where B's pixels were in A (pixels, previous − current), and which were hidden there.
+    let a_clip = cam_a.view_to_clip(1.0) * cam_a.world_to_view();
+    let mut mv = vec![[0.0f32; 4]; (S * S) as usize];
+    let mut revealed = vec![false; mv.len()];
+    for i in 0..mv.len() {
+        if !gb.hit[i] {
+            continue;
+        }
+        let c = a_clip * gb.position[i].extend(1.0);
+        let (ax, ay) = ((c.x / c.w * 0.5 + 0.5) * S as f32, (c.y / c.w * 0.5 + 0.5) * S as f32);
+        mv[i] = [ax - ((i as u32 % S) as f32 + 0.5), ay - ((i as u32 / S) as f32 + 0.5), 0.0, 0.0];
+        let j = (ay.floor() as i64 * S as i64 + ax.floor() as i64) as usize;
+        let hidden = ax < 0.0 || ay < 0.0 || ax >= S as f32 || ay >= S as f32 || ga.instance[j] != gb.instance[i];
+        revealed[i] = gb.instance[i] == 0 && hidden;
+    }
+    let stable: Vec<bool> = (0..mv.len()).map(|i| gb.hit[i] && gb.instance[i] == 0 && !revealed[i]).collect();
+    assert!(revealed.iter().filter(|r| **r).count() > 40, "the move reveals wall");
+
+    let green: Vec<f32> = (0..mv.len()).map(|i| if gb.hit[i] && gb.instance[i] == 0 { wall_green(gb.position[i]) } else { 0.0 }).collect();
+    let mut after = Vec::new();
+    for f in 0..28 {
+        let (cam, g) = if f < 16 { (&cam_a, &ga) } else { (&cam_b, &gb) };
+        if f == 16 {
+            upload_gbuffer(&host, &images, &gb);
+            if with_motion_vectors {
+                host.write_image(&motion, &rgba_bytes(&mv), READ).unwrap();
+            }
+        }
+        if f == 17 && with_motion_vectors {
+            host.write_image(&motion, &rgba_bytes(&vec![[0.0; 4]; mv.len()]), READ).unwrap();
+        }
+        host.write_image(&noisy, &rgba_bytes(&noisy_colours(g, &mut rng)), GENERAL).unwrap();
+        let mut common = images.denoising_common(cam);
+        if with_motion_vectors {
+            common.motion = MotionInput { image: motion.input(READ), motion_type: MotionType::RgViewSpace, scale: [1.0; 3] };
+        }
+        frame
+            .schedule_denoise_diffuse(&DenoiseDiffuseTask { context: dn, common, input: noisy.input(GENERAL), output: out.input(GENERAL) })
+            .unwrap();
+        run_frame(&host, &ctx, &mut frame).unwrap();
+        if f >= 16 {
+            let red = read_channel(&host, &out, 0);
+            let max_red = red.iter().zip(&revealed).filter(|(_, r)| **r).map(|(v, _)| *v).fold(0.0, f32::max);
+            let g_out = read_channel(&host, &out, 1);
+            after.push((max_red, stats::relative_rmse(&g_out, &green, &revealed), stats::relative_rmse(&g_out, &green, &stable)));
+        }
+    }
+    ctx.destroy_denoising_context(dn).unwrap();
+    for i in [noisy, out, motion] {
+        host.destroy_image(i);
+    }
+    images.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+    after
+}
+
+fn check_disocclusion(with_motion_vectors: bool) {
+    let after = disocclusion_run(with_motion_vectors);
+    for (k, (red, revealed, stable)) in after.iter().enumerate() {
+        eprintln!("frame {k} after the move: revealed wall max red {red:.4}, relative RMSE revealed {revealed:.4}, stable {stable:.4}");
+    }
+    // No ghost: the box's red never appears on the wall it uncovered.
+    assert!(after.iter().all(|(red, _, _)| *red < 0.02), "ghosting: {after:?}");
+    // Recovery: the revealed pixels start from one noisy frame, spatially filtered (which
+    // blurs the wall's 2.5-pixel checker), and reach the error of the pixels that kept their
+    // history within the fast window (4 frames). (Those pixels' history was resampled
+    // bilinearly by the 6.6-pixel move, which softens the checker too: see docs.)
+    assert!(after[0].1 > after[4].1, "the revealed region improves with history");
+    let (_, revealed, stable) = after[4];
+    assert!(revealed <= 1.2 * stable, "frame 4: revealed {revealed} stable {stable}");
+}
+
+#[test]
+fn revealed_pixels_carry_no_old_colour_with_camera_reprojection() {
+    check_disocclusion(false);
+}
+
+#[test]
+fn revealed_pixels_carry_no_old_colour_with_motion_vectors() {
+    check_disocclusion(true);
+}
+
+/// A plane facing the camera, for tests that only need a surface under every pixel.
+fn facing_plane() -> (GBuffer, Camera) {
+    let mut scene = Scene::default();
+    let wall = scene.add_mesh(Mesh::grid(20.0, 2));
+    scene.add_instance(wall, Affine3A::from_rotation_translation(glam::Quat::from_rotation_x(std::f32::consts::FRAC_PI_2), Vec3::new(0.0, 0.0, -3.0)));
+    let camera = Camera::look_at(Vec3::new(0.0, 0.0, 2.0), Vec3::new(0.0, 0.0, -3.0));
+    (GBuffer::render(&Tracer::new(&scene), &camera, S, S), camera)
+}
+
+#[test]
+fn mirror_reflections_stay_sharp_and_glossy_ones_are_filtered() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let (g, camera) = facing_plane();
+    assert!(g.hit.iter().filter(|h| **h).count() > (S * S * 9 / 10) as usize);
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    // A one-pixel checker of reflected radiance (the sharpest detail a mirror can show),
+    // with fresh noise each frame as a stochastic trace would have.
+    let checker: Vec<[f32; 4]> = (0..S * S).map(|i| if (i % S + i / S) % 2 == 0 { [2.0, 1.0, 0.5, 3.0] } else { [0.0, 0.0, 0.0, 3.0] }).collect();
+    let noisy = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, S, S);
+    let mut rng = Rng::new(11);
+    let mut results = Vec::new();
+    for roughness in [0.0, 0.5] {
+        let out = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, S, S);
+        let dn = context(&ctx, SignalType::Specular, S, S);
+        let mut common = images.denoising_common(&camera);
+        common.roughness.global_roughness = roughness;
+        let mut frame = ctx.create_task_container();
+        let mut input = Vec::new();
+        for _ in 0..8 {
+            input = checker.iter().map(|c| { let k = 0.5 + rng.next_f32(); [c[0] * k, c[1] * k, c[2] * k, c[3]] }).collect::<Vec<_>>();
+            host.write_image(&noisy, &rgba_bytes(&input), GENERAL).unwrap();
+            frame.schedule_denoise_specular(&DenoiseSpecularTask { context: dn, common, input: noisy.input(GENERAL), output: out.input(GENERAL) }).unwrap();
+            run_frame(&host, &ctx, &mut frame).unwrap();
+        }
+        let r = read_channel(&host, &out, 0);
+        let max_diff = r.iter().zip(&input).zip(&g.hit).filter(|(_, h)| **h).map(|((a, c), _)| (a - c[0]).abs()).fold(0.0, f32::max);
+        eprintln!("specular, roughness {roughness}: largest difference from this frame's input {max_diff:.4}");
+        results.push(max_diff);
+        ctx.destroy_denoising_context(dn).unwrap();
+        host.destroy_image(out);
+    }
+    // A mirror's reflection is exact (one deterministic ray): passed through, no blur, no
+    // history to smear it when the view moves.
+    // (It passes through the fp16 history: values up to 3 round by at most 2^-10 x 3.)
+    assert!(results[0] < 3e-3, "a mirror passes through unchanged");
+    assert!(results[1] > 0.5, "a glossy surface is filtered");
+    host.destroy_image(noisy);
+    images.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+}
+
+#[test]
+fn reset_history_drops_the_past_at_once() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let (g, camera) = facing_plane();
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let noisy = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, S, S);
+    let red = vec![[1.0f32, 0.0, 0.0, 1.0]; (S * S) as usize];
+    let green = vec![[0.0f32, 1.0, 0.0, 1.0]; (S * S) as usize];
+    let mut remaining_red = Vec::new();
+    for reset in [true, false] {
+        let out = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, S, S);
+        let dn = context(&ctx, SignalType::Diffuse, S, S);
+        let mut frame = ctx.create_task_container();
+        let mut common = images.denoising_common(&camera);
+        host.write_image(&noisy, &rgba_bytes(&red), GENERAL).unwrap();
+        for f in 0..9 {
+            if f == 8 {
+                host.write_image(&noisy, &rgba_bytes(&green), GENERAL).unwrap();
+                common.reset_history = reset;
+            }
+            frame.schedule_denoise_diffuse(&DenoiseDiffuseTask { context: dn, common, input: noisy.input(GENERAL), output: out.input(GENERAL) }).unwrap();
+            run_frame(&host, &ctx, &mut frame).unwrap();
+        }
+        remaining_red.push(read_channel(&host, &out, 0).iter().cloned().fold(0.0, f32::max));
+        ctx.destroy_denoising_context(dn).unwrap();
+        host.destroy_image(out);
+    }
+    eprintln!("largest red left one frame after red -> green: with reset {:.4}, without {:.4}", remaining_red[0], remaining_red[1]);
+    assert!(remaining_red[0] < 1e-4, "reset: no red at all");
+    assert!(remaining_red[1] > 0.1, "without reset the history shows (the test is not vacuous)");
+    host.destroy_image(noisy);
+    images.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+}
+
+#[test]
+fn specular_and_diffuse_in_one_task_equal_two_tasks() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let (g, camera) = facing_plane();
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let spec_in = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, S, S);
+    let diff_in = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, S, S);
+    let outs: Vec<HostImage> = (0..4).map(|_| storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, S, S)).collect();
+    let both = context(&ctx, SignalType::SpecularAndDiffuse, S, S);
+    let spec = context(&ctx, SignalType::Specular, S, S);
+    let diff = context(&ctx, SignalType::Diffuse, S, S);
+    let mut common = images.denoising_common(&camera);
+    common.roughness.global_roughness = 0.4;
+    let mut rng = Rng::new(5);
+    let mut frame = ctx.create_task_container();
+    for _ in 0..4 {
+        let mut noise = || (0..S * S).map(|_| [rng.next_f32(), rng.next_f32(), rng.next_f32(), 2.0]).collect::<Vec<_>>();
+        host.write_image(&spec_in, &rgba_bytes(&noise()), GENERAL).unwrap();
+        host.write_image(&diff_in, &rgba_bytes(&noise()), GENERAL).unwrap();
+        let (si, di) = (spec_in.input(GENERAL), diff_in.input(GENERAL));
+        frame
+            .schedule_denoise_specular_and_diffuse(&DenoiseSpecularAndDiffuseTask {
+                context: both,
+                common,
+                input_specular: si,
+                input_diffuse: di,
+                output_specular: outs[0].input(GENERAL),
+                output_diffuse: outs[1].input(GENERAL),
+            })
+            .unwrap();
+        frame.schedule_denoise_specular(&DenoiseSpecularTask { context: spec, common, input: si, output: outs[2].input(GENERAL) }).unwrap();
+        frame.schedule_denoise_diffuse(&DenoiseDiffuseTask { context: diff, common, input: di, output: outs[3].input(GENERAL) }).unwrap();
+        let done = run_frame(&host, &ctx, &mut frame).unwrap();
+        assert!(done.timings.iter().any(|t| t.kind == TaskKind::DenoiseSpecularAndDiffuse));
+    }
+    let read = |i: usize| host.read_image(&outs[i], GENERAL).unwrap();
+    assert!(read(0) == read(2), "specular: one task equals its own");
+    assert!(read(1) == read(3), "diffuse: one task equals its own");
+    for dn in [both, spec, diff] {
+        ctx.destroy_denoising_context(dn).unwrap();
+    }
+    for i in outs.into_iter().chain([spec_in, diff_in]) {
+        host.destroy_image(i);
+    }
+    images.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+}
