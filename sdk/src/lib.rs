@@ -29,7 +29,7 @@ pub(crate) mod scene;
 pub mod shaders;
 
 pub use api::container::TaskContainer;
-pub use api::context::ExecuteContext;
+pub use api::context::{ExecuteContext, MAX_DENOISING_EXTENT};
 pub use api::denoising::*;
 pub use api::handles::{DenoisingContextHandle, GeometryHandle, InstanceHandle};
 pub use api::settings::InitSettings;
