@@ -522,6 +522,51 @@ int main(void) {
     EXPECT(rg[0] < 0.0f && rg[1] == 1.0f, "the corner sees the light");
     free_image(shadow);
 
+    /* ---- Denoised shadows: a denoising context owns the history; the trace task's output
+     * image is the denoise task's input in the same container (the SDK orders the two). */
+    HrtDenoisingContextInput dci_in = hrt_denoising_context_input_default();
+    dci_in.max_width = W;
+    dci_in.max_height = H;
+    dci_in.signal = 99;
+    HrtDenoisingContextHandle denoiser = 0;
+    EXPECT(hrt_create_denoising_context(ctx, &dci_in, &denoiser) == HRT_ERROR_INVALID_INPUT, "out-of-range signal type");
+    dci_in.signal = HRT_SIGNAL_SHADOW;
+    CHECK_HRT(hrt_create_denoising_context(ctx, &dci_in, &denoiser));
+    Image noisy = make_image(VK_FORMAT_R32G32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT);
+    Image clean = make_image(VK_FORMAT_R32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT);
+    cmd = begin();
+    transition(cmd, noisy.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL);
+    transition(cmd, clean.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL);
+    submit_and_wait(cmd);
+    shadow_task.output = sdk_image(&noisy, VK_IMAGE_LAYOUT_GENERAL);
+    HrtDenoiseShadowTask denoise = hrt_denoise_shadow_task_default();
+    denoise.context = denoiser;
+    denoise.common.depth = ao.common.depth;
+    denoise.common.normals = ao.common.normals;
+    denoise.common.viewport = ao.common.viewport;
+    denoise.common.camera = ao.common.camera;
+    denoise.light = shadow_task.light;
+    denoise.input = sdk_image(&noisy, VK_IMAGE_LAYOUT_GENERAL);
+    denoise.output = sdk_image(&clean, VK_IMAGE_LAYOUT_GENERAL);
+    float vis_px[W * H];
+    for (int f = 0; f < 4; f++) {
+        CHECK_HRT(hrt_schedule_shadow(frame, &shadow_task));
+        CHECK_HRT(hrt_schedule_denoise_shadow(frame, &denoise));
+        printf("denoised shadow frame %d:\n", f);
+        run_frame(ctx, frame, &clean, 4, vis_px);
+    }
+    printf("denoised visibility: centre %.3f, corner %.3f\n", vis_px[(H / 2) * W + W / 2], vis_px[0]);
+    EXPECT(vis_px[(H / 2) * W + W / 2] == 0.0f && vis_px[0] == 1.0f, "a hard light's shadow stays exact");
+    HrtDenoiseTask wrong = hrt_denoise_task_default();
+    wrong.context = denoiser;
+    wrong.common = denoise.common;
+    wrong.input = wrong.output = sdk_image(&clean, VK_IMAGE_LAYOUT_GENERAL);
+    EXPECT(hrt_schedule_denoise_diffuse(frame, &wrong) == HRT_ERROR_UNSUPPORTED_FORMAT, "a scalar image is no diffuse input");
+    CHECK_HRT(hrt_destroy_denoising_context(ctx, denoiser));
+    EXPECT(hrt_destroy_denoising_context(ctx, denoiser) == HRT_ERROR_INVALID_HANDLE, "destroyed twice");
+    free_image(noisy);
+    free_image(clean);
+
     /* ---- Two lights in one pass: the same light twice gives the same visibility twice. */
     Image vis = make_image(VK_FORMAT_R32_UINT, VK_IMAGE_USAGE_STORAGE_BIT);
     Image packed = make_image(VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT);

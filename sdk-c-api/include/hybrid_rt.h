@@ -26,6 +26,11 @@
 #define HRT_MAX_TILE_RESOLUTION 256
 
 /**
+ * Largest HrtDenoisingContextInput.max_width / max_height.
+ */
+#define HRT_MAX_DENOISING_EXTENT 16384
+
+/**
  * Bits of HrtInstanceInput::mask.
  */
 #define HRT_MASK_REFLECTIONS 1
@@ -108,6 +113,12 @@ typedef enum HrtTaskKind {
   HRT_TASK_DIFFUSE = 8,
   HRT_TASK_SPECULAR = 9,
   HRT_TASK_MULTI_SHADOW = 10,
+  HRT_TASK_DENOISE_SPECULAR = 11,
+  HRT_TASK_DENOISE_DIFFUSE = 12,
+  HRT_TASK_DENOISE_SPECULAR_AND_DIFFUSE = 13,
+  HRT_TASK_DENOISE_DIFFUSE_OCCLUSION = 14,
+  HRT_TASK_DENOISE_SHADOW = 15,
+  HRT_TASK_DENOISE_MULTI_SHADOW = 16,
 } HrtTaskKind;
 
 typedef enum HrtDiffuseBrdfType {
@@ -170,6 +181,41 @@ typedef enum HrtRayOffsetType {
   HRT_RAY_OFFSET_WORLD_POSITION = 1,
   HRT_RAY_OFFSET_CAMERA_DISTANCE = 2,
 } HrtRayOffsetType;
+
+typedef enum HrtDenoisingMethod {
+  /**
+   * Temporal accumulation with reprojection, then spatial filtering (default).
+   */
+  HRT_DENOISING_TEMPORAL = 0,
+  /**
+   * This frame only, no history (debugging).
+   */
+  HRT_DENOISING_SPATIAL_ONLY = 1,
+} HrtDenoisingMethod;
+
+typedef enum HrtSignalType {
+  HRT_SIGNAL_SPECULAR = 0,
+  HRT_SIGNAL_DIFFUSE = 1,
+  HRT_SIGNAL_SPECULAR_AND_DIFFUSE = 2,
+  HRT_SIGNAL_DIFFUSE_OCCLUSION = 3,
+  HRT_SIGNAL_SHADOW = 4,
+  HRT_SIGNAL_MULTI_SHADOW = 5,
+} HrtSignalType;
+
+typedef enum HrtMotionType {
+  /**
+   * RG = screen-space motion in pixels (default).
+   */
+  HRT_MOTION_RG_VIEW_SPACE = 0,
+  /**
+   * RG = motion in normalized device coordinates.
+   */
+  HRT_MOTION_RG_CLIP_SPACE = 1,
+  /**
+   * RGB = world-space motion.
+   */
+  HRT_MOTION_RGB_WORLD_SPACE = 2,
+} HrtMotionType;
 
 /**
  * Opaque context.
@@ -496,6 +542,10 @@ typedef struct HrtResourceAllocations {
   struct HrtAllocationCount pipelines;
   struct HrtAllocationCount cache;
   struct HrtAllocationCount readback;
+  /**
+   * Denoising contexts' history images.
+   */
+  struct HrtAllocationCount denoiser;
 } HrtResourceAllocations;
 
 /**
@@ -665,6 +715,118 @@ typedef struct HrtTraceMultiShadowTask {
    */
   uint32_t rays_per_pixel;
 } HrtTraceMultiShadowTask;
+
+/**
+ * Motion vectors: after `scale`, previous − current. image = VK_NULL_HANDLE: reproject with
+ * the cameras (static scenes only).
+ */
+typedef struct HrtMotionInput {
+  struct HrtImageInput image;
+  /**
+   * An HrtMotionType.
+   */
+  uint32_t motion_type;
+  /**
+   * Default {1, 1, 1}.
+   */
+  float scale[3];
+} HrtMotionInput;
+
+/**
+ * Tuning (see the Rust docs of DenoiserSettings for each default).
+ */
+typedef struct HrtDenoiserSettings {
+  uint32_t max_history_frames;
+  uint32_t fast_history_frames;
+  float history_clamp_sigma;
+  uint32_t spatial_passes;
+  float luminance_sigma;
+  float normal_power;
+  float plane_distance_sigma;
+  bool anti_firefly;
+  float max_shadow_blur_radius;
+} HrtDenoiserSettings;
+
+typedef struct HrtDenoisingCommon {
+  struct HrtDepthInput depth;
+  struct HrtNormalInput normals;
+  struct HrtRoughnessInput roughness;
+  struct HrtMotionInput motion;
+  struct HrtViewport viewport;
+  struct HrtCamera camera;
+  /**
+   * false (default): the camera of the context's previous task.
+   */
+  bool has_previous_camera;
+  struct HrtCamera previous_camera;
+  /**
+   * Pixels; default {0, 0}.
+   */
+  float camera_jitter[2];
+  /**
+   * The trace ran in checkerboard mode in the same container. Default false.
+   */
+  bool half_resolution_mode;
+  /**
+   * Default false.
+   */
+  bool reset_history;
+  struct HrtDenoiserSettings settings;
+} HrtDenoisingCommon;
+
+typedef struct HrtDenoisingContextInput {
+  /**
+   * 1..=HRT_MAX_DENOISING_EXTENT each.
+   */
+  uint32_t max_width;
+  uint32_t max_height;
+  /**
+   * An HrtDenoisingMethod. Default HRT_DENOISING_TEMPORAL.
+   */
+  uint32_t method;
+  /**
+   * An HrtSignalType. Default HRT_SIGNAL_DIFFUSE.
+   */
+  uint32_t signal;
+} HrtDenoisingContextInput;
+
+typedef uint64_t HrtDenoisingContextHandle;
+
+/**
+ * DenoiseSpecular / DenoiseDiffuse / DenoiseDiffuseOcclusion / DenoiseMultiShadow.
+ */
+typedef struct HrtDenoiseTask {
+  HrtDenoisingContextHandle context;
+  struct HrtDenoisingCommon common;
+  /**
+   * The trace task's output (GENERAL or read-only layout, SAMPLED usage).
+   */
+  struct HrtImageInput input;
+  /**
+   * GENERAL layout, STORAGE usage; may be the input image.
+   */
+  struct HrtImageInput output;
+} HrtDenoiseTask;
+
+typedef struct HrtDenoiseShadowTask {
+  HrtDenoisingContextHandle context;
+  struct HrtDenoisingCommon common;
+  /**
+   * The light that was traced.
+   */
+  struct HrtLightInfo light;
+  struct HrtImageInput input;
+  struct HrtImageInput output;
+} HrtDenoiseShadowTask;
+
+typedef struct HrtDenoiseSpecularAndDiffuseTask {
+  HrtDenoisingContextHandle context;
+  struct HrtDenoisingCommon common;
+  struct HrtImageInput input_specular;
+  struct HrtImageInput input_diffuse;
+  struct HrtImageInput output_specular;
+  struct HrtImageInput output_diffuse;
+} HrtDenoiseSpecularAndDiffuseTask;
 
 #ifdef __cplusplus
 extern "C" {
@@ -867,6 +1029,47 @@ struct HrtTraceMultiShadowTask hrt_trace_multi_shadow_task_default(void);
 
 enum HrtStatus hrt_schedule_multi_shadow(struct HrtTaskContainer *container,
                                          const struct HrtTraceMultiShadowTask *task);
+
+struct HrtDenoisingCommon hrt_denoising_common_default(void);
+
+struct HrtDenoisingContextInput hrt_denoising_context_input_default(void);
+
+/**
+ * Creates a denoising context (its history images are allocated now).
+ */
+enum HrtStatus hrt_create_denoising_context(struct HrtContext *ctx,
+                                            const struct HrtDenoisingContextInput *input,
+                                            HrtDenoisingContextHandle *out);
+
+/**
+ * Destroys a denoising context; its images are freed once the tickets issued so far return.
+ */
+enum HrtStatus hrt_destroy_denoising_context(struct HrtContext *ctx,
+                                             HrtDenoisingContextHandle handle);
+
+struct HrtDenoiseTask hrt_denoise_task_default(void);
+
+struct HrtDenoiseShadowTask hrt_denoise_shadow_task_default(void);
+
+struct HrtDenoiseSpecularAndDiffuseTask hrt_denoise_specular_and_diffuse_task_default(void);
+
+enum HrtStatus hrt_schedule_denoise_specular(struct HrtTaskContainer *container,
+                                             const struct HrtDenoiseTask *task);
+
+enum HrtStatus hrt_schedule_denoise_diffuse(struct HrtTaskContainer *container,
+                                            const struct HrtDenoiseTask *task);
+
+enum HrtStatus hrt_schedule_denoise_diffuse_occlusion(struct HrtTaskContainer *container,
+                                                      const struct HrtDenoiseTask *task);
+
+enum HrtStatus hrt_schedule_denoise_multi_shadow(struct HrtTaskContainer *container,
+                                                 const struct HrtDenoiseTask *task);
+
+enum HrtStatus hrt_schedule_denoise_shadow(struct HrtTaskContainer *container,
+                                           const struct HrtDenoiseShadowTask *task);
+
+enum HrtStatus hrt_schedule_denoise_specular_and_diffuse(struct HrtTaskContainer *container,
+                                                         const struct HrtDenoiseSpecularAndDiffuseTask *task);
 
 #ifdef __cplusplus
 }  // extern "C"

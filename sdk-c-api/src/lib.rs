@@ -8,6 +8,7 @@
 //! boundary. Contexts and containers are opaque pointers; geometry and instance handles and
 //! tickets are 64-bit integers that the SDK checks (stale, foreign, returned twice).
 #![allow(non_camel_case_types, clippy::missing_safety_doc)]
+mod denoise;
 mod log_bridge;
 mod status;
 mod types;
@@ -19,6 +20,7 @@ pub use log_bridge::{HrtLogCallback, HrtLogSeverity};
 use status::{guard, null, Failure};
 pub use status::HrtStatus;
 use std::ffi::{c_char, c_void, CStr};
+pub use denoise::*;
 pub use types::*;
 
 /// The API version this header describes: (major << 22) | (minor << 12) | patch.
@@ -28,25 +30,27 @@ pub const HRT_API_VERSION: u32 = 1 << 12; // (major 0 << 22) | (minor 1 << 12) |
 pub const HRT_MAX_SHADOW_LIGHTS: u32 = 16;
 /// Largest HrtSurfelSettings.tile_resolution_limit.
 pub const HRT_MAX_TILE_RESOLUTION: u32 = 256;
+/// Largest HrtDenoisingContextInput.max_width / max_height.
+pub const HRT_MAX_DENOISING_EXTENT: u32 = 16384;
 
 /// Opaque context.
 pub struct HrtContext {
-    ctx: rt::ExecuteContext,
+    pub(crate) ctx: rt::ExecuteContext,
     // Keeps the loader library alive when the SDK loaded it itself.
     _entry: ash::Entry,
 }
 
 /// Opaque task container: fill on one thread, build on any.
 pub struct HrtTaskContainer {
-    inner: rt::TaskContainer,
+    pub(crate) inner: rt::TaskContainer,
 }
 
-fn get<'a, T>(p: *const T, what: &str) -> Result<&'a T, Failure> {
+pub(crate) fn get<'a, T>(p: *const T, what: &str) -> Result<&'a T, Failure> {
     // SAFETY: the caller passes a valid pointer or NULL (checked).
     unsafe { p.as_ref() }.ok_or_else(|| null(what))
 }
 
-fn get_mut<'a, T>(p: *mut T, what: &str) -> Result<&'a mut T, Failure> {
+pub(crate) fn get_mut<'a, T>(p: *mut T, what: &str) -> Result<&'a mut T, Failure> {
     unsafe { p.as_mut() }.ok_or_else(|| null(what))
 }
 
@@ -433,6 +437,12 @@ pub unsafe extern "C" fn hrt_mark_gpu_task_completed(
                         rt::TaskKind::Diffuse => HrtTaskKind::HRT_TASK_DIFFUSE,
                         rt::TaskKind::Specular => HrtTaskKind::HRT_TASK_SPECULAR,
                         rt::TaskKind::MultiShadow => HrtTaskKind::HRT_TASK_MULTI_SHADOW,
+                        rt::TaskKind::DenoiseSpecular => HrtTaskKind::HRT_TASK_DENOISE_SPECULAR,
+                        rt::TaskKind::DenoiseDiffuse => HrtTaskKind::HRT_TASK_DENOISE_DIFFUSE,
+                        rt::TaskKind::DenoiseSpecularAndDiffuse => HrtTaskKind::HRT_TASK_DENOISE_SPECULAR_AND_DIFFUSE,
+                        rt::TaskKind::DenoiseDiffuseOcclusion => HrtTaskKind::HRT_TASK_DENOISE_DIFFUSE_OCCLUSION,
+                        rt::TaskKind::DenoiseShadow => HrtTaskKind::HRT_TASK_DENOISE_SHADOW,
+                        rt::TaskKind::DenoiseMultiShadow => HrtTaskKind::HRT_TASK_DENOISE_MULTI_SHADOW,
                     },
                     task_index: t.task_index,
                     gpu_ms: t.gpu_ms,
@@ -668,5 +678,6 @@ mod tests {
     fn limits_match_the_sdk() {
         assert_eq!(super::HRT_MAX_SHADOW_LIGHTS as usize, hybrid_rt::MAX_SHADOW_LIGHTS);
         assert_eq!(super::HRT_MAX_TILE_RESOLUTION, hybrid_rt::MAX_TILE_RESOLUTION);
+        assert_eq!(super::HRT_MAX_DENOISING_EXTENT, hybrid_rt::MAX_DENOISING_EXTENT);
     }
 }

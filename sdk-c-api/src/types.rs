@@ -496,6 +496,12 @@ pub enum HrtTaskKind {
     HRT_TASK_DIFFUSE = 8,
     HRT_TASK_SPECULAR = 9,
     HRT_TASK_MULTI_SHADOW = 10,
+    HRT_TASK_DENOISE_SPECULAR = 11,
+    HRT_TASK_DENOISE_DIFFUSE = 12,
+    HRT_TASK_DENOISE_SPECULAR_AND_DIFFUSE = 13,
+    HRT_TASK_DENOISE_DIFFUSE_OCCLUSION = 14,
+    HRT_TASK_DENOISE_SHADOW = 15,
+    HRT_TASK_DENOISE_MULTI_SHADOW = 16,
 }
 
 #[repr(C)]
@@ -524,6 +530,8 @@ pub struct HrtResourceAllocations {
     pub pipelines: HrtAllocationCount,
     pub cache: HrtAllocationCount,
     pub readback: HrtAllocationCount,
+    /// Denoising contexts' history images.
+    pub denoiser: HrtAllocationCount,
 }
 
 // ---------------------------------------------------------------- conversions
@@ -537,7 +545,7 @@ fn pick<T: Copy>(what: &str, v: u32, table: &[T]) -> Result<T, Failure> {
     })
 }
 
-fn image(i: &HrtImageInput) -> rt::ImageInput {
+pub(crate) fn image(i: &HrtImageInput) -> rt::ImageInput {
     rt::ImageInput {
         image: vk::Image::from_raw(i.image),
         view: vk::ImageView::from_raw(i.view),
@@ -547,7 +555,7 @@ fn image(i: &HrtImageInput) -> rt::ImageInput {
         layout: vk::ImageLayout::from_raw(i.layout),
     }
 }
-fn image_c(i: &rt::ImageInput) -> HrtImageInput {
+pub(crate) fn image_c(i: &rt::ImageInput) -> HrtImageInput {
     HrtImageInput {
         image: i.image.as_raw(),
         view: i.view.as_raw(),
@@ -815,6 +823,7 @@ impl From<rt::ResourceAllocations> for HrtResourceAllocations {
             pipelines: c(a.pipelines),
             cache: c(a.cache),
             readback: c(a.readback),
+            denoiser: c(a.denoiser),
         }
     }
 }

@@ -1,0 +1,355 @@
+//! Denoising in C: contexts and the six denoise tasks (see the Rust docs of
+//! `hybrid_rt::api::denoising`). Four tasks share one struct, `HrtDenoiseTask` (context,
+//! common, input, output); each has its own schedule function.
+use crate::status::{guard, HrtStatus};
+use crate::types::*;
+use crate::{get, get_mut, HrtContext, HrtTaskContainer};
+use crate::status::Failure;
+use hybrid_rt as rt;
+
+pub type HrtDenoisingContextHandle = u64;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtDenoisingMethod {
+    /// Temporal accumulation with reprojection, then spatial filtering (default).
+    HRT_DENOISING_TEMPORAL = 0,
+    /// This frame only, no history (debugging).
+    HRT_DENOISING_SPATIAL_ONLY = 1,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtSignalType {
+    HRT_SIGNAL_SPECULAR = 0,
+    HRT_SIGNAL_DIFFUSE = 1,
+    HRT_SIGNAL_SPECULAR_AND_DIFFUSE = 2,
+    HRT_SIGNAL_DIFFUSE_OCCLUSION = 3,
+    HRT_SIGNAL_SHADOW = 4,
+    HRT_SIGNAL_MULTI_SHADOW = 5,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtDenoisingContextInput {
+    /// 1..=HRT_MAX_DENOISING_EXTENT each.
+    pub max_width: u32,
+    pub max_height: u32,
+    /// An HrtDenoisingMethod. Default HRT_DENOISING_TEMPORAL.
+    pub method: u32,
+    /// An HrtSignalType. Default HRT_SIGNAL_DIFFUSE.
+    pub signal: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtMotionType {
+    /// RG = screen-space motion in pixels (default).
+    HRT_MOTION_RG_VIEW_SPACE = 0,
+    /// RG = motion in normalized device coordinates.
+    HRT_MOTION_RG_CLIP_SPACE = 1,
+    /// RGB = world-space motion.
+    HRT_MOTION_RGB_WORLD_SPACE = 2,
+}
+
+/// Motion vectors: after `scale`, previous − current. image = VK_NULL_HANDLE: reproject with
+/// the cameras (static scenes only).
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtMotionInput {
+    pub image: HrtImageInput,
+    /// An HrtMotionType.
+    pub motion_type: u32,
+    /// Default {1, 1, 1}.
+    pub scale: [f32; 3],
+}
+
+/// Tuning (see the Rust docs of DenoiserSettings for each default).
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtDenoiserSettings {
+    pub max_history_frames: u32,
+    pub fast_history_frames: u32,
+    pub history_clamp_sigma: f32,
+    pub spatial_passes: u32,
+    pub luminance_sigma: f32,
+    pub normal_power: f32,
+    pub plane_distance_sigma: f32,
+    pub anti_firefly: bool,
+    pub max_shadow_blur_radius: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtDenoisingCommon {
+    pub depth: HrtDepthInput,
+    pub normals: HrtNormalInput,
+    pub roughness: HrtRoughnessInput,
+    pub motion: HrtMotionInput,
+    pub viewport: HrtViewport,
+    pub camera: HrtCamera,
+    /// false (default): the camera of the context's previous task.
+    pub has_previous_camera: bool,
+    pub previous_camera: HrtCamera,
+    /// Pixels; default {0, 0}.
+    pub camera_jitter: [f32; 2],
+    /// The trace ran in checkerboard mode in the same container. Default false.
+    pub half_resolution_mode: bool,
+    /// Default false.
+    pub reset_history: bool,
+    pub settings: HrtDenoiserSettings,
+}
+
+/// DenoiseSpecular / DenoiseDiffuse / DenoiseDiffuseOcclusion / DenoiseMultiShadow.
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtDenoiseTask {
+    pub context: HrtDenoisingContextHandle,
+    pub common: HrtDenoisingCommon,
+    /// The trace task's output (GENERAL or read-only layout, SAMPLED usage).
+    pub input: HrtImageInput,
+    /// GENERAL layout, STORAGE usage; may be the input image.
+    pub output: HrtImageInput,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtDenoiseShadowTask {
+    pub context: HrtDenoisingContextHandle,
+    pub common: HrtDenoisingCommon,
+    /// The light that was traced.
+    pub light: HrtLightInfo,
+    pub input: HrtImageInput,
+    pub output: HrtImageInput,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtDenoiseSpecularAndDiffuseTask {
+    pub context: HrtDenoisingContextHandle,
+    pub common: HrtDenoisingCommon,
+    pub input_specular: HrtImageInput,
+    pub input_diffuse: HrtImageInput,
+    pub output_specular: HrtImageInput,
+    pub output_diffuse: HrtImageInput,
+}
+
+fn camera(c: &HrtCamera) -> rt::Camera {
+    rt::Camera { world_to_view: glam::Mat4::from_cols_array(&c.world_to_view), view_to_clip: glam::Mat4::from_cols_array(&c.view_to_clip) }
+}
+
+fn camera_c(c: &rt::Camera) -> HrtCamera {
+    HrtCamera { world_to_view: c.world_to_view.to_cols_array(), view_to_clip: c.view_to_clip.to_cols_array() }
+}
+
+fn common(c: &HrtDenoisingCommon) -> Result<rt::DenoisingCommon, Failure> {
+    // The G-buffer fields convert as a trace task's do.
+    let t = trace_common(&HrtTraceCommon { depth: c.depth, normals: c.normals, viewport: c.viewport, camera: c.camera, roughness: c.roughness, ..trace_common_default() })?;
+    let motion_type = match c.motion.motion_type {
+        0 => rt::MotionType::RgViewSpace,
+        1 => rt::MotionType::RgClipSpace,
+        2 => rt::MotionType::RgbWorldSpace,
+        v => return Err(Failure(HrtStatus::HRT_ERROR_INVALID_INPUT, format!("invalid HrtMotionInput.motion_type: {v}"))),
+    };
+    let s = &c.settings;
+    Ok(rt::DenoisingCommon {
+        depth: t.depth,
+        normals: t.normals,
+        roughness: t.roughness,
+        motion: rt::MotionInput { image: image(&c.motion.image), motion_type, scale: c.motion.scale },
+        viewport: t.viewport,
+        camera: t.camera,
+        previous_camera: c.has_previous_camera.then(|| camera(&c.previous_camera)),
+        camera_jitter: c.camera_jitter,
+        half_resolution_mode: c.half_resolution_mode,
+        reset_history: c.reset_history,
+        settings: rt::DenoiserSettings {
+            max_history_frames: s.max_history_frames,
+            fast_history_frames: s.fast_history_frames,
+            history_clamp_sigma: s.history_clamp_sigma,
+            spatial_passes: s.spatial_passes,
+            luminance_sigma: s.luminance_sigma,
+            normal_power: s.normal_power,
+            plane_distance_sigma: s.plane_distance_sigma,
+            anti_firefly: s.anti_firefly,
+            max_shadow_blur_radius: s.max_shadow_blur_radius,
+        },
+    })
+}
+
+#[no_mangle]
+pub extern "C" fn hrt_denoising_common_default() -> HrtDenoisingCommon {
+    let d = rt::DenoisingCommon::default();
+    let t = trace_common_default();
+    let s = d.settings;
+    HrtDenoisingCommon {
+        depth: t.depth,
+        normals: t.normals,
+        roughness: t.roughness,
+        motion: HrtMotionInput { image: image_c(&d.motion.image), motion_type: d.motion.motion_type as u32, scale: d.motion.scale },
+        viewport: t.viewport,
+        camera: t.camera,
+        has_previous_camera: false,
+        previous_camera: camera_c(&d.camera),
+        camera_jitter: d.camera_jitter,
+        half_resolution_mode: d.half_resolution_mode,
+        reset_history: d.reset_history,
+        settings: HrtDenoiserSettings {
+            max_history_frames: s.max_history_frames,
+            fast_history_frames: s.fast_history_frames,
+            history_clamp_sigma: s.history_clamp_sigma,
+            spatial_passes: s.spatial_passes,
+            luminance_sigma: s.luminance_sigma,
+            normal_power: s.normal_power,
+            plane_distance_sigma: s.plane_distance_sigma,
+            anti_firefly: s.anti_firefly,
+            max_shadow_blur_radius: s.max_shadow_blur_radius,
+        },
+    }
+}
+
+#[no_mangle]
+pub extern "C" fn hrt_denoising_context_input_default() -> HrtDenoisingContextInput {
+    let d = rt::DenoisingContextInput::default();
+    HrtDenoisingContextInput { max_width: d.max_width, max_height: d.max_height, method: d.method as u32, signal: d.signal as u32 }
+}
+
+/// Creates a denoising context (its history images are allocated now).
+#[no_mangle]
+pub unsafe extern "C" fn hrt_create_denoising_context(
+    ctx: *mut HrtContext,
+    input: *const HrtDenoisingContextInput,
+    out: *mut HrtDenoisingContextHandle,
+) -> HrtStatus {
+    guard(|| {
+        let c = get(ctx, "ctx")?;
+        let i = get(input, "input")?;
+        let out = get_mut(out, "out")?;
+        let method = match i.method {
+            0 => rt::DenoisingMethod::Temporal,
+            1 => rt::DenoisingMethod::SpatialOnly,
+            v => return Err(Failure(HrtStatus::HRT_ERROR_INVALID_INPUT, format!("invalid HrtDenoisingContextInput.method: {v}"))),
+        };
+        use rt::SignalType as S;
+        let signal = *[S::Specular, S::Diffuse, S::SpecularAndDiffuse, S::DiffuseOcclusion, S::Shadow, S::MultiShadow]
+            .get(i.signal as usize)
+            .ok_or_else(|| Failure(HrtStatus::HRT_ERROR_INVALID_INPUT, format!("invalid HrtDenoisingContextInput.signal: {}", i.signal)))?;
+        let h = c.ctx.create_denoising_context(&rt::DenoisingContextInput { max_width: i.max_width, max_height: i.max_height, method, signal })?;
+        *out = h.0;
+        Ok(())
+    })
+}
+
+/// Destroys a denoising context; its images are freed once the tickets issued so far return.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_destroy_denoising_context(ctx: *mut HrtContext, handle: HrtDenoisingContextHandle) -> HrtStatus {
+    guard(|| Ok(get(ctx, "ctx")?.ctx.destroy_denoising_context(rt::DenoisingContextHandle(handle))?))
+}
+
+#[no_mangle]
+pub extern "C" fn hrt_denoise_task_default() -> HrtDenoiseTask {
+    let out = image_c(&rt::DenoiseDiffuseTask::default().output);
+    HrtDenoiseTask { context: 0, common: hrt_denoising_common_default(), input: out, output: out }
+}
+
+#[no_mangle]
+pub extern "C" fn hrt_denoise_shadow_task_default() -> HrtDenoiseShadowTask {
+    let t = hrt_denoise_task_default();
+    HrtDenoiseShadowTask { context: 0, common: t.common, light: shadow_task_default().light, input: t.input, output: t.output }
+}
+
+#[no_mangle]
+pub extern "C" fn hrt_denoise_specular_and_diffuse_task_default() -> HrtDenoiseSpecularAndDiffuseTask {
+    let t = hrt_denoise_task_default();
+    HrtDenoiseSpecularAndDiffuseTask {
+        context: 0,
+        common: t.common,
+        input_specular: t.input,
+        input_diffuse: t.input,
+        output_specular: t.output,
+        output_diffuse: t.output,
+    }
+}
+
+/// Converts an HrtDenoiseTask and schedules it with `schedule`.
+unsafe fn schedule_plain<T>(
+    container: *mut HrtTaskContainer,
+    task: *const HrtDenoiseTask,
+    make: impl FnOnce(rt::DenoisingContextHandle, rt::DenoisingCommon, rt::ImageInput, rt::ImageInput) -> T,
+    schedule: impl FnOnce(&mut rt::TaskContainer, &T) -> rt::Result<()>,
+) -> HrtStatus {
+    guard(|| {
+        let c = get_mut(container, "container")?;
+        let t = get(task, "task")?;
+        let task = make(rt::DenoisingContextHandle(t.context), common(&t.common)?, image(&t.input), image(&t.output));
+        Ok(schedule(&mut c.inner, &task)?)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_schedule_denoise_specular(container: *mut HrtTaskContainer, task: *const HrtDenoiseTask) -> HrtStatus {
+    schedule_plain(container, task, |context, common, input, output| rt::DenoiseSpecularTask { context, common, input, output }, |c, t| {
+        c.schedule_denoise_specular(t)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_schedule_denoise_diffuse(container: *mut HrtTaskContainer, task: *const HrtDenoiseTask) -> HrtStatus {
+    schedule_plain(container, task, |context, common, input, output| rt::DenoiseDiffuseTask { context, common, input, output }, |c, t| {
+        c.schedule_denoise_diffuse(t)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_schedule_denoise_diffuse_occlusion(container: *mut HrtTaskContainer, task: *const HrtDenoiseTask) -> HrtStatus {
+    schedule_plain(
+        container,
+        task,
+        |context, common, input, output| rt::DenoiseDiffuseOcclusionTask { context, common, input, output },
+        |c, t| c.schedule_denoise_diffuse_occlusion(t),
+    )
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_schedule_denoise_multi_shadow(container: *mut HrtTaskContainer, task: *const HrtDenoiseTask) -> HrtStatus {
+    schedule_plain(
+        container,
+        task,
+        |context, common, input, output| rt::DenoiseMultiShadowTask { context, common, input, output },
+        |c, t| c.schedule_denoise_multi_shadow(t),
+    )
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_schedule_denoise_shadow(container: *mut HrtTaskContainer, task: *const HrtDenoiseShadowTask) -> HrtStatus {
+    guard(|| {
+        let c = get_mut(container, "container")?;
+        let t = get(task, "task")?;
+        Ok(c.inner.schedule_denoise_shadow(&rt::DenoiseShadowTask {
+            context: rt::DenoisingContextHandle(t.context),
+            common: common(&t.common)?,
+            light: light(&t.light)?,
+            input: image(&t.input),
+            output: image(&t.output),
+        })?)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_schedule_denoise_specular_and_diffuse(
+    container: *mut HrtTaskContainer,
+    task: *const HrtDenoiseSpecularAndDiffuseTask,
+) -> HrtStatus {
+    guard(|| {
+        let c = get_mut(container, "container")?;
+        let t = get(task, "task")?;
+        Ok(c.inner.schedule_denoise_specular_and_diffuse(&rt::DenoiseSpecularAndDiffuseTask {
+            context: rt::DenoisingContextHandle(t.context),
+            common: common(&t.common)?,
+            input_specular: image(&t.input_specular),
+            input_diffuse: image(&t.input_diffuse),
+            output_specular: image(&t.output_specular),
+            output_diffuse: image(&t.output_diffuse),
+        })?)
+    })
+}
