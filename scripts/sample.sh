@@ -7,4 +7,4 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 cargo run --release --locked -p hybrid-rt-samples --bin sample -- --out out "$@"
-echo "images in $(pwd)/out/: ao.png and ao.exr (AO), lit.png, debug_*.png (cache and debug views)"
+echo "images in $(pwd)/out/: ao.png and ao.exr (AO), lit.png, debug_*.png (cache and debug views), *_noisy_vs_denoised.png"

@@ -73,6 +73,29 @@ fn time_vs_floor(
     Ok((median(t), median(f)))
 }
 
+/// Median GPU times of two task kinds recorded in the same frames (a trace and its denoiser).
+fn time_pair(
+    host: &Host,
+    ctx: &ExecuteContext,
+    frame: &mut hybrid_rt::TaskContainer,
+    frames: usize,
+    kinds: [TaskKind; 2],
+    mut schedule: impl FnMut(&mut hybrid_rt::TaskContainer) -> Result<(), String>,
+) -> Result<[f64; 2], String> {
+    let mut times = [Vec::new(), Vec::new()];
+    for i in 0..frames + 3 {
+        schedule(frame)?;
+        let done = run_frame(host, ctx, frame)?;
+        if i >= 3 {
+            for k in 0..2 {
+                times[k].push(done.gpu_ms(kinds[k]));
+            }
+        }
+    }
+    let [a, b] = times;
+    Ok([median(a), median(b)])
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     if v.is_empty() {
@@ -333,7 +356,6 @@ fn run() -> Result<(), String> {
         rays_per_pixel: 1,
     };
     let (multi_ms, multi_floor) = time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::MultiShadow, |f| f.schedule_multi_shadow(&multi).map_err(e))?;
-    host.destroy_image(vis);
     for (name, ms, fl) in [
         ("Multi-light shadows (4 point lights, 1 ray/pixel each)", multi_ms, multi_floor),
         ("Shadow (sun, 1 ray/pixel)", shadow_ms, shadow_floor),
@@ -347,6 +369,79 @@ fn run() -> Result<(), String> {
         "  \"traces\": {{\"width\": {width}, \"height\": {height}, \"shadow_gpu_ms\": {shadow_ms:.4}, \"shadow_floor_gpu_ms\": {shadow_floor:.4}, \"diffuse_gpu_ms\": {diffuse_ms:.4}, \"diffuse_floor_gpu_ms\": {diffuse_floor:.4}, \"specular_gpu_ms\": {specular_ms:.4}, \"specular_floor_gpu_ms\": {specular_floor:.4}, \"multi_shadow_4_lights_gpu_ms\": {multi_ms:.4}, \"multi_shadow_floor_gpu_ms\": {multi_floor:.4}}},"
     );
     host.destroy_image(rgba);
+
+    // ---- 6. Denoisers, each beside the 1-ray trace it cleans (same frames).
+    let sampled = |format| {
+        host.image_cleared(format, width, height, ash::vk::ImageUsageFlags::STORAGE | ash::vk::ImageUsageFlags::SAMPLED, ash::vk::ImageLayout::GENERAL)
+    };
+    let f16 = ash::vk::Format::R16G16B16A16_SFLOAT;
+    let (in_a, in_b, out_a, out_b) = (sampled(f16)?, sampled(f16)?, sampled(f16)?, sampled(f16)?);
+    let general = ash::vk::ImageLayout::GENERAL;
+    let (ia, ib, oa, ob) = (in_a.input(general), in_b.input(general), out_a.input(general), out_b.input(general));
+    let dcommon = hybrid_rt::DenoisingCommon { roughness: glossy.roughness, ..gbuffer.denoising_common(&camera) };
+    let mut denoise_rows = Vec::new();
+    let mut denoise_json = Vec::new();
+    let mut measure = |name: &str, signal: hybrid_rt::SignalType, kinds: [TaskKind; 2], schedule: &mut dyn FnMut(&mut hybrid_rt::TaskContainer, hybrid_rt::DenoisingContextHandle) -> Result<(), String>| -> Result<(), String> {
+        let dn = ctx
+            .create_denoising_context(&hybrid_rt::DenoisingContextInput { max_width: width, max_height: height, signal, ..Default::default() })
+            .map_err(e)?;
+        let [trace, denoise] = time_pair(&host, &ctx, &mut frame, frames, kinds, |f| schedule(f, dn))?;
+        ctx.destroy_denoising_context(dn).map_err(e)?;
+        denoise_rows.push((format!("Denoise {name} {width}x{height}"), format!("{denoise:.3} ms (its 1-ray trace: {trace:.3} ms)")));
+        denoise_json.push(format!("\"{}\": {{\"denoise_gpu_ms\": {denoise:.4}, \"trace_gpu_ms\": {trace:.4}}}", name.replace(' ', "_")));
+        Ok(())
+    };
+    use hybrid_rt::SignalType as S;
+    let ao1 = hybrid_rt::TraceAmbientOcclusionTask { output: ia, ..gbuffer.ao_task(&camera, 1.0, 1) };
+    measure("AO", S::DiffuseOcclusion, [TaskKind::AmbientOcclusion, TaskKind::DenoiseDiffuseOcclusion], &mut |f, dn| {
+        f.schedule_ambient_occlusion(&ao1).map_err(e)?;
+        f.schedule_denoise_diffuse_occlusion(&hybrid_rt::DenoiseDiffuseOcclusionTask { context: dn, common: dcommon, input: ia, output: oa }).map_err(e)
+    })?;
+    let shadow1 = hybrid_rt::TraceShadowTask { output: ia, ..shadow };
+    measure("shadow", S::Shadow, [TaskKind::Shadow, TaskKind::DenoiseShadow], &mut |f, dn| {
+        f.schedule_shadow(&shadow1).map_err(e)?;
+        f.schedule_denoise_shadow(&hybrid_rt::DenoiseShadowTask { context: dn, common: dcommon, light: shadow.light, input: ia, output: oa }).map_err(e)
+    })?;
+    let multi1 = hybrid_rt::TraceMultiShadowTask { packed: ia, ..multi.clone() };
+    measure("multi-light shadow (4 lights)", S::MultiShadow, [TaskKind::MultiShadow, TaskKind::DenoiseMultiShadow], &mut |f, dn| {
+        f.schedule_multi_shadow(&multi1).map_err(e)?;
+        f.schedule_denoise_multi_shadow(&hybrid_rt::DenoiseMultiShadowTask { context: dn, common: dcommon, input: ia, output: oa }).map_err(e)
+    })?;
+    let diffuse1 = hybrid_rt::TraceDiffuseTask { output: ib, ..diffuse };
+    measure("diffuse", S::Diffuse, [TaskKind::Diffuse, TaskKind::DenoiseDiffuse], &mut |f, dn| {
+        f.schedule_diffuse(&diffuse1).map_err(e)?;
+        f.schedule_denoise_diffuse(&hybrid_rt::DenoiseDiffuseTask { context: dn, common: dcommon, input: ib, output: ob }).map_err(e)
+    })?;
+    let specular1 = hybrid_rt::TraceSpecularTask { output: ia, ..specular };
+    measure("specular (roughness 0.3)", S::Specular, [TaskKind::Specular, TaskKind::DenoiseSpecular], &mut |f, dn| {
+        f.schedule_specular(&specular1).map_err(e)?;
+        f.schedule_denoise_specular(&hybrid_rt::DenoiseSpecularTask { context: dn, common: dcommon, input: ia, output: oa }).map_err(e)
+    })?;
+    measure("specular + diffuse", S::SpecularAndDiffuse, [TaskKind::Specular, TaskKind::DenoiseSpecularAndDiffuse], &mut |f, dn| {
+        f.schedule_specular(&specular1).map_err(e)?;
+        f.schedule_diffuse(&diffuse1).map_err(e)?;
+        f.schedule_denoise_specular_and_diffuse(&hybrid_rt::DenoiseSpecularAndDiffuseTask {
+            context: dn,
+            common: dcommon,
+            input_specular: ia,
+            input_diffuse: ib,
+            output_specular: oa,
+            output_diffuse: ob,
+        })
+        .map_err(e)
+    })?;
+    rows.extend(denoise_rows);
+    // Free the measured contexts first (destroyed contexts wait for their tickets).
+    ctx.release_device_resources_immediately().map_err(e)?;
+    let dn_ctx = ctx.create_denoising_context(&hybrid_rt::DenoisingContextInput { max_width: width, max_height: height, signal: S::SpecularAndDiffuse, ..Default::default() }).map_err(e)?;
+    let dn_bytes = ctx.resource_allocations().denoiser.bytes;
+    ctx.destroy_denoising_context(dn_ctx).map_err(e)?;
+    rows.push((format!("Denoiser history, specular + diffuse context {width}x{height}"), format!("{:.1} MiB", dn_bytes as f64 / 1048576.0)));
+    let _ = writeln!(json, "  \"denoisers\": {{{}, \"specular_and_diffuse_context_bytes\": {dn_bytes}}},", denoise_json.join(", "));
+    for i in [in_a, in_b, out_a, out_b, vis] {
+        host.destroy_image(i);
+    }
+
     let mem = ctx.resource_allocations();
     let _ = writeln!(
         json,

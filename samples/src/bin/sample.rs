@@ -3,7 +3,8 @@
 //! Each frame: BVH tasks, direct-lighting injection of the "rasterized" lit frame from the main
 //! camera and from a low-resolution secondary ("lidar") camera that looks back at the room,
 //! and ray-traced AO. Then one image per debug visualisation, and the soft sun shadow, diffuse
-//! GI and glossy reflections shaded from the cache and the lit frame (not yet denoised). Writes EXR + PNG, prints per-task
+//! GI and glossy reflections shaded from the cache and the lit frame, and each of AO, shadow, GI and
+//! reflections at 1 ray/pixel noisy and denoised side by side. Writes EXR + PNG, prints per-task
 //! GPU times (from the SDK's timestamp queries) and the SDK's memory.
 //!
 //! The G-buffer and the lit frame come from the CPU reference renderer for now (the full
@@ -20,7 +21,7 @@ use hybrid_rt_testkit::reference::{direct_lighting, Camera, GBuffer, Sun, Tracer
 use hybrid_rt_testkit::sdk_scene::{run_frame, GBufferImages, SceneOnGpu, READ};
 use std::path::PathBuf;
 
-const USAGE: &str = "sample [--width 640] [--height 360] [--rays 16] [--ray-length 1.0] [--frames 4] [--tile-unit-length 0.1] [--out out]";
+const USAGE: &str = "sample [--width 640] [--height 360] [--rays 16] [--ray-length 1.0] [--frames 4] [--tile-unit-length 0.1] [--denoise-frames 16] [--out out]";
 const MAGENTA: [f32; 3] = [1.0, 0.0, 1.0];
 
 fn main() {
@@ -199,6 +200,73 @@ fn run() -> Result<(), String> {
     }
 
     let mean = |v: &[f64]| if v.is_empty() { f64::NAN } else { v.iter().sum::<f64>() / v.len() as f64 };
+    // Noisy (1 ray/pixel) and denoised side by side: each trace and its denoise task in one
+    // container per frame, as an engine schedules them; the denoisers accumulate over frames.
+    let sampled_storage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED;
+    let noisy = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, width, height, sampled_storage, vk::ImageLayout::GENERAL)?;
+    let clean = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, width, height, sampled_storage, vk::ImageLayout::GENERAL)?;
+    let (ni, ci) = (noisy.input(vk::ImageLayout::GENERAL), clean.input(vk::ImageLayout::GENERAL));
+    let dcommon = hybrid_rt::DenoisingCommon { roughness: glossy.roughness, ..main.gbuffer.denoising_common(&camera) };
+    let light = hybrid_rt::LightInfo { direction: -sun.to_light, angular_extent: 0.05, ..Default::default() };
+    let denoise_frames = args.get("denoise-frames", 16u32).max(1);
+    let mut denoise_ms: Vec<(&str, f64)> = Vec::new();
+    for (name, signal) in [
+        ("ao", hybrid_rt::SignalType::DiffuseOcclusion),
+        ("shadow", hybrid_rt::SignalType::Shadow),
+        ("diffuse_gi", hybrid_rt::SignalType::Diffuse),
+        ("specular", hybrid_rt::SignalType::Specular),
+    ] {
+        let dn = ctx
+            .create_denoising_context(&hybrid_rt::DenoisingContextInput { max_width: width, max_height: height, signal, ..Default::default() })
+            .map_err(e)?;
+        let mut times = Vec::new();
+        for _ in 0..denoise_frames {
+            let c = dcommon;
+            match signal {
+                hybrid_rt::SignalType::DiffuseOcclusion => {
+                    let trace = hybrid_rt::TraceAmbientOcclusionTask { output: ni, ..main.gbuffer.ao_task(&camera, ray_length, 1) };
+                    frame.schedule_ambient_occlusion(&trace).map_err(e)?;
+                    frame.schedule_denoise_diffuse_occlusion(&hybrid_rt::DenoiseDiffuseOcclusionTask { context: dn, common: c, input: ni, output: ci }).map_err(e)?;
+                }
+                hybrid_rt::SignalType::Shadow => {
+                    frame.schedule_shadow(&hybrid_rt::TraceShadowTask { common, light, output: ni, rays_per_pixel: 1 }).map_err(e)?;
+                    frame.schedule_denoise_shadow(&hybrid_rt::DenoiseShadowTask { context: dn, common: c, light, input: ni, output: ci }).map_err(e)?;
+                }
+                hybrid_rt::SignalType::Diffuse => {
+                    frame.schedule_diffuse(&hybrid_rt::TraceDiffuseTask { common, output: ni, ray_length: 20.0, ..Default::default() }).map_err(e)?;
+                    frame.schedule_denoise_diffuse(&hybrid_rt::DenoiseDiffuseTask { context: dn, common: c, input: ni, output: ci }).map_err(e)?;
+                }
+                _ => {
+                    frame.schedule_specular(&hybrid_rt::TraceSpecularTask { common: glossy, output: ni, ray_length: 20.0, ..Default::default() }).map_err(e)?;
+                    frame.schedule_denoise_specular(&hybrid_rt::DenoiseSpecularTask { context: dn, common: c, input: ni, output: ci }).map_err(e)?;
+                }
+            }
+            let done = run_frame(&host, &ctx, &mut frame)?;
+            times.push(done.timings.iter().filter(|t| format!("{:?}", t.kind).starts_with("Denoise")).map(|t| t.gpu_ms).sum::<f64>());
+        }
+        ctx.destroy_denoising_context(dn).map_err(e)?;
+        denoise_ms.push((name, mean(&times)));
+        let read = |img: &HostImage| -> Result<Vec<[f32; 4]>, String> {
+            let mut t: Vec<[f32; 4]> = bytemuck::cast_slice(&host.read_image(img, vk::ImageLayout::GENERAL)?).to_vec();
+            if name == "shadow" && std::ptr::eq(img, &noisy) {
+                t.iter_mut().for_each(|v| *v = [v[1], v[1], v[1], 1.0]); // G: visible fraction
+            }
+            if name == "ao" && std::ptr::eq(img, &noisy) {
+                t.iter_mut().for_each(|v| *v = [v[0], v[0], v[0], 1.0]);
+            }
+            Ok(t)
+        };
+        let (left, right) = (read(&noisy)?, read(&clean)?);
+        let pair: Vec<[f32; 4]> = (0..height as usize)
+            .flat_map(|y| left[y * width as usize..(y + 1) * width as usize].iter().chain(&right[y * width as usize..(y + 1) * width as usize]).copied().collect::<Vec<_>>())
+            .collect();
+        let path = out.join(format!("{name}_noisy_vs_denoised.png"));
+        images::write_png_rgb(&path, width * 2, height, &pair, 1.0)?;
+        written.push(path.display().to_string());
+    }
+    host.destroy_image(noisy);
+    host.destroy_image(clean);
+
     let mem = ctx.resource_allocations();
     let cache_bytes: u64 = gpu_scene.instances.iter().map(|h| ctx.instance_cache_bytes(*h).unwrap_or(0)).sum();
     println!(
@@ -206,6 +274,10 @@ fn run() -> Result<(), String> {
         mean(&ao_ms),
         mean(&inject_ms),
         ao_ms.len()
+    );
+    println!(
+        "GPU time of the denoisers {width}x{height} (means of {denoise_frames} frames): {}",
+        denoise_ms.iter().map(|(n, ms)| format!("{n} {ms:.3} ms")).collect::<Vec<_>>().join(", ")
     );
     println!(
         "SDK memory: {:.2} MiB (BLAS {:.2} MiB, cache pages {:.2} MiB holding {:.2} MiB of instance caches, {} instances)",
