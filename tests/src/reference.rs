@@ -588,9 +588,20 @@ pub fn coloured_room(with_ceiling: bool) -> (Scene, Vec<[f32; 3]>, Camera) {
 // ---------------------------------------------------------------- diffuse GI
 
 /// Reference mean incoming radiance over the cosine-weighted hemisphere (E/pi, what
-/// `TraceDiffuseTask` estimates with Lambertian weights): a hit takes its instance's
-/// radiance from `colours`, a miss `sky`; `strata`² stratified samples per pixel.
-pub fn diffuse_reference(tracer: &Tracer, g: &GBuffer, eye: Vec3, colours: &[[f32; 3]], sky: [f32; 3], ray_length: f32, strata: u32) -> Vec<[f32; 3]> {
+/// `TraceDiffuseTask` estimates): a hit takes its instance's radiance from `colours`, a miss
+/// `sky`; each sample is weighted by `weight(n, dir, v)` (the BRDF relative to Lambert: 1 for
+/// Lambertian); `strata`² stratified samples per pixel.
+#[allow(clippy::too_many_arguments)]
+pub fn diffuse_reference(
+    tracer: &Tracer,
+    g: &GBuffer,
+    eye: Vec3,
+    colours: &[[f32; 3]],
+    sky: [f32; 3],
+    ray_length: f32,
+    strata: u32,
+    weight: impl Fn(Vec3, Vec3, Vec3) -> f32,
+) -> Vec<[f32; 3]> {
     let offset = hybrid_rt::RayOffset::default();
     let mut rng = Rng::new(3);
     (0..g.depth.len())
@@ -609,8 +620,9 @@ pub fn diffuse_reference(tracer: &Tracer, g: &GBuffer, eye: Vec3, colours: &[[f3
                     let (r, phi) = (u1.sqrt(), 2.0 * std::f32::consts::PI * u2);
                     let dir = (t * r * phi.cos() + b * r * phi.sin() + n * (1.0 - u1).max(0.0).sqrt()).normalize();
                     let c = tracer.closest_hit(origin, dir, 0.0, ray_length).map_or(sky, |h| colours[h.instance as usize]);
+                    let w = weight(n, dir, (eye - p).normalize());
                     for k in 0..3 {
-                        sum[k] += c[k] / (strata * strata) as f32;
+                        sum[k] += c[k] * w / (strata * strata) as f32;
                     }
                 }
             }

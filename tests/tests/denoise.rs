@@ -35,6 +35,46 @@ fn sphere_on_plane() -> (Scene, Camera) {
     (scene, Camera::look_at(Vec3::new(0.0, 1.6, 2.2), Vec3::new(0.0, 0.2, 0.0)))
 }
 
+/// A scene registered and built, its G-buffer uploaded: what every traced test starts from.
+struct Fixture {
+    host: Host,
+    ctx: ExecuteContext,
+    tracer: Tracer,
+    g: GBuffer,
+    images: GBufferImages,
+    gpu_scene: SceneOnGpu,
+    frame: TaskContainer,
+}
+
+impl Fixture {
+    /// `colours`: each instance's cache colour (None: black).
+    fn new(scene: &Scene, colours: Option<&[[f32; 3]]>, camera: &Camera, w: u32) -> Fixture {
+        let (host, ctx) = host_and_context(InitSettings::default());
+        let tracer = Tracer::new(scene);
+        let g = GBuffer::render(&tracer, camera, w, w);
+        let images = GBufferImages::upload(&host, &g).unwrap();
+        let mut frame = ctx.create_task_container();
+        let black = vec![[0.0; 3]; scene.instances.len()];
+        let gpu_scene = SceneOnGpu::register_coloured(&host, &ctx, &mut frame, scene, Default::default(), colours.unwrap_or(&black)).unwrap();
+        frame.schedule_bvh_build(&Default::default()).unwrap();
+        run_frame(&host, &ctx, &mut frame).unwrap();
+        Fixture { host, ctx, tracer, g, images, gpu_scene, frame }
+    }
+
+    /// Frees everything (with the test's own images), checks the validation layer, and hands
+    /// back the G-buffer.
+    fn finish(self, images: impl IntoIterator<Item = HostImage>) -> GBuffer {
+        for i in images {
+            self.host.destroy_image(i);
+        }
+        self.images.destroy(&self.host);
+        self.gpu_scene.destroy(&self.host);
+        drop(self.ctx);
+        assert_no_validation_errors();
+        self.g
+    }
+}
+
 fn context(ctx: &ExecuteContext, signal: SignalType, w: u32, h: u32) -> DenoisingContextHandle {
     ctx.create_denoising_context(&DenoisingContextInput { max_width: w, max_height: h, signal, ..Default::default() }).unwrap()
 }
@@ -48,53 +88,40 @@ struct Quality {
 /// 1-ray AO traced and denoised for FRAMES frames on a static camera.
 fn ao_quality(half_resolution: bool) -> Quality {
     const W: u32 = 64;
-    let (host, ctx) = host_and_context(InitSettings::default());
     let (scene, camera) = sphere_on_plane();
-    let tracer = Tracer::new(&scene);
-    let g = GBuffer::render(&tracer, &camera, W, W);
-    let images = GBufferImages::upload(&host, &g).unwrap();
-    let mut frame = ctx.create_task_container();
-    let gpu_scene = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
-    frame.schedule_bvh_build(&Default::default()).unwrap();
-    run_frame(&host, &ctx, &mut frame).unwrap();
-
-    let noisy = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, W, W);
-    let denoised = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, W, W);
-    let dn = context(&ctx, SignalType::DiffuseOcclusion, W, W);
-    let mut trace = images.ao_task(&camera, 1.0, 1);
+    let mut f = Fixture::new(&scene, None, &camera, W);
+    let noisy = storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W);
+    let denoised = storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W);
+    let dn = context(&f.ctx, SignalType::DiffuseOcclusion, W, W);
+    let mut trace = f.images.ao_task(&camera, 1.0, 1);
     trace.output = noisy.input(GENERAL);
     trace.common.half_resolution_mode = half_resolution;
-    let mut common = images.denoising_common(&camera);
+    let mut common = f.images.denoising_common(&camera);
     common.half_resolution_mode = half_resolution;
     let task = DenoiseDiffuseOcclusionTask { context: dn, common, input: noisy.input(GENERAL), output: denoised.input(GENERAL) };
     for _ in 0..FRAMES {
-        frame.schedule_ambient_occlusion(&trace).unwrap();
-        frame.schedule_denoise_diffuse_occlusion(&task).unwrap();
-        let done = run_frame(&host, &ctx, &mut frame).unwrap();
+        f.frame.schedule_ambient_occlusion(&trace).unwrap();
+        f.frame.schedule_denoise_diffuse_occlusion(&task).unwrap();
+        let done = run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
         assert!(done.timings.iter().any(|t| t.kind == TaskKind::DenoiseDiffuseOcclusion));
     }
-    let raw = read_channel(&host, &noisy, 0);
-    let out = read_channel(&host, &denoised, 0);
+    let raw = read_channel(&f.host, &noisy, 0);
+    let out = read_channel(&f.host, &denoised, 0);
     assert!(out.iter().all(|v| v.is_finite() && (0.0..=1.001).contains(v)), "AO stays in [0, 1]");
     let strata = 24; // 576 samples: the reference's own noise is below 0.021 per pixel
-    let reference = reference::reference_ao(&tracer, &g, camera.eye, &AoParams { ray_length: 1.0, falloff_power: 1.0, ray_offset: RayOffset::default() }, strata);
-    let q = Quality { raw: stats::relative_rmse(&raw, &reference, &g.hit), denoised: stats::relative_rmse(&out, &reference, &g.hit) };
+    let params = AoParams { ray_length: 1.0, falloff_power: 1.0, ray_offset: RayOffset::default() };
+    let reference = reference::reference_ao(&f.tracer, &f.g, camera.eye, &params, strata);
+    let q = Quality { raw: stats::relative_rmse(&raw, &reference, &f.g.hit), denoised: stats::relative_rmse(&out, &reference, &f.g.hit) };
     // Where something occludes (reference < 0.9: the contact region), the harder part.
-    let occluded: Vec<bool> = g.hit.iter().zip(&reference).map(|(h, r)| *h && *r < 0.9).collect();
+    let occluded: Vec<bool> = f.g.hit.iter().zip(&reference).map(|(h, r)| *h && *r < 0.9).collect();
     eprintln!(
         "  occluded region ({} px): raw {:.4}, denoised {:.4}",
         occluded.iter().filter(|m| **m).count(),
         stats::relative_rmse(&raw, &reference, &occluded),
         stats::relative_rmse(&out, &reference, &occluded)
     );
-    ctx.destroy_denoising_context(dn).unwrap();
-    for i in [noisy, denoised] {
-        host.destroy_image(i);
-    }
-    images.destroy(&host);
-    gpu_scene.destroy(&host);
-    drop(ctx);
-    assert_no_validation_errors();
+    f.ctx.destroy_denoising_context(dn).unwrap();
+    f.finish([noisy, denoised]);
     q
 }
 
@@ -124,32 +151,24 @@ fn checkerboard_ao_is_resolved_to_a_full_image() {
 fn diffuse_gi_denoised_over_32_frames_approaches_the_reference() {
     const W: u32 = 48;
     const SKY: [f32; 3] = [0.1, 0.2, 0.3];
-    let (host, ctx) = host_and_context(InitSettings::default());
     let (scene, colours, camera) = reference::coloured_room(true);
-    let tracer = Tracer::new(&scene);
-    let g = GBuffer::render(&tracer, &camera, W, W);
-    let images = GBufferImages::upload(&host, &g).unwrap();
-    let mut frame = ctx.create_task_container();
-    let gpu_scene = SceneOnGpu::register_coloured(&host, &ctx, &mut frame, &scene, Default::default(), &colours).unwrap();
-    frame.schedule_bvh_build(&Default::default()).unwrap();
-    run_frame(&host, &ctx, &mut frame).unwrap();
-
-    let noisy = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, W, W);
-    let denoised = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, W, W);
-    let dn = context(&ctx, SignalType::Diffuse, W, W);
-    let trace = TraceDiffuseTask { common: images.trace_common(&camera), output: noisy.input(GENERAL), ray_length: 100.0, miss_radiance: SKY, ..Default::default() };
-    let task = DenoiseDiffuseTask { context: dn, common: images.denoising_common(&camera), input: noisy.input(GENERAL), output: denoised.input(GENERAL) };
+    let mut f = Fixture::new(&scene, Some(&colours), &camera, W);
+    let noisy = storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W);
+    let denoised = storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W);
+    let dn = context(&f.ctx, SignalType::Diffuse, W, W);
+    let trace = TraceDiffuseTask { common: f.images.trace_common(&camera), output: noisy.input(GENERAL), ray_length: 100.0, miss_radiance: SKY, ..Default::default() };
+    let task = DenoiseDiffuseTask { context: dn, common: f.images.denoising_common(&camera), input: noisy.input(GENERAL), output: denoised.input(GENERAL) };
     for _ in 0..FRAMES {
-        frame.schedule_diffuse(&trace).unwrap();
-        frame.schedule_denoise_diffuse(&task).unwrap();
-        run_frame(&host, &ctx, &mut frame).unwrap();
+        f.frame.schedule_diffuse(&trace).unwrap();
+        f.frame.schedule_denoise_diffuse(&task).unwrap();
+        run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
     }
-    let reference = reference::diffuse_reference(&tracer, &g, camera.eye, &colours, SKY, 100.0, 24);
+    let reference = reference::diffuse_reference(&f.tracer, &f.g, camera.eye, &colours, SKY, 100.0, 24, |_, _, _| 1.0);
     let (mut raw_e, mut den_e) = (0.0, 0.0);
     for k in 0..3 {
         let r: Vec<f32> = reference.iter().map(|c| c[k]).collect();
-        let raw = stats::relative_rmse(&read_channel(&host, &noisy, k), &r, &g.hit);
-        let den = stats::relative_rmse(&read_channel(&host, &denoised, k), &r, &g.hit);
+        let raw = stats::relative_rmse(&read_channel(&f.host, &noisy, k), &r, &f.g.hit);
+        let den = stats::relative_rmse(&read_channel(&f.host, &denoised, k), &r, &f.g.hit);
         eprintln!("diffuse GI channel {k}, 1 ray/pixel, {FRAMES} frames: relative RMSE raw {raw:.4}, denoised {den:.4}");
         raw_e += raw / 3.0;
         den_e += den / 3.0;
@@ -158,61 +177,48 @@ fn diffuse_gi_denoised_over_32_frames_approaches_the_reference() {
     // 576 samples leave ~0.02.
     assert!(den_e < 0.08, "denoised relative RMSE {den_e}");
     assert!(den_e * 5.0 < raw_e, "raw {raw_e} denoised {den_e}");
-    ctx.destroy_denoising_context(dn).unwrap();
-    for i in [noisy, denoised] {
-        host.destroy_image(i);
-    }
-    images.destroy(&host);
-    gpu_scene.destroy(&host);
-    drop(ctx);
-    assert_no_validation_errors();
+    f.ctx.destroy_denoising_context(dn).unwrap();
+    f.finish([noisy, denoised]);
 }
 
 /// Shadows of a sphere on a plane under `light`, traced at 1 ray/pixel and denoised for
 /// `frames` frames: (raw, denoised, reference visibility, G-buffer).
 fn denoised_shadow(light: LightInfo, frames: u32) -> (Vec<f32>, Vec<f32>, Vec<f32>, GBuffer) {
     const W: u32 = 64;
-    let (host, ctx) = host_and_context(InitSettings::default());
     let (scene, camera) = sphere_on_plane();
-    let tracer = Tracer::new(&scene);
-    let g = GBuffer::render(&tracer, &camera, W, W);
-    let images = GBufferImages::upload(&host, &g).unwrap();
-    let mut frame = ctx.create_task_container();
-    let gpu_scene = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
-    frame.schedule_bvh_build(&Default::default()).unwrap();
-    run_frame(&host, &ctx, &mut frame).unwrap();
-
-    let noisy = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, W, W);
-    let denoised = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, W, W);
-    let dn = context(&ctx, SignalType::Shadow, W, W);
-    let trace = TraceShadowTask { common: images.trace_common(&camera), light, output: noisy.input(GENERAL), rays_per_pixel: 1 };
-    let task = DenoiseShadowTask { context: dn, common: images.denoising_common(&camera), light, input: noisy.input(GENERAL), output: denoised.input(GENERAL) };
+    let mut f = Fixture::new(&scene, None, &camera, W);
+    let noisy = storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W);
+    let denoised = storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W);
+    let dn = context(&f.ctx, SignalType::Shadow, W, W);
+    let trace = TraceShadowTask { common: f.images.trace_common(&camera), light, output: noisy.input(GENERAL), rays_per_pixel: 1 };
+    let task = DenoiseShadowTask { context: dn, common: f.images.denoising_common(&camera), light, input: noisy.input(GENERAL), output: denoised.input(GENERAL) };
     for _ in 0..frames {
-        frame.schedule_shadow(&trace).unwrap();
-        frame.schedule_denoise_shadow(&task).unwrap();
-        let done = run_frame(&host, &ctx, &mut frame).unwrap();
+        f.frame.schedule_shadow(&trace).unwrap();
+        f.frame.schedule_denoise_shadow(&task).unwrap();
+        let done = run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
         assert!(done.timings.iter().any(|t| t.kind == TaskKind::DenoiseShadow));
     }
-    let raw = read_channel(&host, &noisy, 1);
-    let out = read_channel(&host, &denoised, 0);
+    let raw = read_channel(&f.host, &noisy, 1);
+    let out = read_channel(&f.host, &denoised, 0);
+    let reference = reference_visibility(&f, &camera, &[light], 24);
+    f.ctx.destroy_denoising_context(dn).unwrap();
+    let g = f.finish([noisy, denoised]);
+    (raw, out, reference, g)
+}
+
+/// Mean visible fraction of `lights` per pixel, `strata`² reference samples per light.
+fn reference_visibility(f: &Fixture, camera: &Camera, lights: &[LightInfo], strata: u32) -> Vec<f32> {
     let mut rng = Rng::new(9);
-    let reference = (0..g.depth.len())
+    (0..f.g.depth.len())
         .map(|i| {
-            if !g.hit[i] {
+            if !f.g.hit[i] {
                 return 1.0;
             }
-            reference::shadow_visibility(&tracer, g.position[i], g.normal[i], camera.eye, &light, &RayOffset::default(), 24, &mut rng).0
+            let (p, n) = (f.g.position[i], f.g.normal[i]);
+            let sum: f32 = lights.iter().map(|l| reference::shadow_visibility(&f.tracer, p, n, camera.eye, l, &RayOffset::default(), strata, &mut rng).0).sum();
+            sum / lights.len() as f32
         })
-        .collect();
-    ctx.destroy_denoising_context(dn).unwrap();
-    for i in [noisy, denoised] {
-        host.destroy_image(i);
-    }
-    images.destroy(&host);
-    gpu_scene.destroy(&host);
-    drop(ctx);
-    assert_no_validation_errors();
-    (raw, out, reference, g)
+        .collect()
 }
 
 fn sun(angular_extent: f32) -> LightInfo {
@@ -427,7 +433,7 @@ fn mirror_reflections_stay_sharp_and_glossy_ones_are_filtered() {
     let images = GBufferImages::upload(&host, &g).unwrap();
     // A one-pixel checker of reflected radiance (the sharpest detail a mirror can show),
     // with fresh noise each frame as a stochastic trace would have.
-    let checker: Vec<[f32; 4]> = (0..S * S).map(|i| if (i % S + i / S) % 2 == 0 { [2.0, 1.0, 0.5, 3.0] } else { [0.0, 0.0, 0.0, 3.0] }).collect();
+    let checker: Vec<[f32; 4]> = (0..S * S).map(|i| if (i % S + i / S).is_multiple_of(2) { [2.0, 1.0, 0.5, 3.0] } else { [0.0, 0.0, 0.0, 3.0] }).collect();
     let noisy = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, S, S);
     let mut rng = Rng::new(11);
     let mut results = Vec::new();
@@ -550,51 +556,30 @@ fn specular_and_diffuse_in_one_task_equal_two_tasks() {
 #[test]
 fn multi_light_shadows_denoise_to_the_mean_visibility() {
     const W: u32 = 64;
-    let (host, ctx) = host_and_context(InitSettings::default());
     let (scene, camera) = sphere_on_plane();
-    let tracer = Tracer::new(&scene);
-    let g = GBuffer::render(&tracer, &camera, W, W);
-    let images = GBufferImages::upload(&host, &g).unwrap();
-    let mut frame = ctx.create_task_container();
-    let gpu_scene = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
-    frame.schedule_bvh_build(&Default::default()).unwrap();
-    run_frame(&host, &ctx, &mut frame).unwrap();
+    let mut f = Fixture::new(&scene, None, &camera, W);
     let lights = vec![sun(0.2), LightInfo { light_type: LightType::Point, position: Vec3::new(1.0, 2.0, 1.0), radius: 0.2, ..Default::default() }];
-    let visibility = host.image_cleared(vk::Format::R32_UINT, W, W, vk::ImageUsageFlags::STORAGE, GENERAL).unwrap();
-    let packed = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, W, W);
-    let out = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, W, W);
-    let dn = context(&ctx, SignalType::MultiShadow, W, W);
-    let trace = TraceMultiShadowTask { common: images.trace_common(&camera), lights: lights.clone(), visibility: visibility.input(GENERAL), packed: packed.input(GENERAL), rays_per_pixel: 1 };
-    let task = DenoiseMultiShadowTask { context: dn, common: images.denoising_common(&camera), input: packed.input(GENERAL), output: out.input(GENERAL) };
+    let visibility = f.host.image_cleared(vk::Format::R32_UINT, W, W, vk::ImageUsageFlags::STORAGE, GENERAL).unwrap();
+    let packed = storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W);
+    let out = storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W);
+    let dn = context(&f.ctx, SignalType::MultiShadow, W, W);
+    let trace = TraceMultiShadowTask { common: f.images.trace_common(&camera), lights: lights.clone(), visibility: visibility.input(GENERAL), packed: packed.input(GENERAL), rays_per_pixel: 1 };
+    let task = DenoiseMultiShadowTask { context: dn, common: f.images.denoising_common(&camera), input: packed.input(GENERAL), output: out.input(GENERAL) };
     for _ in 0..FRAMES {
-        frame.schedule_multi_shadow(&trace).unwrap();
-        frame.schedule_denoise_multi_shadow(&task).unwrap();
-        run_frame(&host, &ctx, &mut frame).unwrap();
+        f.frame.schedule_multi_shadow(&trace).unwrap();
+        f.frame.schedule_denoise_multi_shadow(&task).unwrap();
+        run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
     }
-    let raw = read_channel(&host, &packed, 0);
-    let den = read_channel(&host, &out, 0);
-    let mut rng = Rng::new(4);
-    let reference: Vec<f32> = (0..g.depth.len())
-        .map(|i| {
-            if !g.hit[i] {
-                return 1.0;
-            }
-            lights.iter().map(|l| reference::shadow_visibility(&tracer, g.position[i], g.normal[i], camera.eye, l, &RayOffset::default(), 24, &mut rng).0).sum::<f32>() / 2.0
-        })
-        .collect();
-    let (raw_e, den_e) = (stats::relative_rmse(&raw, &reference, &g.hit), stats::relative_rmse(&den, &reference, &g.hit));
+    let raw = read_channel(&f.host, &packed, 0);
+    let den = read_channel(&f.host, &out, 0);
+    let reference = reference_visibility(&f, &camera, &lights, 24);
+    let (raw_e, den_e) = (stats::relative_rmse(&raw, &reference, &f.g.hit), stats::relative_rmse(&den, &reference, &f.g.hit));
     eprintln!("two-light shadows, 1 ray/pixel/light, {FRAMES} frames: relative RMSE raw {raw_e:.4}, denoised {den_e:.4}");
     // The raw mean of two 1-ray lights is already steps of 0.5; the gain is smaller than
     // for one light but the same filter removes most of the noise.
     assert!(den_e < 0.04 && den_e * 2.5 < raw_e, "raw {raw_e} denoised {den_e}");
-    ctx.destroy_denoising_context(dn).unwrap();
-    for i in [visibility, packed, out] {
-        host.destroy_image(i);
-    }
-    images.destroy(&host);
-    gpu_scene.destroy(&host);
-    drop(ctx);
-    assert_no_validation_errors();
+    f.ctx.destroy_denoising_context(dn).unwrap();
+    f.finish([visibility, packed, out]);
 }
 
 #[test]

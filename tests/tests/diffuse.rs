@@ -3,7 +3,6 @@
 mod common;
 use ash::vk;
 use common::*;
-use glam::Vec3;
 use hybrid_rt::{InitSettings, TraceDiffuseTask};
 use hybrid_rt_testkit::reference::*;
 use hybrid_rt_testkit::sdk_scene::*;
@@ -71,33 +70,9 @@ fn check_room(brdf: hybrid_rt::DiffuseBrdfType, roughness: f32) {
 
     // Reference: stratified cosine-weighted samples; a hit takes its instance's colour.
     let strata = 16;
-    let offset = hybrid_rt::RayOffset::default();
-    let mut rng = Rng::new(3);
-    let mut reference = vec![[0.0f32; 3]; (W * H) as usize];
-    for i in (0..g.depth.len()).filter(|&i| g.hit[i]) {
-        let (p, n) = (g.position[i], g.normal[i]);
-        let origin = offset_origin(p, n, camera.eye, &offset);
-        let t = if n.x.abs() > 0.9 { Vec3::Y } else { Vec3::X };
-        let t = (t - n * n.dot(t)).normalize();
-        let b = n.cross(t);
-        for sy in 0..strata {
-            for sx in 0..strata {
-                let u1 = (sx as f32 + rng.next_f32()) / strata as f32;
-                let u2 = (sy as f32 + rng.next_f32()) / strata as f32;
-                let (r, phi) = (u1.sqrt(), 2.0 * std::f32::consts::PI * u2);
-                let dir = (t * r * phi.cos() + b * r * phi.sin() + n * (1.0 - u1).max(0.0).sqrt()).normalize();
-                let c = match tracer.closest_hit(origin, dir, 0.0, 100.0) {
-                    Some(h) => colours[h.instance as usize],
-                    None => SKY,
-                };
-                let v = (camera.eye - p).normalize();
-                let w = if disney { disney_factor(n.dot(dir).max(0.0), n.dot(v).clamp(1e-4, 1.0), dir.dot((dir + v).normalize()), roughness) } else { 1.0 };
-                for k in 0..3 {
-                    reference[i][k] += c[k] * w / (strata * strata) as f32;
-                }
-            }
-        }
-    }
+    let reference = diffuse_reference(&tracer, &g, camera.eye, &colours, SKY, 100.0, strata, |n, dir, v| {
+        if disney { disney_factor(n.dot(dir).max(0.0), n.dot(v).clamp(1e-4, 1.0), dir.dot((dir + v).normalize()), roughness) } else { 1.0 }
+    });
     // Each channel of a sample lies in [0, 0.9 x max weight]: variance <= (that)^2 / 4 per
     // sample. Disney's weight at roughness 0.8 is at most (1 + 1)^2 x 0.69 < 2.8.
     let max_weight = if disney { 2.8 } else { 1.0 };

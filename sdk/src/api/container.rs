@@ -23,7 +23,8 @@ pub(crate) enum Task {
     Diffuse(TraceDiffuseTask),
     Specular(TraceSpecularTask),
     MultiShadow(TraceMultiShadowTask),
-    Denoise(DenoiseJob),
+    /// Boxed: a denoise task is several times larger than the others.
+    Denoise(Box<DenoiseJob>),
 }
 
 /// Holds only a weak reference to its context: dropping the `ExecuteContext` frees the SDK's
@@ -135,7 +136,7 @@ impl TaskContainer {
     fn schedule_denoise(&mut self, job: DenoiseJob) -> Result<()> {
         self.shared()?.check_denoising_context_alive(job.context)?;
         validate::denoise(&job)?;
-        self.tasks.push(Task::Denoise(job));
+        self.tasks.push(Task::Denoise(Box::new(job)));
         Ok(())
     }
 
