@@ -4,9 +4,9 @@
 // sampling as the single-light task). Two outputs:
 //  - visibility (uint): 8 bits per light, the fraction of its rays that reached it x 255,
 //    four lights per 32-bit channel (light i in channel i/4, bits 8*(i%4)).
-//  - packed (float RGBA, for the multi-shadow denoiser; the layout may change with it):
-//    mean visibility over the lights, mean and min occluder distance (0 if none), and the
-//    surface's distance to the camera.
+//  - packed (float RGBA, the multi-shadow denoiser's input): mean visibility over the
+//    lights, mean penumbra width over the occluded rays (world units, hrt_penumbra_width;
+//    -1 if none), min occluder distance (0 if none), and the surface's distance to the camera.
 #include "common.glsl"
 #include "light_sampling.glsl"
 

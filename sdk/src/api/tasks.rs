@@ -669,9 +669,10 @@ pub const MAX_SHADOW_LIGHTS: usize = 16;
 /// sampled as in `TraceShadowTask`).
 /// - `visibility` (R32_UINT for up to 4 lights, R32G32B32A32_UINT for up to 16): per light, the
 ///   visible fraction x 255 in 8 bits; light i is in channel i / 4 at bits 8 * (i % 4).
-/// - `packed` (RGBA16F/32F), for the multi-shadow denoiser (its layout may change with it):
-///   mean visibility over the lights, mean and min occluder distance (0 if none), and the
-///   surface's distance to the camera.
+/// - `packed` (RGBA16F/32F), the input of `DenoiseMultiShadowTask`: mean visibility over the
+///   lights, mean penumbra width over the occluded rays (world units: occluder distance x the
+///   light's angular size; -1 where no ray was occluded), min occluder distance (0 if none),
+///   and the surface's distance to the camera.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TraceMultiShadowTask {
     pub common: TraceCommon,
