@@ -1,6 +1,8 @@
 //! Shared pieces of the sample and the bench: built-in scenes, image output, argument parsing.
 //! The engine side (device, images, submission) is `hybrid_rt_testkit::host`; the G-buffer
-//! comes from the CPU reference renderer until the sample grows its own rasterizer.
+//! comes from `raster` (a Vulkan graphics pass, as an engine's) or, for comparison, from the
+//! CPU reference renderer.
 pub mod args;
 pub mod images;
+pub mod raster;
 pub mod scenes;

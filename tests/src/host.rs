@@ -161,6 +161,9 @@ impl Host {
         let priorities = [1.0f32];
         let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
         let mut features = DeviceFeatures::required(support.ray_query && !disable_rq);
+        // The engine side rasterizes too (the sample's G-buffer): dynamic rendering is core in
+        // Vulkan 1.3 and always supported there.
+        features.vulkan13 = features.vulkan13.dynamic_rendering(true);
         let info = features.push_to(vk::DeviceCreateInfo::default().queue_create_infos(&queues).enabled_extension_names(&ext_ptrs));
         let device = unsafe { instance.create_device(physical_device, &info, None) }.map_err(vkerr("vkCreateDevice"))?;
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
