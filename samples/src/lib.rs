@@ -4,5 +4,6 @@
 //! CPU reference renderer.
 pub mod args;
 pub mod images;
+pub mod lighting;
 pub mod raster;
 pub mod scenes;

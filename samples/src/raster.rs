@@ -7,7 +7,8 @@ use glam::{Affine3A, Mat4};
 use hybrid_rt_testkit::host::{Host, HostBuffer, HostImage, HostResult};
 use hybrid_rt_testkit::reference::{Camera, Scene};
 
-mod spirv {
+/// The sample's SPIR-V, compiled by samples/build.rs.
+pub(crate) mod spirv {
     include!(concat!(env!("OUT_DIR"), "/sample_shaders.rs"));
 }
 

@@ -81,3 +81,75 @@ fn rasterized_gbuffer_matches_the_reference_and_motion_follows_the_camera() {
     meshes.destroy(&host);
     assert_eq!(Host::validation_errors(), 0, "{:#?}", Host::validation_messages());
 }
+
+#[test]
+fn deferred_lighting_with_sdk_shadows_matches_the_reference_lit_frame() {
+    use hybrid_rt::*;
+    use hybrid_rt_samples::lighting::{Lights, LightingPass};
+    use hybrid_rt_testkit::reference::{direct_lighting, Sun};
+    use hybrid_rt_testkit::sdk_scene::{run_frame, SceneOnGpu};
+    let host = Host::new().expect("device");
+    let (scene, camera) = scenes::room();
+    let tracer = Tracer::new(&scene);
+    let g = GBuffer::render(&tracer, &camera, W, H);
+    let albedo = |i: u32| [0.2 + 0.05 * (i % 8) as f32, 0.6, 0.4];
+    let meshes = MeshBuffers::upload(&host, &scene).unwrap();
+    let targets = Targets::new(&host, W, H).unwrap();
+    let mut pass = GBufferPass::new(&host).unwrap();
+    let mut lighting = LightingPass::new(&host).unwrap();
+    let draws = raster::static_draws(&scene, |i| Material { albedo: albedo(i as u32), roughness: 0.5, metalness: 0.0 });
+    host.run(|cmd| pass.record(&host, cmd, &targets, &meshes, &draws, &camera, &camera)).unwrap().unwrap();
+
+    // The engine's frame: SDK shadows from its own G-buffer, denoised, then its lighting.
+    let ctx = ExecuteContext::new(&host.device_desc(), &Default::default()).unwrap();
+    let mut frame = ctx.create_task_container();
+    let gpu = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    run_frame(&host, &ctx, &mut frame).unwrap();
+    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED;
+    let shadow = host.image_cleared(vk::Format::R32G32_SFLOAT, W, H, usage, vk::ImageLayout::GENERAL).unwrap();
+    let visibility = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, usage, vk::ImageLayout::GENERAL).unwrap();
+    let lit = LightingPass::lit_image(&host, &targets).unwrap();
+    let sun = Sun { to_light: Vec3::new(0.45, 1.0, 0.6), intensity: 2.5 };
+    let light = LightInfo { direction: -sun.to_light, ..Default::default() };
+    let depth = DepthInput { image: targets.depth.input(raster::READ), depth_type: DepthType::ClipSpace };
+    let normals = NormalInput { image: targets.normal_roughness.input(raster::READ), normal_type: NormalType::RgbVector, space: NormalSpace::World };
+    let (viewport, sdk_camera) = (Viewport::full(W, H), camera.sdk_camera(W, H));
+    let dn = ctx.create_denoising_context(&DenoisingContextInput { max_width: W, max_height: H, signal: SignalType::Shadow, ..Default::default() }).unwrap();
+    let general = vk::ImageLayout::GENERAL;
+    frame
+        .schedule_shadow(&TraceShadowTask { common: TraceCommon { depth, normals, viewport, camera: sdk_camera, ..Default::default() }, light, output: shadow.input(general), rays_per_pixel: 1 })
+        .unwrap();
+    let common = DenoisingCommon { depth, normals, viewport, camera: sdk_camera, ..Default::default() };
+    frame.schedule_denoise_shadow(&DenoiseShadowTask { context: dn, common, light, input: shadow.input(general), output: visibility.input(general) }).unwrap();
+    run_frame(&host, &ctx, &mut frame).unwrap();
+    let lights = Lights { sun_direction: sun.to_light, sun_intensity: sun.intensity, point_position: Vec3::ZERO, point_intensity: 0.0, ambient: 0.08 };
+    host.run(|cmd| lighting.record(&host, cmd, &targets, &camera, &lights, &visibility, general, &lit)).unwrap().unwrap();
+
+    let ours = halves(&host.read_image(&lit, general).unwrap());
+    let reference = direct_lighting(&tracer, &g, sun, albedo);
+    let (mut agree, mut n) = (0, 0);
+    for (i, r) in reference.iter().enumerate() {
+        if !g.hit[i] {
+            continue;
+        }
+        n += 1;
+        // 8-bit albedo and fp16 output: 1% of the value plus a little.
+        agree += (0..3).all(|k| (ours[4 * i + k] - r[k]).abs() <= 0.01 * r[k] + 0.01) as u32;
+    }
+    eprintln!("lit frame: {agree} of {n} pixels agree with the reference");
+    // Shadow-edge pixels may differ (the SDK's ray offset vs the reference's).
+    assert!(agree as f32 > 0.97 * n as f32, "{agree} of {n}");
+    assert!(reference.iter().zip(&g.hit).any(|(r, h)| *h && r[1] < 0.1), "the frame has shadows");
+    ctx.destroy_denoising_context(dn).unwrap();
+    for i in [shadow, visibility, lit] {
+        host.destroy_image(i);
+    }
+    gpu.destroy(&host);
+    drop(ctx);
+    lighting.destroy(&host);
+    pass.destroy(&host);
+    targets.destroy(&host);
+    meshes.destroy(&host);
+    assert_eq!(Host::validation_errors(), 0, "{:#?}", Host::validation_messages());
+}

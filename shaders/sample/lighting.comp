@@ -1,0 +1,35 @@
+#version 460
+// The sample's deferred direct lighting (what an engine already has): a sun whose visibility
+// comes from the SDK's (denoised) shadow output, one point light, and a constant ambient.
+// Lambertian: lit = albedo x (sun E x visibility + point E + ambient), the convention of the
+// test kit's reference (tests/src/reference.rs, direct_lighting).
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(set = 0, binding = 0) uniform sampler2D u_depth;
+layout(set = 0, binding = 1) uniform sampler2D u_normal_roughness;
+layout(set = 0, binding = 2) uniform sampler2D u_albedo_metalness;
+layout(set = 0, binding = 3) uniform sampler2D u_sun_visibility;
+layout(set = 0, binding = 4, rgba16f) uniform writeonly image2D u_lit;
+layout(set = 0, binding = 5, std140) uniform Lighting {
+    mat4 clip_to_world;
+    vec4 sun;        // direction towards the sun, intensity
+    vec4 point;      // position, intensity
+    vec4 ambient;    // ambient irradiance, viewport width, height
+} u;
+
+void main() {
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    if (pixel.x >= int(u.ambient.y) || pixel.y >= int(u.ambient.z)) return;
+    float depth = texelFetch(u_depth, pixel, 0).r;
+    if (depth >= 1.0) { imageStore(u_lit, pixel, vec4(0.0)); return; }
+    vec2 ndc = (vec2(pixel) + 0.5) / u.ambient.yz * 2.0 - 1.0;
+    vec4 h = u.clip_to_world * vec4(ndc, depth, 1.0);
+    vec3 p = h.xyz / h.w;
+    vec3 n = normalize(texelFetch(u_normal_roughness, pixel, 0).xyz);
+    vec3 albedo = texelFetch(u_albedo_metalness, pixel, 0).rgb;
+    float visibility = texelFetch(u_sun_visibility, pixel, 0).r;
+    float e = max(dot(n, normalize(u.sun.xyz)), 0.0) * u.sun.w * visibility;
+    vec3 to_point = u.point.xyz - p;
+    float d2 = max(dot(to_point, to_point), 1e-4);
+    e += max(dot(n, to_point * inversesqrt(d2)), 0.0) * u.point.w / d2;
+    imageStore(u_lit, pixel, vec4(albedo * (e + u.ambient.x), 1.0));
+}
