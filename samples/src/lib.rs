@@ -3,6 +3,7 @@
 //! comes from `raster` (a Vulkan graphics pass, as an engine's) or, for comparison, from the
 //! CPU reference renderer.
 pub mod args;
+pub mod gpu;
 pub mod images;
 pub mod lighting;
 pub mod raster;

@@ -2,13 +2,12 @@
 //! visibility from the SDK's shadow task, denoised), a point light and an ambient term. Its
 //! output is the "rasterized lit frame" the engine hands the SDK for light injection and as
 //! the direct-lighting input of GI and reflections.
+use crate::gpu::{self, spirv, UploadSlots};
 use crate::raster::Targets;
 use ash::vk;
 use glam::{Mat4, Vec3};
-use hybrid_rt_testkit::host::{Host, HostBuffer, HostImage, HostResult};
+use hybrid_rt_testkit::host::{Host, HostImage, HostResult};
 use hybrid_rt_testkit::reference::Camera;
-
-use crate::raster::spirv;
 
 pub const LIT_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 
@@ -39,44 +38,36 @@ pub struct LightingPass {
     pipeline: vk::Pipeline,
     sampler: vk::Sampler,
     push: ash::khr::push_descriptor::Device,
-    frame_buffers: Vec<HostBuffer>,
+    constants: UploadSlots,
 }
 
 impl LightingPass {
     pub fn new(host: &Host) -> HostResult<LightingPass> {
         let d = &host.device;
-        let err = |what: &'static str| move |e: vk::Result| format!("{what}: {e:?}");
         let ty = |i: u32| match i {
             0..=3 => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
             4 => vk::DescriptorType::STORAGE_IMAGE,
             _ => vk::DescriptorType::UNIFORM_BUFFER,
         };
-        unsafe {
-            let sampler = d.create_sampler(&vk::SamplerCreateInfo::default(), None).map_err(err("sampler"))?;
-            let samplers = [sampler];
-            let bindings: Vec<_> = (0..6)
-                .map(|i| {
-                    let b = vk::DescriptorSetLayoutBinding::default().binding(i).descriptor_type(ty(i)).descriptor_count(1).stage_flags(vk::ShaderStageFlags::COMPUTE);
-                    if i < 4 { b.immutable_samplers(&samplers) } else { b }
-                })
-                .collect();
-            let set_layout = d
-                .create_descriptor_set_layout(
-                    &vk::DescriptorSetLayoutCreateInfo::default().flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR).bindings(&bindings),
-                    None,
-                )
-                .map_err(err("descriptor set layout"))?;
-            let sets = [set_layout];
-            let layout = d.create_pipeline_layout(&vk::PipelineLayoutCreateInfo::default().set_layouts(&sets), None).map_err(err("pipeline layout"))?;
-            let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv::LIGHTING_COMP)).map_err(|e| e.to_string())?;
-            let module = d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None).map_err(err("shader module"))?;
-            let stage = vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::COMPUTE).module(module).name(c"main");
-            let pipeline = d.create_compute_pipelines(vk::PipelineCache::null(), &[vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)], None);
+        // SAFETY: plain object creation; everything is destroyed in `destroy`.
+        let sampler = unsafe { d.create_sampler(&vk::SamplerCreateInfo::default(), None) }.map_err(|e| format!("sampler: {e:?}"))?;
+        let samplers = [sampler];
+        let bindings: Vec<_> = (0..6)
+            .map(|i| {
+                let b = vk::DescriptorSetLayoutBinding::default().binding(i).descriptor_type(ty(i)).descriptor_count(1).stage_flags(vk::ShaderStageFlags::COMPUTE);
+                if i < 4 { b.immutable_samplers(&samplers) } else { b }
+            })
+            .collect();
+        let (set_layout, layout) = gpu::push_layout(host, &bindings, 0, vk::ShaderStageFlags::COMPUTE)?;
+        let module = gpu::shader_module(host, spirv::LIGHTING_COMP)?;
+        let stage = vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::COMPUTE).module(module).name(c"main");
+        let pipeline = unsafe {
+            let p = d.create_compute_pipelines(vk::PipelineCache::null(), &[vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)], None);
             d.destroy_shader_module(module, None);
-            let pipeline = pipeline.map_err(|(_, e)| format!("compute pipeline: {e:?}"))?[0];
-            let push = ash::khr::push_descriptor::Device::new(&host.instance, d);
-            Ok(LightingPass { set_layout, layout, pipeline, sampler, push, frame_buffers: Vec::new() })
-        }
+            p.map_err(|(_, e)| format!("compute pipeline: {e:?}"))?[0]
+        };
+        let push = ash::khr::push_descriptor::Device::new(&host.instance, d);
+        Ok(LightingPass { set_layout, layout, pipeline, sampler, push, constants: UploadSlots::new(vk::BufferUsageFlags::UNIFORM_BUFFER) })
     }
 
     /// A lit image for `targets` (STORAGE for this pass, SAMPLED for the SDK), in GENERAL.
@@ -85,12 +76,14 @@ impl LightingPass {
         host.image_cleared(LIT_FORMAT, targets.width, targets.height, usage, vk::ImageLayout::GENERAL)
     }
 
-    /// Lights the G-buffer into `lit` (GENERAL). `sun_visibility` (R) is read in `visibility_layout`.
+    /// Lights the G-buffer into `lit` (GENERAL). `sun_visibility` (R) is read in
+    /// `visibility_layout`. `slot`: the frame-in-flight index (its constants are rewritten).
     #[allow(clippy::too_many_arguments)]
     pub fn record(
         &mut self,
         host: &Host,
         cmd: vk::CommandBuffer,
+        slot: usize,
         targets: &Targets,
         camera: &Camera,
         lights: &Lights,
@@ -106,7 +99,7 @@ impl LightingPass {
             point: lights.point_position.extend(lights.point_intensity).to_array(),
             ambient: [lights.ambient, targets.width as f32, targets.height as f32, 0.0],
         };
-        let ubo = host.buffer_with_data(bytemuck::bytes_of(&c), vk::BufferUsageFlags::UNIFORM_BUFFER)?;
+        let ubo = self.constants.write(host, slot, bytemuck::bytes_of(&c))?;
         let image = |i: &HostImage, layout| [vk::DescriptorImageInfo { sampler: self.sampler, image_view: i.view, image_layout: layout }];
         let read = crate::raster::READ;
         let infos = [
@@ -116,7 +109,7 @@ impl LightingPass {
             image(sun_visibility, visibility_layout),
             image(lit, vk::ImageLayout::GENERAL),
         ];
-        let ubo_info = [vk::DescriptorBufferInfo { buffer: ubo.buffer, offset: 0, range: vk::WHOLE_SIZE }];
+        let ubo_info = [vk::DescriptorBufferInfo { buffer: ubo, offset: 0, range: std::mem::size_of::<LightingGpu>() as u64 }];
         let mut writes: Vec<_> = infos
             .iter()
             .enumerate()
@@ -132,18 +125,11 @@ impl LightingPass {
             self.push.cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &writes);
             host.device.cmd_dispatch(cmd, targets.width.div_ceil(8), targets.height.div_ceil(8), 1);
         }
-        self.frame_buffers.push(ubo);
         Ok(())
     }
 
-    pub fn release_frame_buffers(&mut self, host: &Host) {
-        for b in self.frame_buffers.drain(..) {
-            host.destroy_buffer(b);
-        }
-    }
-
-    pub fn destroy(mut self, host: &Host) {
-        self.release_frame_buffers(host);
+    pub fn destroy(self, host: &Host) {
+        self.constants.destroy(host);
         unsafe {
             host.device.destroy_pipeline(self.pipeline, None);
             host.device.destroy_pipeline_layout(self.layout, None);

@@ -4,13 +4,9 @@
 //! its `DepthInput`, `NormalInput`, `RoughnessInput` and `MotionInput`.
 use ash::vk;
 use glam::{Affine3A, Mat4};
+use crate::gpu::{self, spirv, UploadSlots};
 use hybrid_rt_testkit::host::{Host, HostBuffer, HostImage, HostResult};
 use hybrid_rt_testkit::reference::{Camera, Scene};
-
-/// The sample's SPIR-V, compiled by samples/build.rs.
-pub(crate) mod spirv {
-    include!(concat!(env!("OUT_DIR"), "/sample_shaders.rs"));
-}
 
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 pub const NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
@@ -121,36 +117,21 @@ pub struct GBufferPass {
     layout: vk::PipelineLayout,
     pipeline: vk::Pipeline,
     push: ash::khr::push_descriptor::Device,
-    /// Per-frame buffers, freed by `destroy` (kept until the frame's fence was waited on).
-    frame_buffers: Vec<HostBuffer>,
+    cameras: UploadSlots,
+    instances: UploadSlots,
 }
 
 impl GBufferPass {
     pub fn new(host: &Host) -> HostResult<GBufferPass> {
         let d = &host.device;
-        let err = |what: &'static str| move |e: vk::Result| format!("{what}: {e:?}");
         let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
         let bindings = [
             vk::DescriptorSetLayoutBinding::default().binding(0).descriptor_type(vk::DescriptorType::UNIFORM_BUFFER).descriptor_count(1).stage_flags(stages),
             vk::DescriptorSetLayoutBinding::default().binding(1).descriptor_type(vk::DescriptorType::STORAGE_BUFFER).descriptor_count(1).stage_flags(stages),
         ];
+        let (set_layout, layout) = gpu::push_layout(host, &bindings, 4, stages)?;
         unsafe {
-            let set_layout = d
-                .create_descriptor_set_layout(
-                    &vk::DescriptorSetLayoutCreateInfo::default().flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR).bindings(&bindings),
-                    None,
-                )
-                .map_err(err("descriptor set layout"))?;
-            let ranges = [vk::PushConstantRange { stage_flags: stages, offset: 0, size: 4 }];
-            let sets = [set_layout];
-            let layout = d
-                .create_pipeline_layout(&vk::PipelineLayoutCreateInfo::default().set_layouts(&sets).push_constant_ranges(&ranges), None)
-                .map_err(err("pipeline layout"))?;
-            let module = |spirv: &[u8]| -> HostResult<vk::ShaderModule> {
-                let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv)).map_err(|e| e.to_string())?;
-                d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None).map_err(err("shader module"))
-            };
-            let (vs, fs) = (module(spirv::GBUFFER_VERT)?, module(spirv::GBUFFER_FRAG)?);
+            let (vs, fs) = (gpu::shader_module(host, spirv::GBUFFER_VERT)?, gpu::shader_module(host, spirv::GBUFFER_FRAG)?);
             let stages_info = [
                 vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vs).name(c"main"),
                 vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fs).name(c"main"),
@@ -195,14 +176,32 @@ impl GBufferPass {
             d.destroy_shader_module(fs, None);
             let pipeline = pipeline.map_err(|(_, e)| format!("graphics pipeline: {e:?}"))?[0];
             let push = ash::khr::push_descriptor::Device::new(&host.instance, d);
-            Ok(GBufferPass { set_layout, layout, pipeline, push, frame_buffers: Vec::new() })
+            Ok(GBufferPass {
+                set_layout,
+                layout,
+                pipeline,
+                push,
+                cameras: UploadSlots::new(vk::BufferUsageFlags::UNIFORM_BUFFER),
+                instances: UploadSlots::new(vk::BufferUsageFlags::STORAGE_BUFFER),
+            })
         }
     }
 
     /// Records the G-buffer of `draws` seen by `camera` (and `prev_camera` for motion) into
-    /// `targets`, leaving them in `READ` for the SDK. Per-frame buffers live until
-    /// `release_frame_buffers` (after the frame's fence).
-    pub fn record(&mut self, host: &Host, cmd: vk::CommandBuffer, targets: &Targets, meshes: &MeshBuffers, draws: &[Draw], camera: &Camera, prev_camera: &Camera) -> HostResult<()> {
+    /// `targets`, leaving them in `READ` for the SDK. `slot` is the frame-in-flight index: its
+    /// constant buffers are rewritten, so the frame that last used the slot must be finished.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record(
+        &mut self,
+        host: &Host,
+        cmd: vk::CommandBuffer,
+        slot: usize,
+        targets: &Targets,
+        meshes: &MeshBuffers,
+        draws: &[Draw],
+        camera: &Camera,
+        prev_camera: &Camera,
+    ) -> HostResult<()> {
         let d = &host.device;
         let aspect = targets.width as f32 / targets.height as f32;
         let view_proj = |c: &Camera| -> Mat4 { c.view_to_clip(aspect) * c.world_to_view() };
@@ -221,8 +220,8 @@ impl GBufferPass {
                 extra: [dr.material.metalness, 0.0, 0.0, 0.0],
             })
             .collect();
-        let ubo = host.buffer_with_data(bytemuck::bytes_of(&cam), vk::BufferUsageFlags::UNIFORM_BUFFER)?;
-        let ssbo = host.buffer_with_data(bytemuck::cast_slice(&instances), vk::BufferUsageFlags::STORAGE_BUFFER)?;
+        let ubo = self.cameras.write(host, slot, bytemuck::bytes_of(&cam))?;
+        let ssbo = self.instances.write(host, slot, bytemuck::cast_slice(&instances))?;
 
         for t in targets.colors().into_iter().chain([&targets.depth]) {
             let to = if t.format == DEPTH_FORMAT { vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL } else { vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL };
@@ -253,8 +252,8 @@ impl GBufferPass {
             .layer_count(1)
             .color_attachments(&color_attachments)
             .depth_attachment(&depth_attachment);
-        let ubo_info = [vk::DescriptorBufferInfo { buffer: ubo.buffer, offset: 0, range: vk::WHOLE_SIZE }];
-        let ssbo_info = [vk::DescriptorBufferInfo { buffer: ssbo.buffer, offset: 0, range: vk::WHOLE_SIZE }];
+        let ubo_info = [vk::DescriptorBufferInfo { buffer: ubo, offset: 0, range: std::mem::size_of::<CameraGpu>() as u64 }];
+        let ssbo_info = [vk::DescriptorBufferInfo { buffer: ssbo, offset: 0, range: vk::WHOLE_SIZE }];
         let writes = [
             vk::WriteDescriptorSet::default().dst_binding(0).descriptor_type(vk::DescriptorType::UNIFORM_BUFFER).buffer_info(&ubo_info),
             vk::WriteDescriptorSet::default().dst_binding(1).descriptor_type(vk::DescriptorType::STORAGE_BUFFER).buffer_info(&ssbo_info),
@@ -279,19 +278,12 @@ impl GBufferPass {
             let from = if t.format == DEPTH_FORMAT { vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL } else { vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL };
             host.transition(cmd, t, from, READ);
         }
-        self.frame_buffers.extend([ubo, ssbo]);
         Ok(())
     }
 
-    /// Frees the per-frame buffers of recorded frames (call after their fences).
-    pub fn release_frame_buffers(&mut self, host: &Host) {
-        for b in self.frame_buffers.drain(..) {
-            host.destroy_buffer(b);
-        }
-    }
-
-    pub fn destroy(mut self, host: &Host) {
-        self.release_frame_buffers(host);
+    pub fn destroy(self, host: &Host) {
+        self.cameras.destroy(host);
+        self.instances.destroy(host);
         unsafe {
             host.device.destroy_pipeline(self.pipeline, None);
             host.device.destroy_pipeline_layout(self.layout, None);

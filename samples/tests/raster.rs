@@ -26,8 +26,7 @@ fn rasterized_gbuffer_matches_the_reference_and_motion_follows_the_camera() {
     let draws: Vec<Draw> = raster::static_draws(&scene, material);
     // Last frame the camera was 0.1 m to the left: motion vectors point there.
     let prev = Camera { eye: camera.eye - Vec3::X * 0.1, target: camera.target - Vec3::X * 0.1, ..camera };
-    host.run(|cmd| pass.record(&host, cmd, &targets, &meshes, &draws, &camera, &prev)).unwrap().unwrap();
-    pass.release_frame_buffers(&host);
+    host.run(|cmd| pass.record(&host, cmd, 0, &targets, &meshes, &draws, &camera, &prev)).unwrap().unwrap();
 
     let depth: Vec<f32> = bytemuck::cast_slice(&host.read_image(&targets.depth, raster::READ).unwrap()).to_vec();
     let normals = halves(&host.read_image(&targets.normal_roughness, raster::READ).unwrap());
@@ -98,7 +97,7 @@ fn deferred_lighting_with_sdk_shadows_matches_the_reference_lit_frame() {
     let mut pass = GBufferPass::new(&host).unwrap();
     let mut lighting = LightingPass::new(&host).unwrap();
     let draws = raster::static_draws(&scene, |i| Material { albedo: albedo(i as u32), roughness: 0.5, metalness: 0.0 });
-    host.run(|cmd| pass.record(&host, cmd, &targets, &meshes, &draws, &camera, &camera)).unwrap().unwrap();
+    host.run(|cmd| pass.record(&host, cmd, 0, &targets, &meshes, &draws, &camera, &camera)).unwrap().unwrap();
 
     // The engine's frame: SDK shadows from its own G-buffer, denoised, then its lighting.
     let ctx = ExecuteContext::new(&host.device_desc(), &Default::default()).unwrap();
@@ -124,7 +123,7 @@ fn deferred_lighting_with_sdk_shadows_matches_the_reference_lit_frame() {
     frame.schedule_denoise_shadow(&DenoiseShadowTask { context: dn, common, light, input: shadow.input(general), output: visibility.input(general) }).unwrap();
     run_frame(&host, &ctx, &mut frame).unwrap();
     let lights = Lights { sun_direction: sun.to_light, sun_intensity: sun.intensity, point_position: Vec3::ZERO, point_intensity: 0.0, ambient: 0.08 };
-    host.run(|cmd| lighting.record(&host, cmd, &targets, &camera, &lights, &visibility, general, &lit)).unwrap().unwrap();
+    host.run(|cmd| lighting.record(&host, cmd, 0, &targets, &camera, &lights, &visibility, general, &lit)).unwrap().unwrap();
 
     let ours = halves(&host.read_image(&lit, general).unwrap());
     let reference = direct_lighting(&tracer, &g, sun, albedo);

@@ -269,12 +269,21 @@ impl Host {
     /// A host-visible buffer holding `data` (vertex/index buffers of the test scenes).
     pub fn buffer_with_data(&self, data: &[u8], usage: vk::BufferUsageFlags) -> HostResult<HostBuffer> {
         let b = self.create_buffer(data.len().max(4) as u64, usage, vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT)?;
+        self.write_buffer(&b, data)?;
+        Ok(b)
+    }
+
+    /// Copies `data` to the start of a host-visible buffer (made by `buffer_with_data`).
+    pub fn write_buffer(&self, b: &HostBuffer, data: &[u8]) -> HostResult<()> {
+        if data.len() as u64 > b.size {
+            return Err(format!("write_buffer: {} bytes into a {}-byte buffer", data.len(), b.size));
+        }
         unsafe {
             let p = self.device.map_memory(b.memory, 0, b.size, vk::MemoryMapFlags::empty()).map_err(vkerr("map"))?;
             std::ptr::copy_nonoverlapping(data.as_ptr(), p as *mut u8, data.len());
             self.device.unmap_memory(b.memory);
         }
-        Ok(b)
+        Ok(())
     }
 
     pub fn create_buffer(&self, size: u64, usage: vk::BufferUsageFlags, flags: vk::MemoryPropertyFlags) -> HostResult<HostBuffer> {

@@ -560,6 +560,17 @@ pub fn shadow_visibility(
 
 // ---------------------------------------------------------------- test scenes
 
+/// A unit-diameter sphere resting on an 8 m plane, and a camera above and in front: contact
+/// occlusion and a shadow on open ground.
+pub fn sphere_on_plane() -> (Scene, Camera) {
+    let mut scene = Scene::default();
+    let plane = scene.add_mesh(Mesh::grid(8.0, 8));
+    let sphere = scene.add_mesh(Mesh::sphere(0.5, 24, 12));
+    scene.add_instance(plane, Affine3A::IDENTITY);
+    scene.add_instance(sphere, Affine3A::from_translation(Vec3::new(0.0, 0.5, 0.0)));
+    (scene, Camera::look_at(Vec3::new(0.0, 1.6, 2.2), Vec3::new(0.0, 0.2, 0.0)))
+}
+
 /// A 4 m room: a grey floor and red (left), green (right) and blue (back) walls, each carrying
 /// its colour as a known cache radiance; `with_ceiling` adds a grey ceiling. The front is open.
 /// Returns the scene, each instance's colour, and a camera looking into the room.

@@ -14,16 +14,6 @@ fn ao_params(ray_length: f32) -> AoParams {
     AoParams { ray_length, falloff_power: 1.0, ray_offset: hybrid_rt::RayOffset::default() }
 }
 
-/// A sphere resting on a plane, seen from above and in front.
-fn sphere_on_plane() -> (Scene, Camera) {
-    let mut scene = Scene::default();
-    let plane = scene.add_mesh(Mesh::grid(8.0, 8));
-    let sphere = scene.add_mesh(Mesh::sphere(0.5, 24, 12));
-    scene.add_instance(plane, Affine3A::IDENTITY);
-    scene.add_instance(sphere, Affine3A::from_translation(Vec3::new(0.0, 0.5, 0.0)));
-    (scene, Camera::look_at(Vec3::new(0.0, 1.6, 2.2), Vec3::new(0.0, 0.2, 0.0)))
-}
-
 #[test]
 fn open_plane_is_unoccluded() {
     let (host, ctx) = host_and_context(InitSettings::default());

@@ -7,7 +7,7 @@ use common::*;
 use glam::{Affine3A, Vec3};
 use hybrid_rt::*;
 use hybrid_rt_testkit::host::{Host, HostImage};
-use hybrid_rt_testkit::reference::{self as reference, AoParams, Camera, GBuffer, Mesh, Rng, Scene, Tracer};
+use hybrid_rt_testkit::reference::{self as reference, sphere_on_plane, AoParams, Camera, GBuffer, Mesh, Rng, Scene, Tracer};
 use hybrid_rt_testkit::sdk_scene::*;
 use hybrid_rt_testkit::stats;
 
@@ -23,16 +23,6 @@ fn storage_image(host: &Host, format: vk::Format, w: u32, h: u32) -> HostImage {
 fn read_channel(host: &Host, img: &HostImage, c: usize) -> Vec<f32> {
     let texels: Vec<[f32; 4]> = bytemuck::cast_slice(&host.read_image(img, GENERAL).unwrap()).to_vec();
     texels.iter().map(|t| t[c]).collect()
-}
-
-/// A sphere resting on a plane, seen from above and in front (AO and shadows).
-fn sphere_on_plane() -> (Scene, Camera) {
-    let mut scene = Scene::default();
-    let plane = scene.add_mesh(Mesh::grid(8.0, 8));
-    let sphere = scene.add_mesh(Mesh::sphere(0.5, 24, 12));
-    scene.add_instance(plane, Affine3A::IDENTITY);
-    scene.add_instance(sphere, Affine3A::from_translation(Vec3::new(0.0, 0.5, 0.0)));
-    (scene, Camera::look_at(Vec3::new(0.0, 1.6, 2.2), Vec3::new(0.0, 0.2, 0.0)))
 }
 
 /// A scene registered and built, its G-buffer uploaded: what every traced test starts from.
@@ -639,6 +629,15 @@ fn bad_denoise_inputs_are_typed_errors_and_leave_the_context_usable() {
         assert_eq!(frame.len(), 1);
         frame.clear();
     }
+    // A small viewport far into the image: its pixels lie outside a context that is wide
+    // enough for its size but not for its position.
+    let narrow = context(&ctx, SignalType::Diffuse, S / 2 + 4, S);
+    let mut offset = task(narrow);
+    offset.common.viewport = Viewport { x: S / 2, width: 8, ..offset.common.viewport };
+    frame.schedule_denoise_diffuse(&offset).unwrap();
+    assert!(run_frame(&host, &ctx, &mut frame).unwrap_err().contains("beyond the context"));
+    frame.clear();
+    ctx.destroy_denoising_context(narrow).unwrap();
     // A context destroyed between scheduling and building.
     let doomed = context(&ctx, SignalType::Diffuse, S, S);
     frame.schedule_denoise_diffuse(&task(doomed)).unwrap();

@@ -62,6 +62,13 @@ pub(crate) struct Hazards {
 }
 
 impl Hazards {
+    /// The start of a recording: SDK state that outlives a ticket (caches, denoiser history,
+    /// the TLAS) was written by earlier command buffers. Submission order alone does not make
+    /// those writes visible, so the first use in this recording waits on them (one barrier).
+    pub fn after_earlier_submissions() -> Hazards {
+        Hazards { write: Some(Use { stages: vk::PipelineStageFlags2::ALL_COMMANDS, access: vk::AccessFlags2::MEMORY_WRITE }), ..Default::default() }
+    }
+
     /// Declares that the next commands read with `u`; records a barrier if an earlier write is
     /// not yet visible to them.
     pub fn read(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, u: Use) {
@@ -98,7 +105,7 @@ impl Hazards {
     }
 }
 
-pub(crate) fn barrier(device: &ash::Device, cmd: vk::CommandBuffer, src: Use, dst: Use) {
+fn barrier(device: &ash::Device, cmd: vk::CommandBuffer, src: Use, dst: Use) {
     let mb = [vk::MemoryBarrier2::default()
         .src_stage_mask(src.stages)
         .src_access_mask(src.access)

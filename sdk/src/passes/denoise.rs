@@ -63,7 +63,8 @@ pub(crate) struct DenoiserState {
     initialized: bool,
     previous_camera: Option<Camera>,
     previous_jitter: [f32; 2],
-    previous_extent: (u32, u32),
+    /// The viewport of the last task: another one invalidates the history.
+    previous_viewport: [u32; 4],
 }
 
 fn is_shadow(signal: SignalType) -> bool {
@@ -107,7 +108,7 @@ impl DenoiserState {
             initialized: false,
             previous_camera: None,
             previous_jitter: [0.0; 2],
-            previous_extent: (0, 0),
+            previous_viewport: [0; 4],
         })
     }
 
@@ -201,19 +202,17 @@ impl DenoisePass {
                 })
                 .collect();
             unsafe { d.cmd_pipeline_barrier2(r.cmd, &vk::DependencyInfo::default().image_memory_barriers(&barriers)) };
-        } else {
-            // History was written by an earlier command buffer (submission order is the
-            // engine's); make those writes visible to this one's reads.
-            let both = sync::Use { stages: stage, access: vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE };
-            sync::barrier(d, r.cmd, both, both);
         }
+        // History written by earlier command buffers: the recording's hazard tracker starts
+        // with their writes pending (Hazards::after_earlier_submissions).
 
         let c = &job.common;
         let extent = (c.viewport.width, c.viewport.height);
+        let viewport = [c.viewport.x, c.viewport.y, c.viewport.width, c.viewport.height];
         let reset = c.reset_history
             || !state.initialized
             || state.input.method == DenoisingMethod::SpatialOnly
-            || state.previous_extent != extent;
+            || state.previous_viewport != viewport;
         let previous = c.previous_camera.or(state.previous_camera).unwrap_or(c.camera);
         let constants = constants(job, &previous, state.previous_jitter, r.seed, reset);
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
@@ -290,7 +289,7 @@ impl DenoisePass {
         state.initialized = true;
         state.previous_camera = Some(c.camera);
         state.previous_jitter = c.camera_jitter;
-        state.previous_extent = extent;
+        state.previous_viewport = viewport;
     }
 
     pub fn destroy(self, device: &Device) {

@@ -51,11 +51,13 @@ pub(super) fn check_job(denoisers: &crate::api::handles::Registry<DenoisingConte
             format!("the context denoises {:?}, the task is {:?}", state.input.signal, job.signal),
         ));
     }
+    // History is kept at the pixels' own coordinates: the viewport's far corner must fit.
     let vp = &job.common.viewport;
-    if vp.width > state.input.max_width || vp.height > state.input.max_height {
+    let (right, bottom) = (vp.x as u64 + vp.width as u64, vp.y as u64 + vp.height as u64);
+    if right > state.input.max_width as u64 || bottom > state.input.max_height as u64 {
         return Err(Error::invalid(
             "denoise task viewport",
-            format!("{}x{} exceeds the context's {}x{}", vp.width, vp.height, state.input.max_width, state.input.max_height),
+            format!("reaches ({right}, {bottom}), beyond the context's {}x{}", state.input.max_width, state.input.max_height),
         ));
     }
     Ok(())

@@ -553,7 +553,7 @@ impl Shared {
     fn record(&self, st: &mut State, ws_index: usize, serial: u64, tasks: &[Task], cmd: vk::CommandBuffer) -> Result<()> {
         let device = &self.device;
         let d = &device.raw;
-        let mut hazards = Hazards::default();
+        let mut hazards = Hazards::after_earlier_submissions();
         st.working_sets[ws_index].ring.reset();
         st.working_sets[ws_index].timer.reset(d, cmd);
         fn timer(st: &mut State, ws: usize) -> &mut Timer {
