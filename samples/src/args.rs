@@ -1,12 +1,17 @@
 //! Tiny `--key value` parsing (the binaries take a handful of numeric options).
 use std::collections::HashMap;
 
-pub struct Args(HashMap<String, String>);
+pub struct Args {
+    named: HashMap<String, String>,
+    /// Arguments that are not options (the sample's glTF file).
+    pub positional: Vec<String>,
+}
 
 impl Args {
     /// Parses `--key value` and `--flag` pairs; prints `usage` and exits on `--help`.
     pub fn parse(usage: &str) -> Args {
         let mut map = HashMap::new();
+        let mut positional = Vec::new();
         let mut it = std::env::args().skip(1).peekable();
         while let Some(a) = it.next() {
             if a == "--help" || a == "-h" {
@@ -14,8 +19,8 @@ impl Args {
                 std::process::exit(0);
             }
             let Some(key) = a.strip_prefix("--") else {
-                eprintln!("unexpected argument {a}\n{usage}");
-                std::process::exit(2);
+                positional.push(a);
+                continue;
             };
             let value = match it.peek() {
                 Some(v) if !v.starts_with("--") => it.next().unwrap(),
@@ -23,11 +28,11 @@ impl Args {
             };
             map.insert(key.to_string(), value);
         }
-        Args(map)
+        Args { named: map, positional }
     }
 
     pub fn get<T: std::str::FromStr>(&self, key: &str, default: T) -> T {
-        match self.0.get(key) {
+        match self.named.get(key) {
             None => default,
             Some(v) => v.parse().unwrap_or_else(|_| {
                 eprintln!("--{key}: cannot parse {v:?}");
@@ -37,13 +42,22 @@ impl Args {
     }
 
     pub fn list(&self, key: &str, default: &[u32]) -> Vec<u32> {
-        match self.0.get(key) {
+        match self.named.get(key) {
             None => default.to_vec(),
             Some(v) => v.split(',').map(|s| s.trim().parse().expect("comma-separated numbers")).collect(),
         }
     }
 
+    /// The raw value of `--key`, if given.
+    pub fn named(&self, key: &str) -> Option<String> {
+        self.named.get(key).cloned()
+    }
+
+    pub fn flag(&self, key: &str) -> bool {
+        self.named.get(key).is_some_and(|v| v != "false")
+    }
+
     pub fn string(&self, key: &str, default: &str) -> String {
-        self.0.get(key).cloned().unwrap_or_else(|| default.to_string())
+        self.named.get(key).cloned().unwrap_or_else(|| default.to_string())
     }
 }

@@ -3,8 +3,14 @@
 //! comes from `raster` (a Vulkan graphics pass, as an engine's) or, for comparison, from the
 //! CPU reference renderer.
 pub mod args;
+pub mod gltf_scene;
 pub mod gpu;
 pub mod images;
 pub mod lighting;
+pub mod modes;
 pub mod raster;
+pub mod renderer;
+pub mod report;
+pub mod scene;
 pub mod scenes;
+pub mod window;

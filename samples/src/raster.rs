@@ -80,22 +80,40 @@ impl Targets {
 
 /// Vertex and index buffers of every mesh of a scene, in engine memory.
 pub struct MeshBuffers {
-    meshes: Vec<(HostBuffer, HostBuffer, u32)>,
+    /// Vertex buffer, index buffer, index count, vertex count.
+    meshes: Vec<(HostBuffer, HostBuffer, u32, u32)>,
 }
 
 impl MeshBuffers {
+    /// Vertex buffers are drawn and copied by the SDK into its BLAS inputs.
+    pub const VERTEX_USAGE: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
+        vk::BufferUsageFlags::VERTEX_BUFFER.as_raw() | vk::BufferUsageFlags::TRANSFER_SRC.as_raw(),
+    );
+
     pub fn upload(host: &Host, scene: &Scene) -> HostResult<MeshBuffers> {
         let mut meshes = Vec::new();
         for m in &scene.meshes {
-            let vb = host.buffer_with_data(bytemuck::cast_slice(&m.positions), vk::BufferUsageFlags::VERTEX_BUFFER)?;
-            let ib = host.buffer_with_data(bytemuck::cast_slice(&m.indices), vk::BufferUsageFlags::INDEX_BUFFER)?;
-            meshes.push((vb, ib, m.indices.len() as u32));
+            let vb = host.buffer_with_data(bytemuck::cast_slice(&m.positions), Self::VERTEX_USAGE)?;
+            let ib_usage = vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
+            let ib = host.buffer_with_data(bytemuck::cast_slice(&m.indices), ib_usage)?;
+            meshes.push((vb, ib, m.indices.len() as u32, m.positions.len() as u32));
         }
         Ok(MeshBuffers { meshes })
     }
 
+    /// The SDK's view of mesh `i`: the same buffers the rasterizer draws (tightly packed
+    /// RGB32F positions, u32 indices).
+    pub fn geometry_input(&self, i: usize) -> hybrid_rt::GeometryInput {
+        let (vb, ib, index_count, vertex_count) = &self.meshes[i];
+        hybrid_rt::GeometryInput {
+            vertices: hybrid_rt::VertexBufferInput { buffer: vb.buffer, count: *vertex_count, ..Default::default() },
+            indices: hybrid_rt::IndexBufferInput { buffer: ib.buffer, count: *index_count, ..Default::default() },
+            ..Default::default()
+        }
+    }
+
     pub fn destroy(self, host: &Host) {
-        for (v, i, _) in self.meshes {
+        for (v, i, _, _) in self.meshes {
             host.destroy_buffer(v);
             host.destroy_buffer(i);
         }
@@ -109,6 +127,8 @@ pub struct Draw {
     pub transform: Affine3A,
     pub prev_transform: Affine3A,
     pub material: Material,
+    /// Vertices to draw instead of the mesh's own (a deforming mesh's of this frame).
+    pub vertex_buffer: Option<vk::Buffer>,
 }
 
 /// The G-buffer pass: one pipeline, push descriptors for the camera and the instance table.
@@ -266,9 +286,9 @@ impl GBufferPass {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline);
             self.push.cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::GRAPHICS, self.layout, 0, &writes);
             for (i, dr) in draws.iter().enumerate() {
-                let (vb, ib, count) = &meshes.meshes[dr.mesh];
+                let (vb, ib, count, _) = &meshes.meshes[dr.mesh];
                 d.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT, 0, &(i as u32).to_ne_bytes());
-                d.cmd_bind_vertex_buffers(cmd, 0, &[vb.buffer], &[0]);
+                d.cmd_bind_vertex_buffers(cmd, 0, &[dr.vertex_buffer.unwrap_or(vb.buffer)], &[0]);
                 d.cmd_bind_index_buffer(cmd, ib.buffer, 0, vk::IndexType::UINT32);
                 d.cmd_draw_indexed(cmd, *count, 1, 0, 0, 0);
             }
@@ -298,7 +318,7 @@ pub fn static_draws(scene: &Scene, material: impl Fn(usize) -> Material) -> Vec<
         .instances
         .iter()
         .enumerate()
-        .map(|(i, inst)| Draw { mesh: inst.mesh, transform: inst.transform, prev_transform: inst.transform, material: material(i) })
+        .map(|(i, inst)| Draw { mesh: inst.mesh, transform: inst.transform, prev_transform: inst.transform, material: material(i), vertex_buffer: None })
         .collect()
 }
 

@@ -84,7 +84,7 @@ fn rasterized_gbuffer_matches_the_reference_and_motion_follows_the_camera() {
 #[test]
 fn deferred_lighting_with_sdk_shadows_matches_the_reference_lit_frame() {
     use hybrid_rt::*;
-    use hybrid_rt_samples::lighting::{Lights, LightingPass};
+    use hybrid_rt_samples::lighting::{Lights, LightingPass, Visibility};
     use hybrid_rt_testkit::reference::{direct_lighting, Sun};
     use hybrid_rt_testkit::sdk_scene::{run_frame, SceneOnGpu};
     let host = Host::new().expect("device");
@@ -123,7 +123,7 @@ fn deferred_lighting_with_sdk_shadows_matches_the_reference_lit_frame() {
     frame.schedule_denoise_shadow(&DenoiseShadowTask { context: dn, common, light, input: shadow.input(general), output: visibility.input(general) }).unwrap();
     run_frame(&host, &ctx, &mut frame).unwrap();
     let lights = Lights { sun_direction: sun.to_light, sun_intensity: sun.intensity, point_position: Vec3::ZERO, point_intensity: 0.0, ambient: 0.08 };
-    host.run(|cmd| lighting.record(&host, cmd, 0, &targets, &camera, &lights, &visibility, general, &lit)).unwrap().unwrap();
+    host.run(|cmd| lighting.record(&host, cmd, 0, &targets, &camera, &lights, Visibility::same(&visibility, general), &lit)).unwrap().unwrap();
 
     let ours = halves(&host.read_image(&lit, general).unwrap());
     let reference = direct_lighting(&tracer, &g, sun, albedo);

@@ -1,19 +1,21 @@
 #version 460
-// The sample's deferred direct lighting (what an engine already has): a sun whose visibility
-// comes from the SDK's (denoised) shadow output, one point light, and a constant ambient.
-// Lambertian: lit = albedo x (sun E x visibility + point E + ambient), the convention of the
-// test kit's reference (tests/src/reference.rs, direct_lighting).
+// The sample's deferred direct lighting (what an engine already has): a sun and a point light,
+// each with its visibility from the SDK's (denoised) shadow output, and a constant ambient.
+// Lambertian over the diffuse albedo (albedo x (1 - metalness): metals have no diffuse):
+// lit = diffuse x (sun E x sun visibility + point E x point visibility + ambient), the
+// convention of the test kit's reference (tests/src/reference.rs, direct_lighting).
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0) uniform sampler2D u_depth;
 layout(set = 0, binding = 1) uniform sampler2D u_normal_roughness;
 layout(set = 0, binding = 2) uniform sampler2D u_albedo_metalness;
 layout(set = 0, binding = 3) uniform sampler2D u_sun_visibility;
-layout(set = 0, binding = 4, rgba16f) uniform writeonly image2D u_lit;
-layout(set = 0, binding = 5, std140) uniform Lighting {
+layout(set = 0, binding = 4) uniform sampler2D u_point_visibility;
+layout(set = 0, binding = 5, rgba16f) uniform writeonly image2D u_lit;
+layout(set = 0, binding = 6, std140) uniform Lighting {
     mat4 clip_to_world;
     vec4 sun;        // direction towards the sun, intensity
     vec4 point;      // position, intensity
-    vec4 ambient;    // ambient irradiance, viewport width, height
+    vec4 ambient;    // ambient irradiance, viewport width, height, visibility channel (0 = R, 1 = G)
 } u;
 
 void main() {
@@ -25,11 +27,15 @@ void main() {
     vec4 h = u.clip_to_world * vec4(ndc, depth, 1.0);
     vec3 p = h.xyz / h.w;
     vec3 n = normalize(texelFetch(u_normal_roughness, pixel, 0).xyz);
-    vec3 albedo = texelFetch(u_albedo_metalness, pixel, 0).rgb;
-    float visibility = texelFetch(u_sun_visibility, pixel, 0).r;
-    float e = max(dot(n, normalize(u.sun.xyz)), 0.0) * u.sun.w * visibility;
+    vec4 albedo_metalness = texelFetch(u_albedo_metalness, pixel, 0);
+    vec3 diffuse = albedo_metalness.rgb * (1.0 - albedo_metalness.a);
+    // Denoised shadows hold visibility in every channel; raw shadow traces in G.
+    int channel = int(u.ambient.w);
+    float sun_visibility = texelFetch(u_sun_visibility, pixel, 0)[channel];
+    float point_visibility = texelFetch(u_point_visibility, pixel, 0)[channel];
+    float e = max(dot(n, normalize(u.sun.xyz)), 0.0) * u.sun.w * sun_visibility;
     vec3 to_point = u.point.xyz - p;
     float d2 = max(dot(to_point, to_point), 1e-4);
-    e += max(dot(n, to_point * inversesqrt(d2)), 0.0) * u.point.w / d2;
-    imageStore(u_lit, pixel, vec4(albedo * (e + u.ambient.x), 1.0));
+    e += max(dot(n, to_point * inversesqrt(d2)), 0.0) * u.point.w / d2 * point_visibility;
+    imageStore(u_lit, pixel, vec4(diffuse * (e + u.ambient.x), 1.0));
 }

@@ -93,6 +93,13 @@ fn vkerr(what: &'static str) -> impl Fn(vk::Result) -> String {
 
 impl Host {
     pub fn new() -> HostResult<Host> {
+        Self::with_extensions(&[], &[])
+    }
+
+    /// `new` with extra instance extensions (a window's surface extensions) and device
+    /// extensions (`VK_KHR_swapchain`); the queue must then also present, which the caller
+    /// checks against its surface.
+    pub fn with_extensions(instance_extensions: &[&CStr], device_extensions: &[&'static CStr]) -> HostResult<Host> {
         let entry = unsafe { ash::Entry::load() }.map_err(|e| format!("no Vulkan loader: {e}"))?;
         let layers = unsafe { entry.enumerate_instance_layer_properties() }.unwrap_or_default();
         let want_validation = std::env::var("HRT_VALIDATION").map(|v| v != "0").unwrap_or(true);
@@ -104,7 +111,8 @@ impl Host {
 
         let app = vk::ApplicationInfo::default().application_name(c"hybrid-rt host").api_version(vk::API_VERSION_1_3);
         let layer_names: Vec<*const i8> = if validation_enabled { vec![validation_name.as_ptr()] } else { vec![] };
-        let ext_names: Vec<*const i8> = if has_debug { vec![ext::debug_utils::NAME.as_ptr()] } else { vec![] };
+        let mut ext_names: Vec<*const i8> = if has_debug { vec![ext::debug_utils::NAME.as_ptr()] } else { vec![] };
+        ext_names.extend(instance_extensions.iter().map(|e| e.as_ptr()));
         let info = vk::InstanceCreateInfo::default()
             .application_info(&app)
             .enabled_layer_names(&layer_names)
@@ -157,6 +165,7 @@ impl Host {
         if support.ray_query && !disable_rq {
             enabled_extensions.extend_from_slice(hybrid_rt::OPTIONAL_DEVICE_EXTENSIONS);
         }
+        enabled_extensions.extend_from_slice(device_extensions);
         let ext_ptrs: Vec<*const i8> = enabled_extensions.iter().map(|e| e.as_ptr()).collect();
         let priorities = [1.0f32];
         let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];

@@ -420,7 +420,7 @@ impl Default for SpecularInput {
 /// Debug visualisations. Any mode but `Default` replaces the task's output with an image made
 /// by primary rays from the task's camera through the SDK's TLAS (one per pixel centre of the
 /// viewport; the G-buffer is not read), into an output with four channels.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[repr(u32)]
 pub enum DebugOutput {
     /// The task's normal output.

@@ -1,0 +1,127 @@
+//! glTF 2.0 scenes (`.gltf` with `.bin` or data-URI buffers, or `.glb`), parsed by the `gltf`
+//! crate: every triangle primitive of every node of the default scene becomes an instance
+//! with the node's world transform and its material's metallic-roughness factors. Textures are
+//! not read (the G-buffer takes one colour per draw). The camera path, lights, surfel size
+//! and AO length are fitted to the scene's bounds.
+use crate::lighting::Lights;
+use crate::raster::Material;
+use crate::scene::{CameraPath, Motion, SampleScene};
+use base64::Engine;
+use glam::{Affine3A, Mat4, Vec3};
+use hybrid_rt_testkit::reference::{Mesh, Scene};
+use std::collections::HashMap;
+use std::path::Path;
+
+fn buffers(doc: &gltf::Document, blob: Option<Vec<u8>>, dir: &Path) -> Result<Vec<Vec<u8>>, String> {
+    let mut blob = blob;
+    doc.buffers()
+        .map(|b| {
+            let data = match b.source() {
+                gltf::buffer::Source::Bin => blob.take().ok_or("the GLB has no binary chunk")?,
+                gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+                    let (_, payload) = uri.split_once(";base64,").ok_or(format!("unsupported data URI {}", &uri[..uri.len().min(40)]))?;
+                    base64::engine::general_purpose::STANDARD.decode(payload).map_err(|e| format!("data URI: {e}"))?
+                }
+                gltf::buffer::Source::Uri(uri) => {
+                    let path = dir.join(uri.replace("%20", " "));
+                    std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?
+                }
+            };
+            if data.len() < b.length() {
+                return Err(format!("buffer {} holds {} bytes, the file says {}", b.index(), data.len(), b.length()));
+            }
+            Ok(data)
+        })
+        .collect()
+}
+
+fn material(m: &gltf::Material) -> Material {
+    let pbr = m.pbr_metallic_roughness();
+    let c = pbr.base_color_factor();
+    Material { albedo: [c[0], c[1], c[2]], roughness: pbr.roughness_factor(), metalness: pbr.metallic_factor() }
+}
+
+/// Loads `path` into a `SampleScene`.
+pub fn load(path: &Path) -> Result<SampleScene, String> {
+    let gltf::Gltf { document, blob } = gltf::Gltf::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let data = buffers(&document, blob, path.parent().unwrap_or(Path::new(".")))?;
+    let mut scene = Scene::default();
+    let mut materials = Vec::new();
+    // (glTF mesh, primitive) -> our mesh, so instanced glTF meshes share one BLAS.
+    let mut meshes: HashMap<(usize, usize), usize> = HashMap::new();
+    let root = document.default_scene().or_else(|| document.scenes().next()).ok_or("the file has no scene")?;
+    let mut stack: Vec<(gltf::Node, Mat4)> = root.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+    while let Some((node, parent)) = stack.pop() {
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        for child in node.children() {
+            stack.push((child, world));
+        }
+        let Some(mesh) = node.mesh() else { continue };
+        for prim in mesh.primitives() {
+            if prim.mode() != gltf::mesh::Mode::Triangles {
+                continue;
+            }
+            let key = (mesh.index(), prim.index());
+            let ours = match meshes.get(&key) {
+                Some(&m) => m,
+                None => {
+                    let reader = prim.reader(|b| data.get(b.index()).map(|d| d.as_slice()));
+                    let positions: Vec<Vec3> = reader.read_positions().ok_or(format!("mesh {} has no positions", mesh.index()))?.map(Vec3::from).collect();
+                    let indices: Vec<u32> = match reader.read_indices() {
+                        Some(i) => i.into_u32().collect(),
+                        None => (0..positions.len() as u32).collect(),
+                    };
+                    if indices.len() < 3 || indices.iter().any(|&i| i as usize >= positions.len()) {
+                        return Err(format!("mesh {} primitive {}: bad indices", mesh.index(), prim.index()));
+                    }
+                    let m = scene.add_mesh(Mesh { positions, indices });
+                    meshes.insert(key, m);
+                    m
+                }
+            };
+            scene.add_instance(ours, Affine3A::from_mat4(world));
+            materials.push(material(&prim.material()));
+        }
+    }
+    if scene.instances.is_empty() {
+        return Err(format!("{}: no triangle meshes", path.display()));
+    }
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    Ok(fitted(name, scene, materials))
+}
+
+/// Wraps a static scene with a camera path, lights and sizes scaled to its bounds.
+fn fitted(name: String, scene: Scene, materials: Vec<Material>) -> SampleScene {
+    let motions = vec![Motion::Static; scene.instances.len()];
+    let mut s = SampleScene {
+        name,
+        scene,
+        materials,
+        motions,
+        deformer: None,
+        lights: Lights { sun_direction: Vec3::new(0.45, 1.0, 0.6), sun_intensity: 3.0, point_position: Vec3::ZERO, point_intensity: 0.0, ambient: 0.0 },
+        sun_angular_extent: 0.03,
+        point_radius: 0.0,
+        sky: [0.35, 0.45, 0.6],
+        camera_path: CameraPath { from: Vec3::ZERO, to: Vec3::ZERO, target: Vec3::ZERO, fov_y_radians: 60f32.to_radians() },
+        lidar_eye: Vec3::ZERO,
+        tile_unit_length: 0.1,
+        ao_ray_length: 0.5,
+    };
+    let (lo, hi) = s.bounds();
+    let (center, radius) = ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-3));
+    s.camera_path = CameraPath {
+        from: center + radius * Vec3::new(-0.45, 0.3, 1.1),
+        to: center + radius * Vec3::new(0.45, 0.3, 1.1),
+        target: center,
+        fov_y_radians: 60f32.to_radians(),
+    };
+    // A point light a little above the middle, as bright at a radius as the sun.
+    s.lights.point_position = center + Vec3::Y * 0.3 * radius;
+    s.lights.point_intensity = 1.5 * radius * radius;
+    s.point_radius = 0.02 * radius;
+    s.lidar_eye = center;
+    s.tile_unit_length = radius / 60.0;
+    s.ao_ray_length = radius / 10.0;
+    s
+}

@@ -1,0 +1,771 @@
+//! The sample's hybrid renderer: an engine's frame with hybrid-rt in it, written the way the
+//! integration guide (docs/integration.md) tells an engine to do it.
+//!
+//! Per frame, in one command buffer the sample owns:
+//! 1. its own raster G-buffer of the main camera and of a low-resolution "lidar" camera that
+//!    sweeps the scene (`raster`);
+//! 2. **one SDK task container**: the scene's changes (the moving cube's instance update, the
+//!    waving flag's geometry update, which refits its BLAS), a throttled BVH build, light
+//!    injection of *last* frame's lit images (main and lidar: the lit image of this frame
+//!    needs this frame's shadows, so the cache runs a frame behind, which a cache averaging
+//!    over many frames does not notice), shadows of the sun and the point light (main view:
+//!    1 ray and denoised; lidar view: 4 rays), AO, diffuse GI and reflections (1 ray each)
+//!    with their denoisers (specular and diffuse in one task), and the debug visualisations
+//!    asked for;
+//! 3. its deferred direct lighting of both views (`lighting`), then the composite
+//!    (direct + GI x albedo x AO + Fresnel x reflections), then the view of the chosen mode.
+//!
+//! Two frames are in flight: each slot has its command buffer, fence, constant buffers,
+//! G-buffer, lit image and the flag's vertex buffer; before a slot is reused its fence is
+//! waited on and its SDK ticket handed back (which is also where per-task GPU times come
+//! from). The images written and read within a frame (shadows, AO, GI, reflections, the
+//! composite) are shared by both slots: one queue runs the frames in order and every frame
+//! starts with a barrier on the previous one's writes.
+use crate::gpu::{spirv, ComputePass, GpuTimer};
+use crate::lighting::{LightingPass, Visibility};
+use crate::modes::Mode;
+use crate::raster::{self, Draw, GBufferPass, MeshBuffers, Targets};
+use crate::scene::SampleScene;
+use ash::vk;
+use glam::Vec3;
+use hybrid_rt::*;
+use hybrid_rt_testkit::host::{Host, HostBuffer, HostImage, HostResult};
+use hybrid_rt_testkit::reference::Camera;
+use std::collections::HashMap;
+
+const SLOTS: usize = 2;
+const GENERAL: vk::ImageLayout = vk::ImageLayout::GENERAL;
+const WORK_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+
+/// What the renderer does per frame. Defaults in `Default`.
+#[derive(Clone, Copy, Debug)]
+pub struct Settings {
+    pub width: u32,
+    pub height: u32,
+    /// Side of the square lidar view. Default 256 (the guide's 256-512: its pixels must be
+    /// no larger than a cache sample where it looks, or samples get no light).
+    pub lidar_size: u32,
+    /// BLAS builds per frame (`BvhBuildTask::max_blas_build_count`). Default 4: the default
+    /// scene's 12 meshes take three frames, as a level streaming in would.
+    pub max_blas_build_count: u32,
+    /// Rays per pixel of the main view's shadow, AO, GI and reflection traces. Default 1.
+    pub rays_per_pixel: u32,
+    /// Trace half the pixels each frame (checkerboard) and let the denoisers fill the rest.
+    /// Default false.
+    pub checkerboard: bool,
+    /// Frames over which injection averages a cache sample. Default 24 (the guide's 200
+    /// suits a static level; the sample's cube moves and its shadow with it).
+    pub injection_window: f32,
+    /// Multiplies radiance before tone mapping. Default 1.
+    pub exposure: f32,
+    /// The colour of cache samples no camera has lit yet (`InstanceInput::initial_tile_color`).
+    /// Default black; magenta (`--magenta-unlit`) makes coverage holes visible while
+    /// integrating, as the guide suggests.
+    pub unlit_color: [f32; 3],
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            width: 640,
+            height: 360,
+            lidar_size: 256,
+            unlit_color: [0.0; 3],
+            max_blas_build_count: 4,
+            rays_per_pixel: 1,
+            checkerboard: false,
+            injection_window: 24.0,
+            exposure: 1.0,
+        }
+    }
+}
+
+/// A G-buffer and the lit image made from it.
+struct View {
+    targets: Targets,
+    lit: HostImage,
+}
+
+impl View {
+    fn new(host: &Host, width: u32, height: u32) -> HostResult<View> {
+        let targets = Targets::new(host, width, height)?;
+        let lit = LightingPass::lit_image(host, &targets)?;
+        Ok(View { targets, lit })
+    }
+
+    fn destroy(self, host: &Host) {
+        self.targets.destroy(host);
+        host.destroy_image(self.lit);
+    }
+}
+
+/// One frame in flight.
+struct Slot {
+    cmd: vk::CommandBuffer,
+    fence: vk::Fence,
+    ticket: Option<GpuTicket>,
+    timer: GpuTimer,
+    main: View,
+    lidar: View,
+    /// The flag's vertices of this slot's frame (host-visible: the CPU writes them).
+    deformed: Option<HostBuffer>,
+    /// The SDK tasks of the frame, in scheduling order, to name their timings.
+    labels: Vec<(TaskKind, &'static str)>,
+    camera: Camera,
+    lidar_camera: Camera,
+    frame: u64,
+    recorded: bool,
+}
+
+/// Images written and read inside a frame.
+struct Work {
+    sun_noisy: HostImage,
+    sun: HostImage,
+    point_noisy: HostImage,
+    point: HostImage,
+    ao_noisy: HostImage,
+    ao: HostImage,
+    diffuse_noisy: HostImage,
+    diffuse: HostImage,
+    specular_noisy: HostImage,
+    specular: HostImage,
+    composite: HostImage,
+    lidar_sun: HostImage,
+    lidar_point: HostImage,
+    debug: HashMap<DebugOutput, HostImage>,
+    /// The view pass's outputs: linear RGBA32F and tone-mapped sRGB RGBA8.
+    linear: HostImage,
+    display: HostImage,
+}
+
+struct Denoisers {
+    sun: DenoisingContextHandle,
+    point: DenoisingContextHandle,
+    ao: DenoisingContextHandle,
+    radiance: DenoisingContextHandle,
+}
+
+/// Mean GPU times over the frames after the first (which builds every BLAS).
+#[derive(Default, Debug, Clone)]
+pub struct Stats {
+    /// (label, ms per frame), in scheduling order; a label's tasks of one frame are summed
+    /// (the debug views run only in frames that ask for them).
+    pub sdk: Vec<(String, Vec<f64>)>,
+    pub passes: Vec<(String, Vec<f64>)>,
+    pub first_frame_bvh_ms: f64,
+    pub frames: u64,
+}
+
+impl Stats {
+    fn add(list: &mut Vec<(String, Vec<f64>)>, frame_values: Vec<(String, f64)>) {
+        for (k, v) in frame_values {
+            match list.iter_mut().find(|(l, _)| *l == k) {
+                Some((_, values)) => values.push(v),
+                None => list.push((k, vec![v])),
+            }
+        }
+    }
+
+    /// (label, mean ms) of the SDK's tasks and of the sample's own passes.
+    pub fn means(list: &[(String, Vec<f64>)]) -> Vec<(String, f64)> {
+        list.iter().map(|(l, v)| (l.clone(), v.iter().sum::<f64>() / v.len().max(1) as f64)).collect()
+    }
+}
+
+pub struct Renderer<'h> {
+    host: &'h Host,
+    pub ctx: ExecuteContext,
+    container: TaskContainer,
+    pub scene: SampleScene,
+    pub settings: Settings,
+    geometries: Vec<GeometryHandle>,
+    pub instances: Vec<InstanceHandle>,
+    meshes: MeshBuffers,
+    gbuffer: GBufferPass,
+    lighting: LightingPass,
+    composite: ComputePass,
+    view: ComputePass,
+    slots: Vec<Slot>,
+    work: Work,
+    denoisers: Denoisers,
+    frame: u64,
+    last_slot: usize,
+    prev_transforms: Vec<glam::Affine3A>,
+    pub stats: Stats,
+}
+
+fn work_image(host: &Host, width: u32, height: u32) -> HostResult<HostImage> {
+    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC;
+    host.image_cleared(WORK_FORMAT, width, height, usage, GENERAL)
+}
+
+fn sdk_err(e: hybrid_rt::Error) -> String {
+    e.to_string()
+}
+
+impl<'h> Renderer<'h> {
+    pub fn new(host: &'h Host, scene: SampleScene, settings: Settings) -> HostResult<Renderer<'h>> {
+        let (w, h) = (settings.width, settings.height);
+        let ctx = ExecuteContext::new(&host.device_desc(), &InitSettings { supported_working_sets: SLOTS as u32, ..Default::default() }).map_err(sdk_err)?;
+        let mut container = ctx.create_task_container();
+        let meshes = MeshBuffers::upload(host, &scene.scene)?;
+        // Register every mesh and instance (one BLAS per mesh; the flag's may be refit).
+        let geometries = ctx.create_geometry_handles(scene.scene.meshes.len());
+        let deformed_mesh = scene.deformer.as_ref().map(|d| scene.scene.instances[d.instance].mesh);
+        for (i, &handle) in geometries.iter().enumerate() {
+            let input = GeometryInput {
+                allow_update: Some(i) == deformed_mesh,
+                surfels: SurfelSettings { tile_unit_length: scene.tile_unit_length, ..Default::default() },
+                ..meshes.geometry_input(i)
+            };
+            container.schedule_geometry(&GeometryTask { handle, operation: TaskOperation::Register, input }).map_err(sdk_err)?;
+        }
+        let instances = ctx.create_instance_handles(scene.scene.instances.len());
+        for (i, &handle) in instances.iter().enumerate() {
+            let inst = &scene.scene.instances[i];
+            let input = InstanceInput {
+                geometry: geometries[inst.mesh],
+                transform: scene.transform(i, 0.0),
+                initial_tile_color: settings.unlit_color,
+                ..Default::default()
+            };
+            container.schedule_instance(&InstanceTask { handle, operation: InstanceOperation::Register, input }).map_err(sdk_err)?;
+        }
+        let mut slots = Vec::new();
+        for _ in 0..SLOTS {
+            let deformed = match &scene.deformer {
+                Some(d) => Some(host.buffer_with_data(bytemuck::cast_slice(&d.rest), MeshBuffers::VERTEX_USAGE)?),
+                None => None,
+            };
+            // SAFETY: plain object creation; destroyed in `destroy`.
+            let fence = unsafe { host.device.create_fence(&vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED), None) }
+                .map_err(|e| format!("fence: {e:?}"))?;
+            let camera = scene.camera_path.at(0.0);
+            slots.push(Slot {
+                cmd: host.allocate_command_buffer()?,
+                fence,
+                ticket: None,
+                timer: GpuTimer::new(host)?,
+                main: View::new(host, w, h)?,
+                lidar: View::new(host, settings.lidar_size, settings.lidar_size)?,
+                deformed,
+                labels: Vec::new(),
+                camera,
+                lidar_camera: camera,
+                frame: 0,
+                recorded: false,
+            });
+        }
+        let ls = settings.lidar_size;
+        let work = Work {
+            sun_noisy: work_image(host, w, h)?,
+            sun: work_image(host, w, h)?,
+            point_noisy: work_image(host, w, h)?,
+            point: work_image(host, w, h)?,
+            ao_noisy: work_image(host, w, h)?,
+            ao: work_image(host, w, h)?,
+            diffuse_noisy: work_image(host, w, h)?,
+            diffuse: work_image(host, w, h)?,
+            specular_noisy: work_image(host, w, h)?,
+            specular: work_image(host, w, h)?,
+            composite: work_image(host, w, h)?,
+            lidar_sun: work_image(host, ls, ls)?,
+            lidar_point: work_image(host, ls, ls)?,
+            debug: HashMap::new(),
+            linear: host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, w, h, vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC, GENERAL)?,
+            display: host.image_cleared(vk::Format::R8G8B8A8_UNORM, w, h, vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC, GENERAL)?,
+        };
+        let context = |signal| ctx.create_denoising_context(&DenoisingContextInput { max_width: w, max_height: h, signal, ..Default::default() });
+        let denoisers = Denoisers {
+            sun: context(SignalType::Shadow).map_err(sdk_err)?,
+            point: context(SignalType::Shadow).map_err(sdk_err)?,
+            ao: context(SignalType::DiffuseOcclusion).map_err(sdk_err)?,
+            radiance: context(SignalType::SpecularAndDiffuse).map_err(sdk_err)?,
+        };
+        let prev_transforms = (0..scene.scene.instances.len()).map(|i| scene.transform(i, 0.0)).collect();
+        Ok(Renderer {
+            host,
+            ctx,
+            container,
+            scene,
+            settings,
+            geometries,
+            instances,
+            meshes,
+            gbuffer: GBufferPass::new(host)?,
+            lighting: LightingPass::new(host)?,
+            composite: ComputePass::new(host, spirv::COMPOSITE_COMP, 7, 1)?,
+            view: ComputePass::new(host, spirv::VIEW_COMP, 1, 2)?,
+            slots,
+            work,
+            denoisers,
+            frame: 0,
+            last_slot: 0,
+            prev_transforms,
+            stats: Stats::default(),
+        })
+    }
+
+    /// Frames recorded so far.
+    pub fn frames(&self) -> u64 {
+        self.frame
+    }
+
+    /// Waits for the next slot's previous frame, hands its ticket back (collecting its GPU
+    /// times) and starts its command buffer. Returns the slot.
+    pub fn begin_frame(&mut self) -> HostResult<usize> {
+        let slot = (self.frame % SLOTS as u64) as usize;
+        self.retire(slot)?;
+        let s = &mut self.slots[slot];
+        // SAFETY: the slot's previous submission finished (retire waited on its fence).
+        unsafe {
+            self.host.device.reset_command_buffer(s.cmd, vk::CommandBufferResetFlags::empty()).map_err(|e| format!("reset: {e:?}"))?;
+            self.host.device.reset_fences(&[s.fence]).map_err(|e| format!("reset fence: {e:?}"))?;
+        }
+        self.host.begin(s.cmd)?;
+        Ok(slot)
+    }
+
+    pub fn command_buffer(&self, slot: usize) -> vk::CommandBuffer {
+        self.slots[slot].cmd
+    }
+
+    /// Waits for `slot`'s frame, if any, and hands its ticket back.
+    fn retire(&mut self, slot: usize) -> HostResult<()> {
+        let s = &mut self.slots[slot];
+        if !s.recorded {
+            return Ok(());
+        }
+        // SAFETY: the fence belongs to this device.
+        unsafe { self.host.device.wait_for_fences(&[s.fence], true, u64::MAX) }.map_err(|e| format!("wait: {e:?}"))?;
+        s.recorded = false;
+        let mut sdk: Vec<(String, f64)> = Vec::new();
+        if let Some(ticket) = s.ticket.take() {
+            let done = self.ctx.mark_gpu_task_completed(ticket).map_err(sdk_err)?;
+            let mut used = vec![false; s.labels.len()];
+            for t in &done.timings {
+                let label = match s.labels.iter().enumerate().position(|(i, (k, _))| *k == t.kind && !used[i]) {
+                    Some(i) => {
+                        used[i] = true;
+                        s.labels[i].1.to_string()
+                    }
+                    None => format!("{:?}", t.kind),
+                };
+                match sdk.iter_mut().find(|(l, _)| *l == label) {
+                    Some((_, ms)) => *ms += t.gpu_ms,
+                    None => sdk.push((label, t.gpu_ms)),
+                }
+            }
+            if s.frame == 0 {
+                self.stats.first_frame_bvh_ms = done.gpu_ms(TaskKind::Bvh);
+            }
+        }
+        let passes: Vec<(String, f64)> = s.timer.read(self.host).into_iter().map(|(l, ms)| (l.to_string(), ms)).collect();
+        if s.frame > 0 {
+            Stats::add(&mut self.stats.sdk, sdk);
+            Stats::add(&mut self.stats.passes, passes);
+            self.stats.frames += 1;
+        }
+        Ok(())
+    }
+
+    /// The lidar camera at `frame`: it turns a quarter-circle-and-a-bit per frame and nods up
+    /// and down, so within a dozen frames every wall, the floor and the sky side have been in
+    /// its 110-degree view.
+    fn lidar_camera(&self, frame: u64) -> Camera {
+        let yaw = frame as f32 * 0.45;
+        let pitch = (frame as f32 * 0.9).sin() * 0.5 - 0.25;
+        let dir = Vec3::new(yaw.cos() * pitch.cos(), pitch.sin(), yaw.sin() * pitch.cos());
+        let eye = self.scene.lidar_eye;
+        Camera { fov_y_radians: 110f32.to_radians(), ..Camera::look_at(eye, eye + dir) }
+    }
+
+    /// Records the frame into `slot`'s command buffer: `camera` at `time` seconds; `debug` are
+    /// the SDK debug visualisations to trace this frame; `view` the mode to put into the view
+    /// images (for a window or a capture).
+    pub fn record_frame(&mut self, slot: usize, camera: Camera, time: f32, debug: &[DebugOutput], view: Option<Mode>) -> HostResult<()> {
+        let host = self.host;
+        let (w, h) = (self.settings.width, self.settings.height);
+        let prev = (slot + SLOTS - 1) % SLOTS;
+        let frame = self.frame;
+        let lidar_camera = self.lidar_camera(frame);
+        let (prev_camera, prev_lidar) = if frame == 0 { (camera, lidar_camera) } else { (self.slots[prev].camera, self.slots[prev].lidar_camera) };
+        let cmd = self.slots[slot].cmd;
+        self.slots[slot].timer.begin(host, cmd);
+        // The previous frame's writes (this queue's last submission) before anything of this one.
+        host.full_barrier(cmd);
+
+        // --- The engine's scene: animate, then rasterize both views.
+        let transforms: Vec<_> = (0..self.scene.scene.instances.len()).map(|i| self.scene.transform(i, time)).collect();
+        let mut deformed_buffer = None;
+        if let (Some(d), Some(buffer)) = (&self.scene.deformer, &self.slots[slot].deformed) {
+            host.write_buffer(buffer, bytemuck::cast_slice(&d.positions(time)))?;
+            deformed_buffer = Some((self.scene.scene.instances[d.instance].mesh, buffer.buffer));
+        }
+        let draws: Vec<Draw> = (0..transforms.len())
+            .map(|i| Draw {
+                mesh: self.scene.scene.instances[i].mesh,
+                transform: transforms[i],
+                prev_transform: self.prev_transforms[i],
+                material: self.scene.materials[i],
+                vertex_buffer: deformed_buffer.filter(|(m, _)| *m == self.scene.scene.instances[i].mesh).map(|(_, b)| b),
+            })
+            .collect();
+        {
+            let s = &self.slots[slot];
+            self.gbuffer.record(host, cmd, 2 * slot, &s.main.targets, &self.meshes, &draws, &camera, &prev_camera)?;
+            // The lidar view has no use for motion: its previous camera is its current one.
+            self.gbuffer.record(host, cmd, 2 * slot + 1, &s.lidar.targets, &self.meshes, &draws, &lidar_camera, &lidar_camera)?;
+        }
+        self.slots[slot].timer.mark(host, cmd, "raster G-buffers (main + lidar)");
+
+        // --- The SDK: one container for everything of this frame.
+        let mut labels = Vec::new();
+        let (sun, point) = self.lights();
+        let reach = self.reach();
+        let c = &mut self.container;
+        for (i, t) in transforms.iter().enumerate() {
+            if self.scene.is_dynamic(i) {
+                let input = InstanceInput { geometry: self.geometries[self.scene.scene.instances[i].mesh], transform: *t, initial_tile_color: self.settings.unlit_color, ..Default::default() };
+                c.schedule_instance(&InstanceTask { handle: self.instances[i], operation: InstanceOperation::Update, input }).map_err(sdk_err)?;
+            }
+        }
+        if let Some((mesh, buffer)) = deformed_buffer {
+            let base = self.meshes.geometry_input(mesh);
+            let input = GeometryInput {
+                vertices: VertexBufferInput { buffer, ..base.vertices },
+                allow_update: true,
+                surfels: SurfelSettings { tile_unit_length: self.scene.tile_unit_length, ..Default::default() },
+                ..base
+            };
+            c.schedule_geometry(&GeometryTask { handle: self.geometries[mesh], operation: TaskOperation::Update, input }).map_err(sdk_err)?;
+        }
+        c.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: self.settings.max_blas_build_count }).map_err(sdk_err)?;
+        labels.push((TaskKind::Bvh, "BVH (updates, refit, TLAS)"));
+        let main_inputs = Inputs::of(&self.slots[slot].main.targets, &camera);
+        let lidar_inputs = Inputs::of(&self.slots[slot].lidar.targets, &lidar_camera);
+        if frame > 0 {
+            let window = self.settings.injection_window;
+            let p = &self.slots[prev];
+            for (view, cam, label) in [(&p.main, &prev_camera, "inject main (last frame)"), (&p.lidar, &prev_lidar, "inject lidar (last frame)")] {
+                let inputs = Inputs::of(&view.targets, cam);
+                c.schedule_direct_lighting_injection(&DirectLightingInjectionTask {
+                    depth: inputs.common.depth,
+                    lit: view.lit.input(GENERAL),
+                    viewport: inputs.common.viewport,
+                    camera: inputs.common.camera,
+                    average_window: window,
+                    ..Default::default()
+                })
+                .map_err(sdk_err)?;
+                labels.push((TaskKind::DirectLightingInjection, label));
+            }
+        }
+        let wk = &self.work;
+        let rays = self.settings.rays_per_pixel;
+        let mut common = main_inputs.common;
+        common.half_resolution_mode = self.settings.checkerboard;
+        // Shadows: the main view 1 ray + denoiser, the lidar view 4 rays (it is small and
+        // its image only feeds the cache).
+        for (light, noisy, out, ctx, label) in [(sun, &wk.sun_noisy, &wk.sun, self.denoisers.sun, "sun"), (point, &wk.point_noisy, &wk.point, self.denoisers.point, "point")] {
+            c.schedule_shadow(&TraceShadowTask { common, light, output: noisy.input(GENERAL), rays_per_pixel: rays }).map_err(sdk_err)?;
+            labels.push((TaskKind::Shadow, if label == "sun" { "shadow sun" } else { "shadow point" }));
+            c.schedule_denoise_shadow(&DenoiseShadowTask { context: ctx, common: main_inputs.denoising, light, input: noisy.input(GENERAL), output: out.input(GENERAL) })
+                .map_err(sdk_err)?;
+            labels.push((TaskKind::DenoiseShadow, if label == "sun" { "denoise shadow sun" } else { "denoise shadow point" }));
+        }
+        for (light, out) in [(sun, &wk.lidar_sun), (point, &wk.lidar_point)] {
+            c.schedule_shadow(&TraceShadowTask { common: lidar_inputs.common, light, output: out.input(GENERAL), rays_per_pixel: 4 }).map_err(sdk_err)?;
+            labels.push((TaskKind::Shadow, "shadow lidar"));
+        }
+        c.schedule_ambient_occlusion(&TraceAmbientOcclusionTask {
+            common,
+            output: wk.ao_noisy.input(GENERAL),
+            ray_length: self.scene.ao_ray_length,
+            rays_per_pixel: rays,
+            ..Default::default()
+        })
+        .map_err(sdk_err)?;
+        labels.push((TaskKind::AmbientOcclusion, "AO"));
+        c.schedule_denoise_diffuse_occlusion(&DenoiseDiffuseOcclusionTask {
+            context: self.denoisers.ao,
+            common: main_inputs.denoising,
+            input: wk.ao_noisy.input(GENERAL),
+            output: wk.ao.input(GENERAL),
+        })
+        .map_err(sdk_err)?;
+        labels.push((TaskKind::DenoiseDiffuseOcclusion, "denoise AO"));
+        let sky = self.scene.sky;
+        c.schedule_diffuse(&TraceDiffuseTask { common, output: wk.diffuse_noisy.input(GENERAL), rays_per_pixel: rays, ray_length: reach, miss_radiance: sky, ..Default::default() })
+            .map_err(sdk_err)?;
+        labels.push((TaskKind::Diffuse, "diffuse GI"));
+        c.schedule_specular(&TraceSpecularTask {
+            common,
+            output: wk.specular_noisy.input(GENERAL),
+            rays_per_pixel: rays,
+            ray_length: reach,
+            miss_radiance: sky,
+            // One sample of a glossy lobe that finds the sun-lit wall can be 50x its
+            // neighbours; the denoiser spreads such a spike into a blotch.
+            firefly_clamp: 8.0,
+            ..Default::default()
+        })
+        .map_err(sdk_err)?;
+        labels.push((TaskKind::Specular, "reflections"));
+        c.schedule_denoise_specular_and_diffuse(&DenoiseSpecularAndDiffuseTask {
+            context: self.denoisers.radiance,
+            common: main_inputs.denoising,
+            input_specular: wk.specular_noisy.input(GENERAL),
+            input_diffuse: wk.diffuse_noisy.input(GENERAL),
+            output_specular: wk.specular.input(GENERAL),
+            output_diffuse: wk.diffuse.input(GENERAL),
+        })
+        .map_err(sdk_err)?;
+        labels.push((TaskKind::DenoiseSpecularAndDiffuse, "denoise reflections + GI"));
+        for &mode in debug {
+            if !self.work.debug.contains_key(&mode) {
+                let img = work_image(host, w, h)?;
+                self.work.debug.insert(mode, img);
+            }
+            let output = self.work.debug[&mode].input(GENERAL);
+            let task = TraceAmbientOcclusionTask { common: TraceCommon { debug_output: mode, ..main_inputs.common }, output, ..Default::default() };
+            self.container.schedule_ambient_occlusion(&task).map_err(sdk_err)?;
+            labels.push((TaskKind::AmbientOcclusion, "debug views"));
+        }
+        let ticket = self.ctx.build_gpu_task(&mut self.container, cmd).map_err(sdk_err)?;
+        let s = &mut self.slots[slot];
+        s.ticket = Some(ticket);
+        s.labels = labels;
+        s.timer.mark(host, cmd, "SDK (all tasks)");
+        host.full_barrier(cmd);
+
+        // --- The engine's lighting and composite.
+        let lights = self.scene.lights;
+        let wk = &self.work;
+        let s = &self.slots[slot];
+        let main_vis = Visibility { sun: &wk.sun, point: &wk.point, layout: GENERAL, raw_trace: false };
+        self.lighting.record(host, cmd, 2 * slot, &s.main.targets, &camera, &lights, main_vis, &s.main.lit)?;
+        let lidar_vis = Visibility { sun: &wk.lidar_sun, point: &wk.lidar_point, layout: GENERAL, raw_trace: true };
+        self.lighting.record(host, cmd, 2 * slot + 1, &s.lidar.targets, &lidar_camera, &lights, lidar_vis, &s.lidar.lit)?;
+        self.slots[slot].timer.mark(host, cmd, "direct lighting (main + lidar)");
+        host.full_barrier(cmd);
+        self.record_composite(slot, &camera)?;
+        self.slots[slot].timer.mark(host, cmd, "composite");
+        if let Some(mode) = view {
+            host.full_barrier(cmd);
+            self.record_view(cmd, slot, mode)?;
+            self.slots[slot].timer.mark(host, cmd, "view");
+        }
+        let s = &mut self.slots[slot];
+        s.camera = camera;
+        s.lidar_camera = lidar_camera;
+        s.frame = frame;
+        self.prev_transforms = transforms;
+        self.last_slot = slot;
+        Ok(())
+    }
+
+    /// The furthest a GI or reflection ray needs to go: the scene's diagonal.
+    fn reach(&self) -> f32 {
+        let (lo, hi) = self.scene.bounds();
+        (hi - lo).length().max(1.0)
+    }
+
+    /// The sun and the point light as the SDK's shadow tasks take them.
+    fn lights(&self) -> (LightInfo, LightInfo) {
+        let l = &self.scene.lights;
+        let sun = LightInfo { direction: -l.sun_direction, angular_extent: self.scene.sun_angular_extent, ..Default::default() };
+        let point = LightInfo { light_type: LightType::Point, position: l.point_position, radius: self.scene.point_radius, ..Default::default() };
+        (sun, point)
+    }
+
+    fn record_composite(&mut self, slot: usize, camera: &Camera) -> HostResult<()> {
+        let (w, h) = (self.settings.width, self.settings.height);
+        let t = &self.slots[slot].main.targets;
+        let clip_to_world = (camera.view_to_clip(w as f32 / h as f32) * camera.world_to_view()).inverse();
+        #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+        #[repr(C)]
+        struct CompositeGpu {
+            clip_to_world: [f32; 16],
+            eye: [f32; 4],
+            sky: [f32; 4],
+            terms: [f32; 4],
+        }
+        let sky = self.scene.sky;
+        let constants = CompositeGpu {
+            clip_to_world: clip_to_world.to_cols_array(),
+            eye: camera.eye.extend(1.0).to_array(),
+            sky: [sky[0], sky[1], sky[2], w as f32],
+            terms: [1.0, 1.0, 1.0, h as f32],
+        };
+        let wk = &self.work;
+        let read = raster::READ;
+        let sampled = [
+            (&t.depth, read),
+            (&t.normal_roughness, read),
+            (&t.albedo_metalness, read),
+            (&self.slots[slot].main.lit, GENERAL),
+            (&wk.diffuse, GENERAL),
+            (&wk.ao, GENERAL),
+            (&wk.specular, GENERAL),
+        ];
+        self.composite.dispatch(self.host, self.slots[slot].cmd, slot, &sampled, &[&wk.composite], bytemuck::bytes_of(&constants), w, h)
+    }
+
+    fn record_view(&mut self, cmd: vk::CommandBuffer, slot: usize, mode: Mode) -> HostResult<()> {
+        let (w, h) = (self.settings.width, self.settings.height);
+        let m = mode.mapping();
+        #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+        #[repr(C)]
+        struct ViewGpu {
+            swizzle: [f32; 16],
+            bias: [f32; 4],
+            params: [f32; 4],
+        }
+        let constants = ViewGpu {
+            swizzle: m.swizzle.to_cols_array(),
+            bias: m.bias.to_array(),
+            params: [self.settings.exposure, if m.tone_map { 1.0 } else { 0.0 }, w as f32, h as f32],
+        };
+        let sampled = [source(&self.work, &self.slots[slot], mode)];
+        self.view.dispatch(self.host, cmd, slot, &sampled, &[&self.work.linear, &self.work.display], bytemuck::bytes_of(&constants), w, h)
+    }
+
+    /// Ends and submits `slot`'s frame with `waits` and `signals` (a window's swapchain
+    /// semaphores), fenced by the slot's fence.
+    pub fn submit_frame(&mut self, slot: usize, waits: &[(vk::Semaphore, vk::PipelineStageFlags)], signals: &[vk::Semaphore]) -> HostResult<()> {
+        let s = &mut self.slots[slot];
+        let d = &self.host.device;
+        let cmds = [s.cmd];
+        let (wait_sems, wait_stages): (Vec<_>, Vec<_>) = waits.iter().copied().unzip();
+        let info = vk::SubmitInfo::default().command_buffers(&cmds).wait_semaphores(&wait_sems).wait_dst_stage_mask(&wait_stages).signal_semaphores(signals);
+        // SAFETY: the command buffer was recorded by `record_frame`; the fence was reset.
+        unsafe {
+            d.end_command_buffer(s.cmd).map_err(|e| format!("end: {e:?}"))?;
+            d.queue_submit(self.host.queue, &[info], s.fence).map_err(|e| format!("submit: {e:?}"))?;
+        }
+        s.recorded = true;
+        self.frame += 1;
+        Ok(())
+    }
+
+    /// Begin, record (with `view`) and submit one frame with no window.
+    pub fn render(&mut self, camera: Camera, time: f32, debug: &[DebugOutput], view: Option<Mode>) -> HostResult<()> {
+        let slot = self.begin_frame()?;
+        self.record_frame(slot, camera, time, debug, view)?;
+        self.submit_frame(slot, &[], &[])
+    }
+
+    /// Waits for every frame in flight and hands their tickets back.
+    pub fn finish(&mut self) -> HostResult<()> {
+        for slot in 0..SLOTS {
+            self.retire(slot)?;
+        }
+        Ok(())
+    }
+
+    /// After `finish`: `mode` of the last frame as linear RGBA (EXR) and sRGB RGBA8 (PNG).
+    pub fn capture(&mut self, mode: Mode) -> HostResult<(Vec<[f32; 4]>, Vec<u8>)> {
+        let slot = self.last_slot;
+        let host = self.host;
+        let cmd = host.allocate_command_buffer()?;
+        host.begin(cmd)?;
+        host.full_barrier(cmd);
+        self.record_view(cmd, slot, mode)?;
+        host.full_barrier(cmd);
+        let fence = host.submit(cmd)?;
+        host.wait(fence)?;
+        let linear = bytemuck::cast_slice(&host.read_image(&self.work.linear, GENERAL)?).to_vec();
+        let display = host.read_image(&self.work.display, GENERAL)?;
+        Ok((linear, display))
+    }
+
+    /// The display image (RGBA8, GENERAL) the view pass writes: a window blits it.
+    pub fn display_image(&self) -> &HostImage {
+        &self.work.display
+    }
+
+    /// Bytes of every instance's direct-lighting cache.
+    pub fn cache_bytes(&self) -> u64 {
+        self.instances.iter().map(|h| self.ctx.instance_cache_bytes(*h).unwrap_or(0)).sum()
+    }
+
+    pub fn destroy(mut self) -> HostResult<()> {
+        self.finish()?;
+        let host = self.host;
+        for d in [self.denoisers.sun, self.denoisers.point, self.denoisers.ao, self.denoisers.radiance] {
+            self.ctx.destroy_denoising_context(d).map_err(sdk_err)?;
+        }
+        drop(self.container);
+        drop(self.ctx);
+        for s in self.slots {
+            // SAFETY: finished above.
+            unsafe { host.device.destroy_fence(s.fence, None) };
+            s.timer.destroy(host);
+            s.main.destroy(host);
+            s.lidar.destroy(host);
+            if let Some(b) = s.deformed {
+                host.destroy_buffer(b);
+            }
+        }
+        let w = self.work;
+        for i in [w.sun_noisy, w.sun, w.point_noisy, w.point, w.ao_noisy, w.ao, w.diffuse_noisy, w.diffuse, w.specular_noisy, w.specular, w.composite, w.lidar_sun, w.lidar_point, w.linear, w.display]
+            .into_iter()
+            .chain(w.debug.into_values())
+        {
+            host.destroy_image(i);
+        }
+        self.meshes.destroy(host);
+        self.gbuffer.destroy(host);
+        self.lighting.destroy(host);
+        self.composite.destroy(host);
+        self.view.destroy(host);
+        Ok(())
+    }
+}
+
+/// The image behind `mode` and the layout it is in (from the last recorded frame).
+fn source<'a>(wk: &'a Work, s: &'a Slot, mode: Mode) -> (&'a HostImage, vk::ImageLayout) {
+    let read = raster::READ;
+    match mode {
+        Mode::Composite => (&wk.composite, GENERAL),
+        Mode::Direct => (&s.main.lit, GENERAL),
+        Mode::Albedo | Mode::Metalness => (&s.main.targets.albedo_metalness, read),
+        Mode::Normals | Mode::Roughness => (&s.main.targets.normal_roughness, read),
+        Mode::Motion => (&s.main.targets.motion, read),
+        Mode::SunShadowNoisy => (&wk.sun_noisy, GENERAL),
+        Mode::SunShadow => (&wk.sun, GENERAL),
+        Mode::PointShadowNoisy => (&wk.point_noisy, GENERAL),
+        Mode::PointShadow => (&wk.point, GENERAL),
+        Mode::AoNoisy => (&wk.ao_noisy, GENERAL),
+        Mode::Ao => (&wk.ao, GENERAL),
+        Mode::DiffuseNoisy => (&wk.diffuse_noisy, GENERAL),
+        Mode::Diffuse => (&wk.diffuse, GENERAL),
+        Mode::SpecularNoisy => (&wk.specular_noisy, GENERAL),
+        Mode::Specular => (&wk.specular, GENERAL),
+        Mode::Lidar => (&s.lidar.lit, GENERAL),
+        Mode::Debug(d) => (wk.debug.get(&d).unwrap_or(&wk.composite), GENERAL),
+    }
+}
+
+/// The SDK inputs a view's G-buffer makes: trace and denoise commons.
+struct Inputs {
+    common: TraceCommon,
+    denoising: DenoisingCommon,
+}
+
+impl Inputs {
+    fn of(t: &Targets, camera: &Camera) -> Inputs {
+        let read = raster::READ;
+        let depth = DepthInput { image: t.depth.input(read), depth_type: DepthType::ClipSpace };
+        let normals = NormalInput { image: t.normal_roughness.input(read), normal_type: NormalType::RgbVector, space: NormalSpace::World };
+        // Roughness lives in the normal target's alpha.
+        let roughness = RoughnessInput { image: t.normal_roughness.input(read), channel_mask: [0.0, 0.0, 0.0, 1.0], global_roughness: 1.0 };
+        let viewport = Viewport::full(t.width, t.height);
+        let sdk_camera = camera.sdk_camera(t.width, t.height);
+        let common = TraceCommon { depth, normals, roughness, viewport, camera: sdk_camera, ..Default::default() };
+        let motion = MotionInput { image: t.motion.input(read), motion_type: MotionType::RgViewSpace, scale: [1.0; 3] };
+        let denoising = DenoisingCommon { depth, normals, roughness, motion, viewport, camera: sdk_camera, ..Default::default() };
+        Inputs { common, denoising }
+    }
+}

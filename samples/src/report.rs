@@ -1,0 +1,103 @@
+//! The sample's account of a run: the frame's GPU time broken down per SDK task (from the
+//! SDK's timestamp queries, handed back with each ticket) and per pass of the sample's own
+//! (its timestamp queries), means over the frames after the first; and the SDK's memory.
+use crate::renderer::{Renderer, Stats};
+
+pub struct Report {
+    pub device: String,
+    pub width: u32,
+    pub height: u32,
+    pub frames: u64,
+    pub first_frame_bvh_ms: f64,
+    pub sdk: Vec<(String, f64)>,
+    pub passes: Vec<(String, f64)>,
+    pub sdk_bytes: u64,
+    pub cache_bytes: u64,
+    pub denoiser_bytes: u64,
+    pub blas_bytes: u64,
+    pub triangles: usize,
+}
+
+impl Report {
+    pub fn new(r: &Renderer) -> Report {
+        let mem = r.ctx.resource_allocations();
+        Report {
+            device: r.ctx.device_name().to_string(),
+            width: r.settings.width,
+            height: r.settings.height,
+            frames: r.stats.frames,
+            first_frame_bvh_ms: r.stats.first_frame_bvh_ms,
+            sdk: Stats::means(&r.stats.sdk),
+            passes: Stats::means(&r.stats.passes),
+            sdk_bytes: mem.total_bytes(),
+            cache_bytes: r.cache_bytes(),
+            denoiser_bytes: mem.denoiser.bytes,
+            blas_bytes: mem.blas.bytes,
+            triangles: r.scene.scene.triangle_count(),
+        }
+    }
+
+    /// The whole frame: the sample's passes, of which "SDK (all tasks)" spans the SDK's.
+    pub fn frame_ms(&self) -> f64 {
+        self.passes.iter().map(|(_, ms)| ms).sum()
+    }
+
+    /// SDK task times without the parts the BVH total already contains.
+    fn sdk_tasks(&self) -> impl Iterator<Item = &(String, f64)> {
+        self.sdk.iter().filter(|(l, _)| l != "BlasBuild" && l != "TlasBuild")
+    }
+
+    pub fn text(&self) -> String {
+        let mib = |b: u64| b as f64 / 1048576.0;
+        let mut s = format!(
+            "GPU time per frame on {} at {}x{} (mean of {} frames after the first; the first frame's BVH build took {:.3} ms):\n",
+            self.device, self.width, self.height, self.frames, self.first_frame_bvh_ms
+        );
+        for (label, ms) in &self.passes {
+            s += &format!("  {label:<40} {ms:8.3} ms\n");
+            if label.starts_with("SDK") {
+                for (task, ms) in self.sdk_tasks() {
+                    s += &format!("    {task:<38} {ms:8.3} ms\n");
+                }
+            }
+        }
+        s += &format!("  {:<40} {:8.3} ms\n", "frame", self.frame_ms());
+        s += &format!(
+            "SDK memory: {:.1} MiB ({} triangles: BLAS {:.1} MiB; direct-lighting caches {:.1} MiB; denoiser history {:.1} MiB)\n",
+            mib(self.sdk_bytes),
+            self.triangles,
+            mib(self.blas_bytes),
+            mib(self.cache_bytes),
+            mib(self.denoiser_bytes)
+        );
+        s
+    }
+
+    /// A compact line for a window title.
+    pub fn title(&self) -> String {
+        let sdk: f64 = self.passes.iter().filter(|(l, _)| l.starts_with("SDK")).map(|(_, ms)| ms).sum();
+        format!("frame {:.2} ms (SDK {:.2} ms)", self.frame_ms(), sdk)
+    }
+
+    pub fn json(&self) -> String {
+        let list = |v: &mut dyn Iterator<Item = &(String, f64)>| {
+            v.map(|(l, ms)| format!("{{\"label\": \"{l}\", \"gpu_ms\": {ms:.4}}}")).collect::<Vec<_>>().join(", ")
+        };
+        format!(
+            "{{\"device\": \"{}\", \"width\": {}, \"height\": {}, \"frames\": {}, \"first_frame_bvh_ms\": {:.4}, \"frame_gpu_ms\": {:.4}, \"passes\": [{}], \"sdk_tasks\": [{}], \"sdk_bytes\": {}, \"cache_bytes\": {}, \"denoiser_bytes\": {}, \"blas_bytes\": {}, \"triangles\": {}}}\n",
+            self.device,
+            self.width,
+            self.height,
+            self.frames,
+            self.first_frame_bvh_ms,
+            self.frame_ms(),
+            list(&mut self.passes.iter()),
+            list(&mut self.sdk_tasks()),
+            self.sdk_bytes,
+            self.cache_bytes,
+            self.denoiser_bytes,
+            self.blas_bytes,
+            self.triangles
+        )
+    }
+}

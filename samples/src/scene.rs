@@ -1,0 +1,120 @@
+//! What the sample renders: triangle meshes and their instances (the test kit's `Scene`), one
+//! material per instance, what moves, the lights, and the camera path of a headless run.
+//! Built by `scenes::cornell_room` or loaded from glTF (`gltf_scene`).
+use crate::lighting::Lights;
+use crate::raster::Material;
+use glam::{Affine3A, Quat, Vec3};
+use hybrid_rt_testkit::reference::{Camera, Scene};
+
+/// How an instance moves over time (seconds).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Motion {
+    Static,
+    /// Circles `center` at `radius` once every `period` seconds, spinning as it goes.
+    Orbit { center: Vec3, radius: f32, period: f32 },
+}
+
+/// A mesh whose vertices move every frame (cloth, skinning): its BLAS is refit each frame.
+#[derive(Clone, Debug)]
+pub struct Deformer {
+    /// The instance that shows it (its mesh is the deformed one).
+    pub instance: usize,
+    /// Vertex positions at rest.
+    pub rest: Vec<Vec3>,
+    /// Largest displacement along the mesh's normal (+Z of the rest mesh).
+    pub amplitude: f32,
+}
+
+impl Deformer {
+    /// A travelling wave across the mesh, pinned along its left edge (a flag).
+    pub fn positions(&self, time: f32) -> Vec<Vec3> {
+        let min_x = self.rest.iter().map(|p| p.x).fold(f32::INFINITY, f32::min);
+        self.rest
+            .iter()
+            .map(|p| {
+                let along = p.x - min_x;
+                let wave = (along * 4.0 - time * 3.0).sin() + 0.4 * (p.y * 3.0 + time * 1.7).sin();
+                *p + Vec3::Z * (self.amplitude * along.min(1.0) * wave)
+            })
+            .collect()
+    }
+}
+
+/// A camera moving from `from` to `to` (eye positions) while looking at `target`.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraPath {
+    pub from: Vec3,
+    pub to: Vec3,
+    pub target: Vec3,
+    pub fov_y_radians: f32,
+}
+
+impl CameraPath {
+    /// The camera at `u` in [0, 1] along the path (eased at both ends).
+    pub fn at(&self, u: f32) -> Camera {
+        let s = u.clamp(0.0, 1.0);
+        let s = s * s * (3.0 - 2.0 * s);
+        let eye = self.from.lerp(self.to, s);
+        let far = (self.to - self.target).length().max((self.from - self.target).length()) * 20.0;
+        let near = ((eye - self.target).length() * 0.01).min(0.05);
+        Camera { fov_y_radians: self.fov_y_radians, near, far: far.max(100.0), ..Camera::look_at(eye, self.target) }
+    }
+}
+
+/// Everything the sample draws and traces.
+pub struct SampleScene {
+    pub name: String,
+    pub scene: Scene,
+    /// One per instance of `scene`.
+    pub materials: Vec<Material>,
+    /// One per instance of `scene`.
+    pub motions: Vec<Motion>,
+    pub deformer: Option<Deformer>,
+    pub lights: Lights,
+    /// Angular diameter of the sun (radians) and radius of the point light (world units): the
+    /// SDK's shadow rays sample them, so penumbrae widen with distance to the occluder.
+    pub sun_angular_extent: f32,
+    pub point_radius: f32,
+    /// Radiance of GI and reflection rays that leave the scene.
+    pub sky: [f32; 3],
+    pub camera_path: CameraPath,
+    /// Where the low-resolution "lidar" camera sits while it sweeps the scene.
+    pub lidar_eye: Vec3,
+    /// Surfel tile size (world units) for every geometry.
+    pub tile_unit_length: f32,
+    /// Longest AO ray (world units).
+    pub ao_ray_length: f32,
+}
+
+impl SampleScene {
+    /// The transform of instance `i` at `time` seconds.
+    pub fn transform(&self, i: usize, time: f32) -> Affine3A {
+        let rest = self.scene.instances[i].transform;
+        match self.motions[i] {
+            Motion::Static => rest,
+            Motion::Orbit { center, radius, period } => {
+                let a = std::f32::consts::TAU * time / period;
+                let offset = Vec3::new(a.cos(), 0.0, a.sin()) * radius;
+                Affine3A::from_rotation_translation(Quat::from_rotation_y(-2.0 * a), center + offset)
+            }
+        }
+    }
+
+    pub fn is_dynamic(&self, i: usize) -> bool {
+        self.motions[i] != Motion::Static
+    }
+
+    /// Axis-aligned bounds of every instance at rest.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for inst in &self.scene.instances {
+            for p in &self.scene.meshes[inst.mesh].positions {
+                let w = inst.transform.transform_point3(*p);
+                lo = lo.min(w);
+                hi = hi.max(w);
+            }
+        }
+        (lo, hi)
+    }
+}
