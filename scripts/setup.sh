@@ -8,6 +8,8 @@
 #  - glslangValidator (shader compiler) and spirv-val (shader validator)
 #  - the Khronos validation layer, so tests fail on validation errors
 #  - a C compiler and the Vulkan headers/loader (libvulkan-dev), for the C ABI test
+#  - Xvfb and the X11 client libraries winit loads at run time, so the sample's window path
+#    is tested without a display
 #
 # Usage: source it (`. scripts/setup.sh`) or run it. Idempotent. Needs root (or sudo) only
 # when something is missing.
@@ -76,6 +78,13 @@ main() {
   [ -e /usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json ] \
     || pkgs+=(vulkan-validationlayers)
   [ -e /usr/include/vulkan/vulkan.h ] || pkgs+=(libvulkan-dev)
+  have_cmd Xvfb || pkgs+=(xvfb)
+  # winit's X11 backend dlopens these (no -dev packages: nothing links against them).
+  local lib
+  for lib in libX11-xcb.so.1:libx11-xcb1 libXcursor.so.1:libxcursor1 libXrandr.so.2:libxrandr2 \
+             libXi.so.6:libxi6 libxkbcommon-x11.so.0:libxkbcommon-x11-0; do
+    { ldconfig -p 2>/dev/null || /sbin/ldconfig -p 2>/dev/null; } | grep -q "${lib%%:*}" || pkgs+=("${lib##*:}")
+  done
   if [ ${#pkgs[@]} -gt 0 ]; then apt_install "${pkgs[@]}"; fi
 
   if ! have_rt_vulkan; then

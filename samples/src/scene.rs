@@ -100,6 +100,20 @@ impl SampleScene {
         }
     }
 
+    /// The scene as it stands at `time`: moved instances, the deformed mesh (what a frame
+    /// at `time` rasterizes and the SDK traces; tests trace it on the CPU).
+    pub fn at(&self, time: f32) -> Scene {
+        let mut s = self.scene.clone();
+        for (i, inst) in s.instances.iter_mut().enumerate() {
+            inst.transform = self.transform(i, time);
+        }
+        if let Some(d) = &self.deformer {
+            let mesh = s.instances[d.instance].mesh;
+            s.meshes[mesh].positions = d.positions(time);
+        }
+        s
+    }
+
     pub fn is_dynamic(&self, i: usize) -> bool {
         self.motions[i] != Motion::Static
     }
