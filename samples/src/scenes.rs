@@ -70,7 +70,7 @@ pub fn cornell_room() -> SampleScene {
         materials,
         motions,
         deformer: Some(Deformer { instance: flag_instance, rest, amplitude: 0.15 }),
-        lights: Lights { sun_direction: Vec3::new(0.3, 1.0, -0.35), sun_intensity: 3.0, point_position: Vec3::new(0.8, 3.2, 0.6), point_intensity: 5.0, ambient: 0.0 },
+        lights: Lights { sun_direction: Vec3::new(0.3, 1.0, -0.35), sun_intensity: 2.2, point_position: Vec3::new(0.8, 3.2, 0.6), point_intensity: 3.5, ambient: 0.0 },
         sun_angular_extent: 0.03,
         point_radius: 0.15,
         sky: [0.35, 0.45, 0.6],
