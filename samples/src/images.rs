@@ -1,43 +1,6 @@
 //! Writing results: EXR (linear float, for inspection in any HDR viewer) and an 8-bit PNG
-//! preview (sRGB-encoded).
-use std::path::Path;
-
-/// Writes a single-channel float image as a grey RGB EXR.
-pub fn write_exr_gray(path: &Path, width: u32, height: u32, values: &[f32]) -> Result<(), String> {
-    exr::prelude::write_rgb_file(path, width as usize, height as usize, |x, y| {
-        let v = values[y * width as usize + x];
-        (v, v, v)
-    })
-    .map_err(|e| format!("{}: {e}", path.display()))
-}
-
-fn srgb(v: f32) -> u8 {
-    let v = v.clamp(0.0, 1.0);
-    let s = if v <= 0.0031308 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
-    (s * 255.0 + 0.5) as u8
-}
-
-/// Writes a single-channel float image as an sRGB 8-bit grey PNG.
-pub fn write_png_gray(path: &Path, width: u32, height: u32, values: &[f32]) -> Result<(), String> {
-    let file = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), width, height);
-    enc.set_color(png::ColorType::Grayscale);
-    enc.set_depth(png::BitDepth::Eight);
-    let mut w = enc.write_header().map_err(|e| e.to_string())?;
-    let bytes: Vec<u8> = values.iter().map(|v| srgb(*v)).collect();
-    w.write_image_data(&bytes).map_err(|e| e.to_string())
-}
-
-/// Writes RGBA float texels as an sRGB 8-bit RGB PNG (values scaled by `scale` first).
-pub fn write_png_rgb(path: &Path, width: u32, height: u32, texels: &[[f32; 4]], scale: f32) -> Result<(), String> {
-    let file = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), width, height);
-    enc.set_color(png::ColorType::Rgb);
-    enc.set_depth(png::BitDepth::Eight);
-    let mut w = enc.write_header().map_err(|e| e.to_string())?;
-    let bytes: Vec<u8> = texels.iter().flat_map(|t| [srgb(t[0] * scale), srgb(t[1] * scale), srgb(t[2] * scale)]).collect();
-    w.write_image_data(&bytes).map_err(|e| e.to_string())
-}
+//! preview (the view pass's tone-mapped, sRGB-encoded copy); reading EXRs back for tests.
+use std::path::{Path, PathBuf};
 
 /// Writes linear RGBA float texels as an RGBA EXR.
 pub fn write_exr_rgba(path: &Path, width: u32, height: u32, texels: &[[f32; 4]]) -> Result<(), String> {
@@ -57,6 +20,16 @@ pub fn write_png_rgba8(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Res
     let mut w = enc.write_header().map_err(|e| e.to_string())?;
     let rgb: Vec<u8> = rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
     w.write_image_data(&rgb).map_err(|e| e.to_string())
+}
+
+/// Writes one captured mode as `dir/name.exr` (linear) and `dir/name.png` (display); returns
+/// the path without extension.
+pub fn write_capture(dir: &Path, name: &str, width: u32, height: u32, linear: &[[f32; 4]], display: &[u8]) -> Result<PathBuf, String> {
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let base = dir.join(name);
+    write_exr_rgba(&base.with_extension("exr"), width, height, linear)?;
+    write_png_rgba8(&base.with_extension("png"), width, height, display)?;
+    Ok(base)
 }
 
 /// Reads an RGBA EXR written by `write_exr_rgba` (tests check the sample's output with it).

@@ -191,6 +191,8 @@ pub struct Renderer<'h> {
     frame: u64,
     last_slot: usize,
     prev_transforms: Vec<glam::Affine3A>,
+    /// The furthest a GI or reflection ray needs to go: the scene's diagonal.
+    reach: f32,
     pub stats: Stats,
 }
 
@@ -283,6 +285,8 @@ impl<'h> Renderer<'h> {
             radiance: context(SignalType::SpecularAndDiffuse).map_err(sdk_err)?,
         };
         let prev_transforms = (0..scene.scene.instances.len()).map(|i| scene.transform(i, 0.0)).collect();
+        let (lo, hi) = scene.bounds();
+        let reach = (hi - lo).length().max(1.0);
         Ok(Renderer {
             host,
             ctx,
@@ -302,6 +306,7 @@ impl<'h> Renderer<'h> {
             frame: 0,
             last_slot: 0,
             prev_transforms,
+            reach,
             stats: Stats::default(),
         })
     }
@@ -422,7 +427,7 @@ impl<'h> Renderer<'h> {
         // --- The SDK: one container for everything of this frame.
         let mut labels = Vec::new();
         let (sun, point) = self.lights();
-        let reach = self.reach();
+        let reach = self.reach;
         let c = &mut self.container;
         for (i, t) in transforms.iter().enumerate() {
             if self.scene.is_dynamic(i) {
@@ -523,11 +528,10 @@ impl<'h> Renderer<'h> {
         .map_err(sdk_err)?;
         labels.push((TaskKind::DenoiseSpecularAndDiffuse, "denoise reflections + GI"));
         for &mode in debug {
-            if !self.work.debug.contains_key(&mode) {
-                let img = work_image(host, w, h)?;
-                self.work.debug.insert(mode, img);
-            }
-            let output = self.work.debug[&mode].input(GENERAL);
+            let output = match self.work.debug.entry(mode) {
+                std::collections::hash_map::Entry::Occupied(e) => e.get().input(GENERAL),
+                std::collections::hash_map::Entry::Vacant(e) => e.insert(work_image(host, w, h)?).input(GENERAL),
+            };
             let task = TraceAmbientOcclusionTask { common: TraceCommon { debug_output: mode, ..main_inputs.common }, output, ..Default::default() };
             self.container.schedule_ambient_occlusion(&task).map_err(sdk_err)?;
             labels.push((TaskKind::AmbientOcclusion, "debug views"));
@@ -565,11 +569,6 @@ impl<'h> Renderer<'h> {
         Ok(())
     }
 
-    /// The furthest a GI or reflection ray needs to go: the scene's diagonal.
-    fn reach(&self) -> f32 {
-        let (lo, hi) = self.scene.bounds();
-        (hi - lo).length().max(1.0)
-    }
 
     /// The sun and the point light as the SDK's shadow tasks take them.
     fn lights(&self) -> (LightInfo, LightInfo) {

@@ -249,10 +249,7 @@ impl App<'_> {
         let mode = modes::ALL[self.mode];
         let (w, h) = (self.renderer.settings.width, self.renderer.settings.height);
         let (linear, display) = self.renderer.capture(mode)?;
-        std::fs::create_dir_all(&self.out).map_err(|e| e.to_string())?;
-        let base = self.out.join(mode.name());
-        crate::images::write_exr_rgba(&base.with_extension("exr"), w, h, &linear)?;
-        crate::images::write_png_rgba8(&base.with_extension("png"), w, h, &display)?;
+        let base = crate::images::write_capture(&self.out, mode.name(), w, h, &linear, &display)?;
         println!("wrote {}.exr and .png", base.display());
         Ok(())
     }

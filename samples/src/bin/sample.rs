@@ -58,7 +58,6 @@ fn run() -> Result<(), String> {
         list => list.split(',').map(|n| Mode::parse(n.trim()).ok_or(format!("unknown mode {n:?} (see --help)"))).collect::<Result<_, _>>()?,
     };
     let frames = args.get("frames", 16u32).max(2);
-    std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
 
     let host = Host::new()?;
     println!("device: {}{}", host.device_name, if host.validation_enabled { " (validation on)" } else { "" });
@@ -83,9 +82,7 @@ fn run() -> Result<(), String> {
     let mut written = Vec::new();
     for mode in &chosen {
         let (linear, display) = r.capture(*mode)?;
-        let base = out.join(mode.name());
-        images::write_exr_rgba(&base.with_extension("exr"), settings.width, settings.height, &linear)?;
-        images::write_png_rgba8(&base.with_extension("png"), settings.width, settings.height, &display)?;
+        images::write_capture(&out, mode.name(), settings.width, settings.height, &linear, &display)?;
         written.push(mode.name());
     }
     let report = report::Report::new(&r);
