@@ -234,17 +234,19 @@ impl GpuTimer {
     }
 
     /// After the frame's fence: (label, milliseconds) per mark; empty when nothing was timed.
-    pub fn read(&self, host: &Host) -> Vec<(&'static str, f64)> {
+    /// Forgets the marks, so a submission that recorded none (a skipped frame) reads nothing.
+    pub fn read(&mut self, host: &Host) -> Vec<(&'static str, f64)> {
         if self.labels.is_empty() {
             return Vec::new();
         }
         let mut stamps = vec![0u64; self.labels.len() + 1];
         // SAFETY: the frame finished (its fence was waited on), so every query is available.
         let ok = unsafe { host.device.get_query_pool_results(self.pool, 0, &mut stamps, vk::QueryResultFlags::TYPE_64) };
+        let labels = std::mem::take(&mut self.labels);
         if ok.is_err() {
             return Vec::new();
         }
-        self.labels.iter().enumerate().map(|(i, l)| (*l, stamps[i + 1].saturating_sub(stamps[i]) as f64 * self.period_ns * 1e-6)).collect()
+        labels.iter().enumerate().map(|(i, l)| (*l, stamps[i + 1].saturating_sub(stamps[i]) as f64 * self.period_ns * 1e-6)).collect()
     }
 
     pub fn destroy(self, host: &Host) {

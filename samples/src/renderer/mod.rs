@@ -21,21 +21,28 @@
 //! from). The images written and read within a frame (shadows, AO, GI, reflections, the
 //! composite) are shared by both slots: one queue runs the frames in order and every frame
 //! starts with a barrier on the previous one's writes.
-use crate::gpu::{spirv, ComputePass, GpuTimer};
+use crate::gpu::{spirv, ComputePass};
 use crate::lighting::{LightingPass, Visibility};
 use crate::modes::Mode;
-use crate::raster::{self, Draw, GBufferPass, MeshBuffers, Targets};
+use crate::raster::{self, Draw, GBufferPass, MeshBuffers};
 use crate::scene::SampleScene;
 use ash::vk;
 use glam::Vec3;
 use hybrid_rt::*;
-use hybrid_rt_testkit::host::{Host, HostBuffer, HostImage, HostResult};
+use hybrid_rt_testkit::host::{Host, HostImage, HostResult};
 use hybrid_rt_testkit::reference::Camera;
-use std::collections::HashMap;
+
+
+mod inputs;
+mod resources;
+mod stats;
+
+pub use stats::Stats;
+use inputs::Inputs;
+use resources::{source, work_image, Denoisers, Slot, Work};
 
 const SLOTS: usize = 2;
 const GENERAL: vk::ImageLayout = vk::ImageLayout::GENERAL;
-const WORK_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 
 /// What the renderer does per frame. Defaults in `Default`.
 #[derive(Clone, Copy, Debug)]
@@ -80,98 +87,6 @@ impl Default for Settings {
     }
 }
 
-/// A G-buffer and the lit image made from it.
-struct View {
-    targets: Targets,
-    lit: HostImage,
-}
-
-impl View {
-    fn new(host: &Host, width: u32, height: u32) -> HostResult<View> {
-        let targets = Targets::new(host, width, height)?;
-        let lit = LightingPass::lit_image(host, &targets)?;
-        Ok(View { targets, lit })
-    }
-
-    fn destroy(self, host: &Host) {
-        self.targets.destroy(host);
-        host.destroy_image(self.lit);
-    }
-}
-
-/// One frame in flight.
-struct Slot {
-    cmd: vk::CommandBuffer,
-    fence: vk::Fence,
-    ticket: Option<GpuTicket>,
-    timer: GpuTimer,
-    main: View,
-    lidar: View,
-    /// The flag's vertices of this slot's frame (host-visible: the CPU writes them).
-    deformed: Option<HostBuffer>,
-    /// The SDK tasks of the frame, in scheduling order, to name their timings.
-    labels: Vec<(TaskKind, &'static str)>,
-    camera: Camera,
-    lidar_camera: Camera,
-    frame: u64,
-    recorded: bool,
-}
-
-/// Images written and read inside a frame.
-struct Work {
-    sun_noisy: HostImage,
-    sun: HostImage,
-    point_noisy: HostImage,
-    point: HostImage,
-    ao_noisy: HostImage,
-    ao: HostImage,
-    diffuse_noisy: HostImage,
-    diffuse: HostImage,
-    specular_noisy: HostImage,
-    specular: HostImage,
-    composite: HostImage,
-    lidar_sun: HostImage,
-    lidar_point: HostImage,
-    debug: HashMap<DebugOutput, HostImage>,
-    /// The view pass's outputs: linear RGBA32F and tone-mapped sRGB RGBA8.
-    linear: HostImage,
-    display: HostImage,
-}
-
-struct Denoisers {
-    sun: DenoisingContextHandle,
-    point: DenoisingContextHandle,
-    ao: DenoisingContextHandle,
-    radiance: DenoisingContextHandle,
-}
-
-/// Mean GPU times over the frames after the first (which builds every BLAS).
-#[derive(Default, Debug, Clone)]
-pub struct Stats {
-    /// (label, ms per frame), in scheduling order; a label's tasks of one frame are summed
-    /// (the debug views run only in frames that ask for them).
-    pub sdk: Vec<(String, Vec<f64>)>,
-    pub passes: Vec<(String, Vec<f64>)>,
-    pub first_frame_bvh_ms: f64,
-    pub frames: u64,
-}
-
-impl Stats {
-    fn add(list: &mut Vec<(String, Vec<f64>)>, frame_values: Vec<(String, f64)>) {
-        for (k, v) in frame_values {
-            match list.iter_mut().find(|(l, _)| *l == k) {
-                Some((_, values)) => values.push(v),
-                None => list.push((k, vec![v])),
-            }
-        }
-    }
-
-    /// (label, mean ms) of the SDK's tasks and of the sample's own passes.
-    pub fn means(list: &[(String, Vec<f64>)]) -> Vec<(String, f64)> {
-        list.iter().map(|(l, v)| (l.clone(), v.iter().sum::<f64>() / v.len().max(1) as f64)).collect()
-    }
-}
-
 pub struct Renderer<'h> {
     host: &'h Host,
     pub ctx: ExecuteContext,
@@ -194,11 +109,6 @@ pub struct Renderer<'h> {
     /// The furthest a GI or reflection ray needs to go: the scene's diagonal.
     reach: f32,
     pub stats: Stats,
-}
-
-fn work_image(host: &Host, width: u32, height: u32) -> HostResult<HostImage> {
-    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC;
-    host.image_cleared(WORK_FORMAT, width, height, usage, GENERAL)
 }
 
 fn sdk_err(e: hybrid_rt::Error) -> String {
@@ -235,48 +145,10 @@ impl<'h> Renderer<'h> {
         }
         let mut slots = Vec::new();
         for _ in 0..SLOTS {
-            let deformed = match &scene.deformer {
-                Some(d) => Some(host.buffer_with_data(bytemuck::cast_slice(&d.rest), MeshBuffers::VERTEX_USAGE)?),
-                None => None,
-            };
-            // SAFETY: plain object creation; destroyed in `destroy`.
-            let fence = unsafe { host.device.create_fence(&vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED), None) }
-                .map_err(|e| format!("fence: {e:?}"))?;
-            let camera = scene.camera_path.at(0.0);
-            slots.push(Slot {
-                cmd: host.allocate_command_buffer()?,
-                fence,
-                ticket: None,
-                timer: GpuTimer::new(host)?,
-                main: View::new(host, w, h)?,
-                lidar: View::new(host, settings.lidar_size, settings.lidar_size)?,
-                deformed,
-                labels: Vec::new(),
-                camera,
-                lidar_camera: camera,
-                frame: 0,
-                recorded: false,
-            });
+            let rest = scene.deformer.as_ref().map(|d| d.rest.as_slice());
+            slots.push(Slot::new(host, w, h, settings.lidar_size, rest, scene.camera_path.at(0.0))?);
         }
-        let ls = settings.lidar_size;
-        let work = Work {
-            sun_noisy: work_image(host, w, h)?,
-            sun: work_image(host, w, h)?,
-            point_noisy: work_image(host, w, h)?,
-            point: work_image(host, w, h)?,
-            ao_noisy: work_image(host, w, h)?,
-            ao: work_image(host, w, h)?,
-            diffuse_noisy: work_image(host, w, h)?,
-            diffuse: work_image(host, w, h)?,
-            specular_noisy: work_image(host, w, h)?,
-            specular: work_image(host, w, h)?,
-            composite: work_image(host, w, h)?,
-            lidar_sun: work_image(host, ls, ls)?,
-            lidar_point: work_image(host, ls, ls)?,
-            debug: HashMap::new(),
-            linear: host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, w, h, vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC, GENERAL)?,
-            display: host.image_cleared(vk::Format::R8G8B8A8_UNORM, w, h, vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC, GENERAL)?,
-        };
+        let work = Work::new(host, w, h, settings.lidar_size)?;
         let context = |signal| ctx.create_denoising_context(&DenoisingContextInput { max_width: w, max_height: h, signal, ..Default::default() });
         let denoisers = Denoisers {
             sun: context(SignalType::Shadow).map_err(sdk_err)?,
@@ -345,14 +217,15 @@ impl<'h> Renderer<'h> {
         unsafe { self.host.device.wait_for_fences(&[s.fence], true, u64::MAX) }.map_err(|e| format!("wait: {e:?}"))?;
         s.recorded = false;
         let mut sdk: Vec<(String, f64)> = Vec::new();
+        let labels = std::mem::take(&mut s.labels);
         if let Some(ticket) = s.ticket.take() {
             let done = self.ctx.mark_gpu_task_completed(ticket).map_err(sdk_err)?;
-            let mut used = vec![false; s.labels.len()];
+            let mut used = vec![false; labels.len()];
             for t in &done.timings {
-                let label = match s.labels.iter().enumerate().position(|(i, (k, _))| *k == t.kind && !used[i]) {
+                let label = match labels.iter().enumerate().position(|(i, (k, _))| *k == t.kind && !used[i]) {
                     Some(i) => {
                         used[i] = true;
-                        s.labels[i].1.to_string()
+                        labels[i].1.to_string()
                     }
                     None => format!("{:?}", t.kind),
                 };
@@ -698,73 +571,14 @@ impl<'h> Renderer<'h> {
         drop(self.container);
         drop(self.ctx);
         for s in self.slots {
-            // SAFETY: finished above.
-            unsafe { host.device.destroy_fence(s.fence, None) };
-            s.timer.destroy(host);
-            s.main.destroy(host);
-            s.lidar.destroy(host);
-            if let Some(b) = s.deformed {
-                host.destroy_buffer(b);
-            }
+            s.destroy(host);
         }
-        let w = self.work;
-        for i in [w.sun_noisy, w.sun, w.point_noisy, w.point, w.ao_noisy, w.ao, w.diffuse_noisy, w.diffuse, w.specular_noisy, w.specular, w.composite, w.lidar_sun, w.lidar_point, w.linear, w.display]
-            .into_iter()
-            .chain(w.debug.into_values())
-        {
-            host.destroy_image(i);
-        }
+        self.work.destroy(host);
         self.meshes.destroy(host);
         self.gbuffer.destroy(host);
         self.lighting.destroy(host);
         self.composite.destroy(host);
         self.view.destroy(host);
         Ok(())
-    }
-}
-
-/// The image behind `mode` and the layout it is in (from the last recorded frame).
-fn source<'a>(wk: &'a Work, s: &'a Slot, mode: Mode) -> (&'a HostImage, vk::ImageLayout) {
-    let read = raster::READ;
-    match mode {
-        Mode::Composite => (&wk.composite, GENERAL),
-        Mode::Direct => (&s.main.lit, GENERAL),
-        Mode::Albedo | Mode::Metalness => (&s.main.targets.albedo_metalness, read),
-        Mode::Normals | Mode::Roughness => (&s.main.targets.normal_roughness, read),
-        Mode::Motion => (&s.main.targets.motion, read),
-        Mode::SunShadowNoisy => (&wk.sun_noisy, GENERAL),
-        Mode::SunShadow => (&wk.sun, GENERAL),
-        Mode::PointShadowNoisy => (&wk.point_noisy, GENERAL),
-        Mode::PointShadow => (&wk.point, GENERAL),
-        Mode::AoNoisy => (&wk.ao_noisy, GENERAL),
-        Mode::Ao => (&wk.ao, GENERAL),
-        Mode::DiffuseNoisy => (&wk.diffuse_noisy, GENERAL),
-        Mode::Diffuse => (&wk.diffuse, GENERAL),
-        Mode::SpecularNoisy => (&wk.specular_noisy, GENERAL),
-        Mode::Specular => (&wk.specular, GENERAL),
-        Mode::Lidar => (&s.lidar.lit, GENERAL),
-        Mode::Debug(d) => (wk.debug.get(&d).unwrap_or(&wk.composite), GENERAL),
-    }
-}
-
-/// The SDK inputs a view's G-buffer makes: trace and denoise commons.
-struct Inputs {
-    common: TraceCommon,
-    denoising: DenoisingCommon,
-}
-
-impl Inputs {
-    fn of(t: &Targets, camera: &Camera) -> Inputs {
-        let read = raster::READ;
-        let depth = DepthInput { image: t.depth.input(read), depth_type: DepthType::ClipSpace };
-        let normals = NormalInput { image: t.normal_roughness.input(read), normal_type: NormalType::RgbVector, space: NormalSpace::World };
-        // Roughness lives in the normal target's alpha.
-        let roughness = RoughnessInput { image: t.normal_roughness.input(read), channel_mask: [0.0, 0.0, 0.0, 1.0], global_roughness: 1.0 };
-        let viewport = Viewport::full(t.width, t.height);
-        let sdk_camera = camera.sdk_camera(t.width, t.height);
-        let common = TraceCommon { depth, normals, roughness, viewport, camera: sdk_camera, ..Default::default() };
-        let motion = MotionInput { image: t.motion.input(read), motion_type: MotionType::RgViewSpace, scale: [1.0; 3] };
-        let denoising = DenoisingCommon { depth, normals, roughness, motion, viewport, camera: sdk_camera, ..Default::default() };
-        Inputs { common, denoising }
     }
 }
