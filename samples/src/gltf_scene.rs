@@ -19,7 +19,7 @@ fn buffers(doc: &gltf::Document, blob: Option<Vec<u8>>, dir: &Path) -> Result<Ve
             let data = match b.source() {
                 gltf::buffer::Source::Bin => blob.take().ok_or("the GLB has no binary chunk")?,
                 gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
-                    let (_, payload) = uri.split_once(";base64,").ok_or(format!("unsupported data URI {}", &uri[..uri.len().min(40)]))?;
+                    let (_, payload) = uri.split_once(";base64,").ok_or_else(|| format!("unsupported data URI {}", uri.chars().take(40).collect::<String>()))?;
                     base64::engine::general_purpose::STANDARD.decode(payload).map_err(|e| format!("data URI: {e}"))?
                 }
                 gltf::buffer::Source::Uri(uri) => {

@@ -270,7 +270,8 @@ impl App<'_> {
                 }
             }
         }
-        self.title_at = Instant::now() - std::time::Duration::from_secs(1);
+        // Show the new mode in the title at the next frame.
+        self.title_at = Instant::now().checked_sub(std::time::Duration::from_secs(1)).unwrap_or(self.title_at);
         Ok(())
     }
 }

@@ -83,6 +83,10 @@ pub struct HostBuffer {
     pub buffer: vk::Buffer,
     pub memory: vk::DeviceMemory,
     pub size: u64,
+    /// Host-visible memory stays mapped for the buffer's life (null otherwise): the sample
+    /// rewrites its constant and vertex buffers every frame, and a map/unmap per write is a
+    /// driver call per buffer per frame for nothing.
+    mapped: *mut u8,
 }
 
 pub type HostResult<T> = Result<T, String>;
@@ -288,9 +292,10 @@ impl Host {
             return Err(format!("write_buffer: {} bytes into a {}-byte buffer", data.len(), b.size));
         }
         unsafe {
-            let p = self.device.map_memory(b.memory, 0, b.size, vk::MemoryMapFlags::empty()).map_err(vkerr("map"))?;
-            std::ptr::copy_nonoverlapping(data.as_ptr(), p as *mut u8, data.len());
-            self.device.unmap_memory(b.memory);
+            if b.mapped.is_null() {
+                return Err("write_buffer: the buffer is not host-visible".into());
+            }
+            std::ptr::copy_nonoverlapping(data.as_ptr(), b.mapped, data.len());
         }
         Ok(())
     }
@@ -305,11 +310,17 @@ impl Host {
                 .memory_type_index(self.memory_type(req.memory_type_bits, flags)?);
             let memory = self.device.allocate_memory(&alloc, None).map_err(vkerr("allocate"))?;
             self.device.bind_buffer_memory(buffer, memory, 0).map_err(vkerr("bind"))?;
-            Ok(HostBuffer { buffer, memory, size })
+            let mapped = if flags.contains(vk::MemoryPropertyFlags::HOST_VISIBLE) {
+                self.device.map_memory(memory, 0, vk::WHOLE_SIZE, vk::MemoryMapFlags::empty()).map_err(vkerr("map"))? as *mut u8
+            } else {
+                std::ptr::null_mut()
+            };
+            Ok(HostBuffer { buffer, memory, size, mapped })
         }
     }
 
     pub fn destroy_buffer(&self, b: HostBuffer) {
+        // Freeing the memory unmaps it.
         unsafe {
             self.device.destroy_buffer(b.buffer, None);
             self.device.free_memory(b.memory, None);
@@ -443,9 +454,7 @@ impl Host {
         })?;
         let mut out = vec![0u8; size as usize];
         unsafe {
-            let p = self.device.map_memory(staging.memory, 0, size, vk::MemoryMapFlags::empty()).map_err(vkerr("map"))?;
-            std::ptr::copy_nonoverlapping(p as *const u8, out.as_mut_ptr(), out.len());
-            self.device.unmap_memory(staging.memory);
+            std::ptr::copy_nonoverlapping(staging.mapped as *const u8, out.as_mut_ptr(), out.len());
         }
         self.destroy_buffer(staging);
         Ok(out)

@@ -183,11 +183,6 @@ impl<'h> Renderer<'h> {
         })
     }
 
-    /// Frames recorded so far.
-    pub fn frames(&self) -> u64 {
-        self.frame
-    }
-
     /// Waits for the next slot's previous frame, hands its ticket back (collecting its GPU
     /// times) and starts its command buffer. Returns the slot.
     pub fn begin_frame(&mut self) -> HostResult<usize> {
