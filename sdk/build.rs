@@ -45,9 +45,7 @@ fn main() {
             validate(&spv, file);
         }
         let ident = file.replace('.', "_").to_uppercase();
-        rust += &format!(
-            "pub const {ident}: &[u8] = include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{file}.spv\"));\n"
-        );
+        rust += &format!("pub const {ident}: &[u8] = include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{file}.spv\"));\n");
     }
     std::fs::write(out.join("shaders.rs"), rust).unwrap();
 }
@@ -70,11 +68,7 @@ fn compile(compiler: &str, src: &Path, spv: &Path) {
 }
 
 fn validate(spv: &Path, name: &str) {
-    let output = Command::new("spirv-val")
-        .args(["--target-env", "vulkan1.2"])
-        .arg(spv)
-        .output()
-        .expect("run spirv-val");
+    let output = Command::new("spirv-val").args(["--target-env", "vulkan1.2"]).arg(spv).output().expect("run spirv-val");
     if !output.status.success() {
         panic!("shader {name} failed spirv-val:\n{}", String::from_utf8_lossy(&output.stderr));
     }

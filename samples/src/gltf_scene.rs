@@ -19,7 +19,9 @@ fn buffers(doc: &gltf::Document, blob: Option<Vec<u8>>, dir: &Path) -> Result<Ve
             let data = match b.source() {
                 gltf::buffer::Source::Bin => blob.take().ok_or("the GLB has no binary chunk")?,
                 gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
-                    let (_, payload) = uri.split_once(";base64,").ok_or_else(|| format!("unsupported data URI {}", uri.chars().take(40).collect::<String>()))?;
+                    let (_, payload) = uri
+                        .split_once(";base64,")
+                        .ok_or_else(|| format!("unsupported data URI {}", uri.chars().take(40).collect::<String>()))?;
                     base64::engine::general_purpose::STANDARD.decode(payload).map_err(|e| format!("data URI: {e}"))?
                 }
                 gltf::buffer::Source::Uri(uri) => {
@@ -66,7 +68,11 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
                 Some(&m) => m,
                 None => {
                     let reader = prim.reader(|b| data.get(b.index()).map(|d| d.as_slice()));
-                    let positions: Vec<Vec3> = reader.read_positions().ok_or(format!("mesh {} has no positions", mesh.index()))?.map(Vec3::from).collect();
+                    let positions: Vec<Vec3> = reader
+                        .read_positions()
+                        .ok_or(format!("mesh {} has no positions", mesh.index()))?
+                        .map(Vec3::from)
+                        .collect();
                     let indices: Vec<u32> = match reader.read_indices() {
                         Some(i) => i.into_u32().collect(),
                         None => (0..positions.len() as u32).collect(),
@@ -99,7 +105,13 @@ fn fitted(name: String, scene: Scene, materials: Vec<Material>) -> SampleScene {
         materials,
         motions,
         deformer: None,
-        lights: Lights { sun_direction: Vec3::new(0.45, 1.0, 0.6), sun_intensity: 3.0, point_position: Vec3::ZERO, point_intensity: 0.0, ambient: 0.0 },
+        lights: Lights {
+            sun_direction: Vec3::new(0.45, 1.0, 0.6),
+            sun_intensity: 3.0,
+            point_position: Vec3::ZERO,
+            point_intensity: 0.0,
+            ambient: 0.0,
+        },
         sun_angular_extent: 0.03,
         point_radius: 0.0,
         sky: [0.35, 0.45, 0.6],

@@ -15,7 +15,8 @@ fn vkerr(what: &'static str) -> impl Fn(vk::Result) -> String {
 pub(crate) fn shader_module(host: &Host, spirv: &[u8]) -> HostResult<vk::ShaderModule> {
     let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv)).map_err(|e| e.to_string())?;
     // SAFETY: valid SPIR-V words; the caller destroys the module after pipeline creation.
-    unsafe { host.device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None) }.map_err(vkerr("shader module"))
+    unsafe { host.device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None) }
+        .map_err(vkerr("shader module"))
 }
 
 /// A push-descriptor set layout of `bindings` and a pipeline layout with it and `push_bytes`
@@ -30,7 +31,9 @@ pub(crate) fn push_layout(
     unsafe {
         let set_layout = d
             .create_descriptor_set_layout(
-                &vk::DescriptorSetLayoutCreateInfo::default().flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR).bindings(bindings),
+                &vk::DescriptorSetLayoutCreateInfo::default()
+                    .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
+                    .bindings(bindings),
                 None,
             )
             .map_err(vkerr("descriptor set layout"))?;
@@ -115,7 +118,10 @@ impl ComputePass {
         let samplers = [sampler];
         let bindings: Vec<_> = (0..sampled + storage + 1)
             .map(|i| {
-                let b = vk::DescriptorSetLayoutBinding::default().binding(i).descriptor_count(1).stage_flags(vk::ShaderStageFlags::COMPUTE);
+                let b = vk::DescriptorSetLayoutBinding::default()
+                    .binding(i)
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE);
                 if i < sampled {
                     b.descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER).immutable_samplers(&samplers)
                 } else if i < sampled + storage {
@@ -127,15 +133,29 @@ impl ComputePass {
             .collect();
         let (set_layout, layout) = push_layout(host, &bindings, 0, vk::ShaderStageFlags::COMPUTE)?;
         let module = shader_module(host, spirv)?;
-        let stage = vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::COMPUTE).module(module).name(c"main");
+        let stage =
+            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::COMPUTE).module(module).name(c"main");
         // SAFETY: valid create info; the module is destroyed once the pipeline exists.
         let pipeline = unsafe {
-            let p = d.create_compute_pipelines(vk::PipelineCache::null(), &[vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)], None);
+            let p = d.create_compute_pipelines(
+                vk::PipelineCache::null(),
+                &[vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout)],
+                None,
+            );
             d.destroy_shader_module(module, None);
             p.map_err(|(_, e)| format!("compute pipeline: {e:?}"))?[0]
         };
         let push = ash::khr::push_descriptor::Device::new(&host.instance, d);
-        Ok(ComputePass { set_layout, layout, pipeline, sampler, push, constants: UploadSlots::new(vk::BufferUsageFlags::UNIFORM_BUFFER), sampled, storage })
+        Ok(ComputePass {
+            set_layout,
+            layout,
+            pipeline,
+            sampler,
+            push,
+            constants: UploadSlots::new(vk::BufferUsageFlags::UNIFORM_BUFFER),
+            sampled,
+            storage,
+        })
     }
 
     /// Records one dispatch over `width` x `height` pixels. `sampled` images are read in their
@@ -158,19 +178,32 @@ impl ComputePass {
         let infos: Vec<[vk::DescriptorImageInfo; 1]> = sampled
             .iter()
             .map(|(i, layout)| [vk::DescriptorImageInfo { sampler: self.sampler, image_view: i.view, image_layout: *layout }])
-            .chain(storage.iter().map(|i| [vk::DescriptorImageInfo { sampler: vk::Sampler::null(), image_view: i.view, image_layout: vk::ImageLayout::GENERAL }]))
+            .chain(storage.iter().map(|i| {
+                [vk::DescriptorImageInfo {
+                    sampler: vk::Sampler::null(),
+                    image_view: i.view,
+                    image_layout: vk::ImageLayout::GENERAL,
+                }]
+            }))
             .collect();
         let ubo_info = [vk::DescriptorBufferInfo { buffer: ubo, offset: 0, range: constants.len() as u64 }];
         let mut writes: Vec<_> = infos
             .iter()
             .enumerate()
             .map(|(i, info)| {
-                let ty = if (i as u32) < self.sampled { vk::DescriptorType::COMBINED_IMAGE_SAMPLER } else { vk::DescriptorType::STORAGE_IMAGE };
+                let ty = if (i as u32) < self.sampled {
+                    vk::DescriptorType::COMBINED_IMAGE_SAMPLER
+                } else {
+                    vk::DescriptorType::STORAGE_IMAGE
+                };
                 vk::WriteDescriptorSet::default().dst_binding(i as u32).descriptor_type(ty).image_info(info)
             })
             .collect();
         writes.push(
-            vk::WriteDescriptorSet::default().dst_binding(self.sampled + self.storage).descriptor_type(vk::DescriptorType::UNIFORM_BUFFER).buffer_info(&ubo_info),
+            vk::WriteDescriptorSet::default()
+                .dst_binding(self.sampled + self.storage)
+                .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
+                .buffer_info(&ubo_info),
         );
         // SAFETY: cmd is recording; the images and buffer outlive the frame.
         unsafe {
@@ -207,7 +240,10 @@ impl GpuTimer {
     pub fn new(host: &Host) -> HostResult<GpuTimer> {
         // SAFETY: plain object creation, destroyed in `destroy`.
         let pool = unsafe {
-            host.device.create_query_pool(&vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(MAX_MARKS + 1), None)
+            host.device.create_query_pool(
+                &vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(MAX_MARKS + 1),
+                None,
+            )
         }
         .map_err(vkerr("query pool"))?;
         let props = unsafe { host.instance.get_physical_device_properties(host.physical_device) };
@@ -230,7 +266,9 @@ impl GpuTimer {
         }
         self.labels.push(label);
         // SAFETY: cmd is recording; the query was reset in `begin`.
-        unsafe { host.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, self.labels.len() as u32) };
+        unsafe {
+            host.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, self.labels.len() as u32)
+        };
     }
 
     /// After the frame's fence: (label, milliseconds) per mark; empty when nothing was timed.
@@ -246,7 +284,11 @@ impl GpuTimer {
         if ok.is_err() {
             return Vec::new();
         }
-        labels.iter().enumerate().map(|(i, l)| (*l, stamps[i + 1].saturating_sub(stamps[i]) as f64 * self.period_ns * 1e-6)).collect()
+        labels
+            .iter()
+            .enumerate()
+            .map(|(i, l)| (*l, stamps[i + 1].saturating_sub(stamps[i]) as f64 * self.period_ns * 1e-6))
+            .collect()
     }
 
     pub fn destroy(self, host: &Host) {

@@ -24,7 +24,14 @@ pub fn write_png_rgba8(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Res
 
 /// Writes one captured mode as `dir/name.exr` (linear) and `dir/name.png` (display); returns
 /// the path without extension.
-pub fn write_capture(dir: &Path, name: &str, width: u32, height: u32, linear: &[[f32; 4]], display: &[u8]) -> Result<PathBuf, String> {
+pub fn write_capture(
+    dir: &Path,
+    name: &str,
+    width: u32,
+    height: u32,
+    linear: &[[f32; 4]],
+    display: &[u8],
+) -> Result<PathBuf, String> {
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let base = dir.join(name);
     write_exr_rgba(&base.with_extension("exr"), width, height, linear)?;

@@ -109,9 +109,13 @@ impl Mode {
             m
         };
         let (swizzle, bias, tone_map) = match self {
-            Mode::Composite | Mode::Direct | Mode::Diffuse | Mode::DiffuseNoisy | Mode::Specular | Mode::SpecularNoisy | Mode::Lidar => {
-                (Mat4::IDENTITY, Vec4::ZERO, true)
-            }
+            Mode::Composite
+            | Mode::Direct
+            | Mode::Diffuse
+            | Mode::DiffuseNoisy
+            | Mode::Specular
+            | Mode::SpecularNoisy
+            | Mode::Lidar => (Mat4::IDENTITY, Vec4::ZERO, true),
             Mode::Debug(DebugOutput::DirectLightingCache) => (Mat4::IDENTITY, Vec4::ZERO, true),
             Mode::Normals => (Mat4::from_diagonal(Vec4::new(0.5, 0.5, 0.5, 0.0)), Vec4::new(0.5, 0.5, 0.5, 1.0), false),
             Mode::Roughness | Mode::Metalness => (grey(3), Vec4::W, false),

@@ -2,9 +2,9 @@
 //! graphics pass (dynamic rendering) writes a G-buffer — hardware depth, world normal +
 //! roughness, albedo + metalness, screen-space motion in pixels — that the SDK then reads as
 //! its `DepthInput`, `NormalInput`, `RoughnessInput` and `MotionInput`.
+use crate::gpu::{self, spirv, UploadSlots};
 use ash::vk;
 use glam::{Affine3A, Mat4};
-use crate::gpu::{self, spirv, UploadSlots};
 use hybrid_rt_testkit::host::{Host, HostBuffer, HostImage, HostResult};
 use hybrid_rt_testkit::reference::{Camera, Scene};
 
@@ -146,8 +146,16 @@ impl GBufferPass {
         let d = &host.device;
         let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
         let bindings = [
-            vk::DescriptorSetLayoutBinding::default().binding(0).descriptor_type(vk::DescriptorType::UNIFORM_BUFFER).descriptor_count(1).stage_flags(stages),
-            vk::DescriptorSetLayoutBinding::default().binding(1).descriptor_type(vk::DescriptorType::STORAGE_BUFFER).descriptor_count(1).stage_flags(stages),
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(0)
+                .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
+                .descriptor_count(1)
+                .stage_flags(stages),
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(1)
+                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                .descriptor_count(1)
+                .stage_flags(stages),
         ];
         let (set_layout, layout) = gpu::push_layout(host, &bindings, 4, stages)?;
         unsafe {
@@ -156,8 +164,14 @@ impl GBufferPass {
                 vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vs).name(c"main"),
                 vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fs).name(c"main"),
             ];
-            let vertex_bindings = [vk::VertexInputBindingDescription { binding: 0, stride: 12, input_rate: vk::VertexInputRate::VERTEX }];
-            let vertex_attributes = [vk::VertexInputAttributeDescription { location: 0, binding: 0, format: vk::Format::R32G32B32_SFLOAT, offset: 0 }];
+            let vertex_bindings =
+                [vk::VertexInputBindingDescription { binding: 0, stride: 12, input_rate: vk::VertexInputRate::VERTEX }];
+            let vertex_attributes = [vk::VertexInputAttributeDescription {
+                location: 0,
+                binding: 0,
+                format: vk::Format::R32G32B32_SFLOAT,
+                offset: 0,
+            }];
             let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
                 .vertex_binding_descriptions(&vertex_bindings)
                 .vertex_attribute_descriptions(&vertex_attributes);
@@ -167,18 +181,21 @@ impl GBufferPass {
                 .polygon_mode(vk::PolygonMode::FILL)
                 .cull_mode(vk::CullModeFlags::NONE)
                 .line_width(1.0);
-            let multisample = vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+            let multisample =
+                vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
             let depth = vk::PipelineDepthStencilStateCreateInfo::default()
                 .depth_test_enable(true)
                 .depth_write_enable(true)
                 .depth_compare_op(vk::CompareOp::LESS);
-            let attachments = [vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA); 3];
+            let attachments =
+                [vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA); 3];
             let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
             let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
             let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
             let color_formats = [NORMAL_FORMAT, ALBEDO_FORMAT, MOTION_FORMAT];
-            let mut rendering =
-                vk::PipelineRenderingCreateInfo::default().color_attachment_formats(&color_formats).depth_attachment_format(DEPTH_FORMAT);
+            let mut rendering = vk::PipelineRenderingCreateInfo::default()
+                .color_attachment_formats(&color_formats)
+                .depth_attachment_format(DEPTH_FORMAT);
             let info = vk::GraphicsPipelineCreateInfo::default()
                 .push_next(&mut rendering)
                 .stages(&stages_info)
@@ -244,7 +261,11 @@ impl GBufferPass {
         let ssbo = self.instances.write(host, slot, bytemuck::cast_slice(&instances))?;
 
         for t in targets.colors().into_iter().chain([&targets.depth]) {
-            let to = if t.format == DEPTH_FORMAT { vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL } else { vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL };
+            let to = if t.format == DEPTH_FORMAT {
+                vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL
+            } else {
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL
+            };
             host.transition(cmd, t, vk::ImageLayout::UNDEFINED, to);
         }
         let clear = vk::ClearValue { color: vk::ClearColorValue { float32: [0.0; 4] } };
@@ -266,7 +287,8 @@ impl GBufferPass {
             .load_op(vk::AttachmentLoadOp::CLEAR)
             .store_op(vk::AttachmentStoreOp::STORE)
             .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
-        let area = vk::Rect2D { offset: vk::Offset2D::default(), extent: vk::Extent2D { width: targets.width, height: targets.height } };
+        let area =
+            vk::Rect2D { offset: vk::Offset2D::default(), extent: vk::Extent2D { width: targets.width, height: targets.height } };
         let rendering = vk::RenderingInfo::default()
             .render_area(area)
             .layer_count(1)
@@ -275,19 +297,42 @@ impl GBufferPass {
         let ubo_info = [vk::DescriptorBufferInfo { buffer: ubo, offset: 0, range: std::mem::size_of::<CameraGpu>() as u64 }];
         let ssbo_info = [vk::DescriptorBufferInfo { buffer: ssbo, offset: 0, range: vk::WHOLE_SIZE }];
         let writes = [
-            vk::WriteDescriptorSet::default().dst_binding(0).descriptor_type(vk::DescriptorType::UNIFORM_BUFFER).buffer_info(&ubo_info),
-            vk::WriteDescriptorSet::default().dst_binding(1).descriptor_type(vk::DescriptorType::STORAGE_BUFFER).buffer_info(&ssbo_info),
+            vk::WriteDescriptorSet::default()
+                .dst_binding(0)
+                .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
+                .buffer_info(&ubo_info),
+            vk::WriteDescriptorSet::default()
+                .dst_binding(1)
+                .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                .buffer_info(&ssbo_info),
         ];
         // SAFETY: cmd is recording; every referenced object outlives the frame.
         unsafe {
             d.cmd_begin_rendering(cmd, &rendering);
-            d.cmd_set_viewport(cmd, 0, &[vk::Viewport { x: 0.0, y: 0.0, width: targets.width as f32, height: targets.height as f32, min_depth: 0.0, max_depth: 1.0 }]);
+            d.cmd_set_viewport(
+                cmd,
+                0,
+                &[vk::Viewport {
+                    x: 0.0,
+                    y: 0.0,
+                    width: targets.width as f32,
+                    height: targets.height as f32,
+                    min_depth: 0.0,
+                    max_depth: 1.0,
+                }],
+            );
             d.cmd_set_scissor(cmd, 0, &[area]);
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline);
             self.push.cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::GRAPHICS, self.layout, 0, &writes);
             for (i, dr) in draws.iter().enumerate() {
                 let (vb, ib, count, _) = &meshes.meshes[dr.mesh];
-                d.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT, 0, &(i as u32).to_ne_bytes());
+                d.cmd_push_constants(
+                    cmd,
+                    self.layout,
+                    vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+                    0,
+                    &(i as u32).to_ne_bytes(),
+                );
                 d.cmd_bind_vertex_buffers(cmd, 0, &[dr.vertex_buffer.unwrap_or(vb.buffer)], &[0]);
                 d.cmd_bind_index_buffer(cmd, ib.buffer, 0, vk::IndexType::UINT32);
                 d.cmd_draw_indexed(cmd, *count, 1, 0, 0, 0);
@@ -295,7 +340,11 @@ impl GBufferPass {
             d.cmd_end_rendering(cmd);
         }
         for t in targets.colors().into_iter().chain([&targets.depth]) {
-            let from = if t.format == DEPTH_FORMAT { vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL } else { vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL };
+            let from = if t.format == DEPTH_FORMAT {
+                vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL
+            } else {
+                vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL
+            };
             host.transition(cmd, t, from, READ);
         }
         Ok(())
@@ -318,7 +367,12 @@ pub fn static_draws(scene: &Scene, material: impl Fn(usize) -> Material) -> Vec<
         .instances
         .iter()
         .enumerate()
-        .map(|(i, inst)| Draw { mesh: inst.mesh, transform: inst.transform, prev_transform: inst.transform, material: material(i), vertex_buffer: None })
+        .map(|(i, inst)| Draw {
+            mesh: inst.mesh,
+            transform: inst.transform,
+            prev_transform: inst.transform,
+            material: material(i),
+            vertex_buffer: None,
+        })
         .collect()
 }
-

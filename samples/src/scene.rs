@@ -11,7 +11,11 @@ use hybrid_rt_testkit::reference::{Camera, Scene};
 pub enum Motion {
     Static,
     /// Circles `center` at `radius` once every `period` seconds, spinning as it goes.
-    Orbit { center: Vec3, radius: f32, period: f32 },
+    Orbit {
+        center: Vec3,
+        radius: f32,
+        period: f32,
+    },
 }
 
 /// A mesh whose vertices move every frame (cloth, skinning): its BLAS is refit each frame.

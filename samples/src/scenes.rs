@@ -25,7 +25,13 @@ pub fn cornell_room() -> SampleScene {
     let (half, height) = (3.0, 4.0);
     let quarter = std::f32::consts::FRAC_PI_2;
     let floor = scene.add_mesh(Mesh::grid(2.0 * half, 12));
-    add(&mut scene, floor, Affine3A::IDENTITY, Material { albedo: [0.42, 0.4, 0.38], roughness: 0.22, metalness: 0.0 }, Motion::Static);
+    add(
+        &mut scene,
+        floor,
+        Affine3A::IDENTITY,
+        Material { albedo: [0.42, 0.4, 0.38], roughness: 0.22, metalness: 0.0 },
+        Motion::Static,
+    );
     // The walls are the floor grid stood up; `height / 6` squashes the grid's edge that ends
     // up vertical (the grid's Z for walls turned about X, its X for walls turned about Z).
     let wall = scene.add_mesh(Mesh::grid(2.0 * half, 12));
@@ -41,20 +47,44 @@ pub fn cornell_room() -> SampleScene {
         add(&mut scene, wall, Affine3A::from_scale_rotation_translation(scale, rotation, at + mid), m, Motion::Static);
     }
     let mirror = scene.add_mesh(Mesh::cuboid(Vec3::new(1.3, 0.9, 0.02)));
-    add(&mut scene, mirror, Affine3A::from_translation(Vec3::new(0.9, 2.1, -half + 0.03)), Material { albedo: [0.95; 3], roughness: 0.0, metalness: 1.0 }, Motion::Static);
+    add(
+        &mut scene,
+        mirror,
+        Affine3A::from_translation(Vec3::new(0.9, 2.1, -half + 0.03)),
+        Material { albedo: [0.95; 3], roughness: 0.0, metalness: 1.0 },
+        Motion::Static,
+    );
     let sphere = scene.add_mesh(Mesh::sphere(0.7, 128, 64));
     let gold = Material { albedo: [1.0, 0.78, 0.34], roughness: 0.15, metalness: 1.0 };
     add(&mut scene, sphere, Affine3A::from_translation(Vec3::new(-1.4, 0.7, -1.0)), gold, Motion::Static);
     let cube = scene.add_mesh(Mesh::cuboid(Vec3::splat(0.55)));
-    add(&mut scene, cube, Affine3A::from_rotation_translation(Quat::from_rotation_y(0.5), Vec3::new(1.6, 0.55, -1.2)), Material { roughness: 0.6, ..white }, Motion::Static);
+    add(
+        &mut scene,
+        cube,
+        Affine3A::from_rotation_translation(Quat::from_rotation_y(0.5), Vec3::new(1.6, 0.55, -1.2)),
+        Material { roughness: 0.6, ..white },
+        Motion::Static,
+    );
     let column = scene.add_mesh(Mesh::cuboid(Vec3::new(0.25, 1.2, 0.25)));
-    add(&mut scene, column, Affine3A::from_translation(Vec3::new(-0.3, 1.2, -2.2)), Material { albedo: [0.2, 0.35, 0.75], roughness: 0.5, metalness: 0.0 }, Motion::Static);
+    add(
+        &mut scene,
+        column,
+        Affine3A::from_translation(Vec3::new(-0.3, 1.2, -2.2)),
+        Material { albedo: [0.2, 0.35, 0.75], roughness: 0.5, metalness: 0.0 },
+        Motion::Static,
+    );
     let pebble = scene.add_mesh(Mesh::sphere(0.15, 24, 12));
     let mut rng = Rng::new(7);
     for k in 0..6 {
         let p = Vec3::new(-0.4 + rng.next_f32() * 1.4, 0.15, 0.2 + rng.next_f32() * 1.0);
         let hue = [[0.8, 0.3, 0.2], [0.2, 0.6, 0.8], [0.9, 0.8, 0.3]][k % 3];
-        add(&mut scene, pebble, Affine3A::from_translation(p), Material { albedo: hue, roughness: 0.35, metalness: 0.0 }, Motion::Static);
+        add(
+            &mut scene,
+            pebble,
+            Affine3A::from_translation(p),
+            Material { albedo: hue, roughness: 0.35, metalness: 0.0 },
+            Motion::Static,
+        );
     }
     let mover = scene.add_mesh(Mesh::cuboid(Vec3::splat(0.22)));
     let orbit = Motion::Orbit { center: Vec3::new(0.2, 0.22, -0.3), radius: 1.0, period: 6.0 };
@@ -63,18 +93,35 @@ pub fn cornell_room() -> SampleScene {
     let cloth = Mesh::grid(1.0, 16);
     let rest: Vec<Vec3> = cloth.positions.iter().map(|p| Vec3::new((p.x + 0.5) * 1.6, -p.z, 0.0)).collect();
     let flag = scene.add_mesh(Mesh { positions: rest.clone(), indices: cloth.indices });
-    let flag_instance = add(&mut scene, flag, Affine3A::from_translation(Vec3::new(0.9, 3.0, -2.0)), Material { albedo: [0.8, 0.15, 0.3], roughness: 0.7, metalness: 0.0 }, Motion::Static);
+    let flag_instance = add(
+        &mut scene,
+        flag,
+        Affine3A::from_translation(Vec3::new(0.9, 3.0, -2.0)),
+        Material { albedo: [0.8, 0.15, 0.3], roughness: 0.7, metalness: 0.0 },
+        Motion::Static,
+    );
     SampleScene {
         name: "cornell room".into(),
         scene,
         materials,
         motions,
         deformer: Some(Deformer { instance: flag_instance, rest, amplitude: 0.15 }),
-        lights: Lights { sun_direction: Vec3::new(0.3, 1.0, -0.35), sun_intensity: 2.2, point_position: Vec3::new(0.8, 3.2, 0.6), point_intensity: 3.5, ambient: 0.0 },
+        lights: Lights {
+            sun_direction: Vec3::new(0.3, 1.0, -0.35),
+            sun_intensity: 2.2,
+            point_position: Vec3::new(0.8, 3.2, 0.6),
+            point_intensity: 3.5,
+            ambient: 0.0,
+        },
         sun_angular_extent: 0.03,
         point_radius: 0.15,
         sky: [0.35, 0.45, 0.6],
-        camera_path: CameraPath { from: Vec3::new(-1.6, 2.1, 2.6), to: Vec3::new(1.6, 1.7, 2.6), target: Vec3::new(0.0, 1.2, -1.5), fov_y_radians: 65f32.to_radians() },
+        camera_path: CameraPath {
+            from: Vec3::new(-1.6, 2.1, 2.6),
+            to: Vec3::new(1.6, 1.7, 2.6),
+            target: Vec3::new(0.0, 1.2, -1.5),
+            fov_y_radians: 65f32.to_radians(),
+        },
         lidar_eye: Vec3::new(0.0, 2.0, 0.5),
         tile_unit_length: 0.08,
         ao_ray_length: 0.6,
@@ -93,7 +140,10 @@ pub fn room() -> (Scene, Camera) {
     s.add_instance(wall, Affine3A::from_rotation_translation(Quat::from_rotation_x(quarter), Vec3::new(0.0, 3.0, -3.0)));
     s.add_instance(wall, Affine3A::from_rotation_translation(Quat::from_rotation_z(-quarter), Vec3::new(-3.0, 3.0, 0.0)));
     s.add_instance(wall, Affine3A::from_rotation_translation(Quat::from_rotation_z(quarter), Vec3::new(3.0, 3.0, 0.0)));
-    s.add_instance(wall, Affine3A::from_rotation_translation(Quat::from_rotation_x(std::f32::consts::PI), Vec3::new(0.0, 6.0, 0.0)));
+    s.add_instance(
+        wall,
+        Affine3A::from_rotation_translation(Quat::from_rotation_x(std::f32::consts::PI), Vec3::new(0.0, 6.0, 0.0)),
+    );
     let sphere = s.add_mesh(Mesh::sphere(0.7, 48, 24));
     s.add_instance(sphere, Affine3A::from_translation(Vec3::new(-1.2, 0.7, -0.8)));
     let cube = s.add_mesh(Mesh::cuboid(Vec3::splat(0.6)));

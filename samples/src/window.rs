@@ -32,7 +32,13 @@ struct Swapchain {
 }
 
 impl Swapchain {
-    fn new(host: &Host, surface: &ash::khr::surface::Instance, sk: vk::SurfaceKHR, size: (u32, u32), old: vk::SwapchainKHR) -> HostResult<Swapchain> {
+    fn new(
+        host: &Host,
+        surface: &ash::khr::surface::Instance,
+        sk: vk::SurfaceKHR,
+        size: (u32, u32),
+        old: vk::SwapchainKHR,
+    ) -> HostResult<Swapchain> {
         let pd = host.physical_device;
         // SAFETY: valid surface and device; the swapchain is destroyed in `destroy`.
         unsafe {
@@ -48,9 +54,16 @@ impl Swapchain {
             let extent = if caps.current_extent.width != u32::MAX {
                 caps.current_extent
             } else {
-                vk::Extent2D { width: size.0.clamp(caps.min_image_extent.width, caps.max_image_extent.width), height: size.1.clamp(caps.min_image_extent.height, caps.max_image_extent.height) }
+                vk::Extent2D {
+                    width: size.0.clamp(caps.min_image_extent.width, caps.max_image_extent.width),
+                    height: size.1.clamp(caps.min_image_extent.height, caps.max_image_extent.height),
+                }
             };
-            let count = if caps.max_image_count == 0 { caps.min_image_count + 1 } else { (caps.min_image_count + 1).min(caps.max_image_count) };
+            let count = if caps.max_image_count == 0 {
+                caps.min_image_count + 1
+            } else {
+                (caps.min_image_count + 1).min(caps.max_image_count)
+            };
             let info = vk::SwapchainCreateInfoKHR::default()
                 .surface(sk)
                 .min_image_count(count)
@@ -180,8 +193,19 @@ impl App<'_> {
         let cmd = self.renderer.command_buffer(slot);
         let image = sc.images[index as usize];
         let display = self.renderer.display_image();
-        let range = vk::ImageSubresourceRange { aspect_mask: vk::ImageAspectFlags::COLOR, base_mip_level: 0, level_count: 1, base_array_layer: 0, layer_count: 1 };
-        let layers = vk::ImageSubresourceLayers { aspect_mask: vk::ImageAspectFlags::COLOR, mip_level: 0, base_array_layer: 0, layer_count: 1 };
+        let range = vk::ImageSubresourceRange {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            base_mip_level: 0,
+            level_count: 1,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
+        let layers = vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
         let barrier = |from, to, src: vk::AccessFlags2, dst: vk::AccessFlags2| {
             vk::ImageMemoryBarrier2::default()
                 .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
@@ -202,10 +226,28 @@ impl App<'_> {
         // SAFETY: cmd is recording; the swapchain image was acquired for this frame.
         unsafe {
             host.full_barrier(cmd);
-            let to_dst = [barrier(vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::AccessFlags2::NONE, vk::AccessFlags2::TRANSFER_WRITE)];
+            let to_dst = [barrier(
+                vk::ImageLayout::UNDEFINED,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::AccessFlags2::NONE,
+                vk::AccessFlags2::TRANSFER_WRITE,
+            )];
             host.device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_dst));
-            host.device.cmd_blit_image(cmd, display.image, vk::ImageLayout::GENERAL, image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[blit], vk::Filter::LINEAR);
-            let to_present = [barrier(vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::PRESENT_SRC_KHR, vk::AccessFlags2::TRANSFER_WRITE, vk::AccessFlags2::NONE)];
+            host.device.cmd_blit_image(
+                cmd,
+                display.image,
+                vk::ImageLayout::GENERAL,
+                image,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[blit],
+                vk::Filter::LINEAR,
+            );
+            let to_present = [barrier(
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                vk::ImageLayout::PRESENT_SRC_KHR,
+                vk::AccessFlags2::TRANSFER_WRITE,
+                vk::AccessFlags2::NONE,
+            )];
             host.device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_present));
         }
         let rendered = sc.rendered[index as usize];
@@ -236,7 +278,13 @@ impl App<'_> {
         unsafe { self.host.device.device_wait_idle() }.map_err(vkerr("wait idle"))?;
         let size = self.window.inner_size();
         let old = self.swapchain.take();
-        let fresh = Swapchain::new(self.host, self.surface, self.surface_khr, (size.width, size.height), old.as_ref().map_or(vk::SwapchainKHR::null(), |s| s.swapchain))?;
+        let fresh = Swapchain::new(
+            self.host,
+            self.surface,
+            self.surface_khr,
+            (size.width, size.height),
+            old.as_ref().map_or(vk::SwapchainKHR::null(), |s| s.swapchain),
+        )?;
         if let Some(o) = old {
             o.destroy(self.host);
         }
@@ -263,7 +311,17 @@ impl App<'_> {
             KeyCode::Space => self.paused = !self.paused,
             KeyCode::KeyP => self.capture()?,
             k => {
-                let digits = [KeyCode::Digit1, KeyCode::Digit2, KeyCode::Digit3, KeyCode::Digit4, KeyCode::Digit5, KeyCode::Digit6, KeyCode::Digit7, KeyCode::Digit8, KeyCode::Digit9];
+                let digits = [
+                    KeyCode::Digit1,
+                    KeyCode::Digit2,
+                    KeyCode::Digit3,
+                    KeyCode::Digit4,
+                    KeyCode::Digit5,
+                    KeyCode::Digit6,
+                    KeyCode::Digit7,
+                    KeyCode::Digit8,
+                    KeyCode::Digit9,
+                ];
                 match digits.iter().position(|d| *d == k) {
                     Some(i) => self.mode = i,
                     None => self.camera.key(k, 1.0 / 30.0),
@@ -289,7 +347,10 @@ impl ApplicationHandler for App<'_> {
                 self.modifiers = m.state();
                 Ok(())
             }
-            WindowEvent::KeyboardInput { event: KeyEvent { physical_key: PhysicalKey::Code(k), state: ElementState::Pressed, .. }, .. } => self.key(event_loop, k),
+            WindowEvent::KeyboardInput {
+                event: KeyEvent { physical_key: PhysicalKey::Code(k), state: ElementState::Pressed, .. },
+                ..
+            } => self.key(event_loop, k),
             WindowEvent::Resized(_) => self.recreate(),
             WindowEvent::RedrawRequested => self.frame(),
             _ => Ok(()),
@@ -312,7 +373,9 @@ impl ApplicationHandler for App<'_> {
 /// Opens a window on `scene` and renders until it closes (or `frame_limit` frames).
 pub fn run(scene: SampleScene, settings: Settings, frame_limit: Option<u64>, out: PathBuf) -> HostResult<()> {
     let event_loop = EventLoop::new().map_err(|e| format!("no display: {e} (run with --headless)"))?;
-    let attributes = Window::default_attributes().with_title("hybrid-rt").with_inner_size(winit::dpi::PhysicalSize::new(settings.width, settings.height));
+    let attributes = Window::default_attributes()
+        .with_title("hybrid-rt")
+        .with_inner_size(winit::dpi::PhysicalSize::new(settings.width, settings.height));
     // winit 0.30 wants windows made inside the loop; making it first keeps the Vulkan objects
     // plain locals the app borrows (the renderer borrows the device).
     #[allow(deprecated)]
@@ -326,10 +389,13 @@ pub fn run(scene: SampleScene, settings: Settings, frame_limit: Option<u64>, out
     println!("device: {}{}", host.device_name, if host.validation_enabled { " (validation on)" } else { "" });
     let surface = ash::khr::surface::Instance::new(&host.entry, &host.instance);
     // SAFETY: the handles come from a live window; the surface is destroyed before the host.
-    let surface_khr = unsafe { ash_window::create_surface(&host.entry, &host.instance, display_handle, window_handle, None) }.map_err(vkerr("surface"))?;
+    let surface_khr = unsafe { ash_window::create_surface(&host.entry, &host.instance, display_handle, window_handle, None) }
+        .map_err(vkerr("surface"))?;
     let result = (|| {
         // SAFETY: valid physical device, queue family and surface.
-        let presents = unsafe { surface.get_physical_device_surface_support(host.physical_device, host.queue_family, surface_khr) }.unwrap_or(false);
+        let presents =
+            unsafe { surface.get_physical_device_surface_support(host.physical_device, host.queue_family, surface_khr) }
+                .unwrap_or(false);
         if !presents {
             return Err("the device's queue cannot present to this window".to_string());
         }
@@ -340,7 +406,9 @@ pub fn run(scene: SampleScene, settings: Settings, frame_limit: Option<u64>, out
         let swapchain = Swapchain::new(&host, &surface, surface_khr, (size.width, size.height), vk::SwapchainKHR::null())?;
         let acquired = (0..2)
             // SAFETY: plain object creation; destroyed below.
-            .map(|_| unsafe { host.device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }.map_err(vkerr("semaphore")))
+            .map(|_| {
+                unsafe { host.device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }.map_err(vkerr("semaphore"))
+            })
             .collect::<HostResult<Vec<_>>>()?;
         let mut app = App {
             host: &host,
@@ -386,7 +454,10 @@ pub fn run(scene: SampleScene, settings: Settings, frame_limit: Option<u64>, out
     result?;
     let errors = Host::validation_errors();
     if errors > 0 {
-        return Err(format!("{errors} Vulkan validation errors, the first: {:#?}", Host::validation_messages().iter().take(3).collect::<Vec<_>>()));
+        return Err(format!(
+            "{errors} Vulkan validation errors, the first: {:#?}",
+            Host::validation_messages().iter().take(3).collect::<Vec<_>>()
+        ));
     }
     Ok(())
 }

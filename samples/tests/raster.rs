@@ -42,7 +42,10 @@ fn rasterized_gbuffer_matches_the_reference_and_motion_follows_the_camera() {
         let rn = Vec3::new(normals[4 * i], normals[4 * i + 1], normals[4 * i + 2]);
         normal_ok += (rn.dot(g.normal[i]) > 0.99) as u32;
         let c = prev_clip * g.position[i].extend(1.0);
-        let expected = ((c.x / c.w * 0.5 + 0.5) * W as f32 - ((i as u32 % W) as f32 + 0.5), (c.y / c.w * 0.5 + 0.5) * H as f32 - ((i as u32 / W) as f32 + 0.5));
+        let expected = (
+            (c.x / c.w * 0.5 + 0.5) * W as f32 - ((i as u32 % W) as f32 + 0.5),
+            (c.y / c.w * 0.5 + 0.5) * H as f32 - ((i as u32 / W) as f32 + 0.5),
+        );
         motion_ok += ((motion[2 * i] - expected.0).abs() < 0.02 && (motion[2 * i + 1] - expected.1).abs() < 0.02) as u32;
     }
     eprintln!("raster vs reference over {n} pixels: depth {depth_ok}, normals {normal_ok}, motion {motion_ok} agree");
@@ -60,18 +63,30 @@ fn rasterized_gbuffer_matches_the_reference_and_motion_follows_the_camera() {
     let ao = host.image_cleared(vk::Format::R32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
     let common = hybrid_rt::TraceCommon {
         depth: hybrid_rt::DepthInput { image: targets.depth.input(raster::READ), depth_type: hybrid_rt::DepthType::ClipSpace },
-        normals: hybrid_rt::NormalInput { image: targets.normal_roughness.input(raster::READ), normal_type: hybrid_rt::NormalType::RgbVector, space: hybrid_rt::NormalSpace::World },
+        normals: hybrid_rt::NormalInput {
+            image: targets.normal_roughness.input(raster::READ),
+            normal_type: hybrid_rt::NormalType::RgbVector,
+            space: hybrid_rt::NormalSpace::World,
+        },
         viewport: hybrid_rt::Viewport::full(W, H),
         camera: camera.sdk_camera(W, H),
         ..Default::default()
     };
     frame
-        .schedule_ambient_occlusion(&hybrid_rt::TraceAmbientOcclusionTask { common, output: ao.input(vk::ImageLayout::GENERAL), rays_per_pixel: 4, ..Default::default() })
+        .schedule_ambient_occlusion(&hybrid_rt::TraceAmbientOcclusionTask {
+            common,
+            output: ao.input(vk::ImageLayout::GENERAL),
+            rays_per_pixel: 4,
+            ..Default::default()
+        })
         .unwrap();
     hybrid_rt_testkit::sdk_scene::run_frame(&host, &ctx, &mut frame).unwrap();
     let values = host.read_image_f32(&ao, vk::ImageLayout::GENERAL).unwrap();
     let mean = values.iter().sum::<f32>() / values.len() as f32;
-    assert!(values.iter().all(|v| (0.0..=1.0).contains(v)) && mean > 0.5 && mean < 0.99, "AO from the raster G-buffer: mean {mean}");
+    assert!(
+        values.iter().all(|v| (0.0..=1.0).contains(v)) && mean > 0.5 && mean < 0.99,
+        "AO from the raster G-buffer: mean {mean}"
+    );
     host.destroy_image(ao);
     gpu.destroy(&host);
     drop(ctx);
@@ -84,7 +99,7 @@ fn rasterized_gbuffer_matches_the_reference_and_motion_follows_the_camera() {
 #[test]
 fn deferred_lighting_with_sdk_shadows_matches_the_reference_lit_frame() {
     use hybrid_rt::*;
-    use hybrid_rt_samples::lighting::{Lights, LightingPass, Visibility};
+    use hybrid_rt_samples::lighting::{LightingPass, Lights, Visibility};
     use hybrid_rt_testkit::reference::{direct_lighting, Sun};
     use hybrid_rt_testkit::sdk_scene::{run_frame, SceneOnGpu};
     let host = Host::new().expect("device");
@@ -112,18 +127,50 @@ fn deferred_lighting_with_sdk_shadows_matches_the_reference_lit_frame() {
     let sun = Sun { to_light: Vec3::new(0.45, 1.0, 0.6), intensity: 2.5 };
     let light = LightInfo { direction: -sun.to_light, ..Default::default() };
     let depth = DepthInput { image: targets.depth.input(raster::READ), depth_type: DepthType::ClipSpace };
-    let normals = NormalInput { image: targets.normal_roughness.input(raster::READ), normal_type: NormalType::RgbVector, space: NormalSpace::World };
+    let normals = NormalInput {
+        image: targets.normal_roughness.input(raster::READ),
+        normal_type: NormalType::RgbVector,
+        space: NormalSpace::World,
+    };
     let (viewport, sdk_camera) = (Viewport::full(W, H), camera.sdk_camera(W, H));
-    let dn = ctx.create_denoising_context(&DenoisingContextInput { max_width: W, max_height: H, signal: SignalType::Shadow, ..Default::default() }).unwrap();
+    let dn = ctx
+        .create_denoising_context(&DenoisingContextInput {
+            max_width: W,
+            max_height: H,
+            signal: SignalType::Shadow,
+            ..Default::default()
+        })
+        .unwrap();
     let general = vk::ImageLayout::GENERAL;
     frame
-        .schedule_shadow(&TraceShadowTask { common: TraceCommon { depth, normals, viewport, camera: sdk_camera, ..Default::default() }, light, output: shadow.input(general), rays_per_pixel: 1 })
+        .schedule_shadow(&TraceShadowTask {
+            common: TraceCommon { depth, normals, viewport, camera: sdk_camera, ..Default::default() },
+            light,
+            output: shadow.input(general),
+            rays_per_pixel: 1,
+        })
         .unwrap();
     let common = DenoisingCommon { depth, normals, viewport, camera: sdk_camera, ..Default::default() };
-    frame.schedule_denoise_shadow(&DenoiseShadowTask { context: dn, common, light, input: shadow.input(general), output: visibility.input(general) }).unwrap();
+    frame
+        .schedule_denoise_shadow(&DenoiseShadowTask {
+            context: dn,
+            common,
+            light,
+            input: shadow.input(general),
+            output: visibility.input(general),
+        })
+        .unwrap();
     run_frame(&host, &ctx, &mut frame).unwrap();
-    let lights = Lights { sun_direction: sun.to_light, sun_intensity: sun.intensity, point_position: Vec3::ZERO, point_intensity: 0.0, ambient: 0.08 };
-    host.run(|cmd| lighting.record(&host, cmd, 0, &targets, &camera, &lights, Visibility::same(&visibility, general), &lit)).unwrap().unwrap();
+    let lights = Lights {
+        sun_direction: sun.to_light,
+        sun_intensity: sun.intensity,
+        point_position: Vec3::ZERO,
+        point_intensity: 0.0,
+        ambient: 0.08,
+    };
+    host.run(|cmd| lighting.record(&host, cmd, 0, &targets, &camera, &lights, Visibility::same(&visibility, general), &lit))
+        .unwrap()
+        .unwrap();
 
     let ours = halves(&host.read_image(&lit, general).unwrap());
     let reference = direct_lighting(&tracer, &g, sun, albedo);

@@ -16,7 +16,13 @@ const FRAMES: u32 = 12;
 
 fn run_sample(args: &[&str], out: &Path) -> String {
     let _ = std::fs::remove_dir_all(out);
-    let run = Command::new(env!("CARGO_BIN_EXE_sample")).args(args).arg("--out").arg(out).env_remove("DISPLAY").output().expect("run sample");
+    let run = Command::new(env!("CARGO_BIN_EXE_sample"))
+        .args(args)
+        .arg("--out")
+        .arg(out)
+        .env_remove("DISPLAY")
+        .output()
+        .expect("run sample");
     let text = String::from_utf8_lossy(&run.stdout).to_string() + &String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success(), "{text}");
     text
@@ -58,7 +64,8 @@ fn roughness_of(v: &[f32]) -> f32 {
 fn pixel_ray(camera: &Camera, x: u32, y: u32) -> (Vec3, Vec3) {
     let clip_to_world: Mat4 = (camera.view_to_clip(W as f32 / H as f32) * camera.world_to_view()).inverse();
     let ndc = |d: f32| {
-        let p = clip_to_world * Vec4::new((x as f32 + 0.5) / W as f32 * 2.0 - 1.0, (y as f32 + 0.5) / H as f32 * 2.0 - 1.0, d, 1.0);
+        let p =
+            clip_to_world * Vec4::new((x as f32 + 0.5) / W as f32 * 2.0 - 1.0, (y as f32 + 0.5) / H as f32 * 2.0 - 1.0, d, 1.0);
         p.truncate() / p.w
     };
     (camera.eye, (ndc(1.0) - ndc(0.0)).normalize())
@@ -69,7 +76,21 @@ fn the_sample_renders_the_room_and_every_mode_is_sane() {
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("sample-room");
     let (w, h, f) = (W.to_string(), H.to_string(), FRAMES.to_string());
     let text = run_sample(&["--headless", "--width", &w, "--height", &h, "--frames", &f], &out);
-    for label in ["raster G-buffers", "SDK (all tasks)", "inject main", "inject lidar", "shadow sun", "denoise shadow point", "AO", "diffuse GI", "reflections", "denoise reflections + GI", "composite", "SDK memory", "caches"] {
+    for label in [
+        "raster G-buffers",
+        "SDK (all tasks)",
+        "inject main",
+        "inject lidar",
+        "shadow sun",
+        "denoise shadow point",
+        "AO",
+        "diffuse GI",
+        "reflections",
+        "denoise reflections + GI",
+        "composite",
+        "SDK memory",
+        "caches",
+    ] {
         assert!(text.contains(label), "{label} missing from the report:\n{text}");
     }
 
@@ -94,7 +115,12 @@ fn the_sample_renders_the_room_and_every_mode_is_sane() {
     // The denoisers smooth what they are given: neighbour differences of each denoised signal
     // are a fraction of the 1-ray input's. Shadows at this size are mostly hard edges, which
     // a denoiser must keep, so only their penumbra noise can go: a looser bound.
-    for (noisy, clean, ratio) in [("ao_noisy", "ao", 0.5), ("point_shadow_noisy", "point_shadow", 0.8), ("diffuse_noisy", "diffuse", 0.5), ("specular_noisy", "specular", 0.5)] {
+    for (noisy, clean, ratio) in [
+        ("ao_noisy", "ao", 0.5),
+        ("point_shadow_noisy", "point_shadow", 0.8),
+        ("diffuse_noisy", "diffuse", 0.5),
+        ("specular_noisy", "specular", 0.5),
+    ] {
         let (n, c) = (roughness_of(&Image::read(&out, noisy).luminance()), roughness_of(&Image::read(&out, clean).luminance()));
         eprintln!("{noisy} {n:.4} -> {clean} {c:.4}");
         assert!(c < ratio * n, "{clean} ({c}) is not smoother than {noisy} ({n})");
@@ -146,7 +172,10 @@ fn the_sample_renders_the_room_and_every_mode_is_sane() {
     assert!(tested > 100, "the mirror is in view ({tested} pixels)");
     // A grey mirror would pass on the white walls alone: the reflections of the red and green
     // walls, the blue column and the gold sphere must agree too.
-    assert!(coloured > 30 && coloured_agree as f32 > 0.8 * coloured as f32, "{coloured_agree} of {coloured} coloured reflections");
+    assert!(
+        coloured > 30 && coloured_agree as f32 > 0.8 * coloured as f32,
+        "{coloured_agree} of {coloured} coloured reflections"
+    );
     assert!(shows_light as f32 > 0.85 * tested as f32, "{shows_light} of {tested} mirror pixels show light");
     assert!(agree as f32 > 0.8 * tested as f32, "{agree} of {tested}");
 
@@ -177,9 +206,14 @@ fn write_gltf(path: &Path) {
     let quad_idx: [u16; 6] = [0, 2, 1, 0, 3, 2];
     let mut cube = Vec::new();
     for i in 0..8 {
-        cube.push([if i & 1 == 0 { -0.5f32 } else { 0.5 }, if i & 2 == 0 { 0.0 } else { 1.0 }, if i & 4 == 0 { -0.5 } else { 0.5 }]);
+        cube.push([
+            if i & 1 == 0 { -0.5f32 } else { 0.5 },
+            if i & 2 == 0 { 0.0 } else { 1.0 },
+            if i & 4 == 0 { -0.5 } else { 0.5 },
+        ]);
     }
-    let cube_idx: [u16; 36] = [0, 1, 3, 0, 3, 2, 4, 6, 7, 4, 7, 5, 0, 4, 5, 0, 5, 1, 2, 3, 7, 2, 7, 6, 0, 2, 6, 0, 6, 4, 1, 5, 7, 1, 7, 3];
+    let cube_idx: [u16; 36] =
+        [0, 1, 3, 0, 3, 2, 4, 6, 7, 4, 7, 5, 0, 4, 5, 0, 5, 1, 2, 3, 7, 2, 7, 6, 0, 2, 6, 0, 6, 4, 1, 5, 7, 1, 7, 3];
     bin.extend(bytemuck::cast_slice(&quad));
     bin.extend(bytemuck::cast_slice(&quad_idx));
     bin.extend(bytemuck::cast_slice(&cube));
@@ -212,12 +246,31 @@ fn the_sample_renders_a_gltf_file() {
 
     let out = dir.join("sample-gltf");
     let (w, h) = (W.to_string(), H.to_string());
-    run_sample(&[file.to_str().unwrap(), "--headless", "--width", &w, "--height", &h, "--frames", "4", "--modes", "composite,debug_random_mesh,albedo"], &out);
+    run_sample(
+        &[
+            file.to_str().unwrap(),
+            "--headless",
+            "--width",
+            &w,
+            "--height",
+            &h,
+            "--frames",
+            "4",
+            "--modes",
+            "composite,debug_random_mesh,albedo",
+        ],
+        &out,
+    );
     let albedo = Image::read(&out, "albedo");
     let red = albedo.0.iter().filter(|t| t[0] > 0.8 && t[1] < 0.3).count();
     assert!(red > 50, "the red cubes are in view: {red} pixels");
     let meshes = Image::read(&out, "debug_random_mesh");
-    let mut colours: Vec<[u32; 3]> = meshes.0.iter().filter(|t| t[0] + t[1] + t[2] > 0.0).map(|t| [(t[0] * 255.0) as u32, (t[1] * 255.0) as u32, (t[2] * 255.0) as u32]).collect();
+    let mut colours: Vec<[u32; 3]> = meshes
+        .0
+        .iter()
+        .filter(|t| t[0] + t[1] + t[2] > 0.0)
+        .map(|t| [(t[0] * 255.0) as u32, (t[1] * 255.0) as u32, (t[2] * 255.0) as u32])
+        .collect();
     colours.sort();
     colours.dedup();
     assert!(colours.len() >= 3, "three instances, three colours: {colours:?}");
@@ -232,7 +285,10 @@ fn the_sample_presents_frames_in_a_window_under_xvfb() {
         return;
     };
     let display = format!(":{}", 90 + std::process::id() % 400);
-    let mut server = Command::new(xvfb).args([display.as_str(), "-screen", "0", "320x240x24", "-nolisten", "tcp"]).spawn().expect("start Xvfb");
+    let mut server = Command::new(xvfb)
+        .args([display.as_str(), "-screen", "0", "320x240x24", "-nolisten", "tcp"])
+        .spawn()
+        .expect("start Xvfb");
     std::thread::sleep(std::time::Duration::from_millis(800));
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("sample-window");
     let run = Command::new(env!("CARGO_BIN_EXE_sample"))

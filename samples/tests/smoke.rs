@@ -14,7 +14,22 @@ fn bench_prints_and_writes_json() {
     let text = String::from_utf8_lossy(&run.stdout).to_string() + &String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success(), "{text}");
     let j = std::fs::read_to_string(&json).unwrap();
-    for key in ["blas_big_mesh", "triangles_per_s", "blas_field", "tlas", "build_gpu_task_cpu_us", "ratio_to_floor", "floor_gpu_ms", "memory_bytes", "injection", "cache_bytes_mean_per_instance", "shadow_gpu_ms", "diffuse_gpu_ms", "specular_gpu_ms", "multi_shadow_4_lights_gpu_ms"] {
+    for key in [
+        "blas_big_mesh",
+        "triangles_per_s",
+        "blas_field",
+        "tlas",
+        "build_gpu_task_cpu_us",
+        "ratio_to_floor",
+        "floor_gpu_ms",
+        "memory_bytes",
+        "injection",
+        "cache_bytes_mean_per_instance",
+        "shadow_gpu_ms",
+        "diffuse_gpu_ms",
+        "specular_gpu_ms",
+        "multi_shadow_4_lights_gpu_ms",
+    ] {
         assert!(j.contains(key), "{key} missing from {j}");
     }
     assert!(text.contains("AO 64x36, 2 ray(s)/pixel"), "{text}");

@@ -1,10 +1,10 @@
 //! Denoising in C: contexts and the six denoise tasks (see the Rust docs of
 //! `hybrid_rt::api::denoising`). Four tasks share one struct, `HrtDenoiseTask` (context,
 //! common, input, output); each has its own schedule function.
+use crate::status::Failure;
 use crate::status::{guard, HrtStatus};
 use crate::types::*;
 use crate::{get, get_mut, HrtContext, HrtTaskContainer};
-use crate::status::Failure;
 use hybrid_rt as rt;
 
 pub type HrtDenoisingContextHandle = u64;
@@ -135,7 +135,10 @@ pub struct HrtDenoiseSpecularAndDiffuseTask {
 }
 
 fn camera(c: &HrtCamera) -> rt::Camera {
-    rt::Camera { world_to_view: glam::Mat4::from_cols_array(&c.world_to_view), view_to_clip: glam::Mat4::from_cols_array(&c.view_to_clip) }
+    rt::Camera {
+        world_to_view: glam::Mat4::from_cols_array(&c.world_to_view),
+        view_to_clip: glam::Mat4::from_cols_array(&c.view_to_clip),
+    }
 }
 
 fn camera_c(c: &rt::Camera) -> HrtCamera {
@@ -144,7 +147,14 @@ fn camera_c(c: &rt::Camera) -> HrtCamera {
 
 fn common(c: &HrtDenoisingCommon) -> Result<rt::DenoisingCommon, Failure> {
     // The G-buffer fields convert as a trace task's do.
-    let t = trace_common(&HrtTraceCommon { depth: c.depth, normals: c.normals, viewport: c.viewport, camera: c.camera, roughness: c.roughness, ..trace_common_default() })?;
+    let t = trace_common(&HrtTraceCommon {
+        depth: c.depth,
+        normals: c.normals,
+        viewport: c.viewport,
+        camera: c.camera,
+        roughness: c.roughness,
+        ..trace_common_default()
+    })?;
     let motion_type = match c.motion.motion_type {
         0 => rt::MotionType::RgViewSpace,
         1 => rt::MotionType::RgClipSpace,
@@ -186,7 +196,11 @@ pub extern "C" fn hrt_denoising_common_default() -> HrtDenoisingCommon {
         depth: t.depth,
         normals: t.normals,
         roughness: t.roughness,
-        motion: HrtMotionInput { image: image_c(&d.motion.image), motion_type: d.motion.motion_type as u32, scale: d.motion.scale },
+        motion: HrtMotionInput {
+            image: image_c(&d.motion.image),
+            motion_type: d.motion.motion_type as u32,
+            scale: d.motion.scale,
+        },
         viewport: t.viewport,
         camera: t.camera,
         has_previous_camera: false,
@@ -211,7 +225,12 @@ pub extern "C" fn hrt_denoising_common_default() -> HrtDenoisingCommon {
 #[no_mangle]
 pub extern "C" fn hrt_denoising_context_input_default() -> HrtDenoisingContextInput {
     let d = rt::DenoisingContextInput::default();
-    HrtDenoisingContextInput { max_width: d.max_width, max_height: d.max_height, method: d.method as u32, signal: d.signal as u32 }
+    HrtDenoisingContextInput {
+        max_width: d.max_width,
+        max_height: d.max_height,
+        method: d.method as u32,
+        signal: d.signal as u32,
+    }
 }
 
 /// Creates a denoising context (its history images are allocated now).
@@ -228,13 +247,22 @@ pub unsafe extern "C" fn hrt_create_denoising_context(
         let method = match i.method {
             0 => rt::DenoisingMethod::Temporal,
             1 => rt::DenoisingMethod::SpatialOnly,
-            v => return Err(Failure(HrtStatus::HRT_ERROR_INVALID_INPUT, format!("invalid HrtDenoisingContextInput.method: {v}"))),
+            v => {
+                return Err(Failure(HrtStatus::HRT_ERROR_INVALID_INPUT, format!("invalid HrtDenoisingContextInput.method: {v}")))
+            }
         };
         use rt::SignalType as S;
         let signal = *[S::Specular, S::Diffuse, S::SpecularAndDiffuse, S::DiffuseOcclusion, S::Shadow, S::MultiShadow]
             .get(i.signal as usize)
-            .ok_or_else(|| Failure(HrtStatus::HRT_ERROR_INVALID_INPUT, format!("invalid HrtDenoisingContextInput.signal: {}", i.signal)))?;
-        let h = c.ctx.create_denoising_context(&rt::DenoisingContextInput { max_width: i.max_width, max_height: i.max_height, method, signal })?;
+            .ok_or_else(|| {
+                Failure(HrtStatus::HRT_ERROR_INVALID_INPUT, format!("invalid HrtDenoisingContextInput.signal: {}", i.signal))
+            })?;
+        let h = c.ctx.create_denoising_context(&rt::DenoisingContextInput {
+            max_width: i.max_width,
+            max_height: i.max_height,
+            method,
+            signal,
+        })?;
         *out = h.0;
         Ok(())
     })
@@ -287,21 +315,36 @@ unsafe fn schedule_plain<T>(
 }
 
 #[no_mangle]
-pub unsafe extern "C" fn hrt_schedule_denoise_specular(container: *mut HrtTaskContainer, task: *const HrtDenoiseTask) -> HrtStatus {
-    schedule_plain(container, task, |context, common, input, output| rt::DenoiseSpecularTask { context, common, input, output }, |c, t| {
-        c.schedule_denoise_specular(t)
-    })
+pub unsafe extern "C" fn hrt_schedule_denoise_specular(
+    container: *mut HrtTaskContainer,
+    task: *const HrtDenoiseTask,
+) -> HrtStatus {
+    schedule_plain(
+        container,
+        task,
+        |context, common, input, output| rt::DenoiseSpecularTask { context, common, input, output },
+        |c, t| c.schedule_denoise_specular(t),
+    )
 }
 
 #[no_mangle]
-pub unsafe extern "C" fn hrt_schedule_denoise_diffuse(container: *mut HrtTaskContainer, task: *const HrtDenoiseTask) -> HrtStatus {
-    schedule_plain(container, task, |context, common, input, output| rt::DenoiseDiffuseTask { context, common, input, output }, |c, t| {
-        c.schedule_denoise_diffuse(t)
-    })
+pub unsafe extern "C" fn hrt_schedule_denoise_diffuse(
+    container: *mut HrtTaskContainer,
+    task: *const HrtDenoiseTask,
+) -> HrtStatus {
+    schedule_plain(
+        container,
+        task,
+        |context, common, input, output| rt::DenoiseDiffuseTask { context, common, input, output },
+        |c, t| c.schedule_denoise_diffuse(t),
+    )
 }
 
 #[no_mangle]
-pub unsafe extern "C" fn hrt_schedule_denoise_diffuse_occlusion(container: *mut HrtTaskContainer, task: *const HrtDenoiseTask) -> HrtStatus {
+pub unsafe extern "C" fn hrt_schedule_denoise_diffuse_occlusion(
+    container: *mut HrtTaskContainer,
+    task: *const HrtDenoiseTask,
+) -> HrtStatus {
     schedule_plain(
         container,
         task,
@@ -311,7 +354,10 @@ pub unsafe extern "C" fn hrt_schedule_denoise_diffuse_occlusion(container: *mut 
 }
 
 #[no_mangle]
-pub unsafe extern "C" fn hrt_schedule_denoise_multi_shadow(container: *mut HrtTaskContainer, task: *const HrtDenoiseTask) -> HrtStatus {
+pub unsafe extern "C" fn hrt_schedule_denoise_multi_shadow(
+    container: *mut HrtTaskContainer,
+    task: *const HrtDenoiseTask,
+) -> HrtStatus {
     schedule_plain(
         container,
         task,
@@ -321,7 +367,10 @@ pub unsafe extern "C" fn hrt_schedule_denoise_multi_shadow(container: *mut HrtTa
 }
 
 #[no_mangle]
-pub unsafe extern "C" fn hrt_schedule_denoise_shadow(container: *mut HrtTaskContainer, task: *const HrtDenoiseShadowTask) -> HrtStatus {
+pub unsafe extern "C" fn hrt_schedule_denoise_shadow(
+    container: *mut HrtTaskContainer,
+    task: *const HrtDenoiseShadowTask,
+) -> HrtStatus {
     guard(|| {
         let c = get_mut(container, "container")?;
         let t = get(task, "task")?;

@@ -15,12 +15,12 @@ mod types;
 
 use ash::vk;
 use ash::vk::Handle;
+pub use denoise::*;
 use hybrid_rt as rt;
 pub use log_bridge::{HrtLogCallback, HrtLogSeverity};
-use status::{guard, null, Failure};
 pub use status::HrtStatus;
+use status::{guard, null, Failure};
 use std::ffi::{c_char, c_void, CStr};
-pub use denoise::*;
 pub use types::*;
 
 /// The API version this header describes: (major << 22) | (minor << 12) | patch.
@@ -101,7 +101,11 @@ pub unsafe extern "C" fn hrt_last_error_message(buffer: *mut c_char, capacity: u
 /// (NULL removes it). Returns false if another logger of the Rust `log` crate already owns
 /// the process.
 #[no_mangle]
-pub unsafe extern "C" fn hrt_set_log_callback(callback: HrtLogCallback, min_severity: HrtLogSeverity, user_data: *mut c_void) -> bool {
+pub unsafe extern "C" fn hrt_set_log_callback(
+    callback: HrtLogCallback,
+    min_severity: HrtLogSeverity,
+    user_data: *mut c_void,
+) -> bool {
     std::panic::catch_unwind(|| log_bridge::install(callback, min_severity, user_data)).unwrap_or(false)
 }
 
@@ -258,7 +262,11 @@ pub unsafe extern "C" fn hrt_create_geometry_handles(ctx: *mut HrtContext, count
 }
 
 #[no_mangle]
-pub unsafe extern "C" fn hrt_destroy_geometry_handles(ctx: *mut HrtContext, handles: *const HrtGeometryHandle, count: u32) -> HrtStatus {
+pub unsafe extern "C" fn hrt_destroy_geometry_handles(
+    ctx: *mut HrtContext,
+    handles: *const HrtGeometryHandle,
+    count: u32,
+) -> HrtStatus {
     guard(|| {
         let c = get(ctx, "ctx")?;
         let hs: Vec<rt::GeometryHandle> = slice(handles, count, "handles")?.iter().map(|&h| rt::GeometryHandle(h)).collect();
@@ -281,7 +289,11 @@ pub unsafe extern "C" fn hrt_create_instance_handles(ctx: *mut HrtContext, count
 }
 
 #[no_mangle]
-pub unsafe extern "C" fn hrt_destroy_instance_handles(ctx: *mut HrtContext, handles: *const HrtInstanceHandle, count: u32) -> HrtStatus {
+pub unsafe extern "C" fn hrt_destroy_instance_handles(
+    ctx: *mut HrtContext,
+    handles: *const HrtInstanceHandle,
+    count: u32,
+) -> HrtStatus {
     guard(|| {
         let c = get(ctx, "ctx")?;
         let hs: Vec<rt::InstanceHandle> = slice(handles, count, "handles")?.iter().map(|&h| rt::InstanceHandle(h)).collect();
@@ -378,7 +390,10 @@ pub extern "C" fn hrt_trace_ambient_occlusion_task_default() -> HrtTraceAmbientO
 }
 
 #[no_mangle]
-pub unsafe extern "C" fn hrt_schedule_ambient_occlusion(container: *mut HrtTaskContainer, task: *const HrtTraceAmbientOcclusionTask) -> HrtStatus {
+pub unsafe extern "C" fn hrt_schedule_ambient_occlusion(
+    container: *mut HrtTaskContainer,
+    task: *const HrtTraceAmbientOcclusionTask,
+) -> HrtStatus {
     guard(|| {
         let c = get_mut(container, "container")?;
         Ok(c.inner.schedule_ambient_occlusion(&types::ao_task(get(task, "task")?)?)?)
@@ -480,7 +495,12 @@ pub unsafe extern "C" fn hrt_resource_allocations(ctx: *const HrtContext, out: *
 /// Serials of the tickets built and not yet handed back: writes up to `capacity` and the total
 /// to `count`.
 #[no_mangle]
-pub unsafe extern "C" fn hrt_tickets_in_flight(ctx: *const HrtContext, serials: *mut u64, capacity: u32, count: *mut u32) -> HrtStatus {
+pub unsafe extern "C" fn hrt_tickets_in_flight(
+    ctx: *const HrtContext,
+    serials: *mut u64,
+    capacity: u32,
+    count: *mut u32,
+) -> HrtStatus {
     guard(|| {
         let c = get(ctx, "ctx")?;
         let all = c.ctx.tickets_in_flight();
@@ -535,7 +555,11 @@ pub unsafe extern "C" fn hrt_schedule_clear_cache(container: *mut HrtTaskContain
 /// Bytes of an instance's direct-lighting cache (0 until allocated, one recording after the
 /// ticket that registered its geometry came back).
 #[no_mangle]
-pub unsafe extern "C" fn hrt_instance_cache_bytes(ctx: *const HrtContext, instance: HrtInstanceHandle, bytes: *mut u64) -> HrtStatus {
+pub unsafe extern "C" fn hrt_instance_cache_bytes(
+    ctx: *const HrtContext,
+    instance: HrtInstanceHandle,
+    bytes: *mut u64,
+) -> HrtStatus {
     guard(|| {
         let c = get(ctx, "ctx")?;
         *get_mut(bytes, "bytes")? = c.ctx.instance_cache_bytes(rt::InstanceHandle(instance))?;
@@ -546,7 +570,12 @@ pub unsafe extern "C" fn hrt_instance_cache_bytes(ctx: *const HrtContext, instan
 #[no_mangle]
 pub extern "C" fn hrt_direct_light_transfer_task_default() -> HrtDirectLightTransferTask {
     let d = rt::DirectLightTransferTask::default();
-    HrtDirectLightTransferTask { source: 0, target: 0, max_distance: d.max_distance, enable_bilinear_sampling: d.enable_bilinear_sampling }
+    HrtDirectLightTransferTask {
+        source: 0,
+        target: 0,
+        max_distance: d.max_distance,
+        enable_bilinear_sampling: d.enable_bilinear_sampling,
+    }
 }
 
 #[no_mangle]
@@ -634,8 +663,10 @@ pub unsafe extern "C" fn hrt_schedule_specular(container: *mut HrtTaskContainer,
     guard(|| {
         let c = get_mut(container, "container")?;
         let t = get(task, "task")?;
-        let ao = types::ao_task(&HrtTraceAmbientOcclusionTask { common: t.common, output: t.output, ..types::ao_task_default() })?;
-        let demod = types::ao_task(&HrtTraceAmbientOcclusionTask { output: t.demodulated_output, ..types::ao_task_default() })?.output;
+        let ao =
+            types::ao_task(&HrtTraceAmbientOcclusionTask { common: t.common, output: t.output, ..types::ao_task_default() })?;
+        let demod =
+            types::ao_task(&HrtTraceAmbientOcclusionTask { output: t.demodulated_output, ..types::ao_task_default() })?.output;
         Ok(c.inner.schedule_specular(&rt::TraceSpecularTask {
             common: ao.common,
             output: ao.output,
@@ -662,7 +693,10 @@ pub extern "C" fn hrt_trace_multi_shadow_task_default() -> HrtTraceMultiShadowTa
 }
 
 #[no_mangle]
-pub unsafe extern "C" fn hrt_schedule_multi_shadow(container: *mut HrtTaskContainer, task: *const HrtTraceMultiShadowTask) -> HrtStatus {
+pub unsafe extern "C" fn hrt_schedule_multi_shadow(
+    container: *mut HrtTaskContainer,
+    task: *const HrtTraceMultiShadowTask,
+) -> HrtStatus {
     guard(|| {
         let c = get_mut(container, "container")?;
         let t = get(task, "task")?;

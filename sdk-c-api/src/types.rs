@@ -41,12 +41,20 @@ pub struct HrtInitSettings {
 
 impl From<rt::InitSettings> for HrtInitSettings {
     fn from(s: rt::InitSettings) -> Self {
-        HrtInitSettings { supported_working_sets: s.supported_working_sets, upload_ring_bytes: s.upload_ring_bytes, max_timed_tasks: s.max_timed_tasks }
+        HrtInitSettings {
+            supported_working_sets: s.supported_working_sets,
+            upload_ring_bytes: s.upload_ring_bytes,
+            max_timed_tasks: s.max_timed_tasks,
+        }
     }
 }
 impl From<&HrtInitSettings> for rt::InitSettings {
     fn from(s: &HrtInitSettings) -> Self {
-        rt::InitSettings { supported_working_sets: s.supported_working_sets, upload_ring_bytes: s.upload_ring_bytes, max_timed_tasks: s.max_timed_tasks }
+        rt::InitSettings {
+            supported_working_sets: s.supported_working_sets,
+            upload_ring_bytes: s.upload_ring_bytes,
+            max_timed_tasks: s.max_timed_tasks,
+        }
     }
 }
 
@@ -587,7 +595,11 @@ pub(crate) fn geometry_task(t: &HrtGeometryTask) -> Result<rt::GeometryTask, Fai
             },
             allow_update: i.allow_update,
             surfels: rt::SurfelSettings {
-                surfel_type: pick("HrtSurfelSettings.surfel_type", i.surfels.surfel_type, &[rt::SurfelType::MeshColors, rt::SurfelType::Tiles])?,
+                surfel_type: pick(
+                    "HrtSurfelSettings.surfel_type",
+                    i.surfels.surfel_type,
+                    &[rt::SurfelType::MeshColors, rt::SurfelType::Tiles],
+                )?,
                 tile_unit_length: i.surfels.tile_unit_length,
                 tile_resolution_limit: i.surfels.tile_resolution_limit,
             },
@@ -666,14 +678,25 @@ pub(crate) fn trace_common(c: &HrtTraceCommon) -> Result<rt::TraceCommon, Failur
     Ok(rt::TraceCommon {
         depth: rt::DepthInput {
             image: image(&c.depth.image),
-            depth_type: pick("HrtDepthInput.depth_type", c.depth.depth_type, &[rt::DepthType::ClipSpace, rt::DepthType::WorldPosition])?,
+            depth_type: pick(
+                "HrtDepthInput.depth_type",
+                c.depth.depth_type,
+                &[rt::DepthType::ClipSpace, rt::DepthType::WorldPosition],
+            )?,
         },
         normals: rt::NormalInput {
             image: image(&c.normals.image),
             normal_type: pick(
                 "HrtNormalInput.normal_type",
                 c.normals.normal_type,
-                &[N::RgbVector, N::RgbNormalizedVector, N::RgOctahedron, N::BaOctahedron, N::RgNormalizedOctahedron, N::BaNormalizedOctahedron],
+                &[
+                    N::RgbVector,
+                    N::RgbNormalizedVector,
+                    N::RgOctahedron,
+                    N::BaOctahedron,
+                    N::RgNormalizedOctahedron,
+                    N::BaNormalizedOctahedron,
+                ],
             )?,
             space: pick("HrtNormalInput.space", c.normals.space, &[rt::NormalSpace::World, rt::NormalSpace::View])?,
         },
@@ -732,9 +755,16 @@ pub(crate) fn trace_common_default() -> HrtTraceCommon {
     let o = &d.ray_offset;
     HrtTraceCommon {
         depth: HrtDepthInput { image: image_c(&d.depth.image), depth_type: d.depth.depth_type as u32 },
-        normals: HrtNormalInput { image: image_c(&d.normals.image), normal_type: d.normals.normal_type as u32, space: d.normals.space as u32 },
+        normals: HrtNormalInput {
+            image: image_c(&d.normals.image),
+            normal_type: d.normals.normal_type as u32,
+            space: d.normals.space as u32,
+        },
         viewport: HrtViewport { x: 0, y: 0, width: 0, height: 0, min_depth: 0.0, max_depth: 0.0 },
-        camera: HrtCamera { world_to_view: d.camera.world_to_view.to_cols_array(), view_to_clip: d.camera.view_to_clip.to_cols_array() },
+        camera: HrtCamera {
+            world_to_view: d.camera.world_to_view.to_cols_array(),
+            view_to_clip: d.camera.view_to_clip.to_cols_array(),
+        },
         ray_offset: HrtRayOffset {
             offset_type: o.offset_type as u32,
             world_threshold: o.world_threshold,
@@ -830,7 +860,11 @@ impl From<rt::ResourceAllocations> for HrtResourceAllocations {
 
 pub(crate) fn light(l: &HrtLightInfo) -> Result<rt::LightInfo, Failure> {
     Ok(rt::LightInfo {
-        light_type: pick("HrtLightInfo.light_type", l.light_type, &[rt::LightType::Directional, rt::LightType::Point, rt::LightType::Spot])?,
+        light_type: pick(
+            "HrtLightInfo.light_type",
+            l.light_type,
+            &[rt::LightType::Directional, rt::LightType::Point, rt::LightType::Spot],
+        )?,
         position: glam::Vec3::from_array(l.position),
         direction: glam::Vec3::from_array(l.direction),
         angular_extent: l.angular_extent,
@@ -841,10 +875,18 @@ pub(crate) fn light(l: &HrtLightInfo) -> Result<rt::LightInfo, Failure> {
 }
 
 pub(crate) fn shadow_task(t: &HrtTraceShadowTask) -> Result<rt::TraceShadowTask, Failure> {
-    Ok(rt::TraceShadowTask { common: trace_common(&t.common)?, light: light(&t.light)?, output: image(&t.output), rays_per_pixel: t.rays_per_pixel })
+    Ok(rt::TraceShadowTask {
+        common: trace_common(&t.common)?,
+        light: light(&t.light)?,
+        output: image(&t.output),
+        rays_per_pixel: t.rays_per_pixel,
+    })
 }
 
-pub(crate) fn multi_shadow_task(t: &HrtTraceMultiShadowTask, lights: &[HrtLightInfo]) -> Result<rt::TraceMultiShadowTask, Failure> {
+pub(crate) fn multi_shadow_task(
+    t: &HrtTraceMultiShadowTask,
+    lights: &[HrtLightInfo],
+) -> Result<rt::TraceMultiShadowTask, Failure> {
     Ok(rt::TraceMultiShadowTask {
         common: trace_common(&t.common)?,
         lights: lights.iter().map(light).collect::<Result<_, _>>()?,

@@ -37,8 +37,7 @@ pub use api::tasks::*;
 pub use api::ticket::{CompletedTask, GpuTicket, TaskKind, TaskTiming};
 pub use error::{Error, HandleProblem, Result};
 pub use gpu::device::{
-    query_device_support, DeviceDesc, DeviceFeatures, DeviceSupport, OPTIONAL_DEVICE_EXTENSIONS,
-    REQUIRED_DEVICE_EXTENSIONS,
+    query_device_support, DeviceDesc, DeviceFeatures, DeviceSupport, OPTIONAL_DEVICE_EXTENSIONS, REQUIRED_DEVICE_EXTENSIONS,
 };
 pub use gpu::memory::{AllocationCount, ResourceAllocations};
 

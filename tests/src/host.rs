@@ -8,7 +8,7 @@
 //! it. Device choice: the first device with ray tracing, or the first whose name contains
 //! HRT_DEVICE (e.g. HRT_DEVICE=llvmpipe).
 use ash::{ext, vk};
-use hybrid_rt::{DeviceFeatures, DeviceDesc};
+use hybrid_rt::{DeviceDesc, DeviceFeatures};
 use std::ffi::{c_void, CStr};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -108,8 +108,7 @@ impl Host {
         let layers = unsafe { entry.enumerate_instance_layer_properties() }.unwrap_or_default();
         let want_validation = std::env::var("HRT_VALIDATION").map(|v| v != "0").unwrap_or(true);
         let validation_name = c"VK_LAYER_KHRONOS_validation";
-        let validation_enabled =
-            want_validation && layers.iter().any(|l| l.layer_name_as_c_str() == Ok(validation_name));
+        let validation_enabled = want_validation && layers.iter().any(|l| l.layer_name_as_c_str() == Ok(validation_name));
         let exts = unsafe { entry.enumerate_instance_extension_properties(None) }.unwrap_or_default();
         let has_debug = exts.iter().any(|e| e.extension_name_as_c_str() == Ok(ext::debug_utils::NAME));
 
@@ -148,7 +147,10 @@ impl Host {
             let name = props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
             let support = hybrid_rt::query_device_support(&instance, pd);
             seen.push(format!("{name}: {:?}", support.missing));
-            let name_ok = wanted.as_ref().map_or(true, |w| name.contains(w.as_str()));
+            let name_ok = match &wanted {
+                Some(w) => name.contains(w.as_str()),
+                None => true,
+            };
             if support.supported && name_ok {
                 chosen = Some((pd, name, support));
                 break;
@@ -177,7 +179,8 @@ impl Host {
         // The engine side rasterizes too (the sample's G-buffer): dynamic rendering is core in
         // Vulkan 1.3 and always supported there.
         features.vulkan13 = features.vulkan13.dynamic_rendering(true);
-        let info = features.push_to(vk::DeviceCreateInfo::default().queue_create_infos(&queues).enabled_extension_names(&ext_ptrs));
+        let info =
+            features.push_to(vk::DeviceCreateInfo::default().queue_create_infos(&queues).enabled_extension_names(&ext_ptrs));
         let device = unsafe { instance.create_device(physical_device, &info, None) }.map_err(vkerr("vkCreateDevice"))?;
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
         let pool_info = vk::CommandPoolCreateInfo::default()
@@ -237,7 +240,10 @@ impl Host {
         unsafe {
             self.device.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty()).map_err(vkerr("reset cmd"))?;
             self.device
-                .begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT))
+                .begin_command_buffer(
+                    cmd,
+                    &vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                )
                 .map_err(vkerr("begin cmd"))
         }
     }
@@ -281,7 +287,11 @@ impl Host {
 
     /// A host-visible buffer holding `data` (vertex/index buffers of the test scenes).
     pub fn buffer_with_data(&self, data: &[u8], usage: vk::BufferUsageFlags) -> HostResult<HostBuffer> {
-        let b = self.create_buffer(data.len().max(4) as u64, usage, vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT)?;
+        let b = self.create_buffer(
+            data.len().max(4) as u64,
+            usage,
+            vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT,
+        )?;
         self.write_buffer(&b, data)?;
         Ok(b)
     }
@@ -300,7 +310,12 @@ impl Host {
         Ok(())
     }
 
-    pub fn create_buffer(&self, size: u64, usage: vk::BufferUsageFlags, flags: vk::MemoryPropertyFlags) -> HostResult<HostBuffer> {
+    pub fn create_buffer(
+        &self,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        flags: vk::MemoryPropertyFlags,
+    ) -> HostResult<HostBuffer> {
         unsafe {
             let info = vk::BufferCreateInfo::default().size(size).usage(usage);
             let buffer = self.device.create_buffer(&info, None).map_err(vkerr("create buffer"))?;
@@ -408,7 +423,13 @@ impl Host {
             self.transition(cmd, &img, vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
             let region = copy_region(&img);
             unsafe {
-                self.device.cmd_copy_buffer_to_image(cmd, staging.buffer, img.image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[region])
+                self.device.cmd_copy_buffer_to_image(
+                    cmd,
+                    staging.buffer,
+                    img.image,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[region],
+                )
             };
             self.transition(cmd, &img, vk::ImageLayout::TRANSFER_DST_OPTIMAL, layout);
         })?;
@@ -423,7 +444,13 @@ impl Host {
             self.transition(cmd, img, layout, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
             let region = copy_region(img);
             unsafe {
-                self.device.cmd_copy_buffer_to_image(cmd, staging.buffer, img.image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, &[region])
+                self.device.cmd_copy_buffer_to_image(
+                    cmd,
+                    staging.buffer,
+                    img.image,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[region],
+                )
             };
             self.transition(cmd, img, vk::ImageLayout::TRANSFER_DST_OPTIMAL, layout);
         })?;
@@ -432,7 +459,14 @@ impl Host {
     }
 
     /// An image cleared to zero, in `layout` (outputs: GENERAL).
-    pub fn image_cleared(&self, format: vk::Format, width: u32, height: u32, usage: vk::ImageUsageFlags, layout: vk::ImageLayout) -> HostResult<HostImage> {
+    pub fn image_cleared(
+        &self,
+        format: vk::Format,
+        width: u32,
+        height: u32,
+        usage: vk::ImageUsageFlags,
+        layout: vk::ImageLayout,
+    ) -> HostResult<HostImage> {
         let bytes = width as usize * height as usize * texel_size(format);
         self.image_with_data(format, width, height, usage, &vec![0u8; bytes], layout)
     }
@@ -448,7 +482,13 @@ impl Host {
         self.run(|cmd| {
             self.transition(cmd, img, layout, vk::ImageLayout::TRANSFER_SRC_OPTIMAL);
             unsafe {
-                self.device.cmd_copy_image_to_buffer(cmd, img.image, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, staging.buffer, &[copy_region(img)])
+                self.device.cmd_copy_image_to_buffer(
+                    cmd,
+                    img.image,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    staging.buffer,
+                    &[copy_region(img)],
+                )
             };
             self.transition(cmd, img, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, layout);
         })?;
@@ -497,7 +537,12 @@ fn copy_region(img: &HostImage) -> vk::BufferImageCopy {
         buffer_offset: 0,
         buffer_row_length: 0,
         buffer_image_height: 0,
-        image_subresource: vk::ImageSubresourceLayers { aspect_mask: img.aspect, mip_level: 0, base_array_layer: 0, layer_count: 1 },
+        image_subresource: vk::ImageSubresourceLayers {
+            aspect_mask: img.aspect,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        },
         image_offset: vk::Offset3D::default(),
         image_extent: vk::Extent3D { width: img.width, height: img.height, depth: 1 },
     }
@@ -508,7 +553,11 @@ pub fn texel_size(format: vk::Format) -> usize {
     match format {
         vk::Format::R8_UNORM => 1,
         vk::Format::R16_SFLOAT | vk::Format::R16_UNORM | vk::Format::D16_UNORM | vk::Format::R8G8_UNORM => 2,
-        vk::Format::R32_SFLOAT | vk::Format::R32_UINT | vk::Format::D32_SFLOAT | vk::Format::R8G8B8A8_UNORM | vk::Format::R16G16_SFLOAT
+        vk::Format::R32_SFLOAT
+        | vk::Format::R32_UINT
+        | vk::Format::D32_SFLOAT
+        | vk::Format::R8G8B8A8_UNORM
+        | vk::Format::R16G16_SFLOAT
         | vk::Format::A2B10G10R10_UNORM_PACK32 => 4,
         vk::Format::R16G16B16A16_SFLOAT | vk::Format::R32G32_SFLOAT => 8,
         vk::Format::R32G32B32A32_SFLOAT | vk::Format::R32G32B32A32_UINT => 16,

@@ -196,7 +196,13 @@ impl Tracer {
                 continue;
             }
             let ext = cmax - cmin;
-            let axis = if ext.x >= ext.y && ext.x >= ext.z { 0 } else if ext.y >= ext.z { 1 } else { 2 };
+            let axis = if ext.x >= ext.y && ext.x >= ext.z {
+                0
+            } else if ext.y >= ext.z {
+                1
+            } else {
+                2
+            };
             let key = |t: &[Vec3; 3]| (t[0][axis] + t[1][axis] + t[2][axis]) / 3.0;
             let mut order: Vec<usize> = (start..start + count).collect();
             order.sort_by(|&a, &b| key(&self.tris[a]).total_cmp(&key(&self.tris[b])));
@@ -390,12 +396,8 @@ impl GBuffer {
     /// World positions as R32G32B32A32_SFLOAT bytes (DepthType::WorldPosition); background
     /// pixels hold NaN.
     pub fn position_bytes_rgba32f(&self) -> Vec<u8> {
-        let v: Vec<[f32; 4]> = self
-            .position
-            .iter()
-            .zip(&self.hit)
-            .map(|(p, h)| if *h { [p.x, p.y, p.z, 1.0] } else { [f32::NAN; 4] })
-            .collect();
+        let v: Vec<[f32; 4]> =
+            self.position.iter().zip(&self.hit).map(|(p, h)| if *h { [p.x, p.y, p.z, 1.0] } else { [f32::NAN; 4] }).collect();
         bytemuck::cast_slice(&v).to_vec()
     }
 }
@@ -521,6 +523,8 @@ pub fn concentric_disk(u: f32, v: f32) -> (f32, f32) {
 /// Fraction of the light's extent visible from surface point `p` (normal `n`), with
 /// `strata`² stratified samples of the same disk of directions / positions the SDK samples,
 /// and the closest occluder distance over them (None if all reach the light).
+// One argument per input of the SDK's shadow trace that it mirrors.
+#[allow(clippy::too_many_arguments)]
 pub fn shadow_visibility(
     tracer: &Tracer,
     p: Vec3,
@@ -586,7 +590,10 @@ pub fn coloured_room(with_ceiling: bool) -> (Scene, Vec<[f32; 3]>, Camera) {
         (Affine3A::from_rotation_translation(Quat::from_rotation_x(q), Vec3::new(0.0, 2.0, -2.0)), [0.1, 0.1, 0.9]),
     ];
     if with_ceiling {
-        placements.push((Affine3A::from_rotation_translation(Quat::from_rotation_x(2.0 * q), Vec3::new(0.0, 4.0, 0.0)), [0.5, 0.5, 0.5]));
+        placements.push((
+            Affine3A::from_rotation_translation(Quat::from_rotation_x(2.0 * q), Vec3::new(0.0, 4.0, 0.0)),
+            [0.5, 0.5, 0.5],
+        ));
     }
     let mut colours = Vec::new();
     for (t, c) in placements {

@@ -60,7 +60,12 @@ impl SceneOnGpu {
         }
         let instances = ctx.create_instance_handles(scene.instances.len());
         for ((inst, &handle), &initial_tile_color) in scene.instances.iter().zip(&instances).zip(colours) {
-            let input = InstanceInput { geometry: geometries[inst.mesh], transform: inst.transform, initial_tile_color, ..Default::default() };
+            let input = InstanceInput {
+                geometry: geometries[inst.mesh],
+                transform: inst.transform,
+                initial_tile_color,
+                ..Default::default()
+            };
             container
                 .schedule_instance(&InstanceTask { handle, operation: InstanceOperation::Register, input })
                 .map_err(|e| e.to_string())?;
@@ -93,14 +98,24 @@ impl GBufferImages {
         let depth = host.image_with_data(vk::Format::R32_SFLOAT, g.width, g.height, sampled, &g.depth_bytes(), READ)?;
         let normals =
             host.image_with_data(vk::Format::R32G32B32A32_SFLOAT, g.width, g.height, sampled, &g.normal_bytes_rgba32f(), READ)?;
-        let output = host.image_cleared(vk::Format::R32_SFLOAT, g.width, g.height, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL)?;
+        let output = host.image_cleared(
+            vk::Format::R32_SFLOAT,
+            g.width,
+            g.height,
+            vk::ImageUsageFlags::STORAGE,
+            vk::ImageLayout::GENERAL,
+        )?;
         Ok(GBufferImages { depth, normals, output, width: g.width, height: g.height })
     }
 
     pub fn trace_common(&self, camera: &Camera) -> TraceCommon {
         TraceCommon {
             depth: DepthInput { image: self.depth.input(READ), depth_type: DepthType::ClipSpace },
-            normals: NormalInput { image: self.normals.input(READ), normal_type: NormalType::RgbVector, space: NormalSpace::World },
+            normals: NormalInput {
+                image: self.normals.input(READ),
+                normal_type: NormalType::RgbVector,
+                space: NormalSpace::World,
+            },
             viewport: Viewport::full(self.width, self.height),
             camera: camera.sdk_camera(self.width, self.height),
             ..Default::default()

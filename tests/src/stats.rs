@@ -20,7 +20,15 @@ pub struct BlockReport {
 }
 
 /// Compares means over `block`x`block` tiles.
-pub fn compare_blocks(gpu: &[f32], reference: &[f32], width: u32, height: u32, block: u32, sigma_pixel: f32, bias: f32) -> BlockReport {
+pub fn compare_blocks(
+    gpu: &[f32],
+    reference: &[f32],
+    width: u32,
+    height: u32,
+    block: u32,
+    sigma_pixel: f32,
+    bias: f32,
+) -> BlockReport {
     let tolerance = 4.0 * sigma_pixel / ((block * block) as f32).sqrt() + bias;
     let mut worst = (0.0f32, (0, 0));
     for by in 0..height / block {

@@ -121,7 +121,8 @@ fn encodings_and_inline_rt_give_the_same_image() {
     let img = |format, bytes: &[u8]| host.image_with_data(format, W, H, sampled, bytes, read).unwrap();
     let d32 = img(vk::Format::D32_SFLOAT, &g.depth_bytes());
     let positions = img(vk::Format::R32G32B32A32_SFLOAT, &g.position_bytes_rgba32f());
-    let n_normalized = img(vk::Format::R32G32B32A32_SFLOAT, &normals_as(&|n| [n.x * 0.5 + 0.5, n.y * 0.5 + 0.5, n.z * 0.5 + 0.5, 0.0]));
+    let n_normalized =
+        img(vk::Format::R32G32B32A32_SFLOAT, &normals_as(&|n| [n.x * 0.5 + 0.5, n.y * 0.5 + 0.5, n.z * 0.5 + 0.5, 0.0]));
     let n_rg_oct = img(vk::Format::R32G32_SFLOAT, bytemuck::cast_slice(&rg));
     let n_ba_oct_view = img(
         vk::Format::R32G32B32A32_SFLOAT,
@@ -137,14 +138,20 @@ fn encodings_and_inline_rt_give_the_same_image() {
     let mut variants: Vec<(&str, TraceAmbientOcclusionTask)> = Vec::new();
     let mut v = baseline;
     v.common.depth.image = d32.input(read);
-    v.common.normals = NormalInput { image: n_normalized.input(read), normal_type: NormalType::RgbNormalizedVector, space: NormalSpace::World };
+    v.common.normals =
+        NormalInput { image: n_normalized.input(read), normal_type: NormalType::RgbNormalizedVector, space: NormalSpace::World };
     variants.push(("D32 depth, normalized RGB normals", v));
     let mut v = baseline;
     v.common.depth = DepthInput { image: positions.input(read), depth_type: DepthType::WorldPosition };
-    v.common.normals = NormalInput { image: n_rg_oct.input(read), normal_type: NormalType::RgOctahedron, space: NormalSpace::World };
+    v.common.normals =
+        NormalInput { image: n_rg_oct.input(read), normal_type: NormalType::RgOctahedron, space: NormalSpace::World };
     variants.push(("world positions, RG octahedral normals", v));
     let mut v = baseline;
-    v.common.normals = NormalInput { image: n_ba_oct_view.input(read), normal_type: NormalType::BaNormalizedOctahedron, space: NormalSpace::View };
+    v.common.normals = NormalInput {
+        image: n_ba_oct_view.input(read),
+        normal_type: NormalType::BaNormalizedOctahedron,
+        space: NormalSpace::View,
+    };
     variants.push(("view-space BA normalized octahedral normals", v));
     let mut v = baseline;
     v.common.use_inline_rt = true;
@@ -153,7 +160,8 @@ fn encodings_and_inline_rt_give_the_same_image() {
     frame.schedule_ambient_occlusion(&baseline).unwrap();
     let mut outputs = Vec::new();
     for (_, task) in variants.iter_mut() {
-        let out = host.image_cleared(vk::Format::R32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
+        let out =
+            host.image_cleared(vk::Format::R32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
         task.output = out.input(vk::ImageLayout::GENERAL);
         frame.schedule_ambient_occlusion(task).unwrap();
         outputs.push(out);
@@ -228,7 +236,9 @@ fn instance_mask_hides_instances_from_ao() {
 #[test]
 fn viewport_offsets_are_honoured() {
     use ash::vk;
-    use hybrid_rt::{DepthInput, DepthType, NormalInput, NormalSpace, NormalType, TraceAmbientOcclusionTask, TraceCommon, Viewport};
+    use hybrid_rt::{
+        DepthInput, DepthType, NormalInput, NormalSpace, NormalType, TraceAmbientOcclusionTask, TraceCommon, Viewport,
+    };
     let (host, ctx) = host_and_context(InitSettings::default());
     let (scene, camera) = sphere_on_plane();
     let tracer = Tracer::new(&scene);
@@ -249,7 +259,8 @@ fn viewport_offsets_are_honoured() {
     let read = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
     let sampled = vk::ImageUsageFlags::SAMPLED;
     let depth_img = host.image_with_data(vk::Format::R32_SFLOAT, W, H, sampled, bytemuck::cast_slice(&depth), read).unwrap();
-    let normal_img = host.image_with_data(vk::Format::R32G32B32A32_SFLOAT, W, H, sampled, bytemuck::cast_slice(&normals), read).unwrap();
+    let normal_img =
+        host.image_with_data(vk::Format::R32G32B32A32_SFLOAT, W, H, sampled, bytemuck::cast_slice(&normals), read).unwrap();
     let out = host.image_cleared(vk::Format::R32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
     let rays = 16;
     let task = TraceAmbientOcclusionTask {
@@ -310,7 +321,14 @@ fn half_resolution_traces_only_its_checkerboard() {
     for _ in 0..2 {
         let fill = vec![sentinel; (W * H) as usize];
         let out = host
-            .image_with_data(vk::Format::R32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, bytemuck::cast_slice(&fill), vk::ImageLayout::GENERAL)
+            .image_with_data(
+                vk::Format::R32_SFLOAT,
+                W,
+                H,
+                vk::ImageUsageFlags::STORAGE,
+                bytemuck::cast_slice(&fill),
+                vk::ImageLayout::GENERAL,
+            )
             .unwrap();
         let mut task = images.ao_task(&camera, 1.0, 1);
         task.common.half_resolution_mode = true;
@@ -319,7 +337,9 @@ fn half_resolution_traces_only_its_checkerboard() {
         run_frame(&host, &ctx, &mut frame).unwrap();
         let ao = host.read_image_f32(&out, vk::ImageLayout::GENERAL).unwrap();
         // Written pixels form one colour of a checkerboard.
-        let parity = ((0..W * H).find(|&i| ao[i as usize] != sentinel).unwrap() / W + (0..W * H).find(|&i| ao[i as usize] != sentinel).unwrap() % W) % 2;
+        let parity = ((0..W * H).find(|&i| ao[i as usize] != sentinel).unwrap() / W
+            + (0..W * H).find(|&i| ao[i as usize] != sentinel).unwrap() % W)
+            % 2;
         for y in 0..H {
             for x in 0..W {
                 let written = ao[(y * W + x) as usize] != sentinel;

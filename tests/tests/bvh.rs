@@ -4,7 +4,10 @@ mod common;
 use ash::vk;
 use common::*;
 use glam::{Affine3A, Vec3};
-use hybrid_rt::{BvhBuildTask, Error, GeometryInput, GeometryTask, IndexBufferInput, InitSettings, InstanceInput, InstanceOperation, InstanceTask, RayOffset, TaskOperation, VertexBufferInput};
+use hybrid_rt::{
+    BvhBuildTask, Error, GeometryInput, GeometryTask, IndexBufferInput, InitSettings, InstanceInput, InstanceOperation,
+    InstanceTask, RayOffset, TaskOperation, VertexBufferInput,
+};
 use hybrid_rt_testkit::host::Host;
 use hybrid_rt_testkit::reference::*;
 use hybrid_rt_testkit::sdk_scene::*;
@@ -64,12 +67,21 @@ fn check_rings(gpu: &[f32], g: &GBuffer, b: &Boxes, in_tlas: impl Fn(usize) -> b
         let n = mask.iter().filter(|m| **m).count();
         assert!(n >= 20, "ring {i} has {n} pixels");
         let reference: Vec<f32> = (0..g.depth.len())
-            .map(|p| if mask[p] { ao_at(&tracer, g.position[p], g.normal[p], b.camera.eye, &params(), 8, &mut Rng::new(p as u64)) } else { 1.0 })
+            .map(|p| {
+                if mask[p] {
+                    ao_at(&tracer, g.position[p], g.normal[p], b.camera.eye, &params(), 8, &mut Rng::new(p as u64))
+                } else {
+                    1.0
+                }
+            })
             .collect();
         let gpu_mean = stats::masked_mean(gpu, &mask);
         let ref_mean = stats::masked_mean(&reference, &mask);
         let tol = 4.0 * stats::sample_sigma(RAYS, 64) / (n as f32).sqrt() + 0.01;
-        assert!((gpu_mean - ref_mean).abs() <= tol, "{what}: box {i}: GPU ring AO {gpu_mean:.4} vs reference {ref_mean:.4} (tol {tol:.4})");
+        assert!(
+            (gpu_mean - ref_mean).abs() <= tol,
+            "{what}: box {i}: GPU ring AO {gpu_mean:.4} vs reference {ref_mean:.4} (tol {tol:.4})"
+        );
         if in_tlas(i) {
             assert!(ref_mean < 0.9, "{what}: box {i} should occlude its ring ({ref_mean})");
         } else {
@@ -187,9 +199,15 @@ fn updating_a_deformable_geometry_refits_its_blas() {
     let geo = ctx.create_geometry_handles(1)[0];
     let inst = ctx.create_instance_handles(1)[0];
     let mut frame = ctx.create_task_container();
-    frame.schedule_geometry(&GeometryTask { handle: geo, operation: TaskOperation::Register, input: input(vb_low.buffer) }).unwrap();
     frame
-        .schedule_instance(&InstanceTask { handle: inst, operation: InstanceOperation::Register, input: InstanceInput { geometry: geo, ..Default::default() } })
+        .schedule_geometry(&GeometryTask { handle: geo, operation: TaskOperation::Register, input: input(vb_low.buffer) })
+        .unwrap();
+    frame
+        .schedule_instance(&InstanceTask {
+            handle: inst,
+            operation: InstanceOperation::Register,
+            input: InstanceInput { geometry: geo, ..Default::default() },
+        })
         .unwrap();
     frame.schedule_bvh_build(&Default::default()).unwrap();
     frame.schedule_ambient_occlusion(&images.ao_task(&camera, 1.0, RAYS)).unwrap();
@@ -210,7 +228,9 @@ fn updating_a_deformable_geometry_refits_its_blas() {
 
     let high = ceiling(3.0);
     let vb_high = host.buffer_with_data(bytemuck::cast_slice(&high.positions), usage).unwrap();
-    frame.schedule_geometry(&GeometryTask { handle: geo, operation: TaskOperation::Update, input: input(vb_high.buffer) }).unwrap();
+    frame
+        .schedule_geometry(&GeometryTask { handle: geo, operation: TaskOperation::Update, input: input(vb_high.buffer) })
+        .unwrap();
     frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 0 }).unwrap();
     frame.schedule_ambient_occlusion(&images.ao_task(&camera, 1.0, RAYS)).unwrap();
     run_frame(&host, &ctx, &mut frame).unwrap();
@@ -224,7 +244,11 @@ fn updating_a_deformable_geometry_refits_its_blas() {
         .schedule_geometry(&GeometryTask {
             handle: geo,
             operation: TaskOperation::Update,
-            input: GeometryInput { vertices: VertexBufferInput { buffer: tri.buffer, count: 3, ..Default::default() }, allow_update: true, ..Default::default() },
+            input: GeometryInput {
+                vertices: VertexBufferInput { buffer: tri.buffer, count: 3, ..Default::default() },
+                allow_update: true,
+                ..Default::default()
+            },
         })
         .unwrap();
     assert!(matches!(run_frame(&host, &ctx, &mut frame), Err(e) if e.contains("refitted")));

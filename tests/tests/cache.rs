@@ -47,10 +47,24 @@ impl World {
 
     fn lit_image(&self, g: &GBuffer, f: impl Fn(Vec3) -> [f32; 3]) -> HostImage {
         let texels: Vec<[f32; 4]> = (0..g.depth.len())
-            .map(|i| if g.hit[i] { let c = f(g.position[i]); [c[0], c[1], c[2], 1.0] } else { [0.0; 4] })
+            .map(|i| {
+                if g.hit[i] {
+                    let c = f(g.position[i]);
+                    [c[0], c[1], c[2], 1.0]
+                } else {
+                    [0.0; 4]
+                }
+            })
             .collect();
         self.host
-            .image_with_data(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::SAMPLED, bytemuck::cast_slice(&texels), READ)
+            .image_with_data(
+                vk::Format::R32G32B32A32_SFLOAT,
+                W,
+                H,
+                vk::ImageUsageFlags::SAMPLED,
+                bytemuck::cast_slice(&texels),
+                READ,
+            )
             .unwrap()
     }
 
@@ -145,7 +159,10 @@ fn injected_pattern_comes_back_from_the_cache() {
         let (g, images) = w.gbuffer(&camera);
         // Before injection every surface shows its initial colour.
         let before = w.debug(&images, &camera, DebugOutput::DirectLightingCache, true);
-        assert!(before.iter().zip(&g.hit).filter(|(_, h)| **h).all(|(c, _)| c[..3] == MAGENTA), "{surfel_type:?}: initial colour");
+        assert!(
+            before.iter().zip(&g.hit).filter(|(_, h)| **h).all(|(c, _)| c[..3] == MAGENTA),
+            "{surfel_type:?}: initial colour"
+        );
 
         let lit = w.lit_image(&g, pattern);
         w.inject(&images, &lit, &camera, 1.0);
@@ -182,21 +199,23 @@ fn a_new_camera_sees_injected_and_unseen_surfaces() {
     let seen_from_b = w.debug(&images_b, &b, DebugOutput::DirectLightingCache, false);
     let tracer = Tracer::new(&w.scene);
     let (mut back, mut top) = (0, 0);
-    for i in 0..gb.depth.len() {
+    for (i, seen) in seen_from_b.iter().enumerate() {
         if !gb.hit[i] {
             continue;
         }
         let (p, n) = (gb.position[i], gb.normal[i]);
         if n.z < -0.9 && p.y > 0.05 {
             // The cube's back face: never injected.
-            assert_eq!(seen_from_b[i][..3], MAGENTA, "pixel {i} on the unseen face");
+            assert_eq!(seen[..3], MAGENTA, "pixel {i} on the unseen face");
             back += 1;
         } else if n.y > 0.9 && p.y > 0.9 {
             // The cube's top: seen by both cameras (if A saw this point).
             let eye_a = a.eye;
-            let visible_from_a = tracer.closest_hit(eye_a, (p - eye_a).normalize(), 0.0, f32::MAX).is_some_and(|h| (eye_a + (p - eye_a).normalize() * h.t).distance(p) < 1e-3);
+            let visible_from_a = tracer
+                .closest_hit(eye_a, (p - eye_a).normalize(), 0.0, f32::MAX)
+                .is_some_and(|h| (eye_a + (p - eye_a).normalize() * h.t).distance(p) < 1e-3);
             if visible_from_a {
-                assert!(seen_from_b[i][1] > 0.99 && seen_from_b[i][0] < 0.01, "pixel {i} on the top seen by A: {:?}", seen_from_b[i]);
+                assert!(seen[1] > 0.99 && seen[0] < 0.01, "pixel {i} on the top seen by A: {:?}", seen);
                 top += 1;
             }
         }
@@ -255,7 +274,12 @@ fn mesh_colors_are_continuous_where_tiles_step() {
         for y in 0..H {
             for x in 0..W - 1 {
                 let (i, j) = ((y * W + x) as usize, (y * W + x + 1) as usize);
-                if g.hit[i] && g.hit[j] && g.position[i].x.abs() < 0.95 && g.position[j].x.abs() < 0.95 && g.position[i].z.abs() < 0.95 {
+                if g.hit[i]
+                    && g.hit[j]
+                    && g.position[i].x.abs() < 0.95
+                    && g.position[j].x.abs() < 0.95
+                    && g.position[i].z.abs() < 0.95
+                {
                     worst = worst.max((img[i][0] - img[j][0]).abs());
                 }
             }
@@ -349,7 +373,12 @@ fn transfer_between_tessellations_preserves_colours() {
         .schedule_instance(&InstanceTask {
             handle: target,
             operation: InstanceOperation::Update,
-            input: InstanceInput { geometry: w.gpu_scene.geometries[1], mask: no_injection, initial_tile_color: MAGENTA, ..Default::default() },
+            input: InstanceInput {
+                geometry: w.gpu_scene.geometries[1],
+                mask: no_injection,
+                initial_tile_color: MAGENTA,
+                ..Default::default()
+            },
         })
         .unwrap();
     let camera = top_camera();
@@ -362,7 +391,9 @@ fn transfer_between_tessellations_preserves_colours() {
     assert!(done.timings.iter().any(|t| t.kind == hybrid_rt::TaskKind::CacheTransfer));
     // Scene tasks apply before a container's render tasks, so the old LOD goes in the next
     // frame; the view below then sees only the new one.
-    w.frame.schedule_instance(&InstanceTask { handle: source, operation: InstanceOperation::Remove, ..Default::default() }).unwrap();
+    w.frame
+        .schedule_instance(&InstanceTask { handle: source, operation: InstanceOperation::Remove, ..Default::default() })
+        .unwrap();
     let after = w.debug(&images, &camera, DebugOutput::DirectLightingCache, true);
     let (mean, max_err) = error_vs_pattern(&after, &g);
     eprintln!("transferred cache vs pattern: mean |err| {mean:.4}, max {max_err:.4}");

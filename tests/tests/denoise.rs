@@ -45,7 +45,8 @@ impl Fixture {
         let images = GBufferImages::upload(&host, &g).unwrap();
         let mut frame = ctx.create_task_container();
         let black = vec![[0.0; 3]; scene.instances.len()];
-        let gpu_scene = SceneOnGpu::register_coloured(&host, &ctx, &mut frame, scene, Default::default(), colours.unwrap_or(&black)).unwrap();
+        let gpu_scene =
+            SceneOnGpu::register_coloured(&host, &ctx, &mut frame, scene, Default::default(), colours.unwrap_or(&black)).unwrap();
         frame.schedule_bvh_build(&Default::default()).unwrap();
         run_frame(&host, &ctx, &mut frame).unwrap();
         Fixture { host, ctx, tracer, g, images, gpu_scene, frame }
@@ -101,7 +102,10 @@ fn ao_quality(half_resolution: bool) -> Quality {
     let strata = 24; // 576 samples: the reference's own noise is below 0.021 per pixel
     let params = AoParams { ray_length: 1.0, falloff_power: 1.0, ray_offset: RayOffset::default() };
     let reference = reference::reference_ao(&f.tracer, &f.g, camera.eye, &params, strata);
-    let q = Quality { raw: stats::relative_rmse(&raw, &reference, &f.g.hit), denoised: stats::relative_rmse(&out, &reference, &f.g.hit) };
+    let q = Quality {
+        raw: stats::relative_rmse(&raw, &reference, &f.g.hit),
+        denoised: stats::relative_rmse(&out, &reference, &f.g.hit),
+    };
     // Where something occludes (reference < 0.9: the contact region), the harder part.
     let occluded: Vec<bool> = f.g.hit.iter().zip(&reference).map(|(h, r)| *h && *r < 0.9).collect();
     eprintln!(
@@ -146,8 +150,19 @@ fn diffuse_gi_denoised_over_32_frames_approaches_the_reference() {
     let noisy = storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W);
     let denoised = storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W);
     let dn = context(&f.ctx, SignalType::Diffuse, W, W);
-    let trace = TraceDiffuseTask { common: f.images.trace_common(&camera), output: noisy.input(GENERAL), ray_length: 100.0, miss_radiance: SKY, ..Default::default() };
-    let task = DenoiseDiffuseTask { context: dn, common: f.images.denoising_common(&camera), input: noisy.input(GENERAL), output: denoised.input(GENERAL) };
+    let trace = TraceDiffuseTask {
+        common: f.images.trace_common(&camera),
+        output: noisy.input(GENERAL),
+        ray_length: 100.0,
+        miss_radiance: SKY,
+        ..Default::default()
+    };
+    let task = DenoiseDiffuseTask {
+        context: dn,
+        common: f.images.denoising_common(&camera),
+        input: noisy.input(GENERAL),
+        output: denoised.input(GENERAL),
+    };
     for _ in 0..FRAMES {
         f.frame.schedule_diffuse(&trace).unwrap();
         f.frame.schedule_denoise_diffuse(&task).unwrap();
@@ -180,8 +195,15 @@ fn denoised_shadow(light: LightInfo, frames: u32) -> (Vec<f32>, Vec<f32>, Vec<f3
     let noisy = storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W);
     let denoised = storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W);
     let dn = context(&f.ctx, SignalType::Shadow, W, W);
-    let trace = TraceShadowTask { common: f.images.trace_common(&camera), light, output: noisy.input(GENERAL), rays_per_pixel: 1 };
-    let task = DenoiseShadowTask { context: dn, common: f.images.denoising_common(&camera), light, input: noisy.input(GENERAL), output: denoised.input(GENERAL) };
+    let trace =
+        TraceShadowTask { common: f.images.trace_common(&camera), light, output: noisy.input(GENERAL), rays_per_pixel: 1 };
+    let task = DenoiseShadowTask {
+        context: dn,
+        common: f.images.denoising_common(&camera),
+        light,
+        input: noisy.input(GENERAL),
+        output: denoised.input(GENERAL),
+    };
     for _ in 0..frames {
         f.frame.schedule_shadow(&trace).unwrap();
         f.frame.schedule_denoise_shadow(&task).unwrap();
@@ -205,7 +227,10 @@ fn reference_visibility(f: &Fixture, camera: &Camera, lights: &[LightInfo], stra
                 return 1.0;
             }
             let (p, n) = (f.g.position[i], f.g.normal[i]);
-            let sum: f32 = lights.iter().map(|l| reference::shadow_visibility(&f.tracer, p, n, camera.eye, l, &RayOffset::default(), strata, &mut rng).0).sum();
+            let sum: f32 = lights
+                .iter()
+                .map(|l| reference::shadow_visibility(&f.tracer, p, n, camera.eye, l, &RayOffset::default(), strata, &mut rng).0)
+                .sum();
             sum / lights.len() as f32
         })
         .collect()
@@ -267,7 +292,10 @@ fn wall_and_box() -> Scene {
     let mut scene = Scene::default();
     let wall = scene.add_mesh(Mesh::grid(12.0, 4));
     let cube = scene.add_mesh(Mesh::cuboid(Vec3::splat(0.5)));
-    scene.add_instance(wall, Affine3A::from_rotation_translation(glam::Quat::from_rotation_x(std::f32::consts::FRAC_PI_2), Vec3::new(0.0, 0.0, -3.0)));
+    scene.add_instance(
+        wall,
+        Affine3A::from_rotation_translation(glam::Quat::from_rotation_x(std::f32::consts::FRAC_PI_2), Vec3::new(0.0, 0.0, -3.0)),
+    );
     scene.add_instance(cube, Affine3A::from_translation(Vec3::new(0.0, 0.0, -1.0)));
     scene
 }
@@ -280,7 +308,11 @@ fn rgba_bytes(texels: &[[f32; 4]]) -> Vec<u8> {
 /// filter alone blurs, so fresh pixels need history to become right.
 fn wall_green(p: Vec3) -> f32 {
     let cell = ((p.x / 0.3).floor() + (p.y / 0.3).floor()) as i64;
-    if cell.rem_euclid(2) == 0 { 1.0 } else { 0.4 }
+    if cell.rem_euclid(2) == 0 {
+        1.0
+    } else {
+        0.4
+    }
 }
 
 /// Each surface's colour (the wall's green checker, the box red) times noise of mean 1
@@ -341,7 +373,8 @@ fn disocclusion_run(with_motion_vectors: bool) -> Vec<(f32, f32, f32)> {
     let stable: Vec<bool> = (0..mv.len()).map(|i| gb.hit[i] && gb.instance[i] == 0 && !revealed[i]).collect();
     assert!(revealed.iter().filter(|r| **r).count() > 40, "the move reveals wall");
 
-    let green: Vec<f32> = (0..mv.len()).map(|i| if gb.hit[i] && gb.instance[i] == 0 { wall_green(gb.position[i]) } else { 0.0 }).collect();
+    let green: Vec<f32> =
+        (0..mv.len()).map(|i| if gb.hit[i] && gb.instance[i] == 0 { wall_green(gb.position[i]) } else { 0.0 }).collect();
     let mut after = Vec::new();
     for f in 0..28 {
         let (cam, g) = if f < 16 { (&cam_a, &ga) } else { (&cam_b, &gb) };
@@ -360,7 +393,12 @@ fn disocclusion_run(with_motion_vectors: bool) -> Vec<(f32, f32, f32)> {
             common.motion = MotionInput { image: motion.input(READ), motion_type: MotionType::RgViewSpace, scale: [1.0; 3] };
         }
         frame
-            .schedule_denoise_diffuse(&DenoiseDiffuseTask { context: dn, common, input: noisy.input(GENERAL), output: out.input(GENERAL) })
+            .schedule_denoise_diffuse(&DenoiseDiffuseTask {
+                context: dn,
+                common,
+                input: noisy.input(GENERAL),
+                output: out.input(GENERAL),
+            })
             .unwrap();
         run_frame(&host, &ctx, &mut frame).unwrap();
         if f >= 16 {
@@ -383,7 +421,9 @@ fn disocclusion_run(with_motion_vectors: bool) -> Vec<(f32, f32, f32)> {
 fn check_disocclusion(with_motion_vectors: bool) {
     let after = disocclusion_run(with_motion_vectors);
     for (k, (red, revealed, stable)) in after.iter().enumerate() {
-        eprintln!("frame {k} after the move: revealed wall max red {red:.4}, relative RMSE revealed {revealed:.4}, stable {stable:.4}");
+        eprintln!(
+            "frame {k} after the move: revealed wall max red {red:.4}, relative RMSE revealed {revealed:.4}, stable {stable:.4}"
+        );
     }
     // No ghost: the box's red never appears on the wall it uncovered.
     assert!(after.iter().all(|(red, _, _)| *red < 0.02), "ghosting: {after:?}");
@@ -410,7 +450,10 @@ fn revealed_pixels_carry_no_old_colour_with_motion_vectors() {
 fn facing_plane() -> (GBuffer, Camera) {
     let mut scene = Scene::default();
     let wall = scene.add_mesh(Mesh::grid(20.0, 2));
-    scene.add_instance(wall, Affine3A::from_rotation_translation(glam::Quat::from_rotation_x(std::f32::consts::FRAC_PI_2), Vec3::new(0.0, 0.0, -3.0)));
+    scene.add_instance(
+        wall,
+        Affine3A::from_rotation_translation(glam::Quat::from_rotation_x(std::f32::consts::FRAC_PI_2), Vec3::new(0.0, 0.0, -3.0)),
+    );
     let camera = Camera::look_at(Vec3::new(0.0, 0.0, 2.0), Vec3::new(0.0, 0.0, -3.0));
     (GBuffer::render(&Tracer::new(&scene), &camera, S, S), camera)
 }
@@ -423,7 +466,8 @@ fn mirror_reflections_stay_sharp_and_glossy_ones_are_filtered() {
     let images = GBufferImages::upload(&host, &g).unwrap();
     // A one-pixel checker of reflected radiance (the sharpest detail a mirror can show),
     // with fresh noise each frame as a stochastic trace would have.
-    let checker: Vec<[f32; 4]> = (0..S * S).map(|i| if (i % S + i / S).is_multiple_of(2) { [2.0, 1.0, 0.5, 3.0] } else { [0.0, 0.0, 0.0, 3.0] }).collect();
+    let checker: Vec<[f32; 4]> =
+        (0..S * S).map(|i| if (i % S + i / S).is_multiple_of(2) { [2.0, 1.0, 0.5, 3.0] } else { [0.0, 0.0, 0.0, 3.0] }).collect();
     let noisy = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, S, S);
     let mut rng = Rng::new(11);
     let mut results = Vec::new();
@@ -435,13 +479,27 @@ fn mirror_reflections_stay_sharp_and_glossy_ones_are_filtered() {
         let mut frame = ctx.create_task_container();
         let mut input = Vec::new();
         for _ in 0..8 {
-            input = checker.iter().map(|c| { let k = 0.5 + rng.next_f32(); [c[0] * k, c[1] * k, c[2] * k, c[3]] }).collect::<Vec<_>>();
+            input = checker
+                .iter()
+                .map(|c| {
+                    let k = 0.5 + rng.next_f32();
+                    [c[0] * k, c[1] * k, c[2] * k, c[3]]
+                })
+                .collect::<Vec<_>>();
             host.write_image(&noisy, &rgba_bytes(&input), GENERAL).unwrap();
-            frame.schedule_denoise_specular(&DenoiseSpecularTask { context: dn, common, input: noisy.input(GENERAL), output: out.input(GENERAL) }).unwrap();
+            frame
+                .schedule_denoise_specular(&DenoiseSpecularTask {
+                    context: dn,
+                    common,
+                    input: noisy.input(GENERAL),
+                    output: out.input(GENERAL),
+                })
+                .unwrap();
             run_frame(&host, &ctx, &mut frame).unwrap();
         }
         let r = read_channel(&host, &out, 0);
-        let max_diff = r.iter().zip(&input).zip(&g.hit).filter(|(_, h)| **h).map(|((a, c), _)| (a - c[0]).abs()).fold(0.0, f32::max);
+        let max_diff =
+            r.iter().zip(&input).zip(&g.hit).filter(|(_, h)| **h).map(|((a, c), _)| (a - c[0]).abs()).fold(0.0, f32::max);
         eprintln!("specular, roughness {roughness}: largest difference from this frame's input {max_diff:.4}");
         results.push(max_diff);
         ctx.destroy_denoising_context(dn).unwrap();
@@ -478,14 +536,24 @@ fn reset_history_drops_the_past_at_once() {
                 host.write_image(&noisy, &rgba_bytes(&green), GENERAL).unwrap();
                 common.reset_history = reset;
             }
-            frame.schedule_denoise_diffuse(&DenoiseDiffuseTask { context: dn, common, input: noisy.input(GENERAL), output: out.input(GENERAL) }).unwrap();
+            frame
+                .schedule_denoise_diffuse(&DenoiseDiffuseTask {
+                    context: dn,
+                    common,
+                    input: noisy.input(GENERAL),
+                    output: out.input(GENERAL),
+                })
+                .unwrap();
             run_frame(&host, &ctx, &mut frame).unwrap();
         }
         remaining_red.push(read_channel(&host, &out, 0).iter().cloned().fold(0.0, f32::max));
         ctx.destroy_denoising_context(dn).unwrap();
         host.destroy_image(out);
     }
-    eprintln!("largest red left one frame after red -> green: with reset {:.4}, without {:.4}", remaining_red[0], remaining_red[1]);
+    eprintln!(
+        "largest red left one frame after red -> green: with reset {:.4}, without {:.4}",
+        remaining_red[0], remaining_red[1]
+    );
     assert!(remaining_red[0] < 1e-4, "reset: no red at all");
     assert!(remaining_red[1] > 0.1, "without reset the history shows (the test is not vacuous)");
     host.destroy_image(noisy);
@@ -524,8 +592,12 @@ fn specular_and_diffuse_in_one_task_equal_two_tasks() {
                 output_diffuse: outs[1].input(GENERAL),
             })
             .unwrap();
-        frame.schedule_denoise_specular(&DenoiseSpecularTask { context: spec, common, input: si, output: outs[2].input(GENERAL) }).unwrap();
-        frame.schedule_denoise_diffuse(&DenoiseDiffuseTask { context: diff, common, input: di, output: outs[3].input(GENERAL) }).unwrap();
+        frame
+            .schedule_denoise_specular(&DenoiseSpecularTask { context: spec, common, input: si, output: outs[2].input(GENERAL) })
+            .unwrap();
+        frame
+            .schedule_denoise_diffuse(&DenoiseDiffuseTask { context: diff, common, input: di, output: outs[3].input(GENERAL) })
+            .unwrap();
         let done = run_frame(&host, &ctx, &mut frame).unwrap();
         assert!(done.timings.iter().any(|t| t.kind == TaskKind::DenoiseSpecularAndDiffuse));
     }
@@ -548,13 +620,27 @@ fn multi_light_shadows_denoise_to_the_mean_visibility() {
     const W: u32 = 64;
     let (scene, camera) = sphere_on_plane();
     let mut f = Fixture::new(&scene, None, &camera, W);
-    let lights = vec![sun(0.2), LightInfo { light_type: LightType::Point, position: Vec3::new(1.0, 2.0, 1.0), radius: 0.2, ..Default::default() }];
+    let lights = vec![
+        sun(0.2),
+        LightInfo { light_type: LightType::Point, position: Vec3::new(1.0, 2.0, 1.0), radius: 0.2, ..Default::default() },
+    ];
     let visibility = f.host.image_cleared(vk::Format::R32_UINT, W, W, vk::ImageUsageFlags::STORAGE, GENERAL).unwrap();
     let packed = storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W);
     let out = storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W);
     let dn = context(&f.ctx, SignalType::MultiShadow, W, W);
-    let trace = TraceMultiShadowTask { common: f.images.trace_common(&camera), lights: lights.clone(), visibility: visibility.input(GENERAL), packed: packed.input(GENERAL), rays_per_pixel: 1 };
-    let task = DenoiseMultiShadowTask { context: dn, common: f.images.denoising_common(&camera), input: packed.input(GENERAL), output: out.input(GENERAL) };
+    let trace = TraceMultiShadowTask {
+        common: f.images.trace_common(&camera),
+        lights: lights.clone(),
+        visibility: visibility.input(GENERAL),
+        packed: packed.input(GENERAL),
+        rays_per_pixel: 1,
+    };
+    let task = DenoiseMultiShadowTask {
+        context: dn,
+        common: f.images.denoising_common(&camera),
+        input: packed.input(GENERAL),
+        output: out.input(GENERAL),
+    };
     for _ in 0..FRAMES {
         f.frame.schedule_multi_shadow(&trace).unwrap();
         f.frame.schedule_denoise_multi_shadow(&task).unwrap();
@@ -595,7 +681,10 @@ fn bad_denoise_inputs_are_typed_errors_and_leave_the_context_usable() {
     assert!(matches!(frame.schedule_denoise_diffuse(&task(DenoisingContextHandle::NULL)), Err(Error::InvalidHandle { .. })));
     let gone = context(&ctx, SignalType::Diffuse, S, S);
     ctx.destroy_denoising_context(gone).unwrap();
-    assert!(matches!(frame.schedule_denoise_diffuse(&task(gone)), Err(Error::InvalidHandle { problem: HandleProblem::Destroyed, .. })));
+    assert!(matches!(
+        frame.schedule_denoise_diffuse(&task(gone)),
+        Err(Error::InvalidHandle { problem: HandleProblem::Destroyed, .. })
+    ));
     assert!(matches!(ctx.destroy_denoising_context(gone), Err(Error::InvalidHandle { .. })));
     let mut bad = task(diffuse);
     bad.common.settings.spatial_passes = 7;
@@ -613,7 +702,8 @@ fn bad_denoise_inputs_are_typed_errors_and_leave_the_context_usable() {
     bad.common.camera_jitter = [f32::NAN, 0.0];
     assert!(matches!(frame.schedule_denoise_diffuse(&bad), Err(Error::InvalidInput { .. })));
     let mut bad = task(diffuse);
-    bad.common.previous_camera = Some(hybrid_rt::Camera { world_to_view: glam::Mat4::from_cols_array(&[f32::NAN; 16]), ..Default::default() });
+    bad.common.previous_camera =
+        Some(hybrid_rt::Camera { world_to_view: glam::Mat4::from_cols_array(&[f32::NAN; 16]), ..Default::default() });
     assert!(matches!(frame.schedule_denoise_diffuse(&bad), Err(Error::InvalidTransform { .. })));
     let mut bad = task(diffuse);
     bad.common.motion = MotionInput { image: images.depth.input(READ), ..Default::default() };

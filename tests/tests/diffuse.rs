@@ -42,7 +42,9 @@ fn check_room(brdf: hybrid_rt::DiffuseBrdfType, roughness: f32) {
     let tracer = Tracer::new(&scene);
     let g = GBuffer::render(&tracer, &camera, W, H);
     let images = GBufferImages::upload(&host, &g).unwrap();
-    let out = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
+    let out = host
+        .image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL)
+        .unwrap();
 
     // Each instance's cache holds its wall's colour (its initial colour).
     let mut frame = ctx.create_task_container();
@@ -53,7 +55,14 @@ fn check_room(brdf: hybrid_rt::DiffuseBrdfType, roughness: f32) {
     let (rays, frames) = (16u32, 4u32);
     let mut common = images.trace_common(&camera);
     common.roughness.global_roughness = roughness;
-    let task = TraceDiffuseTask { common, output: out.input(vk::ImageLayout::GENERAL), rays_per_pixel: rays, ray_length: 100.0, miss_radiance: SKY, brdf };
+    let task = TraceDiffuseTask {
+        common,
+        output: out.input(vk::ImageLayout::GENERAL),
+        rays_per_pixel: rays,
+        ray_length: 100.0,
+        miss_radiance: SKY,
+        brdf,
+    };
     let disney = brdf == hybrid_rt::DiffuseBrdfType::NormalizedDisney;
     let mut gpu = vec![[0.0f32; 4]; (W * H) as usize];
     for _ in 0..frames {
@@ -71,7 +80,11 @@ fn check_room(brdf: hybrid_rt::DiffuseBrdfType, roughness: f32) {
     // Reference: stratified cosine-weighted samples; a hit takes its instance's colour.
     let strata = 16;
     let reference = diffuse_reference(&tracer, &g, camera.eye, &colours, SKY, 100.0, strata, |n, dir, v| {
-        if disney { disney_factor(n.dot(dir).max(0.0), n.dot(v).clamp(1e-4, 1.0), dir.dot((dir + v).normalize()), roughness) } else { 1.0 }
+        if disney {
+            disney_factor(n.dot(dir).max(0.0), n.dot(v).clamp(1e-4, 1.0), dir.dot((dir + v).normalize()), roughness)
+        } else {
+            1.0
+        }
     });
     // Each channel of a sample lies in [0, 0.9 x max weight]: variance <= (that)^2 / 4 per
     // sample. Disney's weight at roughness 0.8 is at most (1 + 1)^2 x 0.69 < 2.8.
@@ -81,12 +94,16 @@ fn check_room(brdf: hybrid_rt::DiffuseBrdfType, roughness: f32) {
         let gpu_k: Vec<f32> = gpu.iter().map(|v| v[k]).collect();
         let ref_k: Vec<f32> = reference.iter().map(|v| v[k]).collect();
         let report = stats::compare_blocks(&gpu_k, &ref_k, W, H, 8, sigma, 0.01);
-        eprintln!("{brdf:?} channel {k}: worst 8x8 block error {:.4} (tolerance {:.4}), mean |err| {:.4}", report.worst_block_error, report.tolerance, report.mean_abs_error);
+        eprintln!(
+            "{brdf:?} channel {k}: worst 8x8 block error {:.4} (tolerance {:.4}), mean |err| {:.4}",
+            report.worst_block_error, report.tolerance, report.mean_abs_error
+        );
         assert!(report.worst_block_error <= report.tolerance, "channel {k}");
     }
     // Colour bleeding is visible: the floor near the red wall is redder than near the green.
     let floor = |x_sign: f32| -> f32 {
-        let px: Vec<usize> = (0..g.depth.len()).filter(|&i| g.hit[i] && g.normal[i].y > 0.9 && g.position[i].x * x_sign > 1.2).collect();
+        let px: Vec<usize> =
+            (0..g.depth.len()).filter(|&i| g.hit[i] && g.normal[i].y > 0.9 && g.position[i].x * x_sign > 1.2).collect();
         px.iter().map(|&i| gpu[i][0] - gpu[i][1]).sum::<f32>() / px.len().max(1) as f32
     };
     assert!(floor(-1.0) > 0.05 && floor(1.0) < -0.05, "red near red, green near green: {} {}", floor(-1.0), floor(1.0));

@@ -4,13 +4,15 @@ use ash::vk;
 use common::*;
 use glam::{Affine3A, Mat4, Vec3};
 use hybrid_rt::{
-    BvhBuildTask, Error, GeometryInput, GeometryTask, GpuTicket, HandleProblem, IndexBufferInput, InitSettings,
-    InstanceInput, InstanceOperation, InstanceTask, TaskOperation, VertexBufferInput,
+    BvhBuildTask, Error, GeometryInput, GeometryTask, GpuTicket, HandleProblem, IndexBufferInput, InitSettings, InstanceInput,
+    InstanceOperation, InstanceTask, TaskOperation, VertexBufferInput,
 };
 use hybrid_rt_testkit::reference::*;
 use hybrid_rt_testkit::sdk_scene::*;
 
-fn triangle_buffers(host: &hybrid_rt_testkit::host::Host) -> (hybrid_rt_testkit::host::HostBuffer, hybrid_rt_testkit::host::HostBuffer) {
+fn triangle_buffers(
+    host: &hybrid_rt_testkit::host::Host,
+) -> (hybrid_rt_testkit::host::HostBuffer, hybrid_rt_testkit::host::HostBuffer) {
     let v = [Vec3::ZERO, Vec3::X, Vec3::Z];
     let usage = vk::BufferUsageFlags::TRANSFER_SRC;
     (
@@ -52,22 +54,34 @@ fn bad_geometry_inputs_are_refused() {
     let mut c = ctx.create_task_container();
     let task = |input| GeometryTask { handle: h, operation: TaskOperation::Register, input };
     let cases: Vec<(&str, GeometryInput)> = vec![
-        ("null vertex buffer", GeometryInput { vertices: VertexBufferInput { buffer: vk::Buffer::null(), ..good.vertices }, ..good }),
+        (
+            "null vertex buffer",
+            GeometryInput { vertices: VertexBufferInput { buffer: vk::Buffer::null(), ..good.vertices }, ..good },
+        ),
         ("zero vertices", GeometryInput { vertices: VertexBufferInput { count: 0, ..good.vertices }, ..good }),
         ("stride 8", GeometryInput { vertices: VertexBufferInput { stride: 8, ..good.vertices }, ..good }),
         ("index count 4", GeometryInput { indices: IndexBufferInput { count: 4, ..good.indices }, ..good }),
-        ("zero tile unit", GeometryInput { surfels: hybrid_rt::SurfelSettings { tile_unit_length: 0.0, ..Default::default() }, ..good }),
+        (
+            "zero tile unit",
+            GeometryInput { surfels: hybrid_rt::SurfelSettings { tile_unit_length: 0.0, ..Default::default() }, ..good },
+        ),
     ];
     for (what, input) in cases {
         let e = c.schedule_geometry(&task(input)).unwrap_err();
         assert!(matches!(e, Error::InvalidInput { .. }), "{what}: {e}");
     }
     let e = c
-        .schedule_geometry(&task(GeometryInput { vertices: VertexBufferInput { format: vk::Format::R16G16B16A16_SFLOAT, ..good.vertices }, ..good }))
+        .schedule_geometry(&task(GeometryInput {
+            vertices: VertexBufferInput { format: vk::Format::R16G16B16A16_SFLOAT, ..good.vertices },
+            ..good
+        }))
         .unwrap_err();
     assert!(matches!(e, Error::UnsupportedFormat { .. }), "{e}");
     let e = c
-        .schedule_geometry(&task(GeometryInput { indices: IndexBufferInput { format: vk::Format::R8_UINT, ..good.indices }, ..good }))
+        .schedule_geometry(&task(GeometryInput {
+            indices: IndexBufferInput { format: vk::Format::R8_UINT, ..good.indices },
+            ..good
+        }))
         .unwrap_err();
     assert!(matches!(e, Error::UnsupportedFormat { .. }), "{e}");
     // 3 vertices of 12 bytes fit; a million do not.
@@ -79,7 +93,9 @@ fn bad_geometry_inputs_are_refused() {
         }))
         .unwrap_err();
     assert!(matches!(e, Error::BufferTooSmall { .. }), "{e}");
-    let e = c.schedule_geometry(&task(GeometryInput { indices: IndexBufferInput { offset: 1 << 20, ..good.indices }, ..good })).unwrap_err();
+    let e = c
+        .schedule_geometry(&task(GeometryInput { indices: IndexBufferInput { offset: 1 << 20, ..good.indices }, ..good }))
+        .unwrap_err();
     assert!(matches!(e, Error::BufferTooSmall { .. }), "{e}");
     assert!(c.is_empty(), "refused tasks are not scheduled");
 
@@ -111,7 +127,8 @@ fn stale_foreign_and_null_handles_are_refused() {
     let (host, ctx) = host_and_context(InitSettings::default());
     let other = hybrid_rt::ExecuteContext::new(&host.device_desc(), &InitSettings::default()).unwrap();
     let (vb, _ib) = triangle_buffers(&host);
-    let input = GeometryInput { vertices: VertexBufferInput { buffer: vb.buffer, count: 3, ..Default::default() }, ..Default::default() };
+    let input =
+        GeometryInput { vertices: VertexBufferInput { buffer: vb.buffer, count: 3, ..Default::default() }, ..Default::default() };
     let mut c = ctx.create_task_container();
 
     let stale = ctx.create_geometry_handles(1)[0];
@@ -141,8 +158,12 @@ fn stale_foreign_and_null_handles_are_refused() {
     // An instance of an unregistered geometry.
     let g = ctx.create_geometry_handles(1)[0];
     let i = ctx.create_instance_handles(1)[0];
-    c.schedule_instance(&InstanceTask { handle: i, operation: InstanceOperation::Register, input: InstanceInput { geometry: g, ..Default::default() } })
-        .unwrap();
+    c.schedule_instance(&InstanceTask {
+        handle: i,
+        operation: InstanceOperation::Register,
+        input: InstanceInput { geometry: g, ..Default::default() },
+    })
+    .unwrap();
     assert!(run_frame(&host, &ctx, &mut c).unwrap_err().contains("not registered"));
     c.clear();
     // Removing an instance that was never registered.

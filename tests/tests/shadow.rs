@@ -28,7 +28,8 @@ fn gpu_shadow(light: LightInfo, rays: u32, frames: u32) -> (Vec<f32>, Vec<f32>, 
     let (scene, camera) = scene();
     let g = GBuffer::render(&Tracer::new(&scene), &camera, W, H);
     let images = GBufferImages::upload(&host, &g).unwrap();
-    let out = host.image_cleared(vk::Format::R32G32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
+    let out =
+        host.image_cleared(vk::Format::R32G32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
     let mut frame = ctx.create_task_container();
     let s = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
     frame.schedule_bvh_build(&Default::default()).unwrap();
@@ -66,7 +67,13 @@ fn hard_shadow_edge_lands_on_the_reference_pixels() {
     let offset = hybrid_rt::RayOffset::default();
     let mut rng = Rng::new(1);
     let reference: Vec<(f32, Option<f32>)> = (0..g.depth.len())
-        .map(|i| if g.hit[i] { shadow_visibility(&tracer, g.position[i], g.normal[i], camera.eye, &sun, &offset, 1, &mut rng) } else { (1.0, None) })
+        .map(|i| {
+            if g.hit[i] {
+                shadow_visibility(&tracer, g.position[i], g.normal[i], camera.eye, &sun, &offset, 1, &mut rng)
+            } else {
+                (1.0, None)
+            }
+        })
         .collect();
     let shadowed = |i: usize| reference[i].0 < 0.5;
     let (mut mismatched, mut in_shadow) = (0, 0);
@@ -103,15 +110,31 @@ fn sphere_light_penumbra_matches_the_reference() {
     let strata = 16;
     let mut rng = Rng::new(2);
     let reference: Vec<f32> = (0..g.depth.len())
-        .map(|i| if g.hit[i] { shadow_visibility(&tracer, g.position[i], g.normal[i], camera.eye, &light, &offset, strata, &mut rng).0 } else { 1.0 })
+        .map(|i| {
+            if g.hit[i] {
+                shadow_visibility(&tracer, g.position[i], g.normal[i], camera.eye, &light, &offset, strata, &mut rng).0
+            } else {
+                1.0
+            }
+        })
         .collect();
     // Visibility is a mean of rays x frames Bernoulli samples: sigma <= sqrt(1/4N + 1/4M).
     let sigma = stats::sample_sigma(rays * frames, strata * strata);
     let report = stats::compare_blocks(&vis, &reference, W, H, 4, sigma, 0.02);
-    eprintln!("penumbra: worst 4x4 block error {:.4} (tolerance {:.4}), mean |err| {:.4}", report.worst_block_error, report.tolerance, report.mean_abs_error);
+    eprintln!(
+        "penumbra: worst 4x4 block error {:.4} (tolerance {:.4}), mean |err| {:.4}",
+        report.worst_block_error, report.tolerance, report.mean_abs_error
+    );
     assert!(report.worst_block_error <= report.tolerance);
     // Penumbra width along the row through the light: pixels with 0.1 < visibility < 0.9.
-    let row = |v: &[f32]| (0..W).filter(|x| { let s = v[(H / 2 * W + x) as usize]; s > 0.1 && s < 0.9 }).count() as i32;
+    let row = |v: &[f32]| {
+        (0..W)
+            .filter(|x| {
+                let s = v[(H / 2 * W + x) as usize];
+                s > 0.1 && s < 0.9
+            })
+            .count() as i32
+    };
     let (gw, rw) = (row(&vis), row(&reference));
     eprintln!("penumbra width on the centre row: GPU {gw} px, reference {rw} px");
     assert!(rw >= 4, "the test has a real penumbra");
@@ -125,7 +148,11 @@ fn bad_lights_are_refused() {
     let g = GBuffer::render(&Tracer::new(&scene), &camera, 16, 16);
     let images = GBufferImages::upload(&host, &g).unwrap();
     let mut frame = ctx.create_task_container();
-    let good = TraceShadowTask { common: images.trace_common(&camera), output: images.output.input(vk::ImageLayout::GENERAL), ..Default::default() };
+    let good = TraceShadowTask {
+        common: images.trace_common(&camera),
+        output: images.output.input(vk::ImageLayout::GENERAL),
+        ..Default::default()
+    };
     frame.schedule_shadow(&good).unwrap();
     for bad in [
         LightInfo { position: Vec3::new(f32::NAN, 0.0, 0.0), ..Default::default() },
@@ -133,7 +160,10 @@ fn bad_lights_are_refused() {
         LightInfo { light_type: LightType::Point, radius: -1.0, ..Default::default() },
         LightInfo { angular_extent: 4.0, ..Default::default() },
     ] {
-        assert!(matches!(frame.schedule_shadow(&TraceShadowTask { light: bad, ..good }), Err(hybrid_rt::Error::InvalidInput { .. })));
+        assert!(matches!(
+            frame.schedule_shadow(&TraceShadowTask { light: bad, ..good }),
+            Err(hybrid_rt::Error::InvalidInput { .. })
+        ));
     }
     let mut wrong_format = good;
     wrong_format.output.format = vk::Format::R8_UNORM; // distances need a float format
@@ -159,16 +189,33 @@ fn multi_light_visibility_equals_single_light_results() {
     let lights = vec![
         LightInfo { light_type: LightType::Directional, direction: Vec3::new(1.2, -1.0, 0.6), ..Default::default() },
         LightInfo { light_type: LightType::Point, position: Vec3::new(0.3, 3.0, 0.0), radius: 0.5, ..Default::default() },
-        LightInfo { light_type: LightType::Spot, position: Vec3::new(-1.5, 2.5, 0.5), direction: Vec3::new(0.5, -1.0, 0.0), radius: 0.1, ..Default::default() },
+        LightInfo {
+            light_type: LightType::Spot,
+            position: Vec3::new(-1.5, 2.5, 0.5),
+            direction: Vec3::new(0.5, -1.0, 0.0),
+            radius: 0.1,
+            ..Default::default()
+        },
     ];
     let rays = 8;
-    let rg = || host.image_cleared(vk::Format::R32G32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
+    let rg =
+        || host.image_cleared(vk::Format::R32G32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
     let singles: Vec<_> = lights.iter().map(|_| rg()).collect();
-    let visibility = host.image_cleared(vk::Format::R32_UINT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
-    let packed = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
+    let visibility =
+        host.image_cleared(vk::Format::R32_UINT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
+    let packed = host
+        .image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL)
+        .unwrap();
     let common = images.trace_common(&camera);
     for (l, out) in lights.iter().zip(&singles) {
-        frame.schedule_shadow(&TraceShadowTask { common, light: *l, output: out.input(vk::ImageLayout::GENERAL), rays_per_pixel: rays }).unwrap();
+        frame
+            .schedule_shadow(&TraceShadowTask {
+                common,
+                light: *l,
+                output: out.input(vk::ImageLayout::GENERAL),
+                rays_per_pixel: rays,
+            })
+            .unwrap();
     }
     frame
         .schedule_multi_shadow(&TraceMultiShadowTask {
@@ -199,10 +246,19 @@ fn multi_light_visibility_equals_single_light_results() {
     }
     assert!(partial > 20, "soft lights give partial visibility somewhere ({partial} pixels)");
     // Too many lights, or too few channels for them, are refused.
-    let mut bad = TraceMultiShadowTask { common, lights: vec![lights[0]; 17], visibility: visibility.input(vk::ImageLayout::GENERAL), packed: packed.input(vk::ImageLayout::GENERAL), rays_per_pixel: 1 };
+    let mut bad = TraceMultiShadowTask {
+        common,
+        lights: vec![lights[0]; 17],
+        visibility: visibility.input(vk::ImageLayout::GENERAL),
+        packed: packed.input(vk::ImageLayout::GENERAL),
+        rays_per_pixel: 1,
+    };
     assert!(frame.schedule_multi_shadow(&bad).is_err());
     bad.lights.truncate(5);
-    assert!(matches!(frame.schedule_multi_shadow(&bad), Err(hybrid_rt::Error::UnsupportedFormat { .. })), "5 lights need RGBA32_UINT");
+    assert!(
+        matches!(frame.schedule_multi_shadow(&bad), Err(hybrid_rt::Error::UnsupportedFormat { .. })),
+        "5 lights need RGBA32_UINT"
+    );
     for o in singles.into_iter().chain([visibility, packed]) {
         host.destroy_image(o);
     }

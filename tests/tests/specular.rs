@@ -39,7 +39,9 @@ fn fixture() -> Fixture {
     let tracer = Tracer::new(&scene);
     let g = GBuffer::render(&tracer, &camera, W, H);
     let images = GBufferImages::upload(&host, &g).unwrap();
-    let out = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
+    let out = host
+        .image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL)
+        .unwrap();
     let mut frame = ctx.create_task_container();
     let gpu_scene = SceneOnGpu::register_coloured(&host, &ctx, &mut frame, &scene, Default::default(), &colours).unwrap();
     frame.schedule_bvh_build(&Default::default()).unwrap();
@@ -54,7 +56,8 @@ impl Fixture {
             self.frame.schedule_specular(task).unwrap();
             let done = run_frame(&self.host, &self.ctx, &mut self.frame).unwrap();
             assert!(done.timings.iter().any(|t| t.kind == hybrid_rt::TaskKind::Specular));
-            let texels: Vec<[f32; 4]> = bytemuck::cast_slice(&self.host.read_image(&self.out, vk::ImageLayout::GENERAL).unwrap()).to_vec();
+            let texels: Vec<[f32; 4]> =
+                bytemuck::cast_slice(&self.host.read_image(&self.out, vk::ImageLayout::GENERAL).unwrap()).to_vec();
             for (a, t) in acc.iter_mut().zip(&texels) {
                 for c in 0..4 {
                     a[c] += t[c] / frames as f32;
@@ -67,7 +70,14 @@ impl Fixture {
     fn task(&self, roughness: RoughnessInput, rays: u32) -> TraceSpecularTask {
         let mut common = self.images.trace_common(&self.camera);
         common.roughness = roughness;
-        TraceSpecularTask { common, output: self.out.input(vk::ImageLayout::GENERAL), rays_per_pixel: rays, ray_length: 100.0, miss_radiance: SKY, ..Default::default() }
+        TraceSpecularTask {
+            common,
+            output: self.out.input(vk::ImageLayout::GENERAL),
+            rays_per_pixel: rays,
+            ray_length: 100.0,
+            miss_radiance: SKY,
+            ..Default::default()
+        }
     }
 
     fn radiance(&self, origin: Vec3, dir: Vec3) -> [f32; 3] {
@@ -164,7 +174,11 @@ fn glossy_reflections_converge_to_the_reference_and_read_the_roughness_channel()
                             let l = (t * r * phi.cos() + b * r * phi.sin() + nrm * (1.0 - u1).max(0.0).sqrt()).normalize();
                             let nl = nrm.dot(l).max(1e-4);
                             let h = (v + l).normalize();
-                            let w = std::f32::consts::PI * ggx_d(nrm.dot(h).max(0.0), alpha) * smith_g1(nv, alpha) * smith_g1(nl, alpha) / (4.0 * nv * nl);
+                            let w = std::f32::consts::PI
+                                * ggx_d(nrm.dot(h).max(0.0), alpha)
+                                * smith_g1(nv, alpha)
+                                * smith_g1(nl, alpha)
+                                / (4.0 * nv * nl);
                             let e = w * f.radiance(origin, l)[0];
                             s1 += e;
                             s2 += e * e;
@@ -188,7 +202,12 @@ fn glossy_reflections_converge_to_the_reference_and_read_the_roughness_channel()
             let err = (g_sum / nf - r_sum / nf).abs();
             worst = worst.max(err / tolerance);
             blocks += 1;
-            assert!(err <= tolerance, "block ({bx}, {by}): GPU {:.4} vs reference {:.4} (tolerance {tolerance:.4})", g_sum / nf, r_sum / nf);
+            assert!(
+                err <= tolerance,
+                "block ({bx}, {by}): GPU {:.4} vs reference {:.4} (tolerance {tolerance:.4})",
+                g_sum / nf,
+                r_sum / nf
+            );
         }
     }
     eprintln!("glossy: {blocks} blocks, worst error / tolerance = {worst:.2}");
@@ -219,7 +238,14 @@ fn the_lit_image_lights_reflections_that_land_on_screen() {
         .collect();
     let lit = f
         .host
-        .image_with_data(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::SAMPLED, bytemuck::cast_slice(&lit_texels), READ)
+        .image_with_data(
+            vk::Format::R32G32B32A32_SFLOAT,
+            W,
+            H,
+            vk::ImageUsageFlags::SAMPLED,
+            bytemuck::cast_slice(&lit_texels),
+            READ,
+        )
         .unwrap();
     let mut mirror = f.task(RoughnessInput { global_roughness: 0.0, ..Default::default() }, 1);
     mirror.common.direct_lighting = lit.input(READ);
@@ -275,9 +301,19 @@ fn specular_colour_modulates_and_the_demodulated_output_does_not() {
     let spec_texels = vec![[0.9f32, 0.5, 0.1, 0.7]; (W * H) as usize];
     let spec = f
         .host
-        .image_with_data(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::SAMPLED, bytemuck::cast_slice(&spec_texels), READ)
+        .image_with_data(
+            vk::Format::R32G32B32A32_SFLOAT,
+            W,
+            H,
+            vk::ImageUsageFlags::SAMPLED,
+            bytemuck::cast_slice(&spec_texels),
+            READ,
+        )
         .unwrap();
-    let demod = f.host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
+    let demod = f
+        .host
+        .image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL)
+        .unwrap();
     let mut task = f.task(RoughnessInput { global_roughness: 0.3, ..Default::default() }, 4);
     task.common.specular = hybrid_rt::SpecularInput { image: spec.input(READ), global_metalness: 0.5 };
     task.demodulated_output = demod.input(vk::ImageLayout::GENERAL);

@@ -17,7 +17,8 @@ use hybrid_rt_testkit::sdk_scene::{run_frame, GBufferImages, SceneOnGpu};
 use std::fmt::Write as _;
 use std::time::Instant;
 
-const USAGE: &str = "bench [--triangles 1048576] [--instances 1024] [--big-mesh-triangles 1048576] [--width 1920] [--height 1080] \
+const USAGE: &str =
+    "bench [--triangles 1048576] [--instances 1024] [--big-mesh-triangles 1048576] [--width 1920] [--height 1080] \
 [--rays 1,4] [--frames 20] [--warmup-ms 1000] [--tile-unit-length 1.0] [--json bench.json]";
 
 fn main() {
@@ -119,8 +120,13 @@ fn run() -> Result<(), String> {
     let e = |e: hybrid_rt::Error| e.to_string();
 
     let host = Host::new()?;
-    let ctx = ExecuteContext::new(&host.device_desc(), &InitSettings { upload_ring_bytes: 4 << 20, ..Default::default() }).map_err(e)?;
-    println!("device: {}{}", host.device_name, if host.validation_enabled { " (validation layer ON: timings are not representative)" } else { "" });
+    let ctx = ExecuteContext::new(&host.device_desc(), &InitSettings { upload_ring_bytes: 4 << 20, ..Default::default() })
+        .map_err(e)?;
+    println!(
+        "device: {}{}",
+        host.device_name,
+        if host.validation_enabled { " (validation layer ON: timings are not representative)" } else { "" }
+    );
     let mut json = String::from("{\n");
     let _ = writeln!(json, "  \"device\": \"{}\",", host.device_name);
     let mut rows: Vec<(String, String)> = Vec::new();
@@ -151,8 +157,15 @@ fn run() -> Result<(), String> {
     }
     let big_ms = median(big_ms);
     let big_rate = mesh.triangle_count() as f64 / (big_ms * 1e-3);
-    rows.push((format!("BLAS build, 1 mesh of {} triangles", mesh.triangle_count()), format!("{big_ms:.3} ms ({:.1} M tri/s)", big_rate / 1e6)));
-    let _ = writeln!(json, "  \"blas_big_mesh\": {{\"triangles\": {}, \"gpu_ms\": {big_ms:.4}, \"triangles_per_s\": {big_rate:.0}}},", mesh.triangle_count());
+    rows.push((
+        format!("BLAS build, 1 mesh of {} triangles", mesh.triangle_count()),
+        format!("{big_ms:.3} ms ({:.1} M tri/s)", big_rate / 1e6),
+    ));
+    let _ = writeln!(
+        json,
+        "  \"blas_big_mesh\": {{\"triangles\": {}, \"gpu_ms\": {big_ms:.4}, \"triangles_per_s\": {big_rate:.0}}},",
+        mesh.triangle_count()
+    );
     ctx.destroy_geometry_handles(&[geo]).map_err(e)?;
     host.destroy_buffer(vb);
     host.destroy_buffer(ib);
@@ -162,7 +175,12 @@ fn run() -> Result<(), String> {
     let (scene, camera) = scenes::field(triangles, instances);
     let tracer = Tracer::new(&scene);
     let g = GBuffer::render(&tracer, &camera, width, height);
-    println!("scene: {} triangles in {} instances (G-buffer on the CPU in {:.1} s)", scene.triangle_count(), scene.instances.len(), t0.elapsed().as_secs_f64());
+    println!(
+        "scene: {} triangles in {} instances (G-buffer on the CPU in {:.1} s)",
+        scene.triangle_count(),
+        scene.instances.len(),
+        t0.elapsed().as_secs_f64()
+    );
     let gbuffer = GBufferImages::upload(&host, &g)?;
     let surfels = hybrid_rt::SurfelSettings { tile_unit_length: tile_unit, ..Default::default() };
     let gpu_scene = SceneOnGpu::register_with(&host, &ctx, &mut frame, &scene, surfels, [0.0; 3])?;
@@ -214,7 +232,11 @@ fn run() -> Result<(), String> {
             .schedule_instance(&InstanceTask {
                 handle: gpu_scene.instances[1],
                 operation: InstanceOperation::Update,
-                input: InstanceInput { geometry: gpu_scene.geometries[inst.mesh], transform: nudge * inst.transform, ..Default::default() },
+                input: InstanceInput {
+                    geometry: gpu_scene.geometries[inst.mesh],
+                    transform: nudge * inst.transform,
+                    ..Default::default()
+                },
             })
             .map_err(e)?;
         frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 0 }).map_err(e)?;
@@ -231,7 +253,11 @@ fn run() -> Result<(), String> {
     let tlas_record_us = median(record_us);
     rows.push((format!("TLAS build, {} instances", scene.instances.len()), format!("{tlas_ms:.3} ms")));
     rows.push(("build_gpu_task CPU, instance update + TLAS".into(), format!("{tlas_record_us:.1} us")));
-    let _ = writeln!(json, "  \"tlas\": {{\"instances\": {}, \"gpu_ms\": {tlas_ms:.4}, \"build_gpu_task_cpu_us\": {tlas_record_us:.2}}},", scene.instances.len());
+    let _ = writeln!(
+        json,
+        "  \"tlas\": {{\"instances\": {}, \"gpu_ms\": {tlas_ms:.4}, \"build_gpu_task_cpu_us\": {tlas_record_us:.2}}},",
+        scene.instances.len()
+    );
 
     // ---- 3. AO beside the bare-ray floor.
     let _ = writeln!(json, "  \"ao\": [");
@@ -294,7 +320,10 @@ fn run() -> Result<(), String> {
         hybrid_rt_testkit::sdk_scene::READ,
     )?;
     let inject = hybrid_rt::DirectLightingInjectionTask {
-        depth: hybrid_rt::DepthInput { image: gbuffer.depth.input(hybrid_rt_testkit::sdk_scene::READ), depth_type: hybrid_rt::DepthType::ClipSpace },
+        depth: hybrid_rt::DepthInput {
+            image: gbuffer.depth.input(hybrid_rt_testkit::sdk_scene::READ),
+            depth_type: hybrid_rt::DepthType::ClipSpace,
+        },
         lit: lit.input(hybrid_rt_testkit::sdk_scene::READ),
         viewport: hybrid_rt::Viewport::full(width, height),
         camera: camera.sdk_camera(width, height),
@@ -309,7 +338,12 @@ fn run() -> Result<(), String> {
     rows.push((format!("Direct-lighting injection {width}x{height} (+ resolve)"), format!("{inject_ms:.3} ms")));
     rows.push((
         format!("Cache per instance (tile_unit_length {tile_unit})"),
-        format!("{:.1} KiB mean, {:.1} MiB over {} instances", cache_mean / 1024.0, cache_total as f64 / 1048576.0, cache_bytes.len()),
+        format!(
+            "{:.1} KiB mean, {:.1} MiB over {} instances",
+            cache_mean / 1024.0,
+            cache_total as f64 / 1048576.0,
+            cache_bytes.len()
+        ),
     ));
     let _ = writeln!(
         json,
@@ -333,14 +367,23 @@ fn run() -> Result<(), String> {
         output,
         rays_per_pixel: 1,
     };
-    let (shadow_ms, shadow_floor) = time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::Shadow, |f| f.schedule_shadow(&shadow).map_err(e))?;
+    let (shadow_ms, shadow_floor) =
+        time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::Shadow, |f| f.schedule_shadow(&shadow).map_err(e))?;
     let diffuse = hybrid_rt::TraceDiffuseTask { common, output, ray_length: 100.0, ..Default::default() };
-    let (diffuse_ms, diffuse_floor) = time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::Diffuse, |f| f.schedule_diffuse(&diffuse).map_err(e))?;
+    let (diffuse_ms, diffuse_floor) =
+        time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::Diffuse, |f| f.schedule_diffuse(&diffuse).map_err(e))?;
     let mut glossy = common;
     glossy.roughness.global_roughness = 0.3;
     let specular = hybrid_rt::TraceSpecularTask { common: glossy, output, ray_length: 100.0, ..Default::default() };
-    let (specular_ms, specular_floor) = time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::Specular, |f| f.schedule_specular(&specular).map_err(e))?;
-    let vis = host.image_cleared(ash::vk::Format::R32_UINT, width, height, ash::vk::ImageUsageFlags::STORAGE, ash::vk::ImageLayout::GENERAL)?;
+    let (specular_ms, specular_floor) =
+        time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::Specular, |f| f.schedule_specular(&specular).map_err(e))?;
+    let vis = host.image_cleared(
+        ash::vk::Format::R32_UINT,
+        width,
+        height,
+        ash::vk::ImageUsageFlags::STORAGE,
+        ash::vk::ImageLayout::GENERAL,
+    )?;
     let multi = hybrid_rt::TraceMultiShadowTask {
         common,
         lights: (0..4)
@@ -355,7 +398,8 @@ fn run() -> Result<(), String> {
         packed: output,
         rays_per_pixel: 1,
     };
-    let (multi_ms, multi_floor) = time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::MultiShadow, |f| f.schedule_multi_shadow(&multi).map_err(e))?;
+    let (multi_ms, multi_floor) =
+        time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::MultiShadow, |f| f.schedule_multi_shadow(&multi).map_err(e))?;
     for (name, ms, fl) in [
         ("Multi-light shadows (4 point lights, 1 ray/pixel each)", multi_ms, multi_floor),
         ("Shadow (sun, 1 ray/pixel)", shadow_ms, shadow_floor),
@@ -372,7 +416,13 @@ fn run() -> Result<(), String> {
 
     // ---- 6. Denoisers, each beside the 1-ray trace it cleans (same frames).
     let sampled = |format| {
-        host.image_cleared(format, width, height, ash::vk::ImageUsageFlags::STORAGE | ash::vk::ImageUsageFlags::SAMPLED, ash::vk::ImageLayout::GENERAL)
+        host.image_cleared(
+            format,
+            width,
+            height,
+            ash::vk::ImageUsageFlags::STORAGE | ash::vk::ImageUsageFlags::SAMPLED,
+            ash::vk::ImageLayout::GENERAL,
+        )
     };
     let f16 = ash::vk::Format::R16G16B16A16_SFLOAT;
     let (in_a, in_b, out_a, out_b) = (sampled(f16)?, sampled(f16)?, sampled(f16)?, sampled(f16)?);
@@ -381,63 +431,119 @@ fn run() -> Result<(), String> {
     let dcommon = hybrid_rt::DenoisingCommon { roughness: glossy.roughness, ..gbuffer.denoising_common(&camera) };
     let mut denoise_rows = Vec::new();
     let mut denoise_json = Vec::new();
-    let mut measure = |name: &str, signal: hybrid_rt::SignalType, kinds: [TaskKind; 2], schedule: &mut dyn FnMut(&mut hybrid_rt::TaskContainer, hybrid_rt::DenoisingContextHandle) -> Result<(), String>| -> Result<(), String> {
+    let mut measure = |name: &str,
+                       signal: hybrid_rt::SignalType,
+                       kinds: [TaskKind; 2],
+                       schedule: &mut dyn FnMut(
+        &mut hybrid_rt::TaskContainer,
+        hybrid_rt::DenoisingContextHandle,
+    ) -> Result<(), String>|
+     -> Result<(), String> {
         let dn = ctx
-            .create_denoising_context(&hybrid_rt::DenoisingContextInput { max_width: width, max_height: height, signal, ..Default::default() })
+            .create_denoising_context(&hybrid_rt::DenoisingContextInput {
+                max_width: width,
+                max_height: height,
+                signal,
+                ..Default::default()
+            })
             .map_err(e)?;
         let [trace, denoise] = time_pair(&host, &ctx, &mut frame, frames, kinds, |f| schedule(f, dn))?;
         ctx.destroy_denoising_context(dn).map_err(e)?;
-        denoise_rows.push((format!("Denoise {name} {width}x{height}"), format!("{denoise:.3} ms (its 1-ray trace: {trace:.3} ms)")));
-        denoise_json.push(format!("\"{}\": {{\"denoise_gpu_ms\": {denoise:.4}, \"trace_gpu_ms\": {trace:.4}}}", name.replace(' ', "_")));
+        denoise_rows
+            .push((format!("Denoise {name} {width}x{height}"), format!("{denoise:.3} ms (its 1-ray trace: {trace:.3} ms)")));
+        denoise_json
+            .push(format!("\"{}\": {{\"denoise_gpu_ms\": {denoise:.4}, \"trace_gpu_ms\": {trace:.4}}}", name.replace(' ', "_")));
         Ok(())
     };
     use hybrid_rt::SignalType as S;
     let ao1 = hybrid_rt::TraceAmbientOcclusionTask { output: ia, ..gbuffer.ao_task(&camera, 1.0, 1) };
     measure("AO", S::DiffuseOcclusion, [TaskKind::AmbientOcclusion, TaskKind::DenoiseDiffuseOcclusion], &mut |f, dn| {
         f.schedule_ambient_occlusion(&ao1).map_err(e)?;
-        f.schedule_denoise_diffuse_occlusion(&hybrid_rt::DenoiseDiffuseOcclusionTask { context: dn, common: dcommon, input: ia, output: oa }).map_err(e)
+        f.schedule_denoise_diffuse_occlusion(&hybrid_rt::DenoiseDiffuseOcclusionTask {
+            context: dn,
+            common: dcommon,
+            input: ia,
+            output: oa,
+        })
+        .map_err(e)
     })?;
     let shadow1 = hybrid_rt::TraceShadowTask { output: ia, ..shadow };
     measure("shadow", S::Shadow, [TaskKind::Shadow, TaskKind::DenoiseShadow], &mut |f, dn| {
         f.schedule_shadow(&shadow1).map_err(e)?;
-        f.schedule_denoise_shadow(&hybrid_rt::DenoiseShadowTask { context: dn, common: dcommon, light: shadow.light, input: ia, output: oa }).map_err(e)
+        f.schedule_denoise_shadow(&hybrid_rt::DenoiseShadowTask {
+            context: dn,
+            common: dcommon,
+            light: shadow.light,
+            input: ia,
+            output: oa,
+        })
+        .map_err(e)
     })?;
     let multi1 = hybrid_rt::TraceMultiShadowTask { packed: ia, ..multi.clone() };
-    measure("multi-light shadow (4 lights)", S::MultiShadow, [TaskKind::MultiShadow, TaskKind::DenoiseMultiShadow], &mut |f, dn| {
-        f.schedule_multi_shadow(&multi1).map_err(e)?;
-        f.schedule_denoise_multi_shadow(&hybrid_rt::DenoiseMultiShadowTask { context: dn, common: dcommon, input: ia, output: oa }).map_err(e)
-    })?;
+    measure(
+        "multi-light shadow (4 lights)",
+        S::MultiShadow,
+        [TaskKind::MultiShadow, TaskKind::DenoiseMultiShadow],
+        &mut |f, dn| {
+            f.schedule_multi_shadow(&multi1).map_err(e)?;
+            f.schedule_denoise_multi_shadow(&hybrid_rt::DenoiseMultiShadowTask {
+                context: dn,
+                common: dcommon,
+                input: ia,
+                output: oa,
+            })
+            .map_err(e)
+        },
+    )?;
     let diffuse1 = hybrid_rt::TraceDiffuseTask { output: ib, ..diffuse };
     measure("diffuse", S::Diffuse, [TaskKind::Diffuse, TaskKind::DenoiseDiffuse], &mut |f, dn| {
         f.schedule_diffuse(&diffuse1).map_err(e)?;
-        f.schedule_denoise_diffuse(&hybrid_rt::DenoiseDiffuseTask { context: dn, common: dcommon, input: ib, output: ob }).map_err(e)
+        f.schedule_denoise_diffuse(&hybrid_rt::DenoiseDiffuseTask { context: dn, common: dcommon, input: ib, output: ob })
+            .map_err(e)
     })?;
     let specular1 = hybrid_rt::TraceSpecularTask { output: ia, ..specular };
     measure("specular (roughness 0.3)", S::Specular, [TaskKind::Specular, TaskKind::DenoiseSpecular], &mut |f, dn| {
         f.schedule_specular(&specular1).map_err(e)?;
-        f.schedule_denoise_specular(&hybrid_rt::DenoiseSpecularTask { context: dn, common: dcommon, input: ia, output: oa }).map_err(e)
+        f.schedule_denoise_specular(&hybrid_rt::DenoiseSpecularTask { context: dn, common: dcommon, input: ia, output: oa })
+            .map_err(e)
     })?;
-    measure("specular + diffuse", S::SpecularAndDiffuse, [TaskKind::Specular, TaskKind::DenoiseSpecularAndDiffuse], &mut |f, dn| {
-        f.schedule_specular(&specular1).map_err(e)?;
-        f.schedule_diffuse(&diffuse1).map_err(e)?;
-        f.schedule_denoise_specular_and_diffuse(&hybrid_rt::DenoiseSpecularAndDiffuseTask {
-            context: dn,
-            common: dcommon,
-            input_specular: ia,
-            input_diffuse: ib,
-            output_specular: oa,
-            output_diffuse: ob,
-        })
-        .map_err(e)
-    })?;
+    measure(
+        "specular + diffuse",
+        S::SpecularAndDiffuse,
+        [TaskKind::Specular, TaskKind::DenoiseSpecularAndDiffuse],
+        &mut |f, dn| {
+            f.schedule_specular(&specular1).map_err(e)?;
+            f.schedule_diffuse(&diffuse1).map_err(e)?;
+            f.schedule_denoise_specular_and_diffuse(&hybrid_rt::DenoiseSpecularAndDiffuseTask {
+                context: dn,
+                common: dcommon,
+                input_specular: ia,
+                input_diffuse: ib,
+                output_specular: oa,
+                output_diffuse: ob,
+            })
+            .map_err(e)
+        },
+    )?;
     rows.extend(denoise_rows);
     // Free the measured contexts first (destroyed contexts wait for their tickets).
     ctx.release_device_resources_immediately().map_err(e)?;
-    let dn_ctx = ctx.create_denoising_context(&hybrid_rt::DenoisingContextInput { max_width: width, max_height: height, signal: S::SpecularAndDiffuse, ..Default::default() }).map_err(e)?;
+    let dn_ctx = ctx
+        .create_denoising_context(&hybrid_rt::DenoisingContextInput {
+            max_width: width,
+            max_height: height,
+            signal: S::SpecularAndDiffuse,
+            ..Default::default()
+        })
+        .map_err(e)?;
     let dn_bytes = ctx.resource_allocations().denoiser.bytes;
     ctx.destroy_denoising_context(dn_ctx).map_err(e)?;
-    rows.push((format!("Denoiser history, specular + diffuse context {width}x{height}"), format!("{:.1} MiB", dn_bytes as f64 / 1048576.0)));
-    let _ = writeln!(json, "  \"denoisers\": {{{}, \"specular_and_diffuse_context_bytes\": {dn_bytes}}},", denoise_json.join(", "));
+    rows.push((
+        format!("Denoiser history, specular + diffuse context {width}x{height}"),
+        format!("{:.1} MiB", dn_bytes as f64 / 1048576.0),
+    ));
+    let _ =
+        writeln!(json, "  \"denoisers\": {{{}, \"specular_and_diffuse_context_bytes\": {dn_bytes}}},", denoise_json.join(", "));
     for i in [in_a, in_b, out_a, out_b, vis] {
         host.destroy_image(i);
     }
@@ -455,7 +561,10 @@ fn run() -> Result<(), String> {
         mem.cache.bytes
     );
     json.push_str("}\n");
-    rows.push(("SDK device memory".into(), format!("{:.1} MiB (BLAS {:.1} MiB)", mem.total_bytes() as f64 / 1048576.0, mem.blas.bytes as f64 / 1048576.0)));
+    rows.push((
+        "SDK device memory".into(),
+        format!("{:.1} MiB (BLAS {:.1} MiB)", mem.total_bytes() as f64 / 1048576.0, mem.blas.bytes as f64 / 1048576.0),
+    ));
 
     let wide = rows.iter().map(|r| r.0.len()).max().unwrap_or(0);
     println!("\n{:wide$}  result", "measurement");

@@ -55,7 +55,10 @@ fn run() -> Result<(), String> {
 
     let chosen: Vec<Mode> = match args.string("modes", "all").as_str() {
         "all" => modes::ALL.to_vec(),
-        list => list.split(',').map(|n| Mode::parse(n.trim()).ok_or(format!("unknown mode {n:?} (see --help)"))).collect::<Result<_, _>>()?,
+        list => list
+            .split(',')
+            .map(|n| Mode::parse(n.trim()).ok_or(format!("unknown mode {n:?} (see --help)")))
+            .collect::<Result<_, _>>()?,
     };
     let frames = args.get("frames", 16u32).max(2);
 
@@ -69,7 +72,8 @@ fn run() -> Result<(), String> {
         settings.width,
         settings.height
     );
-    let debug: Vec<hybrid_rt::DebugOutput> = chosen.iter().filter_map(|m| if let Mode::Debug(d) = m { Some(*d) } else { None }).collect();
+    let debug: Vec<hybrid_rt::DebugOutput> =
+        chosen.iter().filter_map(|m| if let Mode::Debug(d) = m { Some(*d) } else { None }).collect();
     let mut r = Renderer::new(&host, scene, settings)?;
     for f in 0..frames {
         let u = f as f32 / (frames - 1) as f32;
@@ -94,7 +98,10 @@ fn run() -> Result<(), String> {
     r.destroy()?;
     let errors = Host::validation_errors();
     if errors > 0 {
-        return Err(format!("{errors} Vulkan validation errors, the first: {:#?}", Host::validation_messages().iter().take(3).collect::<Vec<_>>()));
+        return Err(format!(
+            "{errors} Vulkan validation errors, the first: {:#?}",
+            Host::validation_messages().iter().take(3).collect::<Vec<_>>()
+        ));
     }
     Ok(())
 }

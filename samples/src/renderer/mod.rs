@@ -32,14 +32,13 @@ use hybrid_rt::*;
 use hybrid_rt_testkit::host::{Host, HostImage, HostResult};
 use hybrid_rt_testkit::reference::Camera;
 
-
 mod inputs;
 mod resources;
 mod stats;
 
-pub use stats::Stats;
 use inputs::Inputs;
 use resources::{source, work_image, Denoisers, Slot, Work};
+pub use stats::Stats;
 
 const SLOTS: usize = 2;
 const GENERAL: vk::ImageLayout = vk::ImageLayout::GENERAL;
@@ -118,7 +117,11 @@ fn sdk_err(e: hybrid_rt::Error) -> String {
 impl<'h> Renderer<'h> {
     pub fn new(host: &'h Host, scene: SampleScene, settings: Settings) -> HostResult<Renderer<'h>> {
         let (w, h) = (settings.width, settings.height);
-        let ctx = ExecuteContext::new(&host.device_desc(), &InitSettings { supported_working_sets: SLOTS as u32, ..Default::default() }).map_err(sdk_err)?;
+        let ctx = ExecuteContext::new(
+            &host.device_desc(),
+            &InitSettings { supported_working_sets: SLOTS as u32, ..Default::default() },
+        )
+        .map_err(sdk_err)?;
         let mut container = ctx.create_task_container();
         let meshes = MeshBuffers::upload(host, &scene.scene)?;
         // Register every mesh and instance (one BLAS per mesh; the flag's may be refit).
@@ -141,7 +144,9 @@ impl<'h> Renderer<'h> {
                 initial_tile_color: settings.unlit_color,
                 ..Default::default()
             };
-            container.schedule_instance(&InstanceTask { handle, operation: InstanceOperation::Register, input }).map_err(sdk_err)?;
+            container
+                .schedule_instance(&InstanceTask { handle, operation: InstanceOperation::Register, input })
+                .map_err(sdk_err)?;
         }
         let mut slots = Vec::new();
         for _ in 0..SLOTS {
@@ -149,7 +154,9 @@ impl<'h> Renderer<'h> {
             slots.push(Slot::new(host, w, h, settings.lidar_size, rest, scene.camera_path.at(0.0))?);
         }
         let work = Work::new(host, w, h, settings.lidar_size)?;
-        let context = |signal| ctx.create_denoising_context(&DenoisingContextInput { max_width: w, max_height: h, signal, ..Default::default() });
+        let context = |signal| {
+            ctx.create_denoising_context(&DenoisingContextInput { max_width: w, max_height: h, signal, ..Default::default() })
+        };
         let denoisers = Denoisers {
             sun: context(SignalType::Shadow).map_err(sdk_err)?,
             point: context(SignalType::Shadow).map_err(sdk_err)?,
@@ -191,7 +198,10 @@ impl<'h> Renderer<'h> {
         let s = &mut self.slots[slot];
         // SAFETY: the slot's previous submission finished (retire waited on its fence).
         unsafe {
-            self.host.device.reset_command_buffer(s.cmd, vk::CommandBufferResetFlags::empty()).map_err(|e| format!("reset: {e:?}"))?;
+            self.host
+                .device
+                .reset_command_buffer(s.cmd, vk::CommandBufferResetFlags::empty())
+                .map_err(|e| format!("reset: {e:?}"))?;
             self.host.device.reset_fences(&[s.fence]).map_err(|e| format!("reset fence: {e:?}"))?;
         }
         self.host.begin(s.cmd)?;
@@ -256,13 +266,21 @@ impl<'h> Renderer<'h> {
     /// Records the frame into `slot`'s command buffer: `camera` at `time` seconds; `debug` are
     /// the SDK debug visualisations to trace this frame; `view` the mode to put into the view
     /// images (for a window or a capture).
-    pub fn record_frame(&mut self, slot: usize, camera: Camera, time: f32, debug: &[DebugOutput], view: Option<Mode>) -> HostResult<()> {
+    pub fn record_frame(
+        &mut self,
+        slot: usize,
+        camera: Camera,
+        time: f32,
+        debug: &[DebugOutput],
+        view: Option<Mode>,
+    ) -> HostResult<()> {
         let host = self.host;
         let (w, h) = (self.settings.width, self.settings.height);
         let prev = (slot + SLOTS - 1) % SLOTS;
         let frame = self.frame;
         let lidar_camera = self.lidar_camera(frame);
-        let (prev_camera, prev_lidar) = if frame == 0 { (camera, lidar_camera) } else { (self.slots[prev].camera, self.slots[prev].lidar_camera) };
+        let (prev_camera, prev_lidar) =
+            if frame == 0 { (camera, lidar_camera) } else { (self.slots[prev].camera, self.slots[prev].lidar_camera) };
         let cmd = self.slots[slot].cmd;
         self.slots[slot].timer.begin(host, cmd);
         // The previous frame's writes (this queue's last submission) before anything of this one.
@@ -299,8 +317,14 @@ impl<'h> Renderer<'h> {
         let c = &mut self.container;
         for (i, t) in transforms.iter().enumerate() {
             if self.scene.is_dynamic(i) {
-                let input = InstanceInput { geometry: self.geometries[self.scene.scene.instances[i].mesh], transform: *t, initial_tile_color: self.settings.unlit_color, ..Default::default() };
-                c.schedule_instance(&InstanceTask { handle: self.instances[i], operation: InstanceOperation::Update, input }).map_err(sdk_err)?;
+                let input = InstanceInput {
+                    geometry: self.geometries[self.scene.scene.instances[i].mesh],
+                    transform: *t,
+                    initial_tile_color: self.settings.unlit_color,
+                    ..Default::default()
+                };
+                c.schedule_instance(&InstanceTask { handle: self.instances[i], operation: InstanceOperation::Update, input })
+                    .map_err(sdk_err)?;
             }
         }
         if let Some((mesh, buffer)) = deformed_buffer {
@@ -311,7 +335,8 @@ impl<'h> Renderer<'h> {
                 surfels: SurfelSettings { tile_unit_length: self.scene.tile_unit_length, ..Default::default() },
                 ..base
             };
-            c.schedule_geometry(&GeometryTask { handle: self.geometries[mesh], operation: TaskOperation::Update, input }).map_err(sdk_err)?;
+            c.schedule_geometry(&GeometryTask { handle: self.geometries[mesh], operation: TaskOperation::Update, input })
+                .map_err(sdk_err)?;
         }
         c.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: self.settings.max_blas_build_count }).map_err(sdk_err)?;
         labels.push((TaskKind::Bvh, "BVH (updates, refit, TLAS)"));
@@ -320,7 +345,9 @@ impl<'h> Renderer<'h> {
         if frame > 0 {
             let window = self.settings.injection_window;
             let p = &self.slots[prev];
-            for (view, cam, label) in [(&p.main, &prev_camera, "inject main (last frame)"), (&p.lidar, &prev_lidar, "inject lidar (last frame)")] {
+            for (view, cam, label) in
+                [(&p.main, &prev_camera, "inject main (last frame)"), (&p.lidar, &prev_lidar, "inject lidar (last frame)")]
+            {
                 let inputs = Inputs::of(&view.targets, cam);
                 c.schedule_direct_lighting_injection(&DirectLightingInjectionTask {
                     depth: inputs.common.depth,
@@ -340,15 +367,31 @@ impl<'h> Renderer<'h> {
         common.half_resolution_mode = self.settings.checkerboard;
         // Shadows: the main view 1 ray + denoiser, the lidar view 4 rays (it is small and
         // its image only feeds the cache).
-        for (light, noisy, out, ctx, label) in [(sun, &wk.sun_noisy, &wk.sun, self.denoisers.sun, "sun"), (point, &wk.point_noisy, &wk.point, self.denoisers.point, "point")] {
-            c.schedule_shadow(&TraceShadowTask { common, light, output: noisy.input(GENERAL), rays_per_pixel: rays }).map_err(sdk_err)?;
-            labels.push((TaskKind::Shadow, if label == "sun" { "shadow sun" } else { "shadow point" }));
-            c.schedule_denoise_shadow(&DenoiseShadowTask { context: ctx, common: main_inputs.denoising, light, input: noisy.input(GENERAL), output: out.input(GENERAL) })
+        for (light, noisy, out, ctx, label) in [
+            (sun, &wk.sun_noisy, &wk.sun, self.denoisers.sun, "sun"),
+            (point, &wk.point_noisy, &wk.point, self.denoisers.point, "point"),
+        ] {
+            c.schedule_shadow(&TraceShadowTask { common, light, output: noisy.input(GENERAL), rays_per_pixel: rays })
                 .map_err(sdk_err)?;
+            labels.push((TaskKind::Shadow, if label == "sun" { "shadow sun" } else { "shadow point" }));
+            c.schedule_denoise_shadow(&DenoiseShadowTask {
+                context: ctx,
+                common: main_inputs.denoising,
+                light,
+                input: noisy.input(GENERAL),
+                output: out.input(GENERAL),
+            })
+            .map_err(sdk_err)?;
             labels.push((TaskKind::DenoiseShadow, if label == "sun" { "denoise shadow sun" } else { "denoise shadow point" }));
         }
         for (light, out) in [(sun, &wk.lidar_sun), (point, &wk.lidar_point)] {
-            c.schedule_shadow(&TraceShadowTask { common: lidar_inputs.common, light, output: out.input(GENERAL), rays_per_pixel: 4 }).map_err(sdk_err)?;
+            c.schedule_shadow(&TraceShadowTask {
+                common: lidar_inputs.common,
+                light,
+                output: out.input(GENERAL),
+                rays_per_pixel: 4,
+            })
+            .map_err(sdk_err)?;
             labels.push((TaskKind::Shadow, "shadow lidar"));
         }
         c.schedule_ambient_occlusion(&TraceAmbientOcclusionTask {
@@ -369,8 +412,15 @@ impl<'h> Renderer<'h> {
         .map_err(sdk_err)?;
         labels.push((TaskKind::DenoiseDiffuseOcclusion, "denoise AO"));
         let sky = self.scene.sky;
-        c.schedule_diffuse(&TraceDiffuseTask { common, output: wk.diffuse_noisy.input(GENERAL), rays_per_pixel: rays, ray_length: reach, miss_radiance: sky, ..Default::default() })
-            .map_err(sdk_err)?;
+        c.schedule_diffuse(&TraceDiffuseTask {
+            common,
+            output: wk.diffuse_noisy.input(GENERAL),
+            rays_per_pixel: rays,
+            ray_length: reach,
+            miss_radiance: sky,
+            ..Default::default()
+        })
+        .map_err(sdk_err)?;
         labels.push((TaskKind::Diffuse, "diffuse GI"));
         c.schedule_specular(&TraceSpecularTask {
             common,
@@ -400,7 +450,11 @@ impl<'h> Renderer<'h> {
                 std::collections::hash_map::Entry::Occupied(e) => e.get().input(GENERAL),
                 std::collections::hash_map::Entry::Vacant(e) => e.insert(work_image(host, w, h)?).input(GENERAL),
             };
-            let task = TraceAmbientOcclusionTask { common: TraceCommon { debug_output: mode, ..main_inputs.common }, output, ..Default::default() };
+            let task = TraceAmbientOcclusionTask {
+                common: TraceCommon { debug_output: mode, ..main_inputs.common },
+                output,
+                ..Default::default()
+            };
             self.container.schedule_ambient_occlusion(&task).map_err(sdk_err)?;
             labels.push((TaskKind::AmbientOcclusion, "debug views"));
         }
@@ -437,12 +491,16 @@ impl<'h> Renderer<'h> {
         Ok(())
     }
 
-
     /// The sun and the point light as the SDK's shadow tasks take them.
     fn lights(&self) -> (LightInfo, LightInfo) {
         let l = &self.scene.lights;
         let sun = LightInfo { direction: -l.sun_direction, angular_extent: self.scene.sun_angular_extent, ..Default::default() };
-        let point = LightInfo { light_type: LightType::Point, position: l.point_position, radius: self.scene.point_radius, ..Default::default() };
+        let point = LightInfo {
+            light_type: LightType::Point,
+            position: l.point_position,
+            radius: self.scene.point_radius,
+            ..Default::default()
+        };
         (sun, point)
     }
 
@@ -476,7 +534,16 @@ impl<'h> Renderer<'h> {
             (&wk.ao, GENERAL),
             (&wk.specular, GENERAL),
         ];
-        self.composite.dispatch(self.host, self.slots[slot].cmd, slot, &sampled, &[&wk.composite], bytemuck::bytes_of(&constants), w, h)
+        self.composite.dispatch(
+            self.host,
+            self.slots[slot].cmd,
+            slot,
+            &sampled,
+            &[&wk.composite],
+            bytemuck::bytes_of(&constants),
+            w,
+            h,
+        )
     }
 
     fn record_view(&mut self, cmd: vk::CommandBuffer, slot: usize, mode: Mode) -> HostResult<()> {
@@ -495,17 +562,35 @@ impl<'h> Renderer<'h> {
             params: [self.settings.exposure, if m.tone_map { 1.0 } else { 0.0 }, w as f32, h as f32],
         };
         let sampled = [source(&self.work, &self.slots[slot], mode)];
-        self.view.dispatch(self.host, cmd, slot, &sampled, &[&self.work.linear, &self.work.display], bytemuck::bytes_of(&constants), w, h)
+        self.view.dispatch(
+            self.host,
+            cmd,
+            slot,
+            &sampled,
+            &[&self.work.linear, &self.work.display],
+            bytemuck::bytes_of(&constants),
+            w,
+            h,
+        )
     }
 
     /// Ends and submits `slot`'s frame with `waits` and `signals` (a window's swapchain
     /// semaphores), fenced by the slot's fence.
-    pub fn submit_frame(&mut self, slot: usize, waits: &[(vk::Semaphore, vk::PipelineStageFlags)], signals: &[vk::Semaphore]) -> HostResult<()> {
+    pub fn submit_frame(
+        &mut self,
+        slot: usize,
+        waits: &[(vk::Semaphore, vk::PipelineStageFlags)],
+        signals: &[vk::Semaphore],
+    ) -> HostResult<()> {
         let s = &mut self.slots[slot];
         let d = &self.host.device;
         let cmds = [s.cmd];
         let (wait_sems, wait_stages): (Vec<_>, Vec<_>) = waits.iter().copied().unzip();
-        let info = vk::SubmitInfo::default().command_buffers(&cmds).wait_semaphores(&wait_sems).wait_dst_stage_mask(&wait_stages).signal_semaphores(signals);
+        let info = vk::SubmitInfo::default()
+            .command_buffers(&cmds)
+            .wait_semaphores(&wait_sems)
+            .wait_dst_stage_mask(&wait_stages)
+            .signal_semaphores(signals);
         // SAFETY: the command buffer was recorded by `record_frame`; the fence was reset.
         unsafe {
             d.end_command_buffer(s.cmd).map_err(|e| format!("end: {e:?}"))?;

@@ -2,10 +2,10 @@
 //! share (the images written and read inside one frame, the denoising contexts), and which
 //! image each display mode shows.
 use super::GENERAL;
+use crate::gpu::GpuTimer;
 use crate::lighting::LightingPass;
 use crate::modes::Mode;
 use crate::raster::{self, MeshBuffers, Targets};
-use crate::gpu::GpuTimer;
 use ash::vk;
 use hybrid_rt::{DebugOutput, DenoisingContextHandle, GpuTicket, TaskKind};
 use hybrid_rt_testkit::host::{Host, HostBuffer, HostImage, HostResult};
@@ -73,15 +73,23 @@ pub(super) struct Work {
 }
 
 impl Slot {
-    pub(super) fn new(host: &Host, width: u32, height: u32, lidar_size: u32, deformer_rest: Option<&[glam::Vec3]>, camera: Camera) -> HostResult<Slot> {
+    pub(super) fn new(
+        host: &Host,
+        width: u32,
+        height: u32,
+        lidar_size: u32,
+        deformer_rest: Option<&[glam::Vec3]>,
+        camera: Camera,
+    ) -> HostResult<Slot> {
         let deformed = match deformer_rest {
             Some(rest) => Some(host.buffer_with_data(bytemuck::cast_slice(rest), MeshBuffers::VERTEX_USAGE)?),
             None => None,
         };
         // SAFETY: plain object creation; destroyed in `destroy`. Signalled: a fresh slot has
         // no frame to wait for.
-        let fence = unsafe { host.device.create_fence(&vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED), None) }
-            .map_err(|e| format!("fence: {e:?}"))?;
+        let fence =
+            unsafe { host.device.create_fence(&vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED), None) }
+                .map_err(|e| format!("fence: {e:?}"))?;
         Ok(Slot {
             cmd: host.allocate_command_buffer()?,
             fence,

@@ -3,8 +3,8 @@
 //! emptied and can be reused next frame; a container whose build failed keeps its tasks, so a
 //! frame refused for lack of a working set can be built again later.
 use super::context::Shared;
-use super::handles::{GeometryHandle, InstanceHandle};
 use super::denoising::*;
+use super::handles::{GeometryHandle, InstanceHandle};
 use super::tasks::*;
 use super::validate;
 use crate::error::Result;

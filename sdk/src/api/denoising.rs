@@ -321,8 +321,22 @@ pub(crate) struct DenoiseJob {
 }
 
 impl DenoiseJob {
-    fn one(context: DenoisingContextHandle, signal: SignalType, common: &DenoisingCommon, input: &ImageInput, output: &ImageInput) -> DenoiseJob {
-        DenoiseJob { context, signal, common: *common, inputs: [*input; 2], outputs: [*output; 2], count: 1, light: LightInfo::default() }
+    fn one(
+        context: DenoisingContextHandle,
+        signal: SignalType,
+        common: &DenoisingCommon,
+        input: &ImageInput,
+        output: &ImageInput,
+    ) -> DenoiseJob {
+        DenoiseJob {
+            context,
+            signal,
+            common: *common,
+            inputs: [*input; 2],
+            outputs: [*output; 2],
+            count: 1,
+            light: LightInfo::default(),
+        }
     }
 }
 

@@ -131,9 +131,10 @@ impl<H: RawHandle, T> Registry<H, T> {
     }
 
     pub fn iter(&self) -> impl Iterator<Item = (H, &T)> {
-        self.slots.iter().enumerate().filter_map(move |(i, s)| {
-            s.value.as_ref().map(|v| (H::from_raw(pack(self.ctx, s.generation, i as u32)), v))
-        })
+        self.slots
+            .iter()
+            .enumerate()
+            .filter_map(move |(i, s)| s.value.as_ref().map(|v| (H::from_raw(pack(self.ctx, s.generation, i as u32)), v)))
     }
 
     /// Slot index of a live handle (the instance's custom index in the TLAS).

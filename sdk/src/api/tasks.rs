@@ -38,13 +38,7 @@ pub struct VertexBufferInput {
 
 impl Default for VertexBufferInput {
     fn default() -> Self {
-        VertexBufferInput {
-            buffer: vk::Buffer::null(),
-            offset: 0,
-            stride: 12,
-            count: 0,
-            format: vk::Format::R32G32B32_SFLOAT,
-        }
+        VertexBufferInput { buffer: vk::Buffer::null(), offset: 0, stride: 12, count: 0, format: vk::Format::R32G32B32_SFLOAT }
     }
 }
 
@@ -686,7 +680,13 @@ pub struct TraceMultiShadowTask {
 impl Default for TraceMultiShadowTask {
     fn default() -> Self {
         let general = ImageInput { layout: vk::ImageLayout::GENERAL, ..Default::default() };
-        TraceMultiShadowTask { common: TraceCommon::default(), lights: Vec::new(), visibility: general, packed: general, rays_per_pixel: 1 }
+        TraceMultiShadowTask {
+            common: TraceCommon::default(),
+            lights: Vec::new(),
+            visibility: general,
+            packed: general,
+            rays_per_pixel: 1,
+        }
     }
 }
 

@@ -203,8 +203,12 @@ pub(crate) fn trace_common(c: &TraceCommon) -> Result<()> {
     let r = &c.roughness;
     if r.has_image() {
         image("TraceCommon.roughness.image", &r.image, vp, INPUT_LAYOUTS)?;
-        if !NORMAL_FORMATS_4.contains(&r.image.format) && !NORMAL_FORMATS_2.contains(&r.image.format)
-            && !matches!(r.image.format, vk::Format::R8_UNORM | vk::Format::R16_UNORM | vk::Format::R16_SFLOAT | vk::Format::R32_SFLOAT)
+        if !NORMAL_FORMATS_4.contains(&r.image.format)
+            && !NORMAL_FORMATS_2.contains(&r.image.format)
+            && !matches!(
+                r.image.format,
+                vk::Format::R8_UNORM | vk::Format::R16_UNORM | vk::Format::R16_SFLOAT | vk::Format::R32_SFLOAT
+            )
         {
             return Err(Error::UnsupportedFormat {
                 what: "TraceCommon.roughness.image.format",
@@ -280,7 +284,12 @@ pub(crate) fn injection(t: &DirectLightingInjectionTask) -> Result<()> {
     }
     image("DirectLightingInjectionTask.depth.image", &t.depth.image, vp, INPUT_LAYOUTS)?;
     let depth_formats = if t.depth.depth_type == DepthType::ClipSpace { CLIP_DEPTH_FORMATS } else { POSITION_FORMATS };
-    format_in("DirectLightingInjectionTask.depth.image.format", t.depth.image.format, depth_formats, "a depth format matching depth_type")?;
+    format_in(
+        "DirectLightingInjectionTask.depth.image.format",
+        t.depth.image.format,
+        depth_formats,
+        "a depth format matching depth_type",
+    )?;
     image("DirectLightingInjectionTask.lit", &t.lit, vp, INPUT_LAYOUTS)?;
     format_in("DirectLightingInjectionTask.lit.format", t.lit.format, LIT_FORMATS, "an RGB(A) colour format")?;
     matrix("DirectLightingInjectionTask.camera.world_to_view", &common.camera.world_to_view)?;
@@ -304,7 +313,12 @@ pub(crate) fn shadow(t: &TraceShadowTask) -> Result<()> {
     trace_common(&t.common)?;
     if t.common.debug_output != DebugOutput::Default {
         image("TraceShadowTask.output", &t.output, &t.common.viewport, &[vk::ImageLayout::GENERAL])?;
-        return format_in("TraceShadowTask.output (debug output)", t.output.format, COLOR_OUTPUT_FORMATS, "an RGBA format for a debug visualisation");
+        return format_in(
+            "TraceShadowTask.output (debug output)",
+            t.output.format,
+            COLOR_OUTPUT_FORMATS,
+            "an RGBA format for a debug visualisation",
+        );
     }
     image("TraceShadowTask.output", &t.output, &t.common.viewport, &[vk::ImageLayout::GENERAL])?;
     format_in("TraceShadowTask.output", t.output.format, SHADOW_OUTPUT_FORMATS, "a signed float format (R16/R32, RG or RGBA)")?;
@@ -347,7 +361,12 @@ pub(crate) fn specular(t: &TraceSpecularTask) -> Result<()> {
     }
     if t.demodulated_output.image != vk::Image::null() {
         image("TraceSpecularTask.demodulated_output", &t.demodulated_output, &t.common.viewport, &[vk::ImageLayout::GENERAL])?;
-        format_in("TraceSpecularTask.demodulated_output", t.demodulated_output.format, &formats, "R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT")?;
+        format_in(
+            "TraceSpecularTask.demodulated_output",
+            t.demodulated_output.format,
+            &formats,
+            "R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT",
+        )?;
     }
     let s = &t.common.specular;
     if s.image.image != vk::Image::null() {
@@ -397,16 +416,27 @@ pub(crate) fn multi_shadow(t: &TraceMultiShadowTask) -> Result<()> {
         ));
     }
     if t.lights.is_empty() || t.lights.len() > MAX_SHADOW_LIGHTS {
-        return Err(Error::invalid("TraceMultiShadowTask.lights", format!("{} lights: 1..={MAX_SHADOW_LIGHTS} are supported", t.lights.len())));
+        return Err(Error::invalid(
+            "TraceMultiShadowTask.lights",
+            format!("{} lights: 1..={MAX_SHADOW_LIGHTS} are supported", t.lights.len()),
+        ));
     }
     for l in &t.lights {
         light("TraceMultiShadowTask.lights[]", l)?;
     }
     let vp = &t.common.viewport;
     image("TraceMultiShadowTask.visibility", &t.visibility, vp, &[vk::ImageLayout::GENERAL])?;
-    let vis_formats: &[vk::Format] =
-        if t.lights.len() <= 4 { &[vk::Format::R32_UINT, vk::Format::R32G32B32A32_UINT] } else { &[vk::Format::R32G32B32A32_UINT] };
-    format_in("TraceMultiShadowTask.visibility", t.visibility.format, vis_formats, "R32_UINT (up to 4 lights) or R32G32B32A32_UINT")?;
+    let vis_formats: &[vk::Format] = if t.lights.len() <= 4 {
+        &[vk::Format::R32_UINT, vk::Format::R32G32B32A32_UINT]
+    } else {
+        &[vk::Format::R32G32B32A32_UINT]
+    };
+    format_in(
+        "TraceMultiShadowTask.visibility",
+        t.visibility.format,
+        vis_formats,
+        "R32_UINT (up to 4 lights) or R32G32B32A32_UINT",
+    )?;
     image("TraceMultiShadowTask.packed", &t.packed, vp, &[vk::ImageLayout::GENERAL])?;
     format_in(
         "TraceMultiShadowTask.packed",
@@ -439,7 +469,14 @@ const MOTION_FORMATS_2: &[vk::Format] =
 /// formats its signal reads and writes.
 pub(crate) fn denoise(j: &DenoiseJob) -> Result<()> {
     let c = &j.common;
-    let as_trace = TraceCommon { depth: c.depth, normals: c.normals, viewport: c.viewport, camera: c.camera, roughness: c.roughness, ..Default::default() };
+    let as_trace = TraceCommon {
+        depth: c.depth,
+        normals: c.normals,
+        viewport: c.viewport,
+        camera: c.camera,
+        roughness: c.roughness,
+        ..Default::default()
+    };
     trace_common(&as_trace)?;
     if let Some(p) = &c.previous_camera {
         matrix("DenoisingCommon.previous_camera.world_to_view", &p.world_to_view)?;
@@ -453,7 +490,12 @@ pub(crate) fn denoise(j: &DenoiseJob) -> Result<()> {
     if m.has_image() {
         image("DenoisingCommon.motion.image", &m.image, vp, INPUT_LAYOUTS)?;
         let formats = if m.motion_type == MotionType::RgbWorldSpace { RADIANCE_FORMATS } else { MOTION_FORMATS_2 };
-        format_in("DenoisingCommon.motion.image.format", m.image.format, formats, "a float format with the channels the MotionType reads")?;
+        format_in(
+            "DenoisingCommon.motion.image.format",
+            m.image.format,
+            formats,
+            "a float format with the channels the MotionType reads",
+        )?;
     }
     if m.scale.iter().any(|v| !v.is_finite()) {
         return Err(Error::invalid("DenoisingCommon.motion.scale", "is not finite"));
@@ -461,7 +503,10 @@ pub(crate) fn denoise(j: &DenoiseJob) -> Result<()> {
     let s = &c.settings;
     let checks: [(&'static str, bool); 9] = [
         ("DenoiserSettings.max_history_frames (1..=255)", (1..=255).contains(&s.max_history_frames)),
-        ("DenoiserSettings.fast_history_frames (1..=max_history_frames)", (1..=s.max_history_frames).contains(&s.fast_history_frames)),
+        (
+            "DenoiserSettings.fast_history_frames (1..=max_history_frames)",
+            (1..=s.max_history_frames).contains(&s.fast_history_frames),
+        ),
         ("DenoiserSettings.history_clamp_sigma (> 0)", s.history_clamp_sigma.is_finite() && s.history_clamp_sigma > 0.0),
         ("DenoiserSettings.spatial_passes (0..=6)", s.spatial_passes <= 6),
         ("DenoiserSettings.luminance_sigma (> 0)", s.luminance_sigma.is_finite() && s.luminance_sigma > 0.0),
@@ -483,7 +528,12 @@ pub(crate) fn denoise(j: &DenoiseJob) -> Result<()> {
         image("denoise task input", &j.inputs[k], vp, INPUT_LAYOUTS)?;
         format_in("denoise task input", j.inputs[k].format, inputs, "the format of the trace task's output for this signal")?;
         image("denoise task output", &j.outputs[k], vp, &[vk::ImageLayout::GENERAL])?;
-        format_in("denoise task output", j.outputs[k].format, outputs, "an RGBA16F/32F (radiance) or scalar/RGBA (visibility) format")?;
+        format_in(
+            "denoise task output",
+            j.outputs[k].format,
+            outputs,
+            "an RGBA16F/32F (radiance) or scalar/RGBA (visibility) format",
+        )?;
     }
     if j.signal == SignalType::Shadow {
         light("DenoiseShadowTask.light", &j.light)?;

@@ -37,16 +37,12 @@ impl DeviceFeatures {
     pub fn required(with_ray_query: bool) -> Self {
         DeviceFeatures {
             core: vk::PhysicalDeviceFeatures2::default().features(
-                vk::PhysicalDeviceFeatures::default()
-                    .shader_storage_image_write_without_format(true)
-                    .shader_int64(false),
+                vk::PhysicalDeviceFeatures::default().shader_storage_image_write_without_format(true).shader_int64(false),
             ),
             vulkan12: vk::PhysicalDeviceVulkan12Features::default().buffer_device_address(true),
             vulkan13: vk::PhysicalDeviceVulkan13Features::default().synchronization2(true),
-            acceleration_structure: vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default()
-                .acceleration_structure(true),
-            ray_tracing_pipeline: vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default()
-                .ray_tracing_pipeline(true),
+            acceleration_structure: vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true),
+            ray_tracing_pipeline: vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default().ray_tracing_pipeline(true),
             ray_query: vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(with_ray_query),
             atomic_float: vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default().shader_buffer_float32_atomic_add(true),
         }
@@ -179,19 +175,14 @@ impl Device {
         let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut rt_props).push_next(&mut as_props);
         unsafe { desc.instance.get_physical_device_properties2(desc.physical_device, &mut props2) };
         let limits = props2.properties.limits;
-        let device_name = props2
-            .properties
-            .device_name_as_c_str()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
+        let device_name = props2.properties.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         let scratch_alignment = as_props.min_acceleration_structure_scratch_offset_alignment.max(1) as u64;
         let rt_props = vk::PhysicalDeviceRayTracingPipelinePropertiesKHR {
             p_next: std::ptr::null_mut(),
             _marker: std::marker::PhantomData,
             ..rt_props
         };
-        let timestamp_period_ns =
-            (limits.timestamp_compute_and_graphics == vk::TRUE).then_some(limits.timestamp_period as f64);
+        let timestamp_period_ns = (limits.timestamp_compute_and_graphics == vk::TRUE).then_some(limits.timestamp_period as f64);
 
         Ok(Device {
             raw: desc.device.clone(),

@@ -57,10 +57,20 @@ pub struct ResourceAllocations {
 
 impl ResourceAllocations {
     pub fn total_bytes(&self) -> u64 {
-        [self.geometry_copies, self.blas, self.build_scratch, self.tlas, self.upload_rings, self.pipelines, self.cache, self.readback, self.denoiser]
-            .iter()
-            .map(|c| c.bytes)
-            .sum()
+        [
+            self.geometry_copies,
+            self.blas,
+            self.build_scratch,
+            self.tlas,
+            self.upload_rings,
+            self.pipelines,
+            self.cache,
+            self.readback,
+            self.denoiser,
+        ]
+        .iter()
+        .map(|c| c.bytes)
+        .sum()
     }
 }
 
@@ -80,16 +90,18 @@ impl Buffer {
 
     /// The mapped bytes of a host-visible buffer.
     pub fn mapped(&mut self) -> &mut [u8] {
-        self.allocation
-            .as_mut()
-            .and_then(|a| a.mapped_slice_mut())
-            .expect("buffer is host visible")
+        self.allocation.as_mut().and_then(|a| a.mapped_slice_mut()).expect("buffer is host visible")
     }
 }
 
 /// The one subresource of the SDK's images.
-pub(crate) const COLOR_RANGE: vk::ImageSubresourceRange =
-    vk::ImageSubresourceRange { aspect_mask: vk::ImageAspectFlags::COLOR, base_mip_level: 0, level_count: 1, base_array_layer: 0, layer_count: 1 };
+pub(crate) const COLOR_RANGE: vk::ImageSubresourceRange = vk::ImageSubresourceRange {
+    aspect_mask: vk::ImageAspectFlags::COLOR,
+    base_mip_level: 0,
+    level_count: 1,
+    base_array_layer: 0,
+    layer_count: 1,
+};
 
 /// An SDK-owned image (denoiser history), always used in GENERAL layout after creation.
 pub(crate) struct Image {
@@ -177,9 +189,7 @@ impl Memory {
             let _ = self.allocator.lock().as_mut().map(|a| a.free(allocation));
             return Err(Error::Vulkan { call: "vkBindBufferMemory", result: e });
         }
-        let address = unsafe {
-            self.device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(raw))
-        };
+        let address = unsafe { self.device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(raw)) };
         let mut counts = self.counts.lock();
         counts[kind as usize].count += 1;
         counts[kind as usize].bytes += allocation.size();
@@ -205,7 +215,14 @@ impl Memory {
 
     /// A 2D storage image in device memory, with its view (layout UNDEFINED until its first
     /// recording transitions it).
-    pub fn create_image(&self, name: &'static str, format: vk::Format, width: u32, height: u32, kind: MemoryKind) -> Result<Image> {
+    pub fn create_image(
+        &self,
+        name: &'static str,
+        format: vk::Format,
+        width: u32,
+        height: u32,
+        kind: MemoryKind,
+    ) -> Result<Image> {
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
             .format(format)

@@ -1,7 +1,7 @@
 //! Thin ash helpers: the device and its loaders, memory, barriers, pipelines, deferred frees.
 //! Nothing here knows what a pass computes.
-pub mod device;
 pub(crate) mod deferred;
+pub mod device;
 pub mod memory;
 pub(crate) mod pipeline;
 pub(crate) mod sync;

@@ -54,7 +54,12 @@ pub(crate) fn pipeline_layout(device: &ash::Device, set: vk::DescriptorSetLayout
 }
 
 /// A push-descriptor set plus `bytes` of push constants (per-dispatch parameters).
-pub(crate) fn pipeline_layout_with_push(device: &ash::Device, set: vk::DescriptorSetLayout, bytes: u32, stages: vk::ShaderStageFlags) -> Result<vk::PipelineLayout> {
+pub(crate) fn pipeline_layout_with_push(
+    device: &ash::Device,
+    set: vk::DescriptorSetLayout,
+    bytes: u32,
+    stages: vk::ShaderStageFlags,
+) -> Result<vk::PipelineLayout> {
     let sets = [set];
     let ranges = [vk::PushConstantRange { stage_flags: stages, offset: 0, size: bytes }];
     let info = vk::PipelineLayoutCreateInfo::default().set_layouts(&sets).push_constant_ranges(&ranges);
@@ -99,16 +104,11 @@ pub(crate) fn rt_pipeline(
         }
     }
     let entry = c"main";
-    let mut stages = vec![vk::PipelineShaderStageCreateInfo::default()
-        .stage(vk::ShaderStageFlags::RAYGEN_KHR)
-        .module(modules[0])
-        .name(entry)];
+    let mut stages =
+        vec![vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::RAYGEN_KHR).module(modules[0]).name(entry)];
     for i in 0..misses.len() {
         stages.push(
-            vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::MISS_KHR)
-                .module(modules[1 + i])
-                .name(entry),
+            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::MISS_KHR).module(modules[1 + i]).name(entry),
         );
     }
     for i in 0..closest_hits.len() {
@@ -228,14 +228,9 @@ pub(crate) fn rt_pipeline(
 
 pub(crate) fn compute_pipeline(device: &ash::Device, layout: vk::PipelineLayout, spirv: &[u8]) -> Result<vk::Pipeline> {
     let module = shader_module(device, spirv)?;
-    let stage = vk::PipelineShaderStageCreateInfo::default()
-        .stage(vk::ShaderStageFlags::COMPUTE)
-        .module(module)
-        .name(c"main");
+    let stage = vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::COMPUTE).module(module).name(c"main");
     let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
     let result = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) };
     unsafe { device.destroy_shader_module(module, None) };
-    result
-        .map(|p| p[0])
-        .map_err(|(_, e)| Error::Vulkan { call: "vkCreateComputePipelines", result: e })
+    result.map(|p| p[0]).map_err(|(_, e)| Error::Vulkan { call: "vkCreateComputePipelines", result: e })
 }

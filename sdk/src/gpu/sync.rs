@@ -11,10 +11,8 @@ pub(crate) struct Use {
     pub access: vk::AccessFlags2,
 }
 
-pub(crate) const TRANSFER_WRITE: Use =
-    Use { stages: vk::PipelineStageFlags2::COPY, access: vk::AccessFlags2::TRANSFER_WRITE };
-pub(crate) const TRANSFER_READ: Use =
-    Use { stages: vk::PipelineStageFlags2::COPY, access: vk::AccessFlags2::TRANSFER_READ };
+pub(crate) const TRANSFER_WRITE: Use = Use { stages: vk::PipelineStageFlags2::COPY, access: vk::AccessFlags2::TRANSFER_WRITE };
+pub(crate) const TRANSFER_READ: Use = Use { stages: vk::PipelineStageFlags2::COPY, access: vk::AccessFlags2::TRANSFER_READ };
 pub(crate) const AS_BUILD_READ: Use = Use {
     stages: vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR,
     access: vk::AccessFlags2::from_raw(
@@ -30,8 +28,7 @@ pub(crate) const AS_BUILD_WRITE: Use = Use {
 pub(crate) const AS_COPY: Use = Use {
     stages: vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR,
     access: vk::AccessFlags2::from_raw(
-        vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR.as_raw()
-            | vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR.as_raw(),
+        vk::AccessFlags2::ACCELERATION_STRUCTURE_READ_KHR.as_raw() | vk::AccessFlags2::ACCELERATION_STRUCTURE_WRITE_KHR.as_raw(),
     ),
 };
 
@@ -66,7 +63,10 @@ impl Hazards {
     /// the TLAS) was written by earlier command buffers. Submission order alone does not make
     /// those writes visible, so the first use in this recording waits on them (one barrier).
     pub fn after_earlier_submissions() -> Hazards {
-        Hazards { write: Some(Use { stages: vk::PipelineStageFlags2::ALL_COMMANDS, access: vk::AccessFlags2::MEMORY_WRITE }), ..Default::default() }
+        Hazards {
+            write: Some(Use { stages: vk::PipelineStageFlags2::ALL_COMMANDS, access: vk::AccessFlags2::MEMORY_WRITE }),
+            ..Default::default()
+        }
     }
 
     /// Declares that the next commands read with `u`; records a barrier if an earlier write is

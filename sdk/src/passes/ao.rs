@@ -9,14 +9,14 @@
 //! (shaders/include/ao.glsl) runs as a ray-tracing pipeline or as a compute shader with ray
 //! queries; the only difference is the one function that traces a ray.
 use super::constants::{AoConstantsGpu, TraceCommonGpu};
+use super::descriptors;
+use super::program::{RtProgram, Shaders};
 use super::Recording;
 use crate::api::tasks::{InstanceInclusionMask, TraceAmbientOcclusionTask};
 use crate::error::Result;
 use crate::gpu::device::Device;
 use crate::gpu::memory::Memory;
 use crate::gpu::pipeline::{self, RtPipeline};
-use super::descriptors;
-use super::program::{RtProgram, Shaders};
 use crate::gpu::sync;
 use crate::shaders;
 use ash::vk;
@@ -36,15 +36,30 @@ impl AoPass {
             memory,
             &super::gbuffer_bindings(sampler, &[]),
             vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE,
-            Shaders { raygen: shaders::AO_RGEN, misses: &[shaders::HIT_T_RMISS], closest_hits: &[shaders::HIT_T_RCHIT], any_hit: None, inline: None },
+            Shaders {
+                raygen: shaders::AO_RGEN,
+                misses: &[shaders::HIT_T_RMISS],
+                closest_hits: &[shaders::HIT_T_RCHIT],
+                any_hit: None,
+                inline: None,
+            },
         )?;
         let floor = program.variant(
             device,
             memory,
-            Shaders { raygen: shaders::AO_RGEN, misses: &[shaders::EMPTY_RMISS], closest_hits: &[shaders::EMPTY_RCHIT], any_hit: None, inline: None },
+            Shaders {
+                raygen: shaders::AO_RGEN,
+                misses: &[shaders::EMPTY_RMISS],
+                closest_hits: &[shaders::EMPTY_RCHIT],
+                any_hit: None,
+                inline: None,
+            },
         )?;
-        let inline =
-            if device.ray_query { Some(pipeline::compute_pipeline(&device.raw, program.layout, shaders::AO_COMP)?) } else { None };
+        let inline = if device.ray_query {
+            Some(pipeline::compute_pipeline(&device.raw, program.layout, shaders::AO_COMP)?)
+        } else {
+            None
+        };
         Ok(AoPass { program, floor: Some(floor), inline })
     }
 

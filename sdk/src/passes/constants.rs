@@ -33,8 +33,7 @@ impl TraceCommonGpu {
         let view_to_world = c.camera.world_to_view.inverse();
         let clip_to_world = (c.camera.view_to_clip * c.camera.world_to_view).inverse();
         let vp = &c.viewport;
-        let (min_d, max_d) =
-            if vp.min_depth == 0.0 && vp.max_depth == 0.0 { (0.0, 1.0) } else { (vp.min_depth, vp.max_depth) };
+        let (min_d, max_d) = if vp.min_depth == 0.0 && vp.max_depth == 0.0 { (0.0, 1.0) } else { (vp.min_depth, vp.max_depth) };
         let o = &c.ray_offset;
         TraceCommonGpu {
             clip_to_world: clip_to_world.to_cols_array(),

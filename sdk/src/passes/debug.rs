@@ -39,7 +39,13 @@ impl DebugPass {
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
             ],
             vk::ShaderStageFlags::RAYGEN_KHR,
-            Shaders { raygen: shaders::DEBUG_RGEN, misses: &[shaders::HIT_RECORD_RMISS], closest_hits: &[shaders::HIT_RECORD_RCHIT], any_hit: None, inline: None },
+            Shaders {
+                raygen: shaders::DEBUG_RGEN,
+                misses: &[shaders::HIT_RECORD_RMISS],
+                closest_hits: &[shaders::HIT_RECORD_RCHIT],
+                any_hit: None,
+                inline: None,
+            },
         )?;
         Ok(DebugPass { program })
     }

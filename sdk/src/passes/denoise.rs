@@ -142,8 +142,9 @@ const STORAGE_BINDINGS: usize = 16;
 impl DenoisePass {
     pub fn new(device: &Device, sampler: vk::Sampler) -> Result<DenoisePass> {
         let d = &device.raw;
-        let mut bindings: Vec<Binding> =
-            (0..SAMPLED_BINDINGS).map(|_| Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) }).collect();
+        let mut bindings: Vec<Binding> = (0..SAMPLED_BINDINGS)
+            .map(|_| Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) })
+            .collect();
         bindings.extend((0..STORAGE_BINDINGS).map(|_| Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None }));
         bindings.push(Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None });
         let set_layout = pipeline::push_set_layout(d, &bindings, vk::ShaderStageFlags::COMPUTE)?;
@@ -226,7 +227,8 @@ impl DenoisePass {
         let hist_prev = pair(&state.history, prev);
         let hist_cur = pair(&state.history, cur);
         // Shadows have no fast history: bind the history images (never read by their passes).
-        let (fast_prev, fast_cur) = if shadow { (hist_prev, hist_cur) } else { (pair(&state.fast, prev), pair(&state.fast, cur)) };
+        let (fast_prev, fast_cur) =
+            if shadow { (hist_prev, hist_cur) } else { (pair(&state.fast, prev), pair(&state.fast, cur)) };
         let temps = [pair(&state.temp, 0), pair(&state.temp, 1)];
         let gb_prev = state.gbuffer[prev].input();
         let gb_cur = state.gbuffer[cur].input();

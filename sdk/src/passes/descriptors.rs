@@ -25,9 +25,11 @@ pub(crate) fn push(
     for s in slots {
         match s {
             Slot::Tlas(a) => tlas.push([*a]),
-            Slot::Sampled(i) | Slot::Storage(i) => {
-                images.push([vk::DescriptorImageInfo { sampler: vk::Sampler::null(), image_view: i.view, image_layout: i.layout }])
-            }
+            Slot::Sampled(i) | Slot::Storage(i) => images.push([vk::DescriptorImageInfo {
+                sampler: vk::Sampler::null(),
+                image_view: i.view,
+                image_layout: i.layout,
+            }]),
             Slot::Uniform(u) => buffers.push([vk::DescriptorBufferInfo { buffer: u.buffer, offset: u.offset, range: u.size }]),
         }
     }

@@ -1,9 +1,9 @@
 //! Diffuse GI (`TraceDiffuseTask`): cosine-distributed rays shaded from the direct-lighting
 //! cache (shaders/diffuse.rgen).
 use super::constants::TraceCommonGpu;
+use super::descriptors::optional_or;
 use super::descriptors::Slot;
 use super::program::{RtProgram, Shaders};
-use super::descriptors::optional_or;
 use super::Recording;
 use crate::api::tasks::{InstanceInclusionMask, TraceDiffuseTask};
 use crate::error::Result;

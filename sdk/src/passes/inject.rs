@@ -41,7 +41,13 @@ impl InjectPass {
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
             ],
             vk::ShaderStageFlags::RAYGEN_KHR,
-            Shaders { raygen: shaders::INJECT_RGEN, misses: &[shaders::HIT_RECORD_RMISS], closest_hits: &[shaders::HIT_RECORD_RCHIT], any_hit: None, inline: None },
+            Shaders {
+                raygen: shaders::INJECT_RGEN,
+                misses: &[shaders::HIT_RECORD_RMISS],
+                closest_hits: &[shaders::HIT_RECORD_RCHIT],
+                any_hit: None,
+                inline: None,
+            },
         )?;
         Ok(InjectPass { program })
     }

@@ -35,7 +35,10 @@ pub(crate) struct Recording<'a> {
 
 /// The bindings a G-buffer trace starts with: TLAS, depth, normals, output image, constants;
 /// a pass appends its own after them.
-pub(crate) fn gbuffer_bindings(sampler: ash::vk::Sampler, extra: &[crate::gpu::pipeline::Binding]) -> Vec<crate::gpu::pipeline::Binding> {
+pub(crate) fn gbuffer_bindings(
+    sampler: ash::vk::Sampler,
+    extra: &[crate::gpu::pipeline::Binding],
+) -> Vec<crate::gpu::pipeline::Binding> {
     use crate::gpu::pipeline::Binding;
     use ash::vk::DescriptorType as T;
     let mut b = vec![
@@ -57,5 +60,11 @@ pub(crate) fn gbuffer_slots<'a>(
     constants: crate::gpu::upload::Upload,
 ) -> Vec<descriptors::Slot<'a>> {
     use descriptors::Slot;
-    vec![Slot::Tlas(tlas), Slot::Sampled(&common.depth.image), Slot::Sampled(&common.normals.image), Slot::Storage(output), Slot::Uniform(constants)]
+    vec![
+        Slot::Tlas(tlas),
+        Slot::Sampled(&common.depth.image),
+        Slot::Sampled(&common.normals.image),
+        Slot::Storage(output),
+        Slot::Uniform(constants),
+    ]
 }

@@ -32,11 +32,18 @@ pub(crate) struct Shaders<'a> {
 }
 
 impl RtProgram {
-    pub fn new(device: &Device, memory: &Memory, bindings: &[Binding], stages: vk::ShaderStageFlags, shaders: Shaders<'_>) -> Result<RtProgram> {
+    pub fn new(
+        device: &Device,
+        memory: &Memory,
+        bindings: &[Binding],
+        stages: vk::ShaderStageFlags,
+        shaders: Shaders<'_>,
+    ) -> Result<RtProgram> {
         let d = &device.raw;
         let set_layout = pipeline::push_set_layout(d, bindings, stages)?;
         let layout = pipeline::pipeline_layout(d, set_layout)?;
-        let rt = pipeline::rt_pipeline(device, memory, layout, shaders.raygen, shaders.misses, shaders.closest_hits, shaders.any_hit)?;
+        let rt =
+            pipeline::rt_pipeline(device, memory, layout, shaders.raygen, shaders.misses, shaders.closest_hits, shaders.any_hit)?;
         let inline = match (shaders.inline, device.ray_query) {
             (Some(spirv), true) => Some(pipeline::compute_pipeline(d, layout, spirv)?),
             _ => None,

@@ -1,9 +1,9 @@
 //! Specular reflections (`TraceSpecularTask`): mirror or GGX-VNDF rays shaded from the cache
 //! (shaders/specular.rgen).
 use super::constants::TraceCommonGpu;
+use super::descriptors::optional_or;
 use super::descriptors::Slot;
 use super::program::{RtProgram, Shaders};
-use super::descriptors::optional_or;
 use super::Recording;
 use crate::api::tasks::{InstanceInclusionMask, TraceSpecularTask};
 use crate::error::Result;

@@ -13,12 +13,14 @@ pub(crate) fn flags(layout: &GeometryLayout) -> vk::BuildAccelerationStructureFl
     if layout.allow_update {
         vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_BUILD | vk::BuildAccelerationStructureFlagsKHR::ALLOW_UPDATE
     } else {
-        vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE
-            | vk::BuildAccelerationStructureFlagsKHR::ALLOW_COMPACTION
+        vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE | vk::BuildAccelerationStructureFlagsKHR::ALLOW_COMPACTION
     }
 }
 
-pub(crate) fn triangles(copy_address: vk::DeviceAddress, layout: &GeometryLayout) -> vk::AccelerationStructureGeometryKHR<'static> {
+pub(crate) fn triangles(
+    copy_address: vk::DeviceAddress,
+    layout: &GeometryLayout,
+) -> vk::AccelerationStructureGeometryKHR<'static> {
     let mut tri = vk::AccelerationStructureGeometryTrianglesDataKHR::default()
         .vertex_format(vk::Format::R32G32B32_SFLOAT)
         .vertex_data(vk::DeviceOrHostAddressConstKHR { device_address: copy_address })
@@ -83,9 +85,9 @@ pub(crate) fn create(
         }
     };
     let address = unsafe {
-        device
-            .accel
-            .get_acceleration_structure_device_address(&vk::AccelerationStructureDeviceAddressInfoKHR::default().acceleration_structure(accel))
+        device.accel.get_acceleration_structure_device_address(
+            &vk::AccelerationStructureDeviceAddressInfoKHR::default().acceleration_structure(accel),
+        )
     };
     Ok(Blas { accel, buffer, address })
 }
@@ -123,10 +125,8 @@ pub(crate) fn record_batch(device: &Device, cmd: vk::CommandBuffer, scratch: &Bu
                 .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch.address + j.scratch_offset })
         })
         .collect();
-    let ranges: Vec<[vk::AccelerationStructureBuildRangeInfoKHR; 1]> = jobs
-        .iter()
-        .map(|j| [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(j.primitive_count)])
-        .collect();
+    let ranges: Vec<[vk::AccelerationStructureBuildRangeInfoKHR; 1]> =
+        jobs.iter().map(|j| [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(j.primitive_count)]).collect();
     let range_refs: Vec<&[vk::AccelerationStructureBuildRangeInfoKHR]> = ranges.iter().map(|r| &r[..]).collect();
     // SAFETY: all addresses point into live buffers sized from build-size queries.
     unsafe { device.accel.cmd_build_acceleration_structures(cmd, &infos, &range_refs) };

@@ -32,7 +32,11 @@ impl GeometryLayout {
         let vertex_bytes = v.stride * (v.count as u64 - 1) + position_bytes;
         let indexed = input.indices.buffer != vk::Buffer::null();
         let index_type = indexed.then(|| {
-            if input.indices.format == vk::Format::R16_UINT { vk::IndexType::UINT16 } else { vk::IndexType::UINT32 }
+            if input.indices.format == vk::Format::R16_UINT {
+                vk::IndexType::UINT16
+            } else {
+                vk::IndexType::UINT32
+            }
         });
         GeometryLayout {
             vertex_count: v.count,
@@ -164,13 +168,7 @@ pub(crate) fn buffer_capacity(device: &ash::Device, buffer: vk::Buffer) -> u64 {
     unsafe { device.get_buffer_memory_requirements(buffer) }.size
 }
 
-pub(crate) fn check_region(
-    device: &ash::Device,
-    what: &'static str,
-    buffer: vk::Buffer,
-    offset: u64,
-    bytes: u64,
-) -> Result<()> {
+pub(crate) fn check_region(device: &ash::Device, what: &'static str, buffer: vk::Buffer, offset: u64, bytes: u64) -> Result<()> {
     let available = buffer_capacity(device, buffer);
     let needed = offset.saturating_add(bytes);
     if needed > available {

@@ -21,14 +21,16 @@ pub(crate) struct Placement {
 
 /// The TLAS record of an instance. `custom_index` is the instance's slot, so shaders can find
 /// per-instance data in a table indexed by gl_InstanceCustomIndexEXT.
-pub(crate) fn tlas_record(p: &Placement, custom_index: u32, blas_address: vk::DeviceAddress) -> vk::AccelerationStructureInstanceKHR {
+pub(crate) fn tlas_record(
+    p: &Placement,
+    custom_index: u32,
+    blas_address: vk::DeviceAddress,
+) -> vk::AccelerationStructureInstanceKHR {
     let m = p.transform.matrix3;
     let t = p.transform.translation;
     // Row-major 3x4, as VkTransformMatrixKHR wants.
     let matrix = [
-        m.x_axis.x, m.y_axis.x, m.z_axis.x, t.x,
-        m.x_axis.y, m.y_axis.y, m.z_axis.y, t.y,
-        m.x_axis.z, m.y_axis.z, m.z_axis.z, t.z,
+        m.x_axis.x, m.y_axis.x, m.z_axis.x, t.x, m.x_axis.y, m.y_axis.y, m.z_axis.y, t.y, m.x_axis.z, m.y_axis.z, m.z_axis.z, t.z,
     ];
     vk::AccelerationStructureInstanceKHR {
         transform: vk::TransformMatrixKHR { matrix },

@@ -105,7 +105,9 @@ impl Shared {
             st.geometries.iter().filter(|(_, g)| g.pending_layout.is_some()).map(|(h, _)| h).collect();
         let bytes: u64 = pending
             .iter()
-            .filter_map(|h| st.geometries.get(*h).ok()?.pending_layout.as_ref().map(|l| (l.words.len() as u64 * 4).div_ceil(16) * 16))
+            .filter_map(|h| {
+                st.geometries.get(*h).ok()?.pending_layout.as_ref().map(|l| (l.words.len() as u64 * 4).div_ceil(16) * 16)
+            })
             .sum();
         let mut staging = if pending.is_empty() {
             None
@@ -139,7 +141,13 @@ impl Shared {
             st.next_layout_id += 1;
             let id = st.next_layout_id;
             let g = st.geometries.get_mut(h)?;
-            let fresh = SurfelGpu { buffer, sample_count: l.sample_count, surfel_type: l.surfel_type, id, max_resolution: l.max_resolution };
+            let fresh = SurfelGpu {
+                buffer,
+                sample_count: l.sample_count,
+                surfel_type: l.surfel_type,
+                id,
+                max_resolution: l.max_resolution,
+            };
             if let Some(old) = g.surfel.replace(fresh) {
                 st.deferred.retire(serial, Garbage::Buffer(old.buffer));
             }
@@ -154,7 +162,9 @@ impl Shared {
             let handles: Vec<InstanceHandle> = st.instances.iter().map(|(h, _)| h).collect();
             for h in handles {
                 let Some(p) = st.instances.get(h)?.placement else { continue };
-                let Some((count, id)) = st.geometries.get(p.geometry).ok().and_then(|g| g.surfel.as_ref()).map(|s| (s.sample_count, s.id)) else {
+                let Some((count, id)) =
+                    st.geometries.get(p.geometry).ok().and_then(|g| g.surfel.as_ref()).map(|s| (s.sample_count, s.id))
+                else {
                     continue;
                 };
                 if p.cache.is_some_and(|(_, made_for)| made_for == id) {
@@ -178,7 +188,8 @@ impl Shared {
         }
         let ws = &mut st.working_sets[ws_index];
         let tlas = ws.tlas.accel.as_ref().map(|a| a.accel).unwrap_or_default();
-        let mut r = Recording { device, cmd, ring: &mut ws.ring, hazards, tlas, seed: serial as u32, instance_table: 0, floor: false };
+        let mut r =
+            Recording { device, cmd, ring: &mut ws.ring, hazards, tlas, seed: serial as u32, instance_table: 0, floor: false };
         let ops = st.cache_ops.as_ref().expect("created in new");
         for (address, count, color) in fills {
             ops.fill(&mut r, address, count, color);
@@ -225,7 +236,6 @@ impl Shared {
         }
         st.working_sets[ws_index].ring.push(bytemuck::cast_slice(&table), 16).address
     }
-
 }
 
 /// Injection, then the resolve of every cache page in use.

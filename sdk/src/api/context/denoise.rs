@@ -14,7 +14,9 @@ impl ExecuteContext {
     /// Creates a denoising context and allocates its history (see `DenoisingContextInput`).
     /// Memory shows under `ResourceAllocations::denoiser`.
     pub fn create_denoising_context(&self, input: &DenoisingContextInput) -> Result<DenoisingContextHandle> {
-        for (what, v) in [("DenoisingContextInput.max_width", input.max_width), ("DenoisingContextInput.max_height", input.max_height)] {
+        for (what, v) in
+            [("DenoisingContextInput.max_width", input.max_width), ("DenoisingContextInput.max_height", input.max_height)]
+        {
             if !(1..=MAX_DENOISING_EXTENT).contains(&v) {
                 return Err(Error::invalid(what, format!("{v} is not in 1..={MAX_DENOISING_EXTENT}")));
             }
@@ -43,7 +45,10 @@ impl Shared {
 }
 
 /// At build: the context still exists, denoises this task's signal and is large enough.
-pub(super) fn check_job(denoisers: &crate::api::handles::Registry<DenoisingContextHandle, DenoiserState>, job: &DenoiseJob) -> Result<()> {
+pub(super) fn check_job(
+    denoisers: &crate::api::handles::Registry<DenoisingContextHandle, DenoiserState>,
+    job: &DenoiseJob,
+) -> Result<()> {
     let state = denoisers.get(job.context)?;
     if state.input.signal != job.signal {
         return Err(Error::invalid(

@@ -5,11 +5,12 @@
 //! likes and hands the ticket back when its fence says the GPU is done. Everything the GPU may
 //! still use is freed only after the tickets that could use it have come back.
 use super::container::{Task, TaskContainer};
+use super::denoising::SignalType;
 use super::handles::{DenoisingContextHandle, GeometryHandle, InstanceHandle, Registry};
 use super::settings::InitSettings;
-use super::denoising::SignalType;
 use super::tasks::*;
 use super::ticket::{CompletedTask, GpuTicket, TaskKind};
+use crate::cache::pool::{CachePool, CacheRange};
 use crate::error::{Error, HandleProblem, Result};
 use crate::gpu::deferred::{self, DeferredFrees, Garbage};
 use crate::gpu::device::{Device, DeviceDesc};
@@ -18,12 +19,19 @@ use crate::gpu::sync::{self, Hazards};
 use crate::gpu::timestamps::Timer;
 use crate::gpu::upload::UploadRing;
 use crate::passes::{self, ao::AoPass, Recording};
+use crate::passes::{
+    cache_ops::CacheOps,
+    debug::DebugPass,
+    diffuse::DiffusePass,
+    inject::InjectPass,
+    shadow::{MultiShadowPass, ShadowPass},
+    specular::SpecularPass,
+    transfer::TransferPass,
+};
 use crate::scene::blas::{self, BuildJob};
 use crate::scene::geometry::{self, BlasState, GeometryLayout, GeometryRecord};
 use crate::scene::instance::{self, InstanceRecord, Placement};
 use crate::scene::tlas::{self, Tlas};
-use crate::cache::pool::{CachePool, CacheRange};
-use crate::passes::{cache_ops::CacheOps, debug::DebugPass, diffuse::DiffusePass, inject::InjectPass, shadow::{MultiShadowPass, ShadowPass}, specular::SpecularPass, transfer::TransferPass};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 use parking_lot::Mutex;
@@ -347,9 +355,11 @@ impl ExecuteContext {
         }
         let mut guard = self.shared.state.lock();
         let st = &mut *guard;
-        let ws_index = st.working_sets.iter().position(|w| w.in_flight.is_none()).ok_or(Error::WorkingSetsExhausted {
-            in_flight: st.working_sets.len() as u32,
-        })?;
+        let ws_index = st
+            .working_sets
+            .iter()
+            .position(|w| w.in_flight.is_none())
+            .ok_or(Error::WorkingSetsExhausted { in_flight: st.working_sets.len() as u32 })?;
         validate_handles(st, &container.tasks)?;
         st.collect_garbage(&self.shared.device, &self.shared.memory);
 
@@ -468,7 +478,13 @@ fn validate_handles(st: &State, tasks: &[Task]) -> Result<()> {
                 st.instances.get(t.target)?;
             }
             Task::Denoise(j) => denoise::check_job(&st.denoisers, j)?,
-            Task::BvhBuild(_) | Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) | Task::Shadow(_) | Task::Diffuse(_) | Task::Specular(_) | Task::MultiShadow(_) => {}
+            Task::BvhBuild(_)
+            | Task::AmbientOcclusion(_)
+            | Task::DirectLightingInjection(_)
+            | Task::Shadow(_)
+            | Task::Diffuse(_)
+            | Task::Specular(_)
+            | Task::MultiShadow(_) => {}
         }
     }
     Ok(())
@@ -561,13 +577,21 @@ impl Shared {
         }
 
         // ---- BVH work: copies, builds, refits, compactions, TLAS.
-        let first_bvh = tasks
-            .iter()
-            .position(|t| matches!(t, Task::Geometry(_) | Task::Instance(_) | Task::BvhBuild(_)))
-            .map(|i| i as u32);
-        let has_render = tasks
-            .iter()
-            .any(|t| matches!(t, Task::AmbientOcclusion(_) | Task::DirectLightingInjection(_) | Task::DirectLightTransfer(_) | Task::Shadow(_) | Task::Diffuse(_) | Task::Specular(_) | Task::MultiShadow(_) | Task::Denoise(_)));
+        let first_bvh =
+            tasks.iter().position(|t| matches!(t, Task::Geometry(_) | Task::Instance(_) | Task::BvhBuild(_))).map(|i| i as u32);
+        let has_render = tasks.iter().any(|t| {
+            matches!(
+                t,
+                Task::AmbientOcclusion(_)
+                    | Task::DirectLightingInjection(_)
+                    | Task::DirectLightTransfer(_)
+                    | Task::Shadow(_)
+                    | Task::Diffuse(_)
+                    | Task::Specular(_)
+                    | Task::MultiShadow(_)
+                    | Task::Denoise(_)
+            )
+        });
         let bvh_span = first_bvh.map(|i| timer(st, ws_index).begin(d, cmd, TaskKind::Bvh, i));
         self.apply_scene_tasks(st, ws_index, tasks, cmd, serial, &mut hazards)?;
         let max_builds: Option<u32> = tasks
@@ -649,8 +673,16 @@ impl Shared {
             let span = timer(st, ws_index).begin(d, cmd, kind, i as u32);
             let ws = &mut st.working_sets[ws_index];
             let tlas = ws.tlas.accel.as_ref().map(|a| a.accel).unwrap_or_default();
-            let mut r =
-                Recording { device, cmd, ring: &mut ws.ring, hazards: &mut hazards, tlas, seed: serial as u32, instance_table, floor };
+            let mut r = Recording {
+                device,
+                cmd,
+                ring: &mut ws.ring,
+                hazards: &mut hazards,
+                tlas,
+                seed: serial as u32,
+                instance_table,
+                floor,
+            };
             // Inline ray queries where asked for and available; otherwise the pipeline (once
             // a warning says so).
             let wants_inline = task.trace_common().is_some_and(|c| c.use_inline_rt);
@@ -743,7 +775,9 @@ impl Shared {
                 Task::Instance(t) => {
                     let mut old = st.instances.get(t.handle)?.placement;
                     // Moving an instance keeps its lighting; a new geometry needs a new cache.
-                    let keep = old.filter(|o| t.operation == InstanceOperation::Update && o.geometry == t.input.geometry).and_then(|o| o.cache);
+                    let keep = old
+                        .filter(|o| t.operation == InstanceOperation::Update && o.geometry == t.input.geometry)
+                        .and_then(|o| o.cache);
                     if keep.is_some() {
                         if let Some(o) = old.as_mut() {
                             o.cache = None;
@@ -789,7 +823,8 @@ impl Shared {
         for h in ready {
             let Ok(g) = st.geometries.get_mut(h) else { continue };
             let (Some(size), Some(_)) = (g.compacted_size.take(), g.blas.as_ref()) else { continue };
-            let compact = blas::create(device, &self.memory, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, size, MemoryKind::Blas)?;
+            let compact =
+                blas::create(device, &self.memory, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, size, MemoryKind::Blas)?;
             if !declared {
                 hazards.read_write(d, cmd, sync::AS_COPY, sync::AS_COPY);
                 declared = true;
@@ -819,8 +854,21 @@ impl Shared {
             let (Some(layout), Some(copy), Some(b)) = (g.layout, g.copy.as_ref(), g.blas.as_ref()) else { continue };
             let geometry = blas::triangles(copy.address, &layout);
             let flags = blas::flags(&layout);
-            let sizes = blas::build_sizes(device, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, flags, &geometry, layout.primitive_count);
-            jobs.push(BuildJob { geometry, flags, refit: true, dst: b.accel, primitive_count: layout.primitive_count, scratch_offset: scratch_total });
+            let sizes = blas::build_sizes(
+                device,
+                vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
+                flags,
+                &geometry,
+                layout.primitive_count,
+            );
+            jobs.push(BuildJob {
+                geometry,
+                flags,
+                refit: true,
+                dst: b.accel,
+                primitive_count: layout.primitive_count,
+                scratch_offset: scratch_total,
+            });
             scratch_total += sizes.update_scratch_size.div_ceil(align) * align;
         }
         let mut built = 0;
@@ -830,8 +878,20 @@ impl Shared {
             let (Some(layout), Some(copy)) = (g.layout, g.copy.as_ref()) else { continue };
             let geometry = blas::triangles(copy.address, &layout);
             let flags = blas::flags(&layout);
-            let sizes = blas::build_sizes(device, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, flags, &geometry, layout.primitive_count);
-            let fresh = blas::create(device, &self.memory, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, sizes.acceleration_structure_size, MemoryKind::Blas)?;
+            let sizes = blas::build_sizes(
+                device,
+                vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
+                flags,
+                &geometry,
+                layout.primitive_count,
+            );
+            let fresh = blas::create(
+                device,
+                &self.memory,
+                vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
+                sizes.acceleration_structure_size,
+                MemoryKind::Blas,
+            )?;
             let dst = fresh.accel;
             if let Some(old) = g.blas.replace(fresh) {
                 st.deferred.retire(serial, Garbage::AccelerationStructure(old.accel, old.buffer));
@@ -842,7 +902,14 @@ impl Shared {
             if !layout.allow_update {
                 compaction_candidates.push((h, g.build_id, dst));
             }
-            jobs.push(BuildJob { geometry, flags, refit: false, dst, primitive_count: layout.primitive_count, scratch_offset: scratch_total });
+            jobs.push(BuildJob {
+                geometry,
+                flags,
+                refit: false,
+                dst,
+                primitive_count: layout.primitive_count,
+                scratch_offset: scratch_total,
+            });
             scratch_total += sizes.build_scratch_size.div_ceil(align) * align;
             st.snapshot_dirty = true;
             built += 1;

@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Formatting and lints, as CI runs them before the tests: `cargo fmt --check` (settings in
+# rustfmt.toml) and clippy on every crate and target with warnings as errors.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+for component in rustfmt clippy; do
+  if ! cargo "${component/rustfmt/fmt}" --version >/dev/null 2>&1; then
+    echo "[lint] installing the $component component" >&2
+    rustup component add "$component"
+  fi
+done
+cargo fmt --all --check
+cargo clippy --workspace --all-targets --locked -- -D warnings
+echo "lint: fmt and clippy clean"
