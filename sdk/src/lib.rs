@@ -1,9 +1,8 @@
 //! # hybrid-rt
 //!
-//! Ray-traced ambient occlusion (and, as the SDK grows, shadows, reflections and diffuse GI)
-//! for a *rasterizing* Vulkan engine. The engine keeps its renderer and its queues: it hands
-//! the SDK its G-buffer and camera, and the SDK records ray-tracing work into a command buffer
-//! the engine owns.
+//! Ray-traced ambient occlusion, shadows, diffuse GI and reflections for a *rasterizing* Vulkan
+//! engine. The engine keeps its renderer and its queues: it hands the SDK its G-buffer and
+//! camera, and the SDK records ray-tracing work into a command buffer the engine owns.
 //!
 //! ```text
 //! let ctx = ExecuteContext::new(&DeviceDesc { .. }, &InitSettings::default())?;
@@ -18,31 +17,41 @@
 //! let done = ctx.mark_gpu_task_completed(ticket)?;     // per-task GPU times in done.timings
 //! ```
 //!
+//! ## Layers
+//! Arrows point one way (docs/design-notes.md has the picture):
+//! `context` (the engine that records containers; nothing imports it) → `passes` (one module
+//! per GPU pass) → `scene` (registries, BLAS queue, TLAS) → `cache` (surfel layouts, sample
+//! pages) → `gpu` (ash helpers) → `types` (the public plain data) and `error`.
+//!
 //! See docs/ for the integration guide and shared/DESIGN.md for the architecture.
-pub mod api;
 pub(crate) mod cache;
+pub(crate) mod context;
 pub mod error;
 pub mod gpu;
 pub(crate) mod passes;
 pub(crate) mod scene;
 #[doc(hidden)]
 pub mod shaders;
+pub mod types;
 
-pub use api::container::TaskContainer;
-pub use api::context::{ExecuteContext, MAX_DENOISING_EXTENT};
-pub use api::denoising::*;
-pub use api::handles::{DenoisingContextHandle, GeometryHandle, InstanceHandle};
-pub use api::settings::InitSettings;
-pub use api::tasks::*;
-pub use api::ticket::{CompletedTask, GpuTicket, TaskKind, TaskTiming};
+pub use context::container::TaskContainer;
+pub use context::ExecuteContext;
 pub use error::{Error, HandleProblem, Result};
 pub use gpu::device::{
     query_device_support, DeviceDesc, DeviceFeatures, DeviceSupport, OPTIONAL_DEVICE_EXTENSIONS, REQUIRED_DEVICE_EXTENSIONS,
 };
 pub use gpu::memory::{AllocationCount, ResourceAllocations};
-
-/// Largest `SurfelSettings::tile_resolution_limit`.
-pub const MAX_TILE_RESOLUTION: u32 = cache::layout::MAX_RESOLUTION;
+// The public data, family by family (not `types::*`, which would also export the family
+// modules under names the crate's own layers use).
+pub use types::cache::*;
+pub use types::denoise::*;
+pub use types::handles::{DenoisingContextHandle, GeometryHandle, InstanceHandle};
+pub use types::inputs::*;
+pub use types::limits::*;
+pub use types::scene::*;
+pub use types::settings::*;
+pub use types::ticket::*;
+pub use types::trace::*;
 
 /// Version of the SDK (the C ABI checks it at context creation).
 pub const VERSION: (u32, u32, u32) = (0, 1, 0);

@@ -5,12 +5,12 @@
 //! Kickstart RT computes sizes on the GPU and reads them back to allocate; we read back the
 //! geometry instead and build the whole layout here, where it is easy to test, including the
 //! edge sharing that mesh colors need.
-use crate::api::tasks::{SurfelSettings, SurfelType};
+use crate::types::{SurfelSettings, SurfelType};
 use glam::Vec3;
 use std::collections::HashMap;
 
 /// Largest resolution along an edge (the layout packs it in 9 bits).
-pub const MAX_RESOLUTION: u32 = 256;
+pub use crate::types::MAX_TILE_RESOLUTION as MAX_RESOLUTION;
 
 #[derive(Debug, Clone)]
 pub(crate) struct SurfelLayout {

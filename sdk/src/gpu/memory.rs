@@ -116,8 +116,8 @@ pub(crate) struct Image {
 
 impl Image {
     /// As an `ImageInput` in GENERAL layout, for descriptor slots.
-    pub fn input(&self) -> crate::api::tasks::ImageInput {
-        crate::api::tasks::ImageInput {
+    pub fn input(&self) -> crate::types::ImageInput {
+        crate::types::ImageInput {
             image: self.raw,
             view: self.view,
             format: self.format,

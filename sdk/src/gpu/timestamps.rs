@@ -1,7 +1,7 @@
 //! Per-task GPU timing from timestamp queries: one pool per working set, intervals may nest
 //! (the BVH interval holds the BLAS and TLAS intervals), read back when the ticket returns.
-use crate::api::ticket::{TaskKind, TaskTiming};
 use crate::error::{Error, Result};
+use crate::types::{TaskKind, TaskTiming};
 use ash::vk;
 
 struct Interval {

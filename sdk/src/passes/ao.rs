@@ -12,13 +12,13 @@ use super::constants::{AoConstantsGpu, TraceCommonGpu};
 use super::descriptors;
 use super::program::{RtProgram, Shaders};
 use super::Recording;
-use crate::api::tasks::{InstanceInclusionMask, TraceAmbientOcclusionTask};
 use crate::error::Result;
 use crate::gpu::device::Device;
 use crate::gpu::memory::Memory;
 use crate::gpu::pipeline::{self, RtPipeline};
 use crate::gpu::sync;
 use crate::shaders;
+use crate::types::{InstanceInclusionMask, TraceAmbientOcclusionTask};
 use ash::vk;
 
 pub(crate) struct AoPass {

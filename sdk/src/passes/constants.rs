@@ -1,6 +1,6 @@
 //! GPU twins of the std140 blocks in shaders/include/*.glsl. Each struct here has exactly one
 //! GLSL counterpart; the tests at the bottom pin sizes and offsets.
-use crate::api::tasks::{DepthType, NormalSpace, RayOffsetType, TraceCommon};
+use crate::types::{DepthType, NormalSpace, RayOffsetType, TraceCommon};
 use bytemuck::{Pod, Zeroable};
 
 /// `TraceCommon` in shaders/include/common.glsl.

@@ -4,13 +4,13 @@ use super::constants::TraceCommonGpu;
 use super::descriptors::Slot;
 use super::program::{RtProgram, Shaders};
 use super::Recording;
-use crate::api::tasks::{DebugOutput, ImageInput, InstanceInclusionMask, TraceCommon};
 use crate::error::Result;
 use crate::gpu::device::Device;
 use crate::gpu::memory::Memory;
 use crate::gpu::pipeline::Binding;
 use crate::gpu::sync;
 use crate::shaders;
+use crate::types::{DebugOutput, ImageInput, InstanceInclusionMask, TraceCommon};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 

@@ -8,14 +8,14 @@ use super::constants::TraceCommonGpu;
 use super::descriptors::{self, Slot};
 use super::shadow::LightGpu;
 use super::Recording;
-use crate::api::denoising::{DenoiseJob, DenoisingContextInput, DenoisingMethod, MotionType, SignalType};
-use crate::api::tasks::{Camera, ImageInput, TraceCommon};
 use crate::error::Result;
 use crate::gpu::device::Device;
 use crate::gpu::memory::{Image, Memory, MemoryKind, COLOR_RANGE};
 use crate::gpu::pipeline::{self, Binding};
 use crate::gpu::sync;
 use crate::shaders;
+use crate::types::{Camera, ImageInput, TraceCommon};
+use crate::types::{DenoiseJob, DenoisingContextInput, DenoisingMethod, MotionType, SignalType};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
@@ -340,7 +340,7 @@ fn constants(job: &DenoiseJob, previous: &Camera, previous_jitter: [f32; 2], see
     };
     let kinds = match job.signal {
         SignalType::SpecularAndDiffuse => [1, 0, 0, 0],
-        s => [kind(s), kind(s), crate::api::validate::channel_count(job.inputs[0].format).is_some_and(|n| n >= 2) as u32, 0],
+        s => [kind(s), kind(s), crate::context::validate::channel_count(job.inputs[0].format).is_some_and(|n| n >= 2) as u32, 0],
     };
     let s = &c.settings;
     let m = c.roughness.channel_mask;

@@ -1,6 +1,6 @@
 //! Push-descriptor writes shared by the passes: what each binding of a set holds.
-use crate::api::tasks::ImageInput;
 use crate::gpu::upload::Upload;
+use crate::types::ImageInput;
 use ash::vk;
 
 /// One descriptor of a push-descriptor set, in binding order.

@@ -55,8 +55,8 @@ pub(crate) fn gbuffer_bindings(
 /// The slots matching `gbuffer_bindings`.
 pub(crate) fn gbuffer_slots<'a>(
     tlas: ash::vk::AccelerationStructureKHR,
-    common: &'a crate::api::tasks::TraceCommon,
-    output: &'a crate::api::tasks::ImageInput,
+    common: &'a crate::types::TraceCommon,
+    output: &'a crate::types::ImageInput,
     constants: crate::gpu::upload::Upload,
 ) -> Vec<descriptors::Slot<'a>> {
     use descriptors::Slot;

@@ -4,13 +4,13 @@ use super::constants::TraceCommonGpu;
 use super::descriptors::Slot;
 use super::program::{RtProgram, Shaders};
 use super::Recording;
-use crate::api::tasks::{InstanceInclusionMask, LightInfo, LightType, TraceMultiShadowTask, TraceShadowTask};
 use crate::error::Result;
 use crate::gpu::device::Device;
 use crate::gpu::memory::Memory;
 use crate::gpu::pipeline::Binding;
 use crate::gpu::sync;
 use crate::shaders;
+use crate::types::{InstanceInclusionMask, LightInfo, LightType, TraceMultiShadowTask, TraceShadowTask};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
@@ -95,7 +95,7 @@ impl ShadowPass {
 struct MultiShadowConstantsGpu {
     common: TraceCommonGpu,
     counts: [u32; 4],
-    lights: [LightGpu; crate::api::tasks::MAX_SHADOW_LIGHTS],
+    lights: [LightGpu; crate::types::MAX_SHADOW_LIGHTS],
 }
 
 pub(crate) const MULTI_UPLOAD_BYTES: u64 = std::mem::size_of::<MultiShadowConstantsGpu>() as u64;
@@ -135,7 +135,7 @@ impl MultiShadowPass {
     }
 
     pub fn record(&self, r: &mut Recording<'_>, inline: bool, task: &TraceMultiShadowTask) {
-        let mut lights = [LightGpu::default(); crate::api::tasks::MAX_SHADOW_LIGHTS];
+        let mut lights = [LightGpu::default(); crate::types::MAX_SHADOW_LIGHTS];
         for (g, l) in lights.iter_mut().zip(&task.lights) {
             *g = LightGpu::new(l);
         }

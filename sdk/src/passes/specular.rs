@@ -5,13 +5,13 @@ use super::descriptors::optional_or;
 use super::descriptors::Slot;
 use super::program::{RtProgram, Shaders};
 use super::Recording;
-use crate::api::tasks::{InstanceInclusionMask, TraceSpecularTask};
 use crate::error::Result;
 use crate::gpu::device::Device;
 use crate::gpu::memory::Memory;
 use crate::gpu::pipeline::Binding;
 use crate::gpu::sync;
 use crate::shaders;
+use crate::types::{InstanceInclusionMask, TraceSpecularTask};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 

@@ -4,9 +4,9 @@
 //! refit reads the vertices again; copying at registration (one vkCmdCopyBuffer) lets the
 //! engine free or reuse its buffers as soon as the registering ticket is back, and gives the
 //! lighting cache a vertex/index source it owns.
-use crate::api::tasks::GeometryInput;
 use crate::error::{Error, Result};
 use crate::gpu::memory::{Buffer, Memory, MemoryKind};
+use crate::types::GeometryInput;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
@@ -103,7 +103,7 @@ pub(crate) struct GeometryRecord {
 pub(crate) struct SurfelGpu {
     pub buffer: Buffer,
     pub sample_count: u32,
-    pub surfel_type: crate::api::tasks::SurfelType,
+    pub surfel_type: crate::types::SurfelType,
     pub id: u64,
     pub max_resolution: u32,
 }

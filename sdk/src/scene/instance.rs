@@ -1,5 +1,5 @@
 //! A placed geometry and its TLAS record.
-use crate::api::handles::GeometryHandle;
+use crate::types::GeometryHandle;
 use ash::vk;
 use glam::Affine3A;
 

@@ -1,14 +1,13 @@
 //! Denoising contexts: created and destroyed by the engine, their history images owned here
 //! and freed only after the tickets that could still use them come back.
 use super::{ExecuteContext, Shared};
-use crate::api::denoising::{DenoiseJob, DenoisingContextInput};
-use crate::api::handles::DenoisingContextHandle;
 use crate::error::{Error, Result};
 use crate::gpu::deferred::Garbage;
 use crate::passes::denoise::DenoiserState;
+use crate::types::DenoisingContextHandle;
+use crate::types::{DenoiseJob, DenoisingContextInput};
 
-/// Largest `max_width` / `max_height` of a denoising context.
-pub const MAX_DENOISING_EXTENT: u32 = 16384;
+use crate::types::MAX_DENOISING_EXTENT;
 
 impl ExecuteContext {
     /// Creates a denoising context and allocates its history (see `DenoisingContextInput`).
@@ -46,7 +45,7 @@ impl Shared {
 
 /// At build: the context still exists, denoises this task's signal and is large enough.
 pub(super) fn check_job(
-    denoisers: &crate::api::handles::Registry<DenoisingContextHandle, DenoiserState>,
+    denoisers: &crate::types::handles::Registry<DenoisingContextHandle, DenoiserState>,
     job: &DenoiseJob,
 ) -> Result<()> {
     let state = denoisers.get(job.context)?;

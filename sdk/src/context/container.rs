@@ -2,12 +2,10 @@
 //! thread; they are `Send`). Scheduling validates each task at once. A built container is
 //! emptied and can be reused next frame; a container whose build failed keeps its tasks, so a
 //! frame refused for lack of a working set can be built again later.
-use super::context::Shared;
-use super::denoising::*;
-use super::handles::{GeometryHandle, InstanceHandle};
-use super::tasks::*;
 use super::validate;
+use super::Shared;
 use crate::error::Result;
+use crate::types::*;
 use std::sync::{Arc, Weak};
 
 #[derive(Debug, Clone)]

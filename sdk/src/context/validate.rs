@@ -1,10 +1,9 @@
 //! Input checks run when a task is scheduled, so a mistake is reported at the call that made
 //! it, with the field's name. Handle *states* (registered or not) are checked again when the
 //! container is built, since handles can be destroyed in between.
-use super::denoising::{DenoiseJob, MotionType, SignalType};
-use super::tasks::*;
 use crate::error::{Error, Result};
 use crate::scene::geometry::{check_region, GeometryLayout};
+use crate::types::*;
 use ash::vk;
 use glam::{Affine3A, Mat4};
 

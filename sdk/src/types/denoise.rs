@@ -28,7 +28,8 @@
 //! `DenoisingMethod::SpatialOnly` filters each frame alone (no history), to tell a temporal
 //! problem from a spatial one.
 use super::handles::DenoisingContextHandle;
-use super::tasks::{Camera, DepthInput, ImageInput, LightInfo, NormalInput, RoughnessInput, Viewport};
+use super::inputs::{Camera, DepthInput, ImageInput, NormalInput, RoughnessInput, Viewport};
+use super::trace::LightInfo;
 use ash::vk;
 
 /// Which filter chain a denoising context runs.

@@ -4,12 +4,8 @@
 //! records our work into its own command buffer with `build_gpu_task`, submits it where it
 //! likes and hands the ticket back when its fence says the GPU is done. Everything the GPU may
 //! still use is freed only after the tickets that could use it have come back.
-use super::container::{Task, TaskContainer};
-use super::denoising::SignalType;
-use super::handles::{DenoisingContextHandle, GeometryHandle, InstanceHandle, Registry};
-use super::settings::InitSettings;
-use super::tasks::*;
-use super::ticket::{CompletedTask, GpuTicket, TaskKind};
+pub(crate) mod container;
+pub(crate) mod validate;
 use crate::cache::pool::{CachePool, CacheRange};
 use crate::error::{Error, HandleProblem, Result};
 use crate::gpu::deferred::{self, DeferredFrees, Garbage};
@@ -32,13 +28,15 @@ use crate::scene::blas::{self, BuildJob};
 use crate::scene::geometry::{self, BlasState, GeometryLayout, GeometryRecord};
 use crate::scene::instance::{self, InstanceRecord, Placement};
 use crate::scene::tlas::{self, Tlas};
+use crate::types::handles::Registry;
+use crate::types::*;
 use ash::vk;
+use container::{Task, TaskContainer};
 use gpu_allocator::MemoryLocation;
 use parking_lot::Mutex;
 
 mod cache;
 mod denoise;
-pub use denoise::MAX_DENOISING_EXTENT;
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, AtomicU16, Ordering};
 use std::sync::Arc;

@@ -1,0 +1,302 @@
+//! The inputs trace tasks share: engine images, the G-buffer's encodings, the camera, the
+//! viewport, ray offsets, and debug visualisations.
+//!
+//! Compared with Kickstart RT: the camera is given once as `world_to_view` + `view_to_clip`
+//! (the SDK derives the inverses, so they cannot disagree); normals may be in world or view
+//! space; every image input carries its format and extent so a wrong one is an error at
+//! schedule time, not a garbage image.
+use ash::vk;
+use glam::Mat4;
+
+/// An engine image the SDK reads or writes. The SDK binds `view` as given and never changes the
+/// image's layout: `layout` is the layout it is in while the ticket runs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct ImageInput {
+    pub image: vk::Image,
+    pub view: vk::ImageView,
+    /// Format of the view.
+    pub format: vk::Format,
+    pub width: u32,
+    pub height: u32,
+    /// Inputs: SHADER_READ_ONLY_OPTIMAL (default), GENERAL, DEPTH_READ_ONLY_OPTIMAL,
+    /// DEPTH_STENCIL_READ_ONLY_OPTIMAL or READ_ONLY_OPTIMAL; the image needs SAMPLED usage.
+    /// Outputs: GENERAL, with STORAGE usage.
+    pub layout: vk::ImageLayout,
+}
+
+impl Default for ImageInput {
+    fn default() -> Self {
+        ImageInput {
+            image: vk::Image::null(),
+            view: vk::ImageView::null(),
+            format: vk::Format::UNDEFINED,
+            width: 0,
+            height: 0,
+            layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum DepthType {
+    /// R holds the hardware depth (after the viewport transform), as rasterized. Default.
+    /// Pixels still at the clear value of the far plane (the viewport's `max_depth`, or
+    /// `min_depth` for a reversed-Z projection, detected from `view_to_clip`) are background:
+    /// trace tasks write their "nothing here" value there (AO: 1).
+    #[default]
+    ClipSpace = 0,
+    /// RGB holds the world-space position.
+    WorldPosition = 1,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct DepthInput {
+    pub image: ImageInput,
+    pub depth_type: DepthType,
+}
+
+impl Default for DepthInput {
+    fn default() -> Self {
+        DepthInput { image: ImageInput::default(), depth_type: DepthType::ClipSpace }
+    }
+}
+
+/// The six normal encodings of the integration guide.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum NormalType {
+    /// RGB = xyz.
+    RgbVector = 0,
+    /// RGB = xyz * 0.5 + 0.5. Default.
+    #[default]
+    RgbNormalizedVector = 1,
+    /// RG = octahedral encoding in [-1, 1].
+    RgOctahedron = 2,
+    /// BA = octahedral encoding in [-1, 1].
+    BaOctahedron = 3,
+    /// RG = octahedral encoding * 0.5 + 0.5.
+    RgNormalizedOctahedron = 4,
+    /// BA = octahedral encoding * 0.5 + 0.5.
+    BaNormalizedOctahedron = 5,
+}
+
+impl NormalType {
+    /// Channels the encoding reads (a format must have at least this many).
+    pub fn channels_needed(self) -> u32 {
+        match self {
+            NormalType::RgbVector | NormalType::RgbNormalizedVector => 3,
+            NormalType::RgOctahedron | NormalType::RgNormalizedOctahedron => 2,
+            NormalType::BaOctahedron | NormalType::BaNormalizedOctahedron => 4,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum NormalSpace {
+    /// Default.
+    #[default]
+    World = 0,
+    View = 1,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[repr(C)]
+pub struct NormalInput {
+    pub image: ImageInput,
+    pub normal_type: NormalType,
+    pub space: NormalSpace,
+}
+
+/// The pixel rectangle of the images that the task reads and writes.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[repr(C)]
+pub struct Viewport {
+    pub x: u32,
+    pub y: u32,
+    pub width: u32,
+    pub height: u32,
+    /// The rasterizer's viewport depth range (default 0..1 when both are 0).
+    pub min_depth: f32,
+    pub max_depth: f32,
+}
+
+impl Viewport {
+    pub fn full(width: u32, height: u32) -> Viewport {
+        Viewport { x: 0, y: 0, width, height, min_depth: 0.0, max_depth: 1.0 }
+    }
+}
+
+/// The camera the G-buffer was rendered with. The SDK derives the inverses itself.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct Camera {
+    pub world_to_view: Mat4,
+    /// Vulkan clip space: y down, depth 0..1 (standard or reversed, finite or infinite far).
+    pub view_to_clip: Mat4,
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Camera { world_to_view: Mat4::IDENTITY, view_to_clip: Mat4::IDENTITY }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum RayOffsetType {
+    Disabled = 0,
+    /// Offset in the position's own float precision (Ray Tracing Gems ch. 6).
+    WorldPosition = 1,
+    /// Offset growing with the distance to the camera. Default: it needs no tuning for the
+    /// usual camera ranges; with `Disabled`, rays from a rasterized G-buffer hit their own
+    /// surface (the guide's "zero reflections in part of the image").
+    #[default]
+    CameraDistance = 2,
+}
+
+/// How secondary rays leave the G-buffer surface. Parameter defaults are the guide's.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct RayOffset {
+    pub offset_type: RayOffsetType,
+    /// WorldPosition: below this magnitude a float offset is used, above it an integer one.
+    pub world_threshold: f32,
+    pub world_float_scale: f32,
+    pub world_int_scale: f32,
+    /// CameraDistance: offset = constant + linear * d + quadratic * d².
+    pub cam_constant: f32,
+    pub cam_linear: f32,
+    pub cam_quadratic: f32,
+}
+
+impl Default for RayOffset {
+    fn default() -> Self {
+        RayOffset {
+            offset_type: RayOffsetType::CameraDistance,
+            world_threshold: 1.0 / 32.0,
+            world_float_scale: 1.0 / 65536.0,
+            world_int_scale: 256.0,
+            cam_constant: 0.00174,
+            cam_linear: -0.0001547,
+            cam_quadratic: 0.0000996,
+        }
+    }
+}
+
+/// Surface roughness (perceptual, 0 = mirror .. 1), read by specular traces:
+/// `global_roughness * dot(texel, channel_mask)` with an image, `global_roughness` without.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RoughnessInput {
+    /// Optional: leave `image` null to use `global_roughness` everywhere.
+    pub image: ImageInput,
+    /// Which channels hold roughness. Default R: [1, 0, 0, 0].
+    pub channel_mask: [f32; 4],
+    /// Multiplier of the image's roughness, or the roughness itself without an image.
+    /// Default 1.0 (the guide: set it to 0 to debug mirror reflections first).
+    pub global_roughness: f32,
+}
+
+impl Default for RoughnessInput {
+    fn default() -> Self {
+        RoughnessInput { image: ImageInput::default(), channel_mask: [1.0, 0.0, 0.0, 0.0], global_roughness: 1.0 }
+    }
+}
+
+impl RoughnessInput {
+    pub fn has_image(&self) -> bool {
+        self.image.image != vk::Image::null()
+    }
+}
+
+/// The specular colour the specular output is multiplied by (Kickstart RT's convention):
+/// `global_metalness * image.rgb`, or `global_metalness` without an image.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpecularInput {
+    /// Optional RGB specular colour (F0); leave `image` null for white.
+    pub image: ImageInput,
+    /// A scalar factor; 1.0 (default) in most cases, other values to debug without an image.
+    pub global_metalness: f32,
+}
+
+impl Default for SpecularInput {
+    fn default() -> Self {
+        SpecularInput { image: ImageInput::default(), global_metalness: 1.0 }
+    }
+}
+
+/// Debug visualisations. Any mode but `Default` replaces the task's output with an image made
+/// by primary rays from the task's camera through the SDK's TLAS (one per pixel centre of the
+/// viewport; the G-buffer is not read), into an output with four channels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[repr(u32)]
+pub enum DebugOutput {
+    /// The task's normal output.
+    #[default]
+    Default = 0,
+    /// The direct-lighting cache's colour at the hit (bilinear for mesh colors when
+    /// `enable_bilinear_sampling`): what injection has baked so far.
+    DirectLightingCache = 1,
+    /// A random colour per cache sample (tile cell or mesh-colors lattice point).
+    RandomTileColor = 2,
+    /// A random colour per instance.
+    RandomMeshColor = 3,
+    /// The hit distance in every channel (0 where nothing is hit).
+    HitT = 4,
+    /// The hit's barycentrics (b0, b1, b2) as RGB.
+    Barycentrics = 5,
+}
+
+/// Inputs every trace task shares.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TraceCommon {
+    pub depth: DepthInput,
+    pub normals: NormalInput,
+    pub viewport: Viewport,
+    pub camera: Camera,
+    pub ray_offset: RayOffset,
+    /// Roughness, for specular traces.
+    pub roughness: RoughnessInput,
+    /// Specular colour, for specular traces.
+    pub specular: SpecularInput,
+    /// Optional (leave `image` null for none): the lit frame of this view, as a direct-lighting
+    /// source for secondary hits. A diffuse or specular hit that lands in the viewport where the
+    /// depth shows that surface takes this image's radiance, any other hit the cache's (the
+    /// guide's "Direct Lighting Input"). Same formats and layouts as injection's lit image.
+    pub direct_lighting: ImageInput,
+    /// Trace with inline ray queries (a compute shader) when the device has them; otherwise
+    /// (e.g. NVIDIA's Vulkan driver today) the ray-tracing pipeline is used and a warning is
+    /// logged once. Both give the same image. Default false.
+    pub use_inline_rt: bool,
+    /// Interpolate mesh-colors caches between samples (continuous across triangle edges)
+    /// instead of taking the nearest sample. Default true (see `TraceCommon::default`).
+    pub enable_bilinear_sampling: bool,
+    /// Default `DebugOutput::Default`.
+    pub debug_output: DebugOutput,
+    /// Checkerboard: trace only the pixels where x + y + ticket serial is even (half the
+    /// rays); the others keep their previous contents, for the denoiser to fill. Successive
+    /// tickets alternate the pattern. Default false.
+    pub half_resolution_mode: bool,
+}
+
+impl Default for TraceCommon {
+    fn default() -> Self {
+        TraceCommon {
+            depth: DepthInput::default(),
+            normals: NormalInput::default(),
+            viewport: Viewport::default(),
+            camera: Camera::default(),
+            ray_offset: RayOffset::default(),
+            roughness: RoughnessInput::default(),
+            specular: SpecularInput::default(),
+            direct_lighting: ImageInput::default(),
+            use_inline_rt: false,
+            enable_bilinear_sampling: true,
+            debug_output: DebugOutput::Default,
+            half_resolution_mode: false,
+        }
+    }
+}

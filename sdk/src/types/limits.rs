@@ -1,0 +1,10 @@
+//! The SDK's fixed limits, in one place (the C header repeats them as `HRT_MAX_*`).
+
+/// Most lights one `TraceMultiShadowTask` traces.
+pub const MAX_SHADOW_LIGHTS: usize = 16;
+
+/// Largest `SurfelSettings::tile_resolution_limit`: cache samples along one triangle edge.
+pub const MAX_TILE_RESOLUTION: u32 = 256;
+
+/// Largest `DenoisingContextInput::max_width` / `max_height`.
+pub const MAX_DENOISING_EXTENT: u32 = 16384;

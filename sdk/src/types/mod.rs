@@ -1,0 +1,22 @@
+//! The public plain data: what an engine fills in and gets back. Task structs by family, handles,
+//! settings, tickets and limits — `Default` everywhere, no Vulkan calls. The C ABI mirrors these
+//! structs field for field. Everything here is re-exported at the crate root.
+pub mod cache;
+pub mod denoise;
+pub mod handles;
+pub mod inputs;
+pub mod limits;
+pub mod scene;
+pub mod settings;
+pub mod ticket;
+pub mod trace;
+
+pub use cache::*;
+pub use denoise::*;
+pub use handles::{DenoisingContextHandle, GeometryHandle, InstanceHandle};
+pub use inputs::*;
+pub use limits::*;
+pub use scene::*;
+pub use settings::*;
+pub use ticket::*;
+pub use trace::*;

@@ -1,0 +1,184 @@
+//! Scene tasks: geometries (a mesh → one BLAS), instances (a geometry + a transform → a TLAS
+//! entry and a direct-lighting cache) and the throttled BVH build.
+use super::handles::{GeometryHandle, InstanceHandle};
+use ash::vk;
+use glam::Affine3A;
+
+/// Register creates the BLAS input; Update replaces it (refit for `allow_update` geometry,
+/// otherwise a throttled rebuild).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum TaskOperation {
+    #[default]
+    Register = 0,
+    Update = 1,
+}
+
+/// A vertex buffer of the engine's. The SDK copies `count` vertices out of it while the ticket
+/// that registers (or updates) the geometry runs, so it must have TRANSFER_SRC usage and stay
+/// alive until that ticket comes back; after that the engine may free it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct VertexBufferInput {
+    pub buffer: vk::Buffer,
+    /// Byte offset of the first vertex's position.
+    pub offset: u64,
+    /// Bytes between vertices (>= 12, a multiple of 4). Default 12.
+    pub stride: u64,
+    pub count: u32,
+    /// Position format: R32G32B32_SFLOAT (default) or R32G32B32A32_SFLOAT.
+    pub format: vk::Format,
+}
+
+impl Default for VertexBufferInput {
+    fn default() -> Self {
+        VertexBufferInput { buffer: vk::Buffer::null(), offset: 0, stride: 12, count: 0, format: vk::Format::R32G32B32_SFLOAT }
+    }
+}
+
+/// An index buffer of the engine's (same lifetime and usage rules as the vertex buffer).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct IndexBufferInput {
+    /// Null for non-indexed triangles (every three vertices make one).
+    pub buffer: vk::Buffer,
+    pub offset: u64,
+    /// Number of indices (a multiple of 3).
+    pub count: u32,
+    /// R32_UINT (default) or R16_UINT.
+    pub format: vk::Format,
+}
+
+impl Default for IndexBufferInput {
+    fn default() -> Self {
+        IndexBufferInput { buffer: vk::Buffer::null(), offset: 0, count: 0, format: vk::Format::R32_UINT }
+    }
+}
+
+/// How the direct-lighting cache lays out its samples on this geometry (used by the cache).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum SurfelType {
+    /// Vertex, edge and face samples shared between neighbouring triangles: bilinear lookups
+    /// are continuous across edges. The default, as in Kickstart RT.
+    #[default]
+    MeshColors = 0,
+    /// One warped-barycentric square tile per triangle.
+    Tiles = 1,
+}
+
+/// Direct-lighting cache resolution for a geometry.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
+pub struct SurfelSettings {
+    pub surfel_type: SurfelType,
+    /// World units per cache sample along a triangle edge. Default 1.0.
+    pub tile_unit_length: f32,
+    /// Most samples along one edge. Default 64.
+    pub tile_resolution_limit: u32,
+}
+
+impl Default for SurfelSettings {
+    fn default() -> Self {
+        SurfelSettings { surfel_type: SurfelType::MeshColors, tile_unit_length: 1.0, tile_resolution_limit: 64 }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[repr(C)]
+pub struct GeometryInput {
+    pub vertices: VertexBufferInput,
+    pub indices: IndexBufferInput,
+    /// Deforming/skinned meshes: later updates refit the BLAS in place (same triangle count)
+    /// instead of queueing a rebuild. Such BLASes are not compacted. Default false.
+    pub allow_update: bool,
+    pub surfels: SurfelSettings,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct GeometryTask {
+    pub handle: GeometryHandle,
+    pub operation: TaskOperation,
+    pub input: GeometryInput,
+}
+
+/// Which rays see an instance (bits of the TLAS instance mask). Combine with `|`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(transparent)]
+pub struct InstanceInclusionMask(pub u8);
+
+impl InstanceInclusionMask {
+    pub const NONE: Self = Self(0);
+    pub const REFLECTIONS: Self = Self(1 << 0);
+    pub const DIFFUSE_GI: Self = Self(1 << 1);
+    pub const AMBIENT_OCCLUSION: Self = Self(1 << 2);
+    pub const SHADOWS: Self = Self(1 << 3);
+    pub const LIGHT_INJECTION: Self = Self(1 << 4);
+    pub const ALL: Self = Self(0x1f);
+
+    pub fn contains(self, other: Self) -> bool {
+        self.0 & other.0 == other.0
+    }
+}
+
+impl std::ops::BitOr for InstanceInclusionMask {
+    type Output = Self;
+    fn bitor(self, rhs: Self) -> Self {
+        Self(self.0 | rhs.0)
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum InstanceOperation {
+    #[default]
+    Register = 0,
+    Update = 1,
+    /// Takes the instance out of the TLAS; the handle stays alive and may be registered again.
+    Remove = 2,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InstanceInput {
+    pub geometry: GeometryHandle,
+    /// Object to world. Must be finite.
+    pub transform: Affine3A,
+    /// Default: visible to every ray type.
+    pub mask: InstanceInclusionMask,
+    /// Colour a new direct-lighting cache starts with (used by the cache). Default black.
+    pub initial_tile_color: [f32; 3],
+}
+
+impl Default for InstanceInput {
+    fn default() -> Self {
+        InstanceInput {
+            geometry: GeometryHandle::NULL,
+            transform: Affine3A::IDENTITY,
+            mask: InstanceInclusionMask::ALL,
+            initial_tile_color: [0.0; 3],
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct InstanceTask {
+    pub handle: InstanceHandle,
+    pub operation: InstanceOperation,
+    pub input: InstanceInput,
+}
+
+/// Builds pending BLASes (at most `max_blas_build_count`, oldest first, so a level load spreads
+/// over frames), refits updated deformable ones, and rebuilds the TLAS from every registered
+/// instance whose BLAS is ready. Instances still waiting for their BLAS stay out of the TLAS.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(C)]
+pub struct BvhBuildTask {
+    /// Default 4 (Kickstart RT's default). 0 builds none this frame.
+    pub max_blas_build_count: u32,
+}
+
+impl Default for BvhBuildTask {
+    fn default() -> Self {
+        BvhBuildTask { max_blas_build_count: 4 }
+    }
+}

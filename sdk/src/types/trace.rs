@@ -1,0 +1,221 @@
+//! Trace tasks: ambient occlusion, shadows from one or many lights, diffuse GI and specular
+//! reflections. Each traces secondary rays from the G-buffer (`TraceCommon`).
+use super::inputs::{ImageInput, TraceCommon};
+use ash::vk;
+
+/// Ray-traced ambient occlusion. Output: visibility in [0, 1] (1 = unoccluded) written to
+/// every channel of `output` (RGB = AO, A = 1) inside the viewport.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TraceAmbientOcclusionTask {
+    pub common: TraceCommon,
+    /// GENERAL layout, STORAGE usage; R8_UNORM, R16_SFLOAT, R32_SFLOAT, R16G16B16A16_SFLOAT,
+    /// R32G32B32A32_SFLOAT or R8G8B8A8_UNORM.
+    pub output: ImageInput,
+    /// World-space length of AO rays. Default 1.0.
+    pub ray_length: f32,
+    /// Rays per pixel, 1..=64. Default 1 (denoise it) — use more for a clean raw image.
+    pub rays_per_pixel: u32,
+    /// A hit at distance t counts (t / ray_length)^power of a miss: near occluders darken more
+    /// than far ones. Larger powers approach binary AO. > 0. Default 1.0.
+    pub falloff_power: f32,
+}
+
+impl Default for TraceAmbientOcclusionTask {
+    fn default() -> Self {
+        TraceAmbientOcclusionTask {
+            common: TraceCommon::default(),
+            output: ImageInput { layout: vk::ImageLayout::GENERAL, ..Default::default() },
+            ray_length: 1.0,
+            rays_per_pixel: 1,
+            falloff_power: 1.0,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum LightType {
+    /// Parallel rays (the sun). Default.
+    #[default]
+    Directional = 0,
+    /// An emitting sphere of `radius` at `position`.
+    Point = 1,
+    /// A point light with a cone; the cone's falloff is the engine's to apply (it does not
+    /// change visibility).
+    Spot = 2,
+}
+
+/// A light, as the engine converts its own to. Size makes soft shadows: the SDK samples the
+/// light's extent.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightInfo {
+    pub light_type: LightType,
+    /// Point and spot: world-space centre.
+    pub position: glam::Vec3,
+    /// Directional and spot: the direction the light travels (need not be normalized).
+    pub direction: glam::Vec3,
+    /// Directional: apparent diameter in radians (the sun: about 0.0093). 0 = hard shadows.
+    pub angular_extent: f32,
+    /// Point and spot: radius of the emitting sphere. 0 = hard shadows.
+    pub radius: f32,
+    /// Spot: inner and outer cone half-angles in radians (kept for the engine's shading).
+    pub inner_cone: f32,
+    pub outer_cone: f32,
+}
+
+impl Default for LightInfo {
+    fn default() -> Self {
+        LightInfo {
+            light_type: LightType::Directional,
+            position: glam::Vec3::ZERO,
+            direction: glam::Vec3::NEG_Y,
+            angular_extent: 0.0,
+            radius: 0.0,
+            inner_cone: 0.5,
+            outer_cone: 0.6,
+        }
+    }
+}
+
+/// Ray-traced shadows from one light. Output (the integration guide's format): R = distance
+/// to the closest occluder, negative where the light is visible; G, when the output has a
+/// second channel, = the fraction of rays that reached the light (soft visibility).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TraceShadowTask {
+    pub common: TraceCommon,
+    pub light: LightInfo,
+    /// GENERAL layout, STORAGE usage: R16_SFLOAT, R32_SFLOAT, R16G16_SFLOAT, R32G32_SFLOAT,
+    /// R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT.
+    pub output: ImageInput,
+    /// Rays per pixel, 1..=64. Default 1 (the guide's one ray per light; denoise it).
+    pub rays_per_pixel: u32,
+}
+
+impl Default for TraceShadowTask {
+    fn default() -> Self {
+        TraceShadowTask {
+            common: TraceCommon::default(),
+            light: LightInfo::default(),
+            output: ImageInput { layout: vk::ImageLayout::GENERAL, ..Default::default() },
+            rays_per_pixel: 1,
+        }
+    }
+}
+
+/// Shadows from several lights in one pass (1..=16; each light gets `rays_per_pixel` rays,
+/// sampled as in `TraceShadowTask`).
+/// - `visibility` (R32_UINT for up to 4 lights, R32G32B32A32_UINT for up to 16): per light, the
+///   visible fraction x 255 in 8 bits; light i is in channel i / 4 at bits 8 * (i % 4).
+/// - `packed` (RGBA16F/32F), the input of `DenoiseMultiShadowTask`: mean visibility over the
+///   lights, mean penumbra width over the occluded rays (world units: occluder distance x the
+///   light's angular size; -1 where no ray was occluded), min occluder distance (0 if none),
+///   and the surface's distance to the camera.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TraceMultiShadowTask {
+    pub common: TraceCommon,
+    pub lights: Vec<LightInfo>,
+    pub visibility: ImageInput,
+    pub packed: ImageInput,
+    /// Rays per pixel and light, 1..=64. Default 1.
+    pub rays_per_pixel: u32,
+}
+
+impl Default for TraceMultiShadowTask {
+    fn default() -> Self {
+        let general = ImageInput { layout: vk::ImageLayout::GENERAL, ..Default::default() };
+        TraceMultiShadowTask {
+            common: TraceCommon::default(),
+            lights: Vec::new(),
+            visibility: general,
+            packed: general,
+            rays_per_pixel: 1,
+        }
+    }
+}
+
+// ---------------------------------------------------------------- diffuse GI
+
+/// The diffuse BRDF that weighs each GI ray (both are normalized to Lambert's albedo).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[repr(u32)]
+pub enum DiffuseBrdfType {
+    /// Lambertian: every direction weighs the same. Default.
+    #[default]
+    Lambertian = 0,
+    /// Burley's Disney diffuse with Frostbite's energy normalisation: rough surfaces
+    /// retro-reflect, smooth ones darken at grazing angles. Reads `common.roughness`.
+    NormalizedDisney = 1,
+}
+
+/// One bounce of diffuse GI shaded from the direct-lighting cache. Output (RGBA float):
+/// RGB = the mean incoming radiance over the cosine-weighted hemisphere (E/pi: multiply by
+/// your albedo for Lambertian outgoing light), A = the mean hit distance (misses count as
+/// `ray_length`), which the denoiser uses.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TraceDiffuseTask {
+    pub common: TraceCommon,
+    /// GENERAL layout, STORAGE usage: R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT.
+    pub output: ImageInput,
+    /// Rays per pixel, 1..=64. Default 1.
+    pub rays_per_pixel: u32,
+    /// Longest ray in world units (> 0). Default 1000.
+    pub ray_length: f32,
+    /// Radiance of rays that hit nothing (a constant sky). Default black.
+    pub miss_radiance: [f32; 3],
+    /// Default Lambertian.
+    pub brdf: DiffuseBrdfType,
+}
+
+impl Default for TraceDiffuseTask {
+    fn default() -> Self {
+        TraceDiffuseTask {
+            common: TraceCommon::default(),
+            output: ImageInput { layout: vk::ImageLayout::GENERAL, ..Default::default() },
+            rays_per_pixel: 1,
+            ray_length: 1000.0,
+            miss_radiance: [0.0; 3],
+            brdf: DiffuseBrdfType::Lambertian,
+        }
+    }
+}
+
+// ---------------------------------------------------------------- specular
+
+/// Specular reflections shaded from the direct-lighting cache. Roughness (from
+/// `common.roughness`) 0 traces the exact mirror direction; otherwise GGX visible normals are
+/// sampled. Output (RGBA float): RGB = reflected radiance weighted by the Smith-GGX lobe (no
+/// Fresnel) times the specular colour of `common.specular`; A = hit distance of the first ray
+/// (misses: `ray_length`), for the denoiser. `demodulated_output`, if set, receives the same
+/// without the specular colour (denoise that, then multiply back).
+/// Reflections off clear glass: a second task with the glass's own depth, normals and
+/// roughness as its G-buffer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TraceSpecularTask {
+    pub common: TraceCommon,
+    /// GENERAL layout, STORAGE usage: R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT.
+    pub output: ImageInput,
+    /// Rays per pixel for rough surfaces, 1..=64 (mirrors always trace one). Default 1.
+    pub rays_per_pixel: u32,
+    /// Longest ray (> 0). Default 1000.
+    pub ray_length: f32,
+    /// Radiance of rays that hit nothing. Default black.
+    pub miss_radiance: [f32; 3],
+    /// Largest luminance one sample may carry (fireflies); 0 = no clamp. Default 0.
+    pub firefly_clamp: f32,
+    /// Optional (image null = none): same format rules as `output`.
+    pub demodulated_output: ImageInput,
+}
+
+impl Default for TraceSpecularTask {
+    fn default() -> Self {
+        TraceSpecularTask {
+            common: TraceCommon::default(),
+            output: ImageInput { layout: vk::ImageLayout::GENERAL, ..Default::default() },
+            rays_per_pixel: 1,
+            ray_length: 1000.0,
+            miss_radiance: [0.0; 3],
+            firefly_clamp: 0.0,
+            demodulated_output: ImageInput { layout: vk::ImageLayout::GENERAL, ..Default::default() },
+        }
+    }
+}
