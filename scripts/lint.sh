@@ -11,4 +11,6 @@ for component in rustfmt clippy; do
 done
 cargo fmt --all --check
 cargo clippy --workspace --all-targets --locked -- -D warnings
+# The SDK alone, without the features the workspace's other crates turn on (bench-floor).
+cargo clippy -p hybrid-rt --lib --locked -- -D warnings
 echo "lint: fmt and clippy clean"

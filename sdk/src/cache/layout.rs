@@ -117,32 +117,6 @@ fn mesh_colors(positions: &[Vec3], triangles: &[[u32; 3]], s: &SurfelSettings) -
     SurfelLayout { surfel_type: SurfelType::MeshColors, words, sample_count: next, max_resolution }
 }
 
-/// Positions and triangles from a read-back geometry copy (vertices with their stride, then
-/// indices at `index_offset`).
-pub(crate) fn read_geometry(bytes: &[u8], g: &crate::scene::geometry::GeometryLayout) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let f = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
-    let positions: Vec<Vec3> = (0..g.vertex_count as usize)
-        .map(|v| {
-            let o = v * g.vertex_stride as usize;
-            if o + 12 <= bytes.len() {
-                Vec3::new(f(o), f(o + 4), f(o + 8))
-            } else {
-                Vec3::ZERO
-            }
-        })
-        .collect();
-    let io = g.index_offset as usize;
-    let index = |i: usize| -> u32 {
-        match g.index_size() {
-            2 => bytes.get(io + i * 2..io + i * 2 + 2).map_or(0, |b| u16::from_le_bytes([b[0], b[1]]) as u32),
-            4 => bytes.get(io + i * 4..io + i * 4 + 4).map_or(0, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-            _ => i as u32,
-        }
-    };
-    let triangles = (0..g.primitive_count as usize).map(|t| [index(3 * t), index(3 * t + 1), index(3 * t + 2)]).collect();
-    (positions, triangles)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

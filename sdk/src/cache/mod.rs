@@ -1,6 +1,5 @@
 //! The surfel direct-lighting cache: per-geometry layouts (built on the CPU from a read-back
-//! copy of the geometry), per-instance sample ranges in large shared pages, and the instance
-//! table that lets shaders find both by buffer device address.
+//! copy of the geometry) and per-instance sample ranges in large shared pages. Shaders find
+//! both through the scene's instance table (`scene::table`).
 pub(crate) mod layout;
 pub(crate) mod pool;
-pub(crate) mod table;

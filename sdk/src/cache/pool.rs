@@ -32,6 +32,8 @@ struct Page {
 #[derive(Default)]
 pub(crate) struct CachePool {
     pages: Vec<Page>,
+    /// Ranges out of use that a ticket in flight may still touch: (newest serial then, range).
+    retired: Vec<(u64, CacheRange)>,
 }
 
 impl CachePool {
@@ -81,6 +83,21 @@ impl CachePool {
         }
         if page.free.len() == 1 && page.free[0] == (0, page.capacity) {
             page.high_water = 0;
+        }
+    }
+
+    /// Frees `r` once every ticket up to `serial` has come back (see `collect`).
+    pub fn free_after(&mut self, serial: u64, r: CacheRange) {
+        self.retired.push((serial, r));
+    }
+
+    /// Frees the retired ranges no in-flight ticket can still use.
+    pub fn collect(&mut self, oldest_in_flight: Option<u64>) {
+        let (free, keep): (Vec<_>, Vec<_>) =
+            self.retired.drain(..).partition(|(serial, _)| !oldest_in_flight.is_some_and(|o| o <= *serial));
+        self.retired = keep;
+        for (_, r) in free {
+            self.free(r);
         }
     }
 

@@ -5,55 +5,27 @@
 use super::validate;
 use super::Shared;
 use crate::error::Result;
+use crate::passes::RenderTask;
 use crate::types::*;
 use std::sync::{Arc, Weak};
 
+/// A scheduled task. Scene tasks are applied before render tasks, whatever their order
+/// (`context::record`); render tasks record in scheduled order.
+// Render tasks are most of a frame's container: boxing them would allocate per task to save
+// the padding of the few scene tasks.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone)]
 pub(crate) enum Task {
     Geometry(GeometryTask),
     Instance(InstanceTask),
     BvhBuild(BvhBuildTask),
-    AmbientOcclusion(TraceAmbientOcclusionTask),
-    DirectLightingInjection(DirectLightingInjectionTask),
     ClearCache(ClearCacheTask),
-    DirectLightTransfer(DirectLightTransferTask),
-    Shadow(TraceShadowTask),
-    Diffuse(TraceDiffuseTask),
-    Specular(TraceSpecularTask),
-    MultiShadow(TraceMultiShadowTask),
-    /// Boxed: a denoise task is several times larger than the others.
-    Denoise(Box<DenoiseJob>),
+    Render(RenderTask),
 }
 
 /// Holds only a weak reference to its context: dropping the `ExecuteContext` frees the SDK's
 /// GPU objects at once, whatever containers are still around (they then refuse to schedule
 /// with `Error::ContextDestroyed`).
-impl Task {
-    /// The shared trace inputs, for tasks that trace from the G-buffer.
-    pub(crate) fn trace_common(&self) -> Option<&TraceCommon> {
-        match self {
-            Task::AmbientOcclusion(t) => Some(&t.common),
-            Task::Shadow(t) => Some(&t.common),
-            Task::Diffuse(t) => Some(&t.common),
-            Task::Specular(t) => Some(&t.common),
-            Task::MultiShadow(t) => Some(&t.common),
-            _ => None,
-        }
-    }
-
-    /// The image a debug visualisation replaces (tasks with one colour output).
-    pub(crate) fn debug_target(&self) -> Option<(&TraceCommon, &ImageInput)> {
-        let (common, output) = match self {
-            Task::AmbientOcclusion(t) => (&t.common, &t.output),
-            Task::Shadow(t) => (&t.common, &t.output),
-            Task::Diffuse(t) => (&t.common, &t.output),
-            Task::Specular(t) => (&t.common, &t.output),
-            _ => return None,
-        };
-        (common.debug_output != DebugOutput::Default).then_some((common, output))
-    }
-}
-
 pub struct TaskContainer {
     pub(crate) shared: Weak<Shared>,
     pub(crate) tasks: Vec<Task>,
@@ -95,7 +67,7 @@ impl TaskContainer {
     pub fn schedule_ambient_occlusion(&mut self, task: &TraceAmbientOcclusionTask) -> Result<()> {
         self.shared()?;
         validate::ambient_occlusion(task)?;
-        self.tasks.push(Task::AmbientOcclusion(*task));
+        self.tasks.push(Task::Render(RenderTask::AmbientOcclusion(*task)));
         Ok(())
     }
 
@@ -103,7 +75,7 @@ impl TaskContainer {
     pub fn schedule_shadow(&mut self, task: &TraceShadowTask) -> Result<()> {
         self.shared()?;
         validate::shadow(task)?;
-        self.tasks.push(Task::Shadow(*task));
+        self.tasks.push(Task::Render(RenderTask::Shadow(*task)));
         Ok(())
     }
 
@@ -111,7 +83,7 @@ impl TaskContainer {
     pub fn schedule_multi_shadow(&mut self, task: &TraceMultiShadowTask) -> Result<()> {
         self.shared()?;
         validate::multi_shadow(task)?;
-        self.tasks.push(Task::MultiShadow(task.clone()));
+        self.tasks.push(Task::Render(RenderTask::MultiShadow(task.clone())));
         Ok(())
     }
 
@@ -119,7 +91,7 @@ impl TaskContainer {
     pub fn schedule_diffuse(&mut self, task: &TraceDiffuseTask) -> Result<()> {
         self.shared()?;
         validate::diffuse(task)?;
-        self.tasks.push(Task::Diffuse(*task));
+        self.tasks.push(Task::Render(RenderTask::Diffuse(*task)));
         Ok(())
     }
 
@@ -127,14 +99,14 @@ impl TaskContainer {
     pub fn schedule_specular(&mut self, task: &TraceSpecularTask) -> Result<()> {
         self.shared()?;
         validate::specular(task)?;
-        self.tasks.push(Task::Specular(*task));
+        self.tasks.push(Task::Render(RenderTask::Specular(*task)));
         Ok(())
     }
 
     fn schedule_denoise(&mut self, job: DenoiseJob) -> Result<()> {
         self.shared()?.check_denoising_context_alive(job.context)?;
         validate::denoise(&job)?;
-        self.tasks.push(Task::Denoise(Box::new(job)));
+        self.tasks.push(Task::Render(RenderTask::Denoise(Box::new(job))));
         Ok(())
     }
 
@@ -172,7 +144,7 @@ impl TaskContainer {
     pub fn schedule_direct_lighting_injection(&mut self, task: &DirectLightingInjectionTask) -> Result<()> {
         self.shared()?;
         validate::injection(task)?;
-        self.tasks.push(Task::DirectLightingInjection(*task));
+        self.tasks.push(Task::Render(RenderTask::DirectLightingInjection(*task)));
         Ok(())
     }
 
@@ -194,7 +166,7 @@ impl TaskContainer {
         if !(task.max_distance.is_finite() && task.max_distance > 0.0) {
             return Err(crate::Error::invalid("DirectLightTransferTask.max_distance", "must be finite and > 0"));
         }
-        self.tasks.push(Task::DirectLightTransfer(*task));
+        self.tasks.push(Task::Render(RenderTask::DirectLightTransfer(*task)));
         Ok(())
     }
 
@@ -218,10 +190,8 @@ impl std::fmt::Debug for TaskContainer {
     }
 }
 
-// Handles are only compared here; re-exported for the container's users.
-#[allow(unused)]
-fn _assert_send() {
+// Containers are filled on the engine's threads: keep them Send.
+const _: fn() = || {
     fn send<T: Send>() {}
     send::<TaskContainer>();
-    let _ = (GeometryHandle::NULL, InstanceHandle::NULL);
-}
+};

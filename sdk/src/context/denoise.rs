@@ -4,10 +4,7 @@ use super::{ExecuteContext, Shared};
 use crate::error::{Error, Result};
 use crate::gpu::deferred::Garbage;
 use crate::passes::denoise::DenoiserState;
-use crate::types::DenoisingContextHandle;
-use crate::types::{DenoiseJob, DenoisingContextInput};
-
-use crate::types::MAX_DENOISING_EXTENT;
+use crate::types::{DenoisingContextHandle, DenoisingContextInput, MAX_DENOISING_EXTENT};
 
 impl ExecuteContext {
     /// Creates a denoising context and allocates its history (see `DenoisingContextInput`).
@@ -41,28 +38,4 @@ impl Shared {
     pub(crate) fn check_denoising_context_alive(&self, h: DenoisingContextHandle) -> Result<()> {
         self.state.lock().denoisers.check(h).map(|_| ())
     }
-}
-
-/// At build: the context still exists, denoises this task's signal and is large enough.
-pub(super) fn check_job(
-    denoisers: &crate::types::handles::Registry<DenoisingContextHandle, DenoiserState>,
-    job: &DenoiseJob,
-) -> Result<()> {
-    let state = denoisers.get(job.context)?;
-    if state.input.signal != job.signal {
-        return Err(Error::invalid(
-            "denoise task context",
-            format!("the context denoises {:?}, the task is {:?}", state.input.signal, job.signal),
-        ));
-    }
-    // History is kept at the pixels' own coordinates: the viewport's far corner must fit.
-    let vp = &job.common.viewport;
-    let (right, bottom) = (vp.x as u64 + vp.width as u64, vp.y as u64 + vp.height as u64);
-    if right > state.input.max_width as u64 || bottom > state.input.max_height as u64 {
-        return Err(Error::invalid(
-            "denoise task viewport",
-            format!("reaches ({right}, {bottom}), beyond the context's {}x{}", state.input.max_width, state.input.max_height),
-        ));
-    }
-    Ok(())
 }

@@ -1,5 +1,7 @@
 //! Pipelines: shader modules from embedded SPIR-V, push-descriptor set layouts, ray-tracing
-//! pipelines with their shader binding table, and compute pipelines.
+//! pipelines with their shader binding table, and compute pipelines — all made through a
+//! [`PipelineArena`], which owns them, so a pass holds only plain handles and a group of passes
+//! (or a half-made one, after an error) is destroyed in one call.
 use super::device::Device;
 use super::memory::{Buffer, Memory, MemoryKind};
 use crate::error::{Error, Result};
@@ -20,11 +22,7 @@ pub(crate) struct Binding {
     pub sampler: Option<vk::Sampler>,
 }
 
-pub(crate) fn push_set_layout(
-    device: &ash::Device,
-    bindings: &[Binding],
-    stages: vk::ShaderStageFlags,
-) -> Result<vk::DescriptorSetLayout> {
+fn push_set_layout(device: &ash::Device, bindings: &[Binding], stages: vk::ShaderStageFlags) -> Result<vk::DescriptorSetLayout> {
     let samplers: Vec<[vk::Sampler; 1]> = bindings.iter().map(|b| [b.sampler.unwrap_or_default()]).collect();
     let vk_bindings: Vec<_> = bindings
         .iter()
@@ -47,51 +45,51 @@ pub(crate) fn push_set_layout(
     unsafe { device.create_descriptor_set_layout(&info, None) }.map_err(Error::vk("vkCreateDescriptorSetLayout"))
 }
 
-pub(crate) fn pipeline_layout(device: &ash::Device, set: vk::DescriptorSetLayout) -> Result<vk::PipelineLayout> {
-    let sets = [set];
-    let info = vk::PipelineLayoutCreateInfo::default().set_layouts(&sets);
-    unsafe { device.create_pipeline_layout(&info, None) }.map_err(Error::vk("vkCreatePipelineLayout"))
-}
-
-/// A push-descriptor set plus `bytes` of push constants (per-dispatch parameters).
-pub(crate) fn pipeline_layout_with_push(
+/// A pipeline layout of an optional push-descriptor set and `push_bytes` of push constants
+/// (0: none) visible to `stages`.
+fn pipeline_layout(
     device: &ash::Device,
-    set: vk::DescriptorSetLayout,
-    bytes: u32,
+    set: Option<vk::DescriptorSetLayout>,
+    push_bytes: u32,
     stages: vk::ShaderStageFlags,
 ) -> Result<vk::PipelineLayout> {
-    let sets = [set];
-    let ranges = [vk::PushConstantRange { stage_flags: stages, offset: 0, size: bytes }];
+    let sets: Vec<_> = set.into_iter().collect();
+    let ranges: Vec<_> = (push_bytes > 0)
+        .then_some(vk::PushConstantRange { stage_flags: stages, offset: 0, size: push_bytes })
+        .into_iter()
+        .collect();
     let info = vk::PipelineLayoutCreateInfo::default().set_layouts(&sets).push_constant_ranges(&ranges);
     unsafe { device.create_pipeline_layout(&info, None) }.map_err(Error::vk("vkCreatePipelineLayout"))
 }
 
-/// A layout with only push constants (passes that reach their data by device address).
-pub(crate) fn push_constant_layout(device: &ash::Device, bytes: u32, stages: vk::ShaderStageFlags) -> Result<vk::PipelineLayout> {
-    let ranges = [vk::PushConstantRange { stage_flags: stages, offset: 0, size: bytes }];
-    let info = vk::PipelineLayoutCreateInfo::default().push_constant_ranges(&ranges);
-    unsafe { device.create_pipeline_layout(&info, None) }.map_err(Error::vk("vkCreatePipelineLayout"))
-}
-
-/// A ray-tracing pipeline: one raygen, miss shaders, closest-hit groups, and its SBT.
+/// A ray-tracing pipeline: one raygen, miss shaders, closest-hit groups, and the regions of
+/// its SBT (the buffer belongs to the arena that made it).
+#[derive(Clone, Copy)]
 pub(crate) struct RtPipeline {
     pub pipeline: vk::Pipeline,
-    pub sbt: Buffer,
     pub raygen: vk::StridedDeviceAddressRegionKHR,
     pub miss: vk::StridedDeviceAddressRegionKHR,
     pub hit: vk::StridedDeviceAddressRegionKHR,
     pub callable: vk::StridedDeviceAddressRegionKHR,
 }
 
-pub(crate) fn rt_pipeline(
+/// The shaders of one ray-tracing pipeline.
+#[derive(Clone, Copy)]
+pub(crate) struct RtShaders<'a> {
+    pub raygen: &'a [u8],
+    pub misses: &'a [&'a [u8]],
+    pub closest_hits: &'a [&'a [u8]],
+    /// One any-hit shader shared by every hit group (a filter, e.g. "only this instance").
+    pub any_hit: Option<&'a [u8]>,
+}
+
+fn rt_pipeline(
     device: &Device,
     memory: &Memory,
     layout: vk::PipelineLayout,
-    raygen: &[u8],
-    misses: &[&[u8]],
-    closest_hits: &[&[u8]],
-    any_hit: Option<&[u8]>,
-) -> Result<RtPipeline> {
+    shaders: &RtShaders<'_>,
+) -> Result<(RtPipeline, Buffer)> {
+    let RtShaders { raygen, misses, closest_hits, any_hit } = *shaders;
     let d = &device.raw;
     let mut modules = vec![shader_module(d, raygen)?];
     for m in misses.iter().chain(closest_hits).chain(any_hit.as_slice()) {
@@ -216,21 +214,93 @@ pub(crate) fn rt_pipeline(
         stride,
         size,
     };
-    Ok(RtPipeline {
+    let rt = RtPipeline {
         pipeline,
         raygen: region(0, raygen_size, raygen_size),
         miss: region(raygen_size, stride, miss_size),
         hit: region(raygen_size + miss_size, stride, hit_size),
         callable: vk::StridedDeviceAddressRegionKHR::default(),
-        sbt,
-    })
+    };
+    Ok((rt, sbt))
 }
 
-pub(crate) fn compute_pipeline(device: &ash::Device, layout: vk::PipelineLayout, spirv: &[u8]) -> Result<vk::Pipeline> {
+fn compute_pipeline(device: &ash::Device, layout: vk::PipelineLayout, spirv: &[u8]) -> Result<vk::Pipeline> {
     let module = shader_module(device, spirv)?;
     let stage = vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::COMPUTE).module(module).name(c"main");
     let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
     let result = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) };
     unsafe { device.destroy_shader_module(module, None) };
     result.map(|p| p[0]).map_err(|(_, e)| Error::Vulkan { call: "vkCreateComputePipelines", result: e })
+}
+
+/// Owns every pipeline object made through it (see the module doc).
+#[derive(Default)]
+pub(crate) struct PipelineArena {
+    set_layouts: Vec<vk::DescriptorSetLayout>,
+    layouts: Vec<vk::PipelineLayout>,
+    pipelines: Vec<vk::Pipeline>,
+    sbts: Vec<Buffer>,
+}
+
+/// Makes pipeline objects on one device into one arena (what a pass's constructor gets).
+pub(crate) struct PipelineBuilder<'a> {
+    pub device: &'a Device,
+    pub memory: &'a Memory,
+    pub arena: &'a mut PipelineArena,
+}
+
+impl PipelineBuilder<'_> {
+    /// A push-descriptor set layout with one descriptor per binding, visible to `stages`.
+    pub fn set_layout(&mut self, bindings: &[Binding], stages: vk::ShaderStageFlags) -> Result<vk::DescriptorSetLayout> {
+        let l = push_set_layout(&self.device.raw, bindings, stages)?;
+        self.arena.set_layouts.push(l);
+        Ok(l)
+    }
+
+    /// A pipeline layout: an optional push-descriptor set, `push_bytes` of push constants.
+    pub fn layout(
+        &mut self,
+        set: Option<vk::DescriptorSetLayout>,
+        push_bytes: u32,
+        stages: vk::ShaderStageFlags,
+    ) -> Result<vk::PipelineLayout> {
+        let l = pipeline_layout(&self.device.raw, set, push_bytes, stages)?;
+        self.arena.layouts.push(l);
+        Ok(l)
+    }
+
+    pub fn compute(&mut self, layout: vk::PipelineLayout, spirv: &[u8]) -> Result<vk::Pipeline> {
+        let p = compute_pipeline(&self.device.raw, layout, spirv)?;
+        self.arena.pipelines.push(p);
+        Ok(p)
+    }
+
+    pub fn ray_tracing(&mut self, layout: vk::PipelineLayout, shaders: &RtShaders<'_>) -> Result<RtPipeline> {
+        let (p, sbt) = rt_pipeline(self.device, self.memory, layout, shaders)?;
+        self.arena.pipelines.push(p.pipeline);
+        self.arena.sbts.push(sbt);
+        Ok(p)
+    }
+}
+
+impl PipelineArena {
+    /// Destroys everything made through the arena (no recording may still use it).
+    pub fn destroy(&mut self, device: &Device, memory: &Memory) {
+        let d = &device.raw;
+        // SAFETY: the owner guarantees no pending GPU use; each object is destroyed once.
+        unsafe {
+            for p in self.pipelines.drain(..) {
+                d.destroy_pipeline(p, None);
+            }
+            for l in self.layouts.drain(..) {
+                d.destroy_pipeline_layout(l, None);
+            }
+            for l in self.set_layouts.drain(..) {
+                d.destroy_descriptor_set_layout(l, None);
+            }
+        }
+        for b in self.sbts.drain(..) {
+            memory.destroy_buffer(b);
+        }
+    }
 }

@@ -3,8 +3,7 @@
 //! resolve accumulated injections into the running average.
 use super::Recording;
 use crate::error::Result;
-use crate::gpu::device::Device;
-use crate::gpu::pipeline;
+use crate::gpu::pipeline::PipelineBuilder;
 use crate::gpu::sync;
 use crate::shaders;
 use ash::vk;
@@ -36,11 +35,10 @@ pub(crate) struct CacheOps {
 const GROUP: u64 = 256;
 
 impl CacheOps {
-    pub fn new(device: &Device) -> Result<CacheOps> {
-        let d = &device.raw;
-        let layout = pipeline::push_constant_layout(d, 32, vk::ShaderStageFlags::COMPUTE)?;
-        let fill = pipeline::compute_pipeline(d, layout, shaders::CACHE_FILL_COMP)?;
-        let resolve = pipeline::compute_pipeline(d, layout, shaders::CACHE_RESOLVE_COMP)?;
+    pub fn new(b: &mut PipelineBuilder<'_>) -> Result<CacheOps> {
+        let layout = b.layout(None, 32, vk::ShaderStageFlags::COMPUTE)?;
+        let fill = b.compute(layout, shaders::CACHE_FILL_COMP)?;
+        let resolve = b.compute(layout, shaders::CACHE_RESOLVE_COMP)?;
         Ok(CacheOps { layout, fill, resolve })
     }
 
@@ -68,13 +66,5 @@ impl CacheOps {
         r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
         let push = ResolvePush { samples: address, count: count as u32, average_window };
         self.dispatch(r, self.resolve, bytemuck::bytes_of(&push), count);
-    }
-
-    pub fn destroy(self, device: &Device) {
-        unsafe {
-            device.raw.destroy_pipeline(self.fill, None);
-            device.raw.destroy_pipeline(self.resolve, None);
-            device.raw.destroy_pipeline_layout(self.layout, None);
-        }
     }
 }

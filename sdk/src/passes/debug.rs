@@ -2,13 +2,10 @@
 //! shaded by what they hit (cache colour, random sample/mesh colour, distance, barycentrics).
 use super::constants::TraceCommonGpu;
 use super::descriptors::Slot;
-use super::program::{RtProgram, Shaders};
+use super::program::{RtProgram, Shaders, Writes};
 use super::Recording;
 use crate::error::Result;
-use crate::gpu::device::Device;
-use crate::gpu::memory::Memory;
-use crate::gpu::pipeline::Binding;
-use crate::gpu::sync;
+use crate::gpu::pipeline::{Binding, PipelineBuilder};
 use crate::shaders;
 use crate::types::{DebugOutput, ImageInput, InstanceInclusionMask, TraceCommon};
 use ash::vk;
@@ -22,6 +19,7 @@ pub(crate) struct DebugConstantsGpu {
     pub mode: [u32; 4],
 }
 
+/// Upload-ring bytes of one visualisation (a trace task's own constants are larger).
 pub(crate) const UPLOAD_BYTES: u64 = std::mem::size_of::<DebugConstantsGpu>() as u64;
 
 pub(crate) struct DebugPass {
@@ -29,22 +27,21 @@ pub(crate) struct DebugPass {
 }
 
 impl DebugPass {
-    pub fn new(device: &Device, memory: &Memory) -> Result<DebugPass> {
+    pub fn new(b: &mut PipelineBuilder<'_>) -> Result<DebugPass> {
         let program = RtProgram::new(
-            device,
-            memory,
+            b,
             &[
                 Binding { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, sampler: None },
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
             ],
-            vk::ShaderStageFlags::RAYGEN_KHR,
             Shaders {
                 raygen: shaders::DEBUG_RGEN,
                 misses: &[shaders::HIT_RECORD_RMISS],
                 closest_hits: &[shaders::HIT_RECORD_RCHIT],
                 any_hit: None,
                 inline: None,
+                floor: None,
             },
         )?;
         Ok(DebugPass { program })
@@ -60,13 +57,8 @@ impl DebugPass {
         };
         debug_assert!(common.debug_output != DebugOutput::Default);
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
-        let stage = vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR;
-        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
         let vp = &common.viewport;
-        self.program.trace(r, &[Slot::Tlas(r.tlas), Slot::Storage(output), Slot::Uniform(ubo)], vp.width, vp.height);
-    }
-
-    pub fn destroy(self, device: &Device, memory: &Memory) {
-        self.program.destroy(device, memory);
+        let slots = [Slot::Tlas(r.tlas), Slot::Storage(output), Slot::Uniform(ubo)];
+        self.program.run(r, &slots, vp.width, vp.height, Writes::Storage);
     }
 }

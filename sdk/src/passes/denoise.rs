@@ -7,15 +7,14 @@
 use super::constants::TraceCommonGpu;
 use super::descriptors::{self, Slot};
 use super::shadow::LightGpu;
-use super::Recording;
-use crate::error::Result;
-use crate::gpu::device::Device;
+use super::{PassTask, Passes, Recording, World};
+use crate::error::{Error, Result};
 use crate::gpu::memory::{Image, Memory, MemoryKind, COLOR_RANGE};
-use crate::gpu::pipeline::{self, Binding};
+use crate::gpu::pipeline::{Binding, PipelineBuilder};
 use crate::gpu::sync;
 use crate::shaders;
 use crate::types::{Camera, ImageInput, TraceCommon};
-use crate::types::{DenoiseJob, DenoisingContextInput, DenoisingMethod, MotionType, SignalType};
+use crate::types::{DenoiseJob, DenoisingContextInput, DenoisingMethod, MotionType, SignalType, TaskKind};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
@@ -38,8 +37,6 @@ pub(crate) struct DenoiseConstantsGpu {
     roughness: [f32; 4],
     light: LightGpu,
 }
-
-pub(crate) const UPLOAD_BYTES: u64 = std::mem::size_of::<DenoiseConstantsGpu>() as u64;
 
 /// Smallest à-trous spacing scale, reached once a pixel has a quarter of the longest history.
 const MIN_RADIUS_SCALE: f32 = 0.25;
@@ -124,7 +121,6 @@ impl DenoiserState {
 }
 
 pub(crate) struct DenoisePass {
-    set_layout: vk::DescriptorSetLayout,
     layout: vk::PipelineLayout,
     temporal: vk::Pipeline,
     clamp: vk::Pipeline,
@@ -140,46 +136,23 @@ const SAMPLED_BINDINGS: usize = 6;
 const STORAGE_BINDINGS: usize = 16;
 
 impl DenoisePass {
-    pub fn new(device: &Device, sampler: vk::Sampler) -> Result<DenoisePass> {
-        let d = &device.raw;
+    pub fn new(b: &mut PipelineBuilder<'_>, sampler: vk::Sampler) -> Result<DenoisePass> {
         let mut bindings: Vec<Binding> = (0..SAMPLED_BINDINGS)
             .map(|_| Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) })
             .collect();
         bindings.extend((0..STORAGE_BINDINGS).map(|_| Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None }));
         bindings.push(Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None });
-        let set_layout = pipeline::push_set_layout(d, &bindings, vk::ShaderStageFlags::COMPUTE)?;
-        let layout = pipeline::pipeline_layout_with_push(d, set_layout, 16, vk::ShaderStageFlags::COMPUTE)?;
-        let mut made = Vec::new();
-        let mut build = |spirv: &[u8]| -> Result<vk::Pipeline> {
-            let p = pipeline::compute_pipeline(d, layout, spirv)?;
-            made.push(p);
-            Ok(p)
-        };
-        let all = (|| {
-            Ok::<_, crate::Error>([
-                build(shaders::DENOISE_TEMPORAL_COMP)?,
-                build(shaders::DENOISE_CLAMP_COMP)?,
-                build(shaders::DENOISE_ATROUS_COMP)?,
-                build(shaders::DENOISE_SHADOW_PREP_COMP)?,
-                build(shaders::DENOISE_SHADOW_BLUR_COMP)?,
-                build(shaders::DENOISE_SHADOW_TEMPORAL_COMP)?,
-            ])
-        })();
-        match all {
-            Ok([temporal, clamp, atrous, shadow_prep, shadow_blur, shadow_temporal]) => {
-                Ok(DenoisePass { set_layout, layout, temporal, clamp, atrous, shadow_prep, shadow_blur, shadow_temporal })
-            }
-            Err(e) => {
-                unsafe {
-                    for p in made {
-                        d.destroy_pipeline(p, None);
-                    }
-                    d.destroy_pipeline_layout(layout, None);
-                    d.destroy_descriptor_set_layout(set_layout, None);
-                }
-                Err(e)
-            }
-        }
+        let set_layout = b.set_layout(&bindings, vk::ShaderStageFlags::COMPUTE)?;
+        let layout = b.layout(Some(set_layout), 16, vk::ShaderStageFlags::COMPUTE)?;
+        Ok(DenoisePass {
+            layout,
+            temporal: b.compute(layout, shaders::DENOISE_TEMPORAL_COMP)?,
+            clamp: b.compute(layout, shaders::DENOISE_CLAMP_COMP)?,
+            atrous: b.compute(layout, shaders::DENOISE_ATROUS_COMP)?,
+            shadow_prep: b.compute(layout, shaders::DENOISE_SHADOW_PREP_COMP)?,
+            shadow_blur: b.compute(layout, shaders::DENOISE_SHADOW_BLUR_COMP)?,
+            shadow_temporal: b.compute(layout, shaders::DENOISE_SHADOW_TEMPORAL_COMP)?,
+        })
     }
 
     /// Records one denoise task against its context's state (and advances that state).
@@ -293,17 +266,6 @@ impl DenoisePass {
         state.previous_jitter = c.camera_jitter;
         state.previous_viewport = viewport;
     }
-
-    pub fn destroy(self, device: &Device) {
-        let d = &device.raw;
-        unsafe {
-            for p in [self.temporal, self.clamp, self.atrous, self.shadow_prep, self.shadow_blur, self.shadow_temporal] {
-                d.destroy_pipeline(p, None);
-            }
-            d.destroy_pipeline_layout(self.layout, None);
-            d.destroy_descriptor_set_layout(self.set_layout, None);
-        }
-    }
 }
 
 fn constants(job: &DenoiseJob, previous: &Camera, previous_jitter: [f32; 2], seed: u32, reset: bool) -> DenoiseConstantsGpu {
@@ -340,7 +302,7 @@ fn constants(job: &DenoiseJob, previous: &Camera, previous_jitter: [f32; 2], see
     };
     let kinds = match job.signal {
         SignalType::SpecularAndDiffuse => [1, 0, 0, 0],
-        s => [kind(s), kind(s), crate::context::validate::channel_count(job.inputs[0].format).is_some_and(|n| n >= 2) as u32, 0],
+        s => [kind(s), kind(s), crate::gpu::formats::channel_count(job.inputs[0].format).is_some_and(|n| n >= 2) as u32, 0],
     };
     let s = &c.settings;
     let m = c.roughness.channel_mask;
@@ -359,6 +321,48 @@ fn constants(job: &DenoiseJob, previous: &Camera, previous_jitter: [f32; 2], see
         roughness_mask: m,
         roughness: [c.roughness.global_roughness, c.roughness.has_image() as u32 as f32, 0.0, 0.0],
         light: LightGpu::new(&job.light),
+    }
+}
+
+impl PassTask for DenoiseJob {
+    fn kind(&self) -> TaskKind {
+        match self.signal {
+            SignalType::Specular => TaskKind::DenoiseSpecular,
+            SignalType::Diffuse => TaskKind::DenoiseDiffuse,
+            SignalType::SpecularAndDiffuse => TaskKind::DenoiseSpecularAndDiffuse,
+            SignalType::DiffuseOcclusion => TaskKind::DenoiseDiffuseOcclusion,
+            SignalType::Shadow => TaskKind::DenoiseShadow,
+            SignalType::MultiShadow => TaskKind::DenoiseMultiShadow,
+        }
+    }
+    fn upload_bytes(&self) -> u64 {
+        std::mem::size_of::<DenoiseConstantsGpu>() as u64
+    }
+    /// At build: the context still exists, denoises this task's signal and is large enough.
+    fn check(&self, world: &World<'_>) -> Result<()> {
+        let state = world.denoisers.get(self.context)?;
+        if state.input.signal != self.signal {
+            return Err(Error::invalid(
+                "denoise task context",
+                format!("the context denoises {:?}, the task is {:?}", state.input.signal, self.signal),
+            ));
+        }
+        // History is kept at the pixels' own coordinates: the viewport's far corner must fit.
+        let vp = &self.common.viewport;
+        let (right, bottom) = (vp.x as u64 + vp.width as u64, vp.y as u64 + vp.height as u64);
+        if right > state.input.max_width as u64 || bottom > state.input.max_height as u64 {
+            return Err(Error::invalid(
+                "denoise task viewport",
+                format!("reaches ({right}, {bottom}), beyond the context's {}x{}", state.input.max_width, state.input.max_height),
+            ));
+        }
+        Ok(())
+    }
+    /// Its context was checked at build (`check`).
+    fn record(&self, r: &mut Recording<'_>, passes: &Passes, world: &mut World<'_>) {
+        if let Ok(state) = world.denoisers.get_mut(self.context) {
+            passes.denoise.record(r, state, self);
+        }
     }
 }
 

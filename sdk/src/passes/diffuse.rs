@@ -1,17 +1,13 @@
 //! Diffuse GI (`TraceDiffuseTask`): cosine-distributed rays shaded from the direct-lighting
 //! cache (shaders/diffuse.rgen).
 use super::constants::TraceCommonGpu;
-use super::descriptors::optional_or;
-use super::descriptors::Slot;
-use super::program::{RtProgram, Shaders};
-use super::Recording;
+use super::descriptors::{optional_or, Slot};
+use super::program::{Payload, RtProgram, Shaders, Writes};
+use super::{PassTask, Passes, Recording, World};
 use crate::error::Result;
-use crate::gpu::device::Device;
-use crate::gpu::memory::Memory;
-use crate::gpu::pipeline::Binding;
-use crate::gpu::sync;
+use crate::gpu::pipeline::{Binding, PipelineBuilder};
 use crate::shaders;
-use crate::types::{InstanceInclusionMask, TraceDiffuseTask};
+use crate::types::{ImageInput, InstanceInclusionMask, TaskKind, TraceCommon, TraceDiffuseTask};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
@@ -26,37 +22,30 @@ struct DiffuseConstantsGpu {
     brdf: [f32; 4],
 }
 
-pub(crate) const UPLOAD_BYTES: u64 = std::mem::size_of::<DiffuseConstantsGpu>() as u64;
-
 pub(crate) struct DiffusePass {
-    program: RtProgram,
+    pub program: RtProgram,
 }
 
 impl DiffusePass {
-    pub fn program_mut(&mut self) -> &mut RtProgram {
-        &mut self.program
-    }
-
-    pub fn new(device: &Device, memory: &Memory, sampler: vk::Sampler) -> Result<DiffusePass> {
+    pub fn new(b: &mut PipelineBuilder<'_>, sampler: vk::Sampler) -> Result<DiffusePass> {
         let sampled = || Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) };
         let program = RtProgram::new(
-            device,
-            memory,
+            b,
             // + roughness, direct lighting
             &super::gbuffer_bindings(sampler, &[sampled(), sampled()]),
-            vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE,
             Shaders {
                 raygen: shaders::DIFFUSE_RGEN,
                 misses: &[shaders::HIT_RECORD_RMISS],
                 closest_hits: &[shaders::HIT_RECORD_RCHIT],
                 any_hit: None,
                 inline: Some(shaders::DIFFUSE_COMP),
+                floor: Some(Payload::HitRecord),
             },
         )?;
         Ok(DiffusePass { program })
     }
 
-    pub fn record(&self, r: &mut Recording<'_>, inline: bool, task: &TraceDiffuseTask) {
+    pub fn record(&self, r: &mut Recording<'_>, task: &TraceDiffuseTask) {
         let table = r.instance_table;
         let m = task.miss_radiance;
         let constants = DiffuseConstantsGpu {
@@ -72,17 +61,29 @@ impl DiffusePass {
             ],
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
-        let stage = self.program.stage(inline);
-        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
         let mut slots = super::gbuffer_slots(r.tlas, &task.common, &task.output, ubo);
         // Without a roughness image the normals stand in (not read then).
         slots.push(Slot::Sampled(optional_or(&task.common.roughness.image, &task.common.normals.image)));
         slots.push(Slot::Sampled(optional_or(&task.common.direct_lighting, &task.common.normals.image)));
         let vp = &task.common.viewport;
-        self.program.run(r, &slots, vp.width, vp.height, inline);
+        self.program.run(r, &slots, vp.width, vp.height, Writes::Storage);
     }
+}
 
-    pub fn destroy(self, device: &Device, memory: &Memory) {
-        self.program.destroy(device, memory);
+impl PassTask for TraceDiffuseTask {
+    fn kind(&self) -> TaskKind {
+        TaskKind::Diffuse
+    }
+    fn upload_bytes(&self) -> u64 {
+        std::mem::size_of::<DiffuseConstantsGpu>() as u64
+    }
+    fn trace_common(&self) -> Option<&TraceCommon> {
+        Some(&self.common)
+    }
+    fn debug_target(&self) -> Option<&ImageInput> {
+        Some(&self.output)
+    }
+    fn record(&self, r: &mut Recording<'_>, passes: &Passes, _: &mut World<'_>) {
+        passes.diffuse.record(r, self);
     }
 }

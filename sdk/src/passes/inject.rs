@@ -3,15 +3,12 @@
 //! cache resolve (passes::cache_ops) that applies the running average.
 use super::constants::TraceCommonGpu;
 use super::descriptors::Slot;
-use super::program::{RtProgram, Shaders};
-use super::Recording;
+use super::program::{RtProgram, Shaders, Writes};
+use super::{PassTask, Passes, Recording, World};
 use crate::error::Result;
-use crate::gpu::device::Device;
-use crate::gpu::memory::Memory;
-use crate::gpu::pipeline::Binding;
-use crate::gpu::sync;
+use crate::gpu::pipeline::{Binding, PipelineBuilder};
 use crate::shaders;
-use crate::types::{DirectLightingInjectionTask, InstanceInclusionMask, TraceCommon};
+use crate::types::{DirectLightingInjectionTask, InstanceInclusionMask, TaskKind, TraceCommon};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
@@ -23,30 +20,27 @@ pub(crate) struct InjectConstantsGpu {
     pub table: [u32; 4],
 }
 
-pub(crate) const UPLOAD_BYTES: u64 = std::mem::size_of::<InjectConstantsGpu>() as u64;
-
 pub(crate) struct InjectPass {
     program: RtProgram,
 }
 
 impl InjectPass {
-    pub fn new(device: &Device, memory: &Memory, sampler: vk::Sampler) -> Result<InjectPass> {
+    pub fn new(b: &mut PipelineBuilder<'_>, sampler: vk::Sampler) -> Result<InjectPass> {
         let program = RtProgram::new(
-            device,
-            memory,
+            b,
             &[
                 Binding { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, sampler: None },
                 Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
                 Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
             ],
-            vk::ShaderStageFlags::RAYGEN_KHR,
             Shaders {
                 raygen: shaders::INJECT_RGEN,
                 misses: &[shaders::HIT_RECORD_RMISS],
                 closest_hits: &[shaders::HIT_RECORD_RCHIT],
                 any_hit: None,
                 inline: None,
+                floor: None,
             },
         )?;
         Ok(InjectPass { program })
@@ -60,13 +54,23 @@ impl InjectPass {
             table: [table as u32, (table >> 32) as u32, 0, 0],
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
-        let stage = vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR;
-        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_atomic(stage));
         let slots = [Slot::Tlas(r.tlas), Slot::Sampled(&task.depth.image), Slot::Sampled(&task.lit), Slot::Uniform(ubo)];
-        self.program.trace(r, &slots, task.viewport.width, task.viewport.height);
+        self.program.run(r, &slots, task.viewport.width, task.viewport.height, Writes::Atomics);
     }
+}
 
-    pub fn destroy(self, device: &Device, memory: &Memory) {
-        self.program.destroy(device, memory);
+/// Injection, then the resolve of every cache page in use.
+impl PassTask for DirectLightingInjectionTask {
+    fn kind(&self) -> TaskKind {
+        TaskKind::DirectLightingInjection
+    }
+    fn upload_bytes(&self) -> u64 {
+        std::mem::size_of::<InjectConstantsGpu>() as u64
+    }
+    fn record(&self, r: &mut Recording<'_>, passes: &Passes, world: &mut World<'_>) {
+        passes.inject.record(r, self);
+        for (address, count) in world.cache_pool.spans() {
+            passes.cache_ops.resolve(r, address, count, self.average_window);
+        }
     }
 }

@@ -1,6 +1,11 @@
-//! One module per GPU pass. A pass owns its pipelines and records itself: it declares what it
-//! reads and writes to the hazard tracker (which emits the barriers) and never reaches into
-//! another pass.
+//! One module per GPU pass. A pass owns its pipelines (made in its module's `new`, owned by
+//! [`Passes`]' arena) and records itself: it declares what it reads and writes to the hazard
+//! tracker (which emits the barriers) and never reaches into another pass.
+//!
+//! Each render task kind has one description, [`PassTask`], implemented beside its pass: the
+//! kind its time is reported as, the upload bytes it needs, and how it records. The recorder
+//! (`context::render`) only walks [`RenderTask`]s; adding a task kind is a variant in
+//! `RenderTask` plus a `PassTask` impl, and no `match` in the recorder.
 pub(crate) mod ao;
 pub(crate) mod cache_ops;
 pub(crate) mod constants;
@@ -14,13 +19,21 @@ pub(crate) mod shadow;
 pub(crate) mod specular;
 pub(crate) mod transfer;
 
+use crate::cache::pool::CachePool;
+use crate::error::{Error, Result};
+use crate::gpu::device::Device;
+use crate::gpu::memory::Memory;
+use crate::gpu::pipeline::{Binding, PipelineArena, PipelineBuilder};
 use crate::gpu::sync::Hazards;
-use crate::gpu::upload::UploadRing;
+use crate::gpu::upload::{Upload, UploadRing};
+use crate::scene::Scene;
+use crate::types::handles::Registry;
+use crate::types::*;
 use ash::vk;
 
 /// What a pass needs while it records.
 pub(crate) struct Recording<'a> {
-    pub device: &'a crate::gpu::device::Device,
+    pub device: &'a Device,
     pub cmd: vk::CommandBuffer,
     pub ring: &'a mut UploadRing,
     pub hazards: &'a mut Hazards,
@@ -29,18 +42,187 @@ pub(crate) struct Recording<'a> {
     pub seed: u32,
     /// Device address of this recording's instance table (0 when the recording has none).
     pub instance_table: u64,
+    /// The task asked for inline ray queries and the device has them (see `program`).
+    pub inline: bool,
     /// Bench only: trace with the programs' floor pipelines (empty hit and miss shaders).
     pub floor: bool,
 }
 
+/// The SDK state some tasks read or advance while they record.
+pub(crate) struct World<'a> {
+    pub scene: &'a Scene,
+    pub cache_pool: &'a CachePool,
+    pub denoisers: &'a mut Registry<DenoisingContextHandle, denoise::DenoiserState>,
+}
+
+/// The one description of a render task kind (see the module doc).
+pub(crate) trait PassTask {
+    /// The kind its GPU time is reported under.
+    fn kind(&self) -> TaskKind;
+    /// Upload-ring bytes its recording pushes (constants), before alignment.
+    fn upload_bytes(&self) -> u64;
+    /// The G-buffer inputs of tasks that trace from it (`use_inline_rt`, debug views).
+    fn trace_common(&self) -> Option<&TraceCommon> {
+        None
+    }
+    /// The image a debug visualisation writes instead, for tasks with one colour output.
+    fn debug_target(&self) -> Option<&ImageInput> {
+        None
+    }
+    /// Checks at build what scheduling could not: handles still alive and fit for the task.
+    fn check(&self, _world: &World<'_>) -> Result<()> {
+        Ok(())
+    }
+    fn record(&self, r: &mut Recording<'_>, passes: &Passes, world: &mut World<'_>);
+}
+
+/// Every render task kind: the tasks recorded in scheduled order after the BVH and cache work.
+#[derive(Debug, Clone)]
+pub(crate) enum RenderTask {
+    AmbientOcclusion(TraceAmbientOcclusionTask),
+    Shadow(TraceShadowTask),
+    MultiShadow(TraceMultiShadowTask),
+    Diffuse(TraceDiffuseTask),
+    Specular(TraceSpecularTask),
+    DirectLightingInjection(DirectLightingInjectionTask),
+    DirectLightTransfer(DirectLightTransferTask),
+    /// Boxed: a denoise task is several times larger than the others.
+    Denoise(Box<DenoiseJob>),
+}
+
+impl RenderTask {
+    pub fn describe(&self) -> &dyn PassTask {
+        match self {
+            RenderTask::AmbientOcclusion(t) => t,
+            RenderTask::Shadow(t) => t,
+            RenderTask::MultiShadow(t) => t,
+            RenderTask::Diffuse(t) => t,
+            RenderTask::Specular(t) => t,
+            RenderTask::DirectLightingInjection(t) => t,
+            RenderTask::DirectLightTransfer(t) => t,
+            RenderTask::Denoise(t) => t.as_ref(),
+        }
+    }
+
+    /// The debug visualisation this task records instead of itself, if it asks for one.
+    fn debug_view(&self) -> Option<(&TraceCommon, &ImageInput)> {
+        let t = self.describe();
+        let common = t.trace_common().filter(|c| c.debug_output != DebugOutput::Default)?;
+        Some((common, t.debug_target()?))
+    }
+
+    /// Upload-ring bytes its recording may push (itself or its debug view), before alignment.
+    pub fn upload_bytes(&self) -> u64 {
+        self.describe().upload_bytes().max(debug::UPLOAD_BYTES)
+    }
+
+    /// Records the task — or, for a trace task with a debug mode, the visualisation instead.
+    pub fn record(&self, r: &mut Recording<'_>, passes: &Passes, world: &mut World<'_>) {
+        match self.debug_view() {
+            Some((common, output)) => passes.debug.record(r, common, output),
+            None => self.describe().record(r, passes, world),
+        }
+    }
+}
+
+/// Every pass, created together when the context is (an error leaves nothing behind), and the
+/// arena that owns their pipelines.
+pub(crate) struct Passes {
+    pub ao: ao::AoPass,
+    pub shadow: shadow::ShadowPass,
+    pub multi_shadow: shadow::MultiShadowPass,
+    pub diffuse: diffuse::DiffusePass,
+    pub specular: specular::SpecularPass,
+    pub debug: debug::DebugPass,
+    pub inject: inject::InjectPass,
+    pub transfer: transfer::TransferPass,
+    pub cache_ops: cache_ops::CacheOps,
+    pub denoise: denoise::DenoisePass,
+    /// The one sampler of every sampled G-buffer binding (nearest, clamped: texel fetches).
+    sampler: vk::Sampler,
+    arena: PipelineArena,
+    /// Bench only: trace through the floor pipelines (see `program`).
+    pub floor: bool,
+}
+
+impl Passes {
+    pub fn new(device: &Device, memory: &Memory) -> Result<Passes> {
+        let sampler_info = vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::NEAREST)
+            .min_filter(vk::Filter::NEAREST)
+            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE);
+        // SAFETY: valid create info; destroyed in `destroy`.
+        let sampler = unsafe { device.raw.create_sampler(&sampler_info, None) }.map_err(Error::vk("vkCreateSampler"))?;
+        let mut arena = PipelineArena::default();
+        match Self::make(&mut PipelineBuilder { device, memory, arena: &mut arena }, sampler) {
+            Ok(passes) => Ok(Passes { arena, ..passes }),
+            Err(e) => {
+                arena.destroy(device, memory);
+                unsafe { device.raw.destroy_sampler(sampler, None) };
+                Err(e)
+            }
+        }
+    }
+
+    /// Makes every pass into the builder's arena (which `new` then moves into the result).
+    fn make(b: &mut PipelineBuilder<'_>, sampler: vk::Sampler) -> Result<Passes> {
+        let ao = ao::AoPass::new(b, sampler)?;
+        let shadow = shadow::ShadowPass::new(b, sampler)?;
+        let multi_shadow = shadow::MultiShadowPass::new(b, sampler)?;
+        let diffuse = diffuse::DiffusePass::new(b, sampler)?;
+        let specular = specular::SpecularPass::new(b, sampler)?;
+        let debug = debug::DebugPass::new(b)?;
+        let inject = inject::InjectPass::new(b, sampler)?;
+        let transfer = transfer::TransferPass::new(b)?;
+        let cache_ops = cache_ops::CacheOps::new(b)?;
+        let denoise = denoise::DenoisePass::new(b, sampler)?;
+        Ok(Passes {
+            ao,
+            shadow,
+            multi_shadow,
+            diffuse,
+            specular,
+            debug,
+            inject,
+            transfer,
+            cache_ops,
+            denoise,
+            sampler,
+            arena: PipelineArena::default(),
+            floor: false,
+        })
+    }
+
+    /// Builds the bench's floor pipelines of every trace that has one (on first use).
+    #[cfg(feature = "bench-floor")]
+    pub fn ensure_floor(&mut self, device: &Device, memory: &Memory) -> Result<()> {
+        let b = &mut PipelineBuilder { device, memory, arena: &mut self.arena };
+        for p in [
+            &mut self.ao.program,
+            &mut self.shadow.program,
+            &mut self.multi_shadow.program,
+            &mut self.diffuse.program,
+            &mut self.specular.program,
+        ] {
+            p.ensure_floor(b)?;
+        }
+        Ok(())
+    }
+
+    /// Destroys every pass (no recording may still use them).
+    pub fn destroy(&mut self, device: &Device, memory: &Memory) {
+        self.arena.destroy(device, memory);
+        unsafe { device.raw.destroy_sampler(self.sampler, None) };
+        self.sampler = vk::Sampler::null();
+    }
+}
+
 /// The bindings a G-buffer trace starts with: TLAS, depth, normals, output image, constants;
 /// a pass appends its own after them.
-pub(crate) fn gbuffer_bindings(
-    sampler: ash::vk::Sampler,
-    extra: &[crate::gpu::pipeline::Binding],
-) -> Vec<crate::gpu::pipeline::Binding> {
-    use crate::gpu::pipeline::Binding;
-    use ash::vk::DescriptorType as T;
+pub(crate) fn gbuffer_bindings(sampler: vk::Sampler, extra: &[Binding]) -> Vec<Binding> {
+    use vk::DescriptorType as T;
     let mut b = vec![
         Binding { ty: T::ACCELERATION_STRUCTURE_KHR, sampler: None },
         Binding { ty: T::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
@@ -54,10 +236,10 @@ pub(crate) fn gbuffer_bindings(
 
 /// The slots matching `gbuffer_bindings`.
 pub(crate) fn gbuffer_slots<'a>(
-    tlas: ash::vk::AccelerationStructureKHR,
-    common: &'a crate::types::TraceCommon,
-    output: &'a crate::types::ImageInput,
-    constants: crate::gpu::upload::Upload,
+    tlas: vk::AccelerationStructureKHR,
+    common: &'a TraceCommon,
+    output: &'a ImageInput,
+    constants: Upload,
 ) -> Vec<descriptors::Slot<'a>> {
     use descriptors::Slot;
     vec![

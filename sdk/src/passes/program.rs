@@ -1,132 +1,147 @@
-//! A ray-tracing program: a push-descriptor set layout, its pipeline layout, and one
-//! ray-tracing pipeline with its SBT. Passes that are "bind these, trace that many rays" are a
-//! program plus their constants.
+//! A ray-tracing program: a push-descriptor set layout, its pipeline layout, one ray-tracing
+//! pipeline with its SBT, and optionally the same raygen body as a compute shader with ray
+//! queries. Passes that are "bind these, trace that many rays" are a program plus their
+//! constants.
+//!
+//! Which pipeline a trace runs through is decided here and nowhere else: the bench's bare-ray
+//! floor (empty hit and miss shaders) when it is on, else the inline ray-query twin when the
+//! task asked for it and the device has ray queries, else the ray-tracing pipeline. Both real
+//! variants give the same image (tests/tests/inline.rs).
 use super::descriptors::{self, Slot};
 use super::Recording;
 use crate::error::Result;
-use crate::gpu::device::Device;
-use crate::gpu::memory::Memory;
-use crate::gpu::pipeline::{self, Binding, RtPipeline};
+use crate::gpu::pipeline::{Binding, PipelineBuilder, RtPipeline, RtShaders};
+use crate::gpu::sync;
 use ash::vk;
 
-pub(crate) struct RtProgram {
-    set_layout: vk::DescriptorSetLayout,
-    pub layout: vk::PipelineLayout,
-    pub rt: RtPipeline,
-    /// The same body as a compute shader with ray queries (devices that have them).
-    inline: Option<vk::Pipeline>,
-    raygen: &'static [u8],
-    /// Bench only: the raygen with empty hit and miss shaders (every ray reads as a miss),
-    /// built on demand by `ExecuteContext::set_bench_floor_mode`.
-    floor: Option<RtPipeline>,
+/// The payload a program's hit and miss shaders write: it picks the empty shaders of the bench
+/// floor (they must write the same payload so the raygen reads "miss").
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Payload {
+    /// `float` hit distance (AO).
+    HitT,
+    /// `HitRecord` (instance, primitive, barycentrics, distance).
+    HitRecord,
 }
 
 /// The shaders of a program.
-pub(crate) struct Shaders<'a> {
+pub(crate) struct Shaders {
     pub raygen: &'static [u8],
-    pub misses: &'a [&'a [u8]],
-    pub closest_hits: &'a [&'a [u8]],
-    pub any_hit: Option<&'a [u8]>,
+    pub misses: &'static [&'static [u8]],
+    pub closest_hits: &'static [&'static [u8]],
+    pub any_hit: Option<&'static [u8]>,
     /// The compute + ray-query twin of the raygen (same bindings), if the pass has one.
-    pub inline: Option<&'a [u8]>,
+    pub inline: Option<&'static [u8]>,
+    /// The payload, when the pass has a bare-ray floor for the bench (None: it has none).
+    pub floor: Option<Payload>,
+}
+
+/// What a program's shaders write besides reading their inputs (for the barrier before them).
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Writes {
+    /// Plain storage writes (trace outputs).
+    Storage,
+    /// Atomic read-modify-writes (injection's accumulation).
+    Atomics,
+}
+
+pub(crate) struct RtProgram {
+    pub layout: vk::PipelineLayout,
+    rt: RtPipeline,
+    /// The compute twin, only on devices with ray queries.
+    inline: Option<vk::Pipeline>,
+    #[cfg_attr(not(feature = "bench-floor"), allow(dead_code))]
+    raygen: &'static [u8],
+    #[cfg_attr(not(feature = "bench-floor"), allow(dead_code))]
+    floor_payload: Option<Payload>,
+    /// The bench's floor pipeline, built on demand (`ExecuteContext::set_bench_floor_mode`).
+    floor: Option<RtPipeline>,
+}
+
+/// The pipeline one trace runs through.
+#[derive(Clone, Copy)]
+enum Variant {
+    RayTracing(RtPipeline),
+    Inline(vk::Pipeline),
 }
 
 impl RtProgram {
-    pub fn new(
-        device: &Device,
-        memory: &Memory,
-        bindings: &[Binding],
-        stages: vk::ShaderStageFlags,
-        shaders: Shaders<'_>,
-    ) -> Result<RtProgram> {
-        let d = &device.raw;
-        let set_layout = pipeline::push_set_layout(d, bindings, stages)?;
-        let layout = pipeline::pipeline_layout(d, set_layout)?;
-        let rt =
-            pipeline::rt_pipeline(device, memory, layout, shaders.raygen, shaders.misses, shaders.closest_hits, shaders.any_hit)?;
-        let inline = match (shaders.inline, device.ray_query) {
-            (Some(spirv), true) => Some(pipeline::compute_pipeline(d, layout, spirv)?),
+    pub fn new(b: &mut PipelineBuilder<'_>, bindings: &[Binding], shaders: Shaders) -> Result<RtProgram> {
+        let stages = if shaders.inline.is_some() {
+            vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE
+        } else {
+            vk::ShaderStageFlags::RAYGEN_KHR
+        };
+        let set_layout = b.set_layout(bindings, stages)?;
+        let layout = b.layout(Some(set_layout), 0, stages)?;
+        let rt = b.ray_tracing(
+            layout,
+            &RtShaders {
+                raygen: shaders.raygen,
+                misses: shaders.misses,
+                closest_hits: shaders.closest_hits,
+                any_hit: shaders.any_hit,
+            },
+        )?;
+        let inline = match (shaders.inline, b.device.ray_query) {
+            (Some(spirv), true) => Some(b.compute(layout, spirv)?),
             _ => None,
         };
-        Ok(RtProgram { set_layout, layout, rt, inline, raygen: shaders.raygen, floor: None })
+        Ok(RtProgram { layout, rt, inline, raygen: shaders.raygen, floor_payload: shaders.floor, floor: None })
     }
 
-    /// Builds the bench's floor pipeline (programs whose hits are HitRecord payloads).
-    pub fn ensure_floor(&mut self, device: &Device, memory: &Memory) -> Result<()> {
-        if self.floor.is_none() {
-            let s = Shaders {
-                raygen: self.raygen,
-                misses: &[crate::shaders::EMPTY_RECORD_RMISS],
-                closest_hits: &[crate::shaders::EMPTY_RECORD_RCHIT],
-                any_hit: None,
-                inline: None,
-            };
-            self.floor = Some(self.variant(device, memory, s)?);
-        }
+    /// Builds the bench's floor pipeline, if this program has one.
+    #[cfg(feature = "bench-floor")]
+    pub fn ensure_floor(&mut self, b: &mut PipelineBuilder<'_>) -> Result<()> {
+        use crate::shaders;
+        let Some(payload) = self.floor_payload.filter(|_| self.floor.is_none()) else { return Ok(()) };
+        let (miss, hit) = match payload {
+            Payload::HitT => (shaders::EMPTY_RMISS, shaders::EMPTY_RCHIT),
+            Payload::HitRecord => (shaders::EMPTY_RECORD_RMISS, shaders::EMPTY_RECORD_RCHIT),
+        };
+        let shaders = RtShaders { raygen: self.raygen, misses: &[miss], closest_hits: &[hit], any_hit: None };
+        self.floor = Some(b.ray_tracing(self.layout, &shaders)?);
         Ok(())
     }
 
-    /// The stage the pass's shaders run in (for its barriers).
-    pub fn stage(&self, inline: bool) -> vk::PipelineStageFlags2 {
-        if inline && self.inline.is_some() {
-            vk::PipelineStageFlags2::COMPUTE_SHADER
-        } else {
-            vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR
+    fn variant(&self, r: &Recording<'_>) -> Variant {
+        if let (true, Some(floor)) = (r.floor, self.floor) {
+            return Variant::RayTracing(floor);
+        }
+        match self.inline.filter(|_| r.inline) {
+            Some(p) => Variant::Inline(p),
+            None => Variant::RayTracing(self.rt),
         }
     }
 
-    /// Traces width x height through the pipeline, or with ray queries when `inline` is
-    /// asked for and available (8x8 compute groups); both give the same image.
-    pub fn run(&self, r: &mut Recording<'_>, slots: &[Slot<'_>], width: u32, height: u32, inline: bool) {
-        if let (true, Some(floor)) = (r.floor, self.floor.as_ref()) {
-            return self.trace_with(r, floor, slots, width, height);
-        }
-        match self.inline.filter(|_| inline) {
-            Some(p) => {
+    /// Declares the pass's reads and `writes` to the hazard tracker, then traces width x height
+    /// (8x8 compute groups for the inline variant).
+    pub fn run(&self, r: &mut Recording<'_>, slots: &[Slot<'_>], width: u32, height: u32, writes: Writes) {
+        let variant = self.variant(r);
+        let stage = match variant {
+            Variant::Inline(_) => vk::PipelineStageFlags2::COMPUTE_SHADER,
+            Variant::RayTracing(_) => vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR,
+        };
+        let write = match writes {
+            Writes::Storage => sync::shader_write(stage),
+            Writes::Atomics => sync::shader_atomic(stage),
+        };
+        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), write);
+        let d = &r.device.raw;
+        match variant {
+            Variant::Inline(p) => {
                 let bind = vk::PipelineBindPoint::COMPUTE;
-                unsafe { r.device.raw.cmd_bind_pipeline(r.cmd, bind, p) };
+                // SAFETY: the slots match the set layout; the command buffer is recording.
+                unsafe { d.cmd_bind_pipeline(r.cmd, bind, p) };
                 descriptors::push(r.device, r.cmd, bind, self.layout, slots);
-                unsafe { r.device.raw.cmd_dispatch(r.cmd, width.div_ceil(8), height.div_ceil(8), 1) };
+                unsafe { d.cmd_dispatch(r.cmd, width.div_ceil(8), height.div_ceil(8), 1) };
             }
-            None => self.trace(r, slots, width, height),
-        }
-    }
-
-    /// Another pipeline over the same layout (e.g. a variant with other hit shaders).
-    pub fn variant(&self, device: &Device, memory: &Memory, shaders: Shaders<'_>) -> Result<RtPipeline> {
-        pipeline::rt_pipeline(device, memory, self.layout, shaders.raygen, shaders.misses, shaders.closest_hits, shaders.any_hit)
-    }
-
-    /// Binds `pipeline` (this program's or a variant), pushes `slots` and traces width x height.
-    pub fn trace_with(&self, r: &mut Recording<'_>, pipeline: &RtPipeline, slots: &[Slot<'_>], width: u32, height: u32) {
-        let bind = vk::PipelineBindPoint::RAY_TRACING_KHR;
-        unsafe { r.device.raw.cmd_bind_pipeline(r.cmd, bind, pipeline.pipeline) };
-        descriptors::push(r.device, r.cmd, bind, self.layout, slots);
-        let p = pipeline;
-        // SAFETY: the slots match the set layout; the command buffer is recording.
-        unsafe { r.device.rt.cmd_trace_rays(r.cmd, &p.raygen, &p.miss, &p.hit, &p.callable, width, height, 1) };
-    }
-
-    pub fn trace(&self, r: &mut Recording<'_>, slots: &[Slot<'_>], width: u32, height: u32) {
-        self.trace_with(r, &self.rt, slots, width, height);
-    }
-
-    pub fn destroy_pipeline(device: &Device, memory: &Memory, p: RtPipeline) {
-        unsafe { device.raw.destroy_pipeline(p.pipeline, None) };
-        memory.destroy_buffer(p.sbt);
-    }
-
-    pub fn destroy(self, device: &Device, memory: &Memory) {
-        if let Some(p) = self.inline {
-            unsafe { device.raw.destroy_pipeline(p, None) };
-        }
-        if let Some(p) = self.floor {
-            Self::destroy_pipeline(device, memory, p);
-        }
-        Self::destroy_pipeline(device, memory, self.rt);
-        unsafe {
-            device.raw.destroy_pipeline_layout(self.layout, None);
-            device.raw.destroy_descriptor_set_layout(self.set_layout, None);
+            Variant::RayTracing(p) => {
+                let bind = vk::PipelineBindPoint::RAY_TRACING_KHR;
+                unsafe { d.cmd_bind_pipeline(r.cmd, bind, p.pipeline) };
+                descriptors::push(r.device, r.cmd, bind, self.layout, slots);
+                unsafe { r.device.rt.cmd_trace_rays(r.cmd, &p.raygen, &p.miss, &p.hit, &p.callable, width, height, 1) };
+            }
         }
     }
 }

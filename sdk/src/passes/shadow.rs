@@ -2,15 +2,15 @@
 //! points of the light's extent (shaders/shadow.rgen).
 use super::constants::TraceCommonGpu;
 use super::descriptors::Slot;
-use super::program::{RtProgram, Shaders};
-use super::Recording;
+use super::program::{Payload, RtProgram, Shaders, Writes};
+use super::{PassTask, Passes, Recording, World};
 use crate::error::Result;
-use crate::gpu::device::Device;
-use crate::gpu::memory::Memory;
-use crate::gpu::pipeline::Binding;
-use crate::gpu::sync;
+use crate::gpu::pipeline::{Binding, PipelineBuilder};
 use crate::shaders;
-use crate::types::{InstanceInclusionMask, LightInfo, LightType, TraceMultiShadowTask, TraceShadowTask};
+use crate::types::{
+    ImageInput, InstanceInclusionMask, LightInfo, LightType, TaskKind, TraceCommon, TraceMultiShadowTask, TraceShadowTask,
+    MAX_SHADOW_LIGHTS,
+};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
@@ -42,50 +42,37 @@ struct ShadowConstantsGpu {
     counts: [u32; 4],
 }
 
-pub(crate) const UPLOAD_BYTES: u64 = std::mem::size_of::<ShadowConstantsGpu>() as u64;
-
 pub(crate) struct ShadowPass {
-    program: RtProgram,
+    pub program: RtProgram,
 }
 
 impl ShadowPass {
-    pub fn program_mut(&mut self) -> &mut RtProgram {
-        &mut self.program
-    }
-
-    pub fn new(device: &Device, memory: &Memory, sampler: vk::Sampler) -> Result<ShadowPass> {
+    pub fn new(b: &mut PipelineBuilder<'_>, sampler: vk::Sampler) -> Result<ShadowPass> {
         let program = RtProgram::new(
-            device,
-            memory,
+            b,
             &super::gbuffer_bindings(sampler, &[]),
-            vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE,
             Shaders {
                 raygen: shaders::SHADOW_RGEN,
                 misses: &[shaders::HIT_RECORD_RMISS],
                 closest_hits: &[shaders::HIT_RECORD_RCHIT],
                 any_hit: None,
                 inline: Some(shaders::SHADOW_COMP),
+                floor: Some(Payload::HitRecord),
             },
         )?;
         Ok(ShadowPass { program })
     }
 
-    pub fn record(&self, r: &mut Recording<'_>, inline: bool, task: &TraceShadowTask) {
+    pub fn record(&self, r: &mut Recording<'_>, task: &TraceShadowTask) {
         let constants = ShadowConstantsGpu {
             common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::SHADOWS.0),
             light: LightGpu::new(&task.light),
             counts: [task.rays_per_pixel, 0, 0, 0],
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
-        let stage = self.program.stage(inline);
-        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
         let slots = super::gbuffer_slots(r.tlas, &task.common, &task.output, ubo);
         let vp = &task.common.viewport;
-        self.program.run(r, &slots, vp.width, vp.height, inline);
-    }
-
-    pub fn destroy(self, device: &Device, memory: &Memory) {
-        self.program.destroy(device, memory);
+        self.program.run(r, &slots, vp.width, vp.height, Writes::Storage);
     }
 }
 
@@ -95,25 +82,18 @@ impl ShadowPass {
 struct MultiShadowConstantsGpu {
     common: TraceCommonGpu,
     counts: [u32; 4],
-    lights: [LightGpu; crate::types::MAX_SHADOW_LIGHTS],
+    lights: [LightGpu; MAX_SHADOW_LIGHTS],
 }
-
-pub(crate) const MULTI_UPLOAD_BYTES: u64 = std::mem::size_of::<MultiShadowConstantsGpu>() as u64;
 
 /// Shadows from several lights in one pass (`TraceMultiShadowTask`).
 pub(crate) struct MultiShadowPass {
-    program: RtProgram,
+    pub program: RtProgram,
 }
 
 impl MultiShadowPass {
-    pub fn program_mut(&mut self) -> &mut RtProgram {
-        &mut self.program
-    }
-
-    pub fn new(device: &Device, memory: &Memory, sampler: vk::Sampler) -> Result<MultiShadowPass> {
+    pub fn new(b: &mut PipelineBuilder<'_>, sampler: vk::Sampler) -> Result<MultiShadowPass> {
         let program = RtProgram::new(
-            device,
-            memory,
+            b,
             &[
                 Binding { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, sampler: None },
                 Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
@@ -122,20 +102,20 @@ impl MultiShadowPass {
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
             ],
-            vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE,
             Shaders {
                 raygen: shaders::MULTI_SHADOW_RGEN,
                 misses: &[shaders::HIT_RECORD_RMISS],
                 closest_hits: &[shaders::HIT_RECORD_RCHIT],
                 any_hit: None,
                 inline: Some(shaders::MULTI_SHADOW_COMP),
+                floor: Some(Payload::HitRecord),
             },
         )?;
         Ok(MultiShadowPass { program })
     }
 
-    pub fn record(&self, r: &mut Recording<'_>, inline: bool, task: &TraceMultiShadowTask) {
-        let mut lights = [LightGpu::default(); crate::types::MAX_SHADOW_LIGHTS];
+    pub fn record(&self, r: &mut Recording<'_>, task: &TraceMultiShadowTask) {
+        let mut lights = [LightGpu::default(); MAX_SHADOW_LIGHTS];
         for (g, l) in lights.iter_mut().zip(&task.lights) {
             *g = LightGpu::new(l);
         }
@@ -145,8 +125,6 @@ impl MultiShadowPass {
             lights,
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
-        let stage = self.program.stage(inline);
-        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
         let slots = [
             Slot::Tlas(r.tlas),
             Slot::Sampled(&task.common.depth.image),
@@ -156,10 +134,39 @@ impl MultiShadowPass {
             Slot::Uniform(ubo),
         ];
         let vp = &task.common.viewport;
-        self.program.run(r, &slots, vp.width, vp.height, inline);
+        self.program.run(r, &slots, vp.width, vp.height, Writes::Storage);
     }
+}
 
-    pub fn destroy(self, device: &Device, memory: &Memory) {
-        self.program.destroy(device, memory);
+impl PassTask for TraceShadowTask {
+    fn kind(&self) -> TaskKind {
+        TaskKind::Shadow
+    }
+    fn upload_bytes(&self) -> u64 {
+        std::mem::size_of::<ShadowConstantsGpu>() as u64
+    }
+    fn trace_common(&self) -> Option<&TraceCommon> {
+        Some(&self.common)
+    }
+    fn debug_target(&self) -> Option<&ImageInput> {
+        Some(&self.output)
+    }
+    fn record(&self, r: &mut Recording<'_>, passes: &Passes, _: &mut World<'_>) {
+        passes.shadow.record(r, self);
+    }
+}
+
+impl PassTask for TraceMultiShadowTask {
+    fn kind(&self) -> TaskKind {
+        TaskKind::MultiShadow
+    }
+    fn upload_bytes(&self) -> u64 {
+        std::mem::size_of::<MultiShadowConstantsGpu>() as u64
+    }
+    fn trace_common(&self) -> Option<&TraceCommon> {
+        Some(&self.common)
+    }
+    fn record(&self, r: &mut Recording<'_>, passes: &Passes, _: &mut World<'_>) {
+        passes.multi_shadow.record(r, self);
     }
 }

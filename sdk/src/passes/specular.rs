@@ -1,17 +1,13 @@
 //! Specular reflections (`TraceSpecularTask`): mirror or GGX-VNDF rays shaded from the cache
 //! (shaders/specular.rgen).
 use super::constants::TraceCommonGpu;
-use super::descriptors::optional_or;
-use super::descriptors::Slot;
-use super::program::{RtProgram, Shaders};
-use super::Recording;
+use super::descriptors::{optional_or, Slot};
+use super::program::{Payload, RtProgram, Shaders, Writes};
+use super::{PassTask, Passes, Recording, World};
 use crate::error::Result;
-use crate::gpu::device::Device;
-use crate::gpu::memory::Memory;
-use crate::gpu::pipeline::Binding;
-use crate::gpu::sync;
+use crate::gpu::pipeline::{Binding, PipelineBuilder};
 use crate::shaders;
-use crate::types::{InstanceInclusionMask, TraceSpecularTask};
+use crate::types::{ImageInput, InstanceInclusionMask, TaskKind, TraceCommon, TraceSpecularTask};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
@@ -27,22 +23,15 @@ struct SpecularConstantsGpu {
     specular: [f32; 4],
 }
 
-pub(crate) const UPLOAD_BYTES: u64 = std::mem::size_of::<SpecularConstantsGpu>() as u64;
-
 pub(crate) struct SpecularPass {
-    program: RtProgram,
+    pub program: RtProgram,
 }
 
 impl SpecularPass {
-    pub fn program_mut(&mut self) -> &mut RtProgram {
-        &mut self.program
-    }
-
-    pub fn new(device: &Device, memory: &Memory, sampler: vk::Sampler) -> Result<SpecularPass> {
+    pub fn new(b: &mut PipelineBuilder<'_>, sampler: vk::Sampler) -> Result<SpecularPass> {
         let sampled = || Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) };
         let program = RtProgram::new(
-            device,
-            memory,
+            b,
             &[
                 Binding { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, sampler: None },
                 sampled(),
@@ -54,19 +43,19 @@ impl SpecularPass {
                 sampled(),
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
             ],
-            vk::ShaderStageFlags::RAYGEN_KHR | vk::ShaderStageFlags::COMPUTE,
             Shaders {
                 raygen: shaders::SPECULAR_RGEN,
                 misses: &[shaders::HIT_RECORD_RMISS],
                 closest_hits: &[shaders::HIT_RECORD_RCHIT],
                 any_hit: None,
                 inline: Some(shaders::SPECULAR_COMP),
+                floor: Some(Payload::HitRecord),
             },
         )?;
         Ok(SpecularPass { program })
     }
 
-    pub fn record(&self, r: &mut Recording<'_>, inline: bool, task: &TraceSpecularTask) {
+    pub fn record(&self, r: &mut Recording<'_>, task: &TraceSpecularTask) {
         let c = &task.common;
         let table = r.instance_table;
         let m = task.miss_radiance;
@@ -84,8 +73,6 @@ impl SpecularPass {
             ],
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
-        let stage = self.program.stage(inline);
-        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
         // Without a roughness image the binding still needs a valid view: the normals stand in
         // (the shader does not read it then).
         let roughness = optional_or(&c.roughness.image, &c.normals.image);
@@ -101,10 +88,24 @@ impl SpecularPass {
             Slot::Sampled(optional_or(&c.specular.image, &c.normals.image)),
             Slot::Storage(optional_or(&task.demodulated_output, &task.output)),
         ];
-        self.program.run(r, &slots, c.viewport.width, c.viewport.height, inline);
+        self.program.run(r, &slots, c.viewport.width, c.viewport.height, Writes::Storage);
     }
+}
 
-    pub fn destroy(self, device: &Device, memory: &Memory) {
-        self.program.destroy(device, memory);
+impl PassTask for TraceSpecularTask {
+    fn kind(&self) -> TaskKind {
+        TaskKind::Specular
+    }
+    fn upload_bytes(&self) -> u64 {
+        std::mem::size_of::<SpecularConstantsGpu>() as u64
+    }
+    fn trace_common(&self) -> Option<&TraceCommon> {
+        Some(&self.common)
+    }
+    fn debug_target(&self) -> Option<&ImageInput> {
+        Some(&self.output)
+    }
+    fn record(&self, r: &mut Recording<'_>, passes: &Passes, _: &mut World<'_>) {
+        passes.specular.record(r, self);
     }
 }

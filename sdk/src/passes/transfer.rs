@@ -4,14 +4,13 @@
 //! primitive onto the destination; tracing from the destination's samples instead writes
 //! every target sample exactly once per triangle, with no gaps where the target is finer.
 use super::descriptors::Slot;
-use super::program::{RtProgram, Shaders};
-use super::Recording;
+use super::program::{RtProgram, Shaders, Writes};
+use super::{PassTask, Passes, Recording, World};
 use crate::error::Result;
-use crate::gpu::device::Device;
-use crate::gpu::memory::Memory;
-use crate::gpu::pipeline::Binding;
-use crate::gpu::sync;
+use crate::gpu::pipeline::{Binding, PipelineBuilder};
+use crate::scene::Scene;
 use crate::shaders;
+use crate::types::{DirectLightTransferTask, InstanceHandle, SurfelType, TaskKind};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
@@ -22,10 +21,8 @@ struct TransferConstantsGpu {
     params: [f32; 4],
 }
 
-pub(crate) const UPLOAD_BYTES: u64 = std::mem::size_of::<TransferConstantsGpu>() as u64;
-
 /// What one transfer needs to know about its two instances.
-pub(crate) struct TransferJob {
+struct TransferJob {
     pub source_index: u32,
     pub target_index: u32,
     pub target_triangles: u32,
@@ -40,39 +37,81 @@ pub(crate) struct TransferPass {
 }
 
 impl TransferPass {
-    pub fn new(device: &Device, memory: &Memory) -> Result<TransferPass> {
+    pub fn new(b: &mut PipelineBuilder<'_>) -> Result<TransferPass> {
         let program = RtProgram::new(
-            device,
-            memory,
+            b,
             &[
                 Binding { ty: vk::DescriptorType::ACCELERATION_STRUCTURE_KHR, sampler: None },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
             ],
-            vk::ShaderStageFlags::RAYGEN_KHR,
             Shaders {
                 raygen: shaders::TRANSFER_RGEN,
                 misses: &[shaders::TRANSFER_RMISS],
                 closest_hits: &[shaders::TRANSFER_RCHIT],
                 any_hit: Some(shaders::TRANSFER_RAHIT),
                 inline: None,
+                floor: None,
             },
         )?;
         Ok(TransferPass { program })
     }
 
-    pub fn record(&self, r: &mut Recording<'_>, job: &TransferJob) {
+    fn record(&self, r: &mut Recording<'_>, job: &TransferJob) {
         let t = r.instance_table;
         let constants = TransferConstantsGpu {
             table: [t as u32, (t >> 32) as u32, job.source_index, job.target_index],
             params: [job.distance, job.bilinear as u32 as f32, 0.0, 0.0],
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
-        let stage = vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR;
-        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
-        self.program.trace(r, &[Slot::Tlas(r.tlas), Slot::Uniform(ubo)], job.target_triangles, job.samples_per_triangle);
+        let slots = [Slot::Tlas(r.tlas), Slot::Uniform(ubo)];
+        self.program.run(r, &slots, job.target_triangles, job.samples_per_triangle, Writes::Storage);
     }
+}
 
-    pub fn destroy(self, device: &Device, memory: &Memory) {
-        self.program.destroy(device, memory);
+impl TransferJob {
+    /// The launch of a transfer, or None when either instance has no cache yet.
+    fn new(scene: &Scene, t: &DirectLightTransferTask) -> Option<TransferJob> {
+        let placed = |h: InstanceHandle| {
+            let p = scene.instances.get(h).ok()?.placement?;
+            p.cache?;
+            Some((scene.instances.index_of(h).ok()?, p))
+        };
+        let (source_index, _) = placed(t.source)?;
+        let (target_index, target) = placed(t.target)?;
+        let g = scene.geometries.get(target.geometry).ok()?;
+        let surfel = g.surfel.as_ref()?;
+        let r = surfel.max_resolution;
+        let samples_per_triangle = match surfel.surfel_type {
+            SurfelType::Tiles => r * r,
+            SurfelType::MeshColors => (r + 1) * (r + 2) / 2,
+        };
+        Some(TransferJob {
+            source_index,
+            target_index,
+            target_triangles: g.layout?.primitive_count,
+            samples_per_triangle,
+            distance: t.max_distance,
+            bilinear: t.enable_bilinear_sampling,
+        })
+    }
+}
+
+impl PassTask for DirectLightTransferTask {
+    fn kind(&self) -> TaskKind {
+        TaskKind::CacheTransfer
+    }
+    fn upload_bytes(&self) -> u64 {
+        std::mem::size_of::<TransferConstantsGpu>() as u64
+    }
+    fn check(&self, world: &World<'_>) -> Result<()> {
+        world.scene.instances.get(self.source)?;
+        world.scene.instances.get(self.target)?;
+        Ok(())
+    }
+    fn record(&self, r: &mut Recording<'_>, passes: &Passes, world: &mut World<'_>) {
+        match TransferJob::new(world.scene, self) {
+            Some(job) => passes.transfer.record(r, &job),
+            None => log::debug!("cache transfer skipped: an instance has no cache yet"),
+        }
     }
 }

@@ -5,7 +5,7 @@
 use super::geometry::{Blas, GeometryLayout};
 use crate::error::{Error, Result};
 use crate::gpu::device::Device;
-use crate::gpu::memory::{Buffer, Memory, MemoryKind};
+use crate::gpu::memory::{Memory, MemoryKind};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
@@ -103,8 +103,8 @@ pub(crate) struct BuildJob {
 }
 
 /// Records every job of the batch in one vkCmdBuildAccelerationStructuresKHR, so the driver can
-/// overlap them. Each job has its own scratch region.
-pub(crate) fn record_batch(device: &Device, cmd: vk::CommandBuffer, scratch: &Buffer, jobs: &[BuildJob]) {
+/// overlap them. Each job has its own scratch region at `scratch` + its offset.
+pub(crate) fn record_batch(device: &Device, cmd: vk::CommandBuffer, scratch: vk::DeviceAddress, jobs: &[BuildJob]) {
     if jobs.is_empty() {
         return;
     }
@@ -122,7 +122,7 @@ pub(crate) fn record_batch(device: &Device, cmd: vk::CommandBuffer, scratch: &Bu
                 .src_acceleration_structure(if j.refit { j.dst } else { vk::AccelerationStructureKHR::null() })
                 .dst_acceleration_structure(j.dst)
                 .geometries(std::slice::from_ref(&j.geometry))
-                .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch.address + j.scratch_offset })
+                .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch + j.scratch_offset })
         })
         .collect();
     let ranges: Vec<[vk::AccelerationStructureBuildRangeInfoKHR; 1]> =

@@ -4,10 +4,12 @@
 //! refit reads the vertices again; copying at registration (one vkCmdCopyBuffer) lets the
 //! engine free or reuse its buffers as soon as the registering ticket is back, and gives the
 //! lighting cache a vertex/index source it owns.
+use crate::cache::layout::SurfelLayout;
 use crate::error::{Error, Result};
 use crate::gpu::memory::{Buffer, Memory, MemoryKind};
-use crate::types::GeometryInput;
+use crate::types::{GeometryInput, SurfelType};
 use ash::vk;
+use glam::Vec3;
 use gpu_allocator::MemoryLocation;
 
 /// The layout of the SDK's copy of a geometry: vertices as the engine laid them out (its
@@ -95,7 +97,7 @@ pub(crate) struct GeometryRecord {
     /// The surfel layout on the GPU, once its read-back came home.
     pub surfel: Option<SurfelGpu>,
     /// A layout built from a read-back, to upload at the next recording.
-    pub pending_layout: Option<crate::cache::layout::SurfelLayout>,
+    pub pending_layout: Option<SurfelLayout>,
 }
 
 /// A geometry's surfel layout on the GPU. `id` changes with every new layout, so instance
@@ -103,7 +105,7 @@ pub(crate) struct GeometryRecord {
 pub(crate) struct SurfelGpu {
     pub buffer: Buffer,
     pub sample_count: u32,
-    pub surfel_type: crate::types::SurfelType,
+    pub surfel_type: SurfelType,
     pub id: u64,
     pub max_resolution: u32,
 }
@@ -175,4 +177,30 @@ pub(crate) fn check_region(device: &ash::Device, what: &'static str, buffer: vk:
         return Err(Error::BufferTooSmall { what, needed, available });
     }
     Ok(())
+}
+
+/// Positions and triangles from a read-back geometry copy (vertices with their stride, then
+/// indices at `index_offset`).
+pub(crate) fn read_geometry(bytes: &[u8], g: &GeometryLayout) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let f = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
+    let positions: Vec<Vec3> = (0..g.vertex_count as usize)
+        .map(|v| {
+            let o = v * g.vertex_stride as usize;
+            if o + 12 <= bytes.len() {
+                Vec3::new(f(o), f(o + 4), f(o + 8))
+            } else {
+                Vec3::ZERO
+            }
+        })
+        .collect();
+    let io = g.index_offset as usize;
+    let index = |i: usize| -> u32 {
+        match g.index_size() {
+            2 => bytes.get(io + i * 2..io + i * 2 + 2).map_or(0, |b| u16::from_le_bytes([b[0], b[1]]) as u32),
+            4 => bytes.get(io + i * 4..io + i * 4 + 4).map_or(0, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+            _ => i as u32,
+        }
+    };
+    let triangles = (0..g.primitive_count as usize).map(|t| [index(3 * t), index(3 * t + 1), index(3 * t + 2)]).collect();
+    (positions, triangles)
 }

@@ -1,4 +1,5 @@
 //! A placed geometry and its TLAS record.
+use crate::cache::pool::CacheRange;
 use crate::types::GeometryHandle;
 use ash::vk;
 use glam::Affine3A;
@@ -16,7 +17,7 @@ pub(crate) struct Placement {
     /// Kept for the direct-lighting cache, which fills a new instance's cache with it.
     pub initial_tile_color: [f32; 3],
     /// This instance's cache and the layout id it was made for.
-    pub cache: Option<(crate::cache::pool::CacheRange, u64)>,
+    pub cache: Option<(CacheRange, u64)>,
 }
 
 /// The TLAS record of an instance. `custom_index` is the instance's slot, so shaders can find

@@ -5,7 +5,7 @@ use super::blas;
 use super::geometry::Blas;
 use crate::error::Result;
 use crate::gpu::device::Device;
-use crate::gpu::memory::{Buffer, Memory, MemoryKind};
+use crate::gpu::memory::{Memory, MemoryKind};
 use crate::gpu::upload::Upload;
 use ash::vk;
 
@@ -47,8 +47,16 @@ impl Tlas {
         Ok(())
     }
 
-    pub fn record_build(&self, device: &Device, cmd: vk::CommandBuffer, instances: Upload, count: u32, scratch: &Buffer) {
-        let accel = self.accel.as_ref().expect("ensure_storage first");
+    /// Records the build into storage made by `ensure_storage` (nothing without it).
+    pub fn record_build(
+        &self,
+        device: &Device,
+        cmd: vk::CommandBuffer,
+        instances: Upload,
+        count: u32,
+        scratch: vk::DeviceAddress,
+    ) {
+        let Some(accel) = self.accel.as_ref() else { return };
         let geometry = instances_geometry(Some(instances));
         let info = vk::AccelerationStructureBuildGeometryInfoKHR::default()
             .ty(vk::AccelerationStructureTypeKHR::TOP_LEVEL)
@@ -56,7 +64,7 @@ impl Tlas {
             .mode(vk::BuildAccelerationStructureModeKHR::BUILD)
             .dst_acceleration_structure(accel.accel)
             .geometries(std::slice::from_ref(&geometry))
-            .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch.address });
+            .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch });
         let range = [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(count)];
         unsafe { device.accel.cmd_build_acceleration_structures(cmd, &[info], &[&range[..]]) };
     }

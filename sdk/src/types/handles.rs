@@ -100,20 +100,24 @@ impl<H: RawHandle, T> Registry<H, T> {
         }
     }
 
+    fn stale(h: H) -> Error {
+        Error::InvalidHandle { kind: H::KIND, raw: h.raw(), problem: HandleProblem::Destroyed }
+    }
+
     pub fn get(&self, h: H) -> Result<&T> {
         let i = self.check(h)?;
-        Ok(self.slots[i as usize].value.as_ref().expect("checked"))
+        self.slots[i as usize].value.as_ref().ok_or_else(|| Self::stale(h))
     }
 
     pub fn get_mut(&mut self, h: H) -> Result<&mut T> {
         let i = self.check(h)?;
-        Ok(self.slots[i as usize].value.as_mut().expect("checked"))
+        self.slots[i as usize].value.as_mut().ok_or_else(|| Self::stale(h))
     }
 
     pub fn remove(&mut self, h: H) -> Result<T> {
         let i = self.check(h)?;
         let slot = &mut self.slots[i as usize];
-        let value = slot.value.take().expect("checked");
+        let value = slot.value.take().ok_or_else(|| Self::stale(h))?;
         // Skip generation 0 on wrap-around so no handle can equal NULL.
         slot.generation = slot.generation.wrapping_add(1).max(1);
         self.free.push(i);

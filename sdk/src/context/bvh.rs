@@ -1,0 +1,173 @@
+//! BVH recording: compactions of BLASes built earlier, throttled BLAS builds and refits in one
+//! batch, compacted-size queries, and the working set's TLAS.
+use super::record::Recorder;
+use crate::error::Result;
+use crate::gpu::deferred::Garbage;
+use crate::gpu::memory::MemoryKind;
+use crate::gpu::sync;
+use crate::scene::blas::{self, BuildJob};
+use crate::scene::geometry::BlasState;
+use crate::scene::{instance, tlas};
+use crate::types::GeometryHandle;
+use ash::vk;
+
+impl Recorder<'_> {
+    /// Compactions, throttled BLAS builds and refits, in one batch where possible.
+    pub fn record_blas_work(&mut self, max_builds: u32) -> Result<()> {
+        let (device, memory, cmd, serial) = (self.device, self.memory, self.cmd, self.serial);
+        let d = &device.raw;
+        let st = &mut *self.st;
+
+        // Compactions of BLASes built in earlier tickets.
+        let ready = std::mem::take(&mut st.scene.compaction_ready);
+        let mut declared = false;
+        for h in ready {
+            let Ok(g) = st.scene.geometries.get_mut(h) else { continue };
+            let Some(size) = g.compacted_size.take() else { continue };
+            let Some(old) = g.blas.take() else { continue };
+            let compact =
+                match blas::create(device, memory, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, size, MemoryKind::Blas) {
+                    Ok(c) => c,
+                    Err(e) => {
+                        g.blas = Some(old);
+                        return Err(e);
+                    }
+                };
+            if !declared {
+                self.hazards.read_write(d, cmd, sync::AS_COPY, sync::AS_COPY);
+                declared = true;
+            }
+            let info = vk::CopyAccelerationStructureInfoKHR::default()
+                .src(old.accel)
+                .dst(compact.accel)
+                .mode(vk::CopyAccelerationStructureModeKHR::COMPACT);
+            unsafe { device.accel.cmd_copy_acceleration_structure(cmd, &info) };
+            g.blas = Some(compact);
+            st.deferred.retire(serial, Garbage::AccelerationStructure(old.accel, old.buffer));
+            st.scene.snapshot_dirty = true;
+        }
+
+        // Plan the batch: refits first (not throttled), then up to max_builds queued builds.
+        let mut jobs: Vec<BuildJob> = Vec::new();
+        let mut compaction_candidates: Vec<(GeometryHandle, u64, vk::AccelerationStructureKHR)> = Vec::new();
+        let mut scratch_total = 0u64;
+        let align = device.scratch_alignment;
+        let refits = std::mem::take(&mut st.scene.refit_queue);
+        for h in refits {
+            let Ok(g) = st.scene.geometries.get_mut(h) else { continue };
+            if !g.needs_refit {
+                continue;
+            }
+            g.needs_refit = false;
+            let (Some(layout), Some(copy), Some(b)) = (g.layout, g.copy.as_ref(), g.blas.as_ref()) else { continue };
+            let geometry = blas::triangles(copy.address, &layout);
+            let flags = blas::flags(&layout);
+            let sizes = blas::build_sizes(
+                device,
+                vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
+                flags,
+                &geometry,
+                layout.primitive_count,
+            );
+            jobs.push(BuildJob {
+                geometry,
+                flags,
+                refit: true,
+                dst: b.accel,
+                primitive_count: layout.primitive_count,
+                scratch_offset: scratch_total,
+            });
+            scratch_total += sizes.update_scratch_size.div_ceil(align) * align;
+        }
+        let mut built = 0;
+        while built < max_builds {
+            let Some(h) = st.scene.build_queue.pop_front() else { break };
+            let Ok(g) = st.scene.geometries.get_mut(h) else { continue };
+            let (Some(layout), Some(copy)) = (g.layout, g.copy.as_ref()) else { continue };
+            let geometry = blas::triangles(copy.address, &layout);
+            let flags = blas::flags(&layout);
+            let sizes = blas::build_sizes(
+                device,
+                vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
+                flags,
+                &geometry,
+                layout.primitive_count,
+            );
+            let fresh = blas::create(
+                device,
+                memory,
+                vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
+                sizes.acceleration_structure_size,
+                MemoryKind::Blas,
+            )?;
+            let dst = fresh.accel;
+            if let Some(old) = g.blas.replace(fresh) {
+                st.deferred.retire(serial, Garbage::AccelerationStructure(old.accel, old.buffer));
+            }
+            g.state = BlasState::Ready;
+            g.needs_refit = false;
+            if !layout.allow_update {
+                compaction_candidates.push((h, g.build_id, dst));
+            }
+            jobs.push(BuildJob {
+                geometry,
+                flags,
+                refit: false,
+                dst,
+                primitive_count: layout.primitive_count,
+                scratch_offset: scratch_total,
+            });
+            scratch_total += sizes.build_scratch_size.div_ceil(align) * align;
+            st.scene.snapshot_dirty = true;
+            built += 1;
+        }
+        if jobs.is_empty() {
+            return Ok(());
+        }
+        let scratch = self.ensure_scratch(scratch_total)?;
+        self.hazards.read_write(d, cmd, sync::AS_BUILD_READ, sync::AS_BUILD_WRITE);
+        blas::record_batch(device, cmd, scratch, &jobs);
+
+        // Ask for compacted sizes; read back when this ticket completes.
+        if !compaction_candidates.is_empty() {
+            let n = compaction_candidates.len() as u32;
+            self.working_set().ensure_compaction_slots(d, n)?;
+            self.hazards.read(d, cmd, sync::AS_BUILD_READ);
+            let ws = self.working_set();
+            let accels: Vec<_> = compaction_candidates.iter().map(|c| c.2).collect();
+            unsafe {
+                d.cmd_reset_query_pool(cmd, ws.compaction_pool, 0, n);
+                device.accel.cmd_write_acceleration_structures_properties(
+                    cmd,
+                    &accels,
+                    vk::QueryType::ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR,
+                    ws.compaction_pool,
+                    0,
+                );
+            }
+            ws.compactions = compaction_candidates.iter().map(|c| (c.0, c.1)).collect();
+        }
+        Ok(())
+    }
+
+    /// Rebuilds this working set's TLAS when the snapshot changed since it last did.
+    pub fn record_tlas(&mut self) -> Result<()> {
+        let (device, memory, cmd) = (self.device, self.memory, self.cmd);
+        let version = self.st.scene.snapshot_version;
+        if self.working_set().tlas.version == version {
+            return Ok(());
+        }
+        let count = self.st.scene.snapshot.len() as u32;
+        let sizes = tlas::sizes(device, count);
+        let scratch = self.ensure_scratch(sizes.build_scratch_size)?;
+        self.ensure_ring(self.st.scene.snapshot.len() as u64 * 64 + 256)?;
+        let st = &mut *self.st;
+        let ws = &mut st.working_sets[self.ws];
+        ws.tlas.ensure_storage(device, memory, sizes.acceleration_structure_size)?;
+        let upload = ws.ring.push(instance::instance_bytes(&st.scene.snapshot), 16);
+        self.hazards.read_write(&device.raw, cmd, sync::AS_BUILD_READ, sync::AS_BUILD_WRITE);
+        ws.tlas.record_build(device, cmd, upload, count, scratch);
+        ws.tlas.version = version;
+        Ok(())
+    }
+}

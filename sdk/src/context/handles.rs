@@ -1,0 +1,120 @@
+//! Creating, destroying and querying geometry and instance handles, and the context-wide
+//! reports (memory, tickets in flight).
+use super::{retire_geometry, ExecuteContext, Shared};
+use crate::error::{Error, HandleProblem, Result};
+use crate::gpu::memory::ResourceAllocations;
+use crate::scene::geometry::GeometryRecord;
+use crate::scene::instance::InstanceRecord;
+use crate::types::{GeometryHandle, InstanceHandle};
+
+impl ExecuteContext {
+    pub fn create_geometry_handles(&self, count: usize) -> Vec<GeometryHandle> {
+        let mut st = self.shared.state.lock();
+        (0..count).map(|_| st.scene.geometries.insert(GeometryRecord::new())).collect()
+    }
+
+    pub fn create_instance_handles(&self, count: usize) -> Vec<InstanceHandle> {
+        let mut st = self.shared.state.lock();
+        (0..count).map(|_| st.scene.instances.insert(InstanceRecord { placement: None })).collect()
+    }
+
+    /// Destroys geometries. All-or-nothing: if any handle is invalid or still used by a
+    /// registered instance, nothing is destroyed. GPU memory is freed once the tickets in
+    /// flight now have come back.
+    pub fn destroy_geometry_handles(&self, handles: &[GeometryHandle]) -> Result<()> {
+        let mut guard = self.shared.state.lock();
+        let st = &mut *guard;
+        for (i, h) in handles.iter().enumerate() {
+            let g = st.scene.geometries.get(*h)?;
+            if g.instance_refs > 0 {
+                return Err(Error::GeometryInUse { raw: h.0, instances: g.instance_refs });
+            }
+            if handles[..i].contains(h) {
+                return Err(Error::InvalidHandle { kind: GeometryHandle::KIND, raw: h.0, problem: HandleProblem::Destroyed });
+            }
+        }
+        let serial = st.last_issued();
+        for h in handles {
+            let g = st.scene.geometries.remove(*h)?;
+            retire_geometry(&mut st.deferred, serial, g);
+        }
+        Ok(())
+    }
+
+    /// Destroys instances (all-or-nothing). They leave the TLAS at the next build.
+    pub fn destroy_instance_handles(&self, handles: &[InstanceHandle]) -> Result<()> {
+        let mut st = self.shared.state.lock();
+        for (i, h) in handles.iter().enumerate() {
+            st.scene.instances.check(*h)?;
+            if handles[..i].contains(h) {
+                return Err(Error::InvalidHandle { kind: InstanceHandle::KIND, raw: h.0, problem: HandleProblem::Destroyed });
+            }
+        }
+        for h in handles {
+            let rec = st.scene.instances.remove(*h)?;
+            st.unplace(rec.placement);
+        }
+        Ok(())
+    }
+
+    /// Destroys every instance (level unload).
+    pub fn destroy_all_instance_handles(&self) {
+        let mut st = self.shared.state.lock();
+        let all: Vec<InstanceHandle> = st.scene.instances.iter().map(|(h, _)| h).collect();
+        for h in all {
+            if let Ok(rec) = st.scene.instances.remove(h) {
+                st.unplace(rec.placement);
+            }
+        }
+    }
+
+    /// BLAS builds waiting for a `BvhBuildTask` (registered geometries not built yet, and
+    /// rebuilds of updated static geometries).
+    pub fn pending_blas_builds(&self) -> usize {
+        self.shared.state.lock().scene.pending_blas_builds()
+    }
+
+    /// Instances in the TLAS as of the last build.
+    pub fn tlas_instance_count(&self) -> usize {
+        self.shared.state.lock().scene.snapshot.len()
+    }
+
+    /// Bytes of the instance's direct-lighting cache (0 until its layout has come back and the
+    /// cache is allocated: one recording after the ticket that registered its geometry).
+    pub fn instance_cache_bytes(&self, instance: InstanceHandle) -> Result<u64> {
+        let st = self.shared.state.lock();
+        let rec = st.scene.instances.get(instance)?;
+        Ok(rec.placement.and_then(|p| p.cache).map_or(0, |(r, _)| r.count * crate::cache::pool::SAMPLE_BYTES))
+    }
+
+    pub fn resource_allocations(&self) -> ResourceAllocations {
+        self.shared.memory.allocations()
+    }
+
+    /// Tickets built and not yet handed back.
+    pub fn tickets_in_flight(&self) -> Vec<u64> {
+        self.shared.state.lock().in_flight().collect()
+    }
+
+    /// Frees every deferred GPU resource now. Only when no ticket is in flight (a level load
+    /// after the engine waited for its queue idle): otherwise `Error::TicketsInFlight`.
+    pub fn release_device_resources_immediately(&self) -> Result<()> {
+        let mut st = self.shared.state.lock();
+        let serials: Vec<u64> = st.in_flight().collect();
+        if !serials.is_empty() {
+            return Err(Error::TicketsInFlight { serials });
+        }
+        st.collect_garbage(&self.shared.device, &self.shared.memory);
+        Ok(())
+    }
+}
+
+impl Shared {
+    pub(crate) fn check_geometry_alive(&self, h: GeometryHandle) -> Result<()> {
+        self.state.lock().scene.geometries.check(h).map(|_| ())
+    }
+
+    pub(crate) fn check_instance_alive(&self, h: InstanceHandle) -> Result<()> {
+        self.state.lock().scene.instances.check(h).map(|_| ())
+    }
+}

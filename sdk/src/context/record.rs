@@ -1,0 +1,140 @@
+//! One recording: the order in which a container's work goes into the engine's command buffer.
+//!
+//! 1. BVH work (timed as `Bvh`): scene tasks applied to the registries with their geometry
+//!    copies (`scene`), throttled BLAS builds, refits and compactions, the TLAS (`bvh`).
+//! 2. Cache maintenance (`CacheUpdate`): new surfel layouts, new and cleared caches (`cache`).
+//! 3. Render tasks in scheduled order, each timed under its own kind. How a task records is its
+//!    [`PassTask`](crate::passes::PassTask)'s business; this loop only sizes the upload ring,
+//!    writes the instance table once, and hands each task a `Recording`.
+use super::container::Task;
+use super::State;
+use crate::error::Result;
+use crate::gpu::device::Device;
+use crate::gpu::memory::Memory;
+use crate::gpu::sync::Hazards;
+use crate::gpu::timestamps::Span;
+use crate::passes::{Recording, RenderTask, World};
+use crate::scene::table;
+use crate::types::TaskKind;
+use ash::vk;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// One recording in progress: the context's state, the working set it records into, and the
+/// engine's command buffer.
+pub(super) struct Recorder<'a> {
+    pub device: &'a Device,
+    pub memory: &'a Memory,
+    pub st: &'a mut State,
+    /// Index of the working set this ticket will own.
+    pub ws: usize,
+    /// The ticket's serial (also its random seed).
+    pub serial: u64,
+    pub cmd: vk::CommandBuffer,
+    pub hazards: Hazards,
+    /// Set once the "no ray queries, using the pipeline" warning was logged.
+    pub warned_inline: &'a AtomicBool,
+}
+
+impl Recorder<'_> {
+    pub fn begin(&mut self, kind: TaskKind, task_index: u32) -> Span {
+        let (d, cmd) = (&self.device.raw, self.cmd);
+        self.working_set().timer.begin(d, cmd, kind, task_index)
+    }
+
+    pub fn end(&mut self, span: Span) {
+        let (d, cmd) = (&self.device.raw, self.cmd);
+        self.working_set().timer.end(d, cmd, span);
+    }
+
+    /// Records every task of a container (validated: errors here are Vulkan/memory failures).
+    pub fn record(&mut self, tasks: &[Task]) -> Result<()> {
+        let (d, cmd) = (&self.device.raw, self.cmd);
+        let ws = self.working_set();
+        ws.ring.reset();
+        ws.timer.reset(d, cmd);
+
+        // ---- BVH work: copies, builds, refits, compactions, TLAS.
+        let first_bvh =
+            tasks.iter().position(|t| matches!(t, Task::Geometry(_) | Task::Instance(_) | Task::BvhBuild(_))).map(|i| i as u32);
+        let has_render = tasks.iter().any(|t| matches!(t, Task::Render(_)));
+        let bvh_span = first_bvh.map(|i| self.begin(TaskKind::Bvh, i));
+        self.apply_scene_tasks(tasks)?;
+        let max_builds: Option<u32> = tasks
+            .iter()
+            .filter_map(|t| if let Task::BvhBuild(b) = t { Some(b.max_blas_build_count) } else { None })
+            .reduce(|a, b| a.saturating_add(b));
+        if let Some(max_builds) = max_builds {
+            let span = self.begin(TaskKind::BlasBuild, first_bvh.unwrap_or(0));
+            self.record_blas_work(max_builds)?;
+            self.end(span);
+        }
+        if max_builds.is_some() || has_render {
+            if self.st.scene.snapshot_dirty {
+                self.st.scene.rebuild_snapshot();
+            }
+            if self.working_set().tlas.version != self.st.scene.snapshot_version {
+                let span = self.begin(TaskKind::TlasBuild, first_bvh.unwrap_or(0));
+                self.record_tlas()?;
+                self.end(span);
+            }
+        }
+        if let Some(span) = bvh_span {
+            self.end(span);
+        }
+
+        // ---- Cache maintenance: new layouts, new caches, clears.
+        if self.st.scene.caches_dirty || tasks.iter().any(|t| matches!(t, Task::ClearCache(_))) {
+            let span = self.begin(TaskKind::CacheUpdate, 0);
+            self.update_caches(tasks)?;
+            self.end(span);
+        }
+
+        // ---- Render tasks, in scheduled order.
+        self.record_render(tasks)
+    }
+
+    fn record_render(&mut self, tasks: &[Task]) -> Result<()> {
+        let renders: Vec<(u32, &RenderTask)> = tasks
+            .iter()
+            .enumerate()
+            .filter_map(|(i, t)| if let Task::Render(r) = t { Some((i as u32, r)) } else { None })
+            .collect();
+        if renders.is_empty() {
+            return Ok(());
+        }
+        let align = self.device.ubo_alignment;
+        let task_bytes: u64 = renders.iter().map(|(_, t)| t.upload_bytes() + align).sum();
+        self.ensure_ring(table::instance_table_bytes(&self.st.scene) + 16 + task_bytes)?;
+
+        let (device, cmd, seed) = (self.device, self.cmd, self.serial as u32);
+        let st = &mut *self.st;
+        let ws = &mut st.working_sets[self.ws];
+        let instance_table = ws.ring.push(bytemuck::cast_slice(&table::instance_table(&st.scene)), 16).address;
+        let tlas = ws.tlas_handle();
+        let mut world = World { scene: &st.scene, cache_pool: &st.cache_pool, denoisers: &mut st.denoisers };
+        for (index, task) in renders {
+            let describe = task.describe();
+            // Inline ray queries where asked for and available; otherwise the pipeline (once a
+            // warning says so).
+            let wants_inline = describe.trace_common().is_some_and(|c| c.use_inline_rt);
+            if wants_inline && !device.ray_query && !self.warned_inline.swap(true, Ordering::Relaxed) {
+                log::warn!("use_inline_rt: the device has no VK_KHR_ray_query enabled; using the ray-tracing pipeline");
+            }
+            let span = ws.timer.begin(&device.raw, cmd, describe.kind(), index);
+            let mut r = Recording {
+                device,
+                cmd,
+                ring: &mut ws.ring,
+                hazards: &mut self.hazards,
+                tlas,
+                seed,
+                instance_table,
+                inline: wants_inline && device.ray_query,
+                floor: st.passes.floor,
+            };
+            task.record(&mut r, &st.passes, &mut world);
+            ws.timer.end(&device.raw, cmd, span);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,163 @@
+//! Scene tasks at build time: handle states checked in task order (before anything is
+//! recorded), then geometry and instance tasks applied to the registries with the geometry
+//! copies recorded.
+use super::container::Task;
+use super::record::Recorder;
+use super::State;
+use crate::error::{Error, HandleProblem, Result};
+use crate::gpu::deferred::Garbage;
+use crate::gpu::sync;
+use crate::passes::World;
+use crate::scene::geometry::{self, BlasState, GeometryLayout};
+use crate::scene::instance::Placement;
+use crate::types::*;
+use std::collections::HashMap;
+
+/// Checks handle states in task order (a register earlier in the container counts), before
+/// anything is recorded; render tasks check theirs through their `PassTask`.
+pub(super) fn validate_handles(st: &mut State, tasks: &[Task]) -> Result<()> {
+    let mut geometry_registered: HashMap<GeometryHandle, bool> = HashMap::new();
+    let mut instance_registered: HashMap<InstanceHandle, bool> = HashMap::new();
+    let problem = |kind, raw, problem| Err(Error::InvalidHandle { kind, raw, problem });
+    let scene = &st.scene;
+    for task in tasks {
+        match task {
+            Task::Geometry(t) => {
+                let g = scene.geometries.get(t.handle)?;
+                let registered = *geometry_registered.entry(t.handle).or_insert(g.registered());
+                match t.operation {
+                    TaskOperation::Register if registered => {
+                        return problem(GeometryHandle::KIND, t.handle.0, HandleProblem::AlreadyRegistered)
+                    }
+                    TaskOperation::Update if !registered => {
+                        return problem(GeometryHandle::KIND, t.handle.0, HandleProblem::NotRegistered)
+                    }
+                    TaskOperation::Update => {
+                        if let Some(old) = g.layout.filter(|l| l.allow_update) {
+                            let new = GeometryLayout::of(&t.input);
+                            if !t.input.allow_update
+                                || new.primitive_count != old.primitive_count
+                                || new.vertex_count != old.vertex_count
+                                || new.index_type != old.index_type
+                            {
+                                return Err(Error::invalid(
+                                    "GeometryTask.input",
+                                    "an update of an allow_update geometry must keep allow_update and its vertex, index and triangle counts (the BLAS is refitted)",
+                                ));
+                            }
+                        }
+                    }
+                    _ => {}
+                }
+                geometry_registered.insert(t.handle, true);
+            }
+            Task::Instance(t) => {
+                let rec = scene.instances.get(t.handle)?;
+                let registered = *instance_registered.entry(t.handle).or_insert(rec.placement.is_some());
+                match t.operation {
+                    InstanceOperation::Register if registered => {
+                        return problem(InstanceHandle::KIND, t.handle.0, HandleProblem::AlreadyRegistered)
+                    }
+                    InstanceOperation::Update | InstanceOperation::Remove if !registered => {
+                        return problem(InstanceHandle::KIND, t.handle.0, HandleProblem::NotRegistered)
+                    }
+                    _ => {}
+                }
+                if t.operation != InstanceOperation::Remove {
+                    let g = scene.geometries.get(t.input.geometry)?;
+                    if !*geometry_registered.get(&t.input.geometry).unwrap_or(&g.registered()) {
+                        return problem(GeometryHandle::KIND, t.input.geometry.0, HandleProblem::NotRegistered);
+                    }
+                }
+                instance_registered.insert(t.handle, t.operation != InstanceOperation::Remove);
+            }
+            Task::ClearCache(t) => {
+                scene.instances.get(t.instance)?;
+            }
+            Task::BvhBuild(_) | Task::Render(_) => {}
+        }
+    }
+    let world = World { scene: &st.scene, cache_pool: &st.cache_pool, denoisers: &mut st.denoisers };
+    for task in tasks {
+        if let Task::Render(r) = task {
+            r.describe().check(&world)?;
+        }
+    }
+    Ok(())
+}
+
+impl Recorder<'_> {
+    /// Applies geometry and instance tasks to the registries and records the geometry copies
+    /// (and the read-backs of geometry that needs a surfel layout).
+    pub fn apply_scene_tasks(&mut self, tasks: &[Task]) -> Result<()> {
+        let (d, cmd, serial) = (&self.device.raw, self.cmd, self.serial);
+        let mut copies_declared = false;
+        let mut read_back: Vec<GeometryHandle> = Vec::new();
+        for task in tasks {
+            match task {
+                Task::Geometry(t) => {
+                    if !copies_declared {
+                        self.hazards.write(d, cmd, sync::TRANSFER_WRITE);
+                        copies_declared = true;
+                    }
+                    let layout = GeometryLayout::of(&t.input);
+                    let copy = geometry::record_copy(d, self.memory, cmd, &t.input, &layout)?;
+                    let st = &mut *self.st;
+                    let g = st.scene.geometries.get_mut(t.handle)?;
+                    if let Some(old) = g.copy.replace(copy) {
+                        st.deferred.retire(serial, Garbage::Buffer(old));
+                    }
+                    g.layout = Some(layout);
+                    g.input = t.input;
+                    let refit = t.operation == TaskOperation::Update && layout.allow_update && g.blas.is_some();
+                    if refit {
+                        g.needs_refit = true;
+                        st.scene.refit_queue.push(t.handle);
+                    } else {
+                        read_back.retain(|h| *h != t.handle);
+                        read_back.push(t.handle);
+                        g.build_id += 1;
+                        g.compacted_size = None;
+                        if g.blas.is_none() {
+                            g.state = BlasState::Queued;
+                        }
+                        if !st.scene.build_queue.contains(&t.handle) {
+                            st.scene.build_queue.push_back(t.handle);
+                        }
+                    }
+                }
+                Task::Instance(t) => self.apply_instance_task(t)?,
+                _ => {}
+            }
+        }
+        self.record_readbacks(&read_back)
+    }
+
+    fn apply_instance_task(&mut self, t: &InstanceTask) -> Result<()> {
+        let st = &mut *self.st;
+        let mut old = st.scene.instances.get(t.handle)?.placement;
+        // Moving an instance keeps its lighting; a new geometry needs a new cache.
+        let keep =
+            old.filter(|o| t.operation == InstanceOperation::Update && o.geometry == t.input.geometry).and_then(|o| o.cache);
+        if keep.is_some() {
+            if let Some(o) = old.as_mut() {
+                o.cache = None;
+            }
+        }
+        st.unplace(old);
+        let placement = (t.operation != InstanceOperation::Remove).then_some(Placement {
+            geometry: t.input.geometry,
+            transform: t.input.transform,
+            mask: t.input.mask.0,
+            initial_tile_color: t.input.initial_tile_color,
+            cache: keep,
+        });
+        st.scene.caches_dirty = true;
+        if let Some(p) = placement {
+            st.scene.geometries.get_mut(p.geometry)?.instance_refs += 1;
+        }
+        st.scene.instances.get_mut(t.handle)?.placement = placement;
+        st.scene.snapshot_dirty = true;
+        Ok(())
+    }
+}

@@ -1,0 +1,94 @@
+//! Tickets: `build_gpu_task` records a container into the engine's command buffer and hands
+//! out a ticket; `mark_gpu_task_completed` takes it back once the GPU is done, returns the
+//! working set to the pool and reports per-task GPU times.
+use super::container::TaskContainer;
+use super::record::Recorder;
+use super::{scene, ExecuteContext};
+use crate::error::{Error, Result};
+use crate::gpu::sync::Hazards;
+use crate::types::{CompletedTask, GpuTicket};
+use ash::vk;
+use std::sync::Arc;
+
+impl ExecuteContext {
+    /// Records every task of `container` into `cmd`, which the engine has begun and will end,
+    /// submit and wait for itself. On success the container is emptied and a ticket returned.
+    /// On error nothing usable was recorded, no state changed, and the container keeps its
+    /// tasks. (A Vulkan error in the middle of recording leaves `cmd` partly recorded: reset
+    /// it.)
+    pub fn build_gpu_task(&self, container: &mut TaskContainer, cmd: vk::CommandBuffer) -> Result<GpuTicket> {
+        if !std::ptr::eq(container.shared.as_ptr(), Arc::as_ptr(&self.shared)) {
+            return Err(Error::ForeignContainer);
+        }
+        if cmd == vk::CommandBuffer::null() {
+            return Err(Error::invalid("build_gpu_task command buffer", "is null"));
+        }
+        let shared = &*self.shared;
+        let mut guard = shared.state.lock();
+        let st = &mut *guard;
+        let ws = st
+            .working_sets
+            .iter()
+            .position(|w| w.in_flight.is_none())
+            .ok_or(Error::WorkingSetsExhausted { in_flight: st.working_sets.len() as u32 })?;
+        scene::validate_handles(st, &container.tasks)?;
+        st.collect_garbage(&shared.device, &shared.memory);
+
+        let serial = st.next_serial;
+        let mut recorder = Recorder {
+            device: &shared.device,
+            memory: &shared.memory,
+            st,
+            ws,
+            serial,
+            cmd,
+            hazards: Hazards::after_earlier_submissions(),
+            warned_inline: &shared.warned_inline,
+        };
+        recorder.record(&container.tasks)?;
+        st.next_serial += 1;
+        st.working_sets[ws].in_flight = Some(serial);
+        container.tasks.clear();
+        Ok(GpuTicket { ctx: shared.id, serial })
+    }
+
+    /// Hands a ticket back once the GPU has finished its command buffer: returns its working
+    /// set to the pool, frees what only it still used, and reports per-task GPU times.
+    pub fn mark_gpu_task_completed(&self, ticket: GpuTicket) -> Result<CompletedTask> {
+        let mut guard = self.shared.state.lock();
+        let st = &mut *guard;
+        let unknown = Error::UnknownTicket { serial: ticket.serial };
+        if ticket.ctx != self.shared.id {
+            return Err(unknown);
+        }
+        let ws_index = st.working_sets.iter().position(|w| w.in_flight == Some(ticket.serial)).ok_or(unknown)?;
+        let d = &self.shared.device;
+        let ws = &mut st.working_sets[ws_index];
+        let mut done = CompletedTask { serial: ticket.serial, timings: Vec::new() };
+        if let Some(period) = d.timestamp_period_ns {
+            match ws.timer.read(&d.raw, period) {
+                Ok(t) => done.timings = t,
+                Err(e) => log::warn!("ticket {}: timestamps unavailable ({e:?}); was it really complete?", ticket.serial),
+            }
+        }
+        if !ws.compactions.is_empty() {
+            let mut sizes = vec![0u64; ws.compactions.len()];
+            let r = unsafe { d.raw.get_query_pool_results(ws.compaction_pool, 0, &mut sizes, vk::QueryResultFlags::TYPE_64) };
+            let compactions = std::mem::take(&mut ws.compactions);
+            if r.is_ok() {
+                for ((h, build_id), size) in compactions.into_iter().zip(sizes) {
+                    if let Ok(g) = st.scene.geometries.get_mut(h) {
+                        if g.build_id == build_id && size > 0 {
+                            g.compacted_size = Some(size);
+                            st.scene.compaction_ready.push(h);
+                        }
+                    }
+                }
+            }
+        }
+        st.finish_readbacks(&self.shared.memory, ws_index);
+        st.working_sets[ws_index].in_flight = None;
+        st.collect_garbage(d, &self.shared.memory);
+        Ok(done)
+    }
+}

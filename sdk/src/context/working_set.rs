@@ -1,0 +1,145 @@
+//! A working set: what one ticket in flight owns, so frames in flight never share mutable GPU
+//! memory — its upload ring, timestamp and compaction query pools, build scratch, the geometry
+//! read-backs it carries home, and its own TLAS.
+use super::record::Recorder;
+use crate::error::{Error, Result};
+use crate::gpu::deferred::Garbage;
+use crate::gpu::device::Device;
+use crate::gpu::memory::{self, Buffer, Memory, MemoryKind};
+use crate::gpu::timestamps::Timer;
+use crate::gpu::upload::UploadRing;
+use crate::scene::tlas::Tlas;
+use crate::types::{GeometryHandle, InitSettings};
+use ash::vk;
+use gpu_allocator::MemoryLocation;
+
+pub(super) struct WorkingSet {
+    /// The serial of the ticket using it, while one is in flight.
+    pub in_flight: Option<u64>,
+    pub ring: UploadRing,
+    pub scratch: Option<Buffer>,
+    pub timer: Timer,
+    pub compaction_pool: vk::QueryPool,
+    pub compaction_slots: u32,
+    /// Geometries whose compacted size this ticket queries: (geometry, build id).
+    pub compactions: Vec<(GeometryHandle, u64)>,
+    /// Geometry copies read back for their surfel layouts: (geometry, build id, buffer).
+    pub readbacks: Vec<(GeometryHandle, u64, Buffer)>,
+    pub tlas: Tlas,
+}
+
+impl WorkingSet {
+    pub fn new(device: &Device, memory: &Memory, settings: &InitSettings) -> Result<WorkingSet> {
+        let d = &device.raw;
+        // Two slots per timed task plus the nested BLAS/TLAS intervals of the BVH work.
+        let timer = Timer::new(d, settings.max_timed_tasks * 2 + 4, device.timestamp_period_ns.is_some())?;
+        let ring = match UploadRing::new(memory, settings.upload_ring_bytes.max(4096)) {
+            Ok(r) => r,
+            Err(e) => {
+                timer.destroy(d);
+                return Err(e);
+            }
+        };
+        Ok(WorkingSet {
+            in_flight: None,
+            ring,
+            scratch: None,
+            timer,
+            compaction_pool: vk::QueryPool::null(),
+            compaction_slots: 0,
+            compactions: Vec::new(),
+            readbacks: Vec::new(),
+            tlas: Tlas { accel: None, version: 0 },
+        })
+    }
+
+    /// The TLAS to bind (null before the first build).
+    pub fn tlas_handle(&self) -> vk::AccelerationStructureKHR {
+        self.tlas.accel.as_ref().map(|a| a.accel).unwrap_or_default()
+    }
+
+    /// Makes the compaction query pool hold at least `n` queries. The set is idle (its ticket
+    /// came back), so the old pool can go at once.
+    pub fn ensure_compaction_slots(&mut self, d: &ash::Device, n: u32) -> Result<()> {
+        if self.compaction_slots >= n {
+            return Ok(());
+        }
+        if self.compaction_pool != vk::QueryPool::null() {
+            unsafe { d.destroy_query_pool(self.compaction_pool, None) };
+            self.compaction_pool = vk::QueryPool::null();
+            self.compaction_slots = 0;
+        }
+        let slots = n.max(16).next_power_of_two();
+        let info = vk::QueryPoolCreateInfo::default()
+            .query_type(vk::QueryType::ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR)
+            .query_count(slots);
+        self.compaction_pool = unsafe { d.create_query_pool(&info, None) }.map_err(Error::vk("vkCreateQueryPool"))?;
+        self.compaction_slots = slots;
+        Ok(())
+    }
+
+    /// Destroys everything it owns (no ticket of it may be in flight).
+    pub fn destroy(mut self, device: &Device, memory: &Memory) {
+        self.tlas.destroy(device, memory);
+        for (_, _, b) in self.readbacks.drain(..) {
+            memory.destroy_buffer(b);
+        }
+        memory.destroy_buffer(self.ring.buffer);
+        if let Some(s) = self.scratch.take() {
+            memory.destroy_buffer(s);
+        }
+        self.timer.destroy(&device.raw);
+        if self.compaction_pool != vk::QueryPool::null() {
+            unsafe { device.raw.destroy_query_pool(self.compaction_pool, None) };
+        }
+    }
+}
+
+impl Recorder<'_> {
+    /// Build scratch of at least `bytes` (plus alignment slack), returned for binding. Scratch
+    /// written earlier in this recording may still be in use by the GPU when a larger one
+    /// replaces it, so the old one goes through deferred destruction; within one recording,
+    /// scratch is only reused after a barrier.
+    pub fn ensure_scratch(&mut self, bytes: u64) -> Result<vk::DeviceAddress> {
+        let (serial, memory) = (self.serial, self.memory);
+        let st = &mut *self.st;
+        let ws = &mut st.working_sets[self.ws];
+        let deferred = &mut st.deferred;
+        memory::ensure_capacity(
+            &mut ws.scratch,
+            bytes + self.device.scratch_alignment,
+            |size| {
+                memory.create_buffer(
+                    "build scratch",
+                    size,
+                    vk::BufferUsageFlags::STORAGE_BUFFER,
+                    MemoryLocation::GpuOnly,
+                    MemoryKind::BuildScratch,
+                )
+            },
+            |old| deferred.retire(serial, Garbage::Buffer(old)),
+        )?;
+        // The slack above lets the base meet minAccelerationStructureScratchOffsetAlignment.
+        let align = self.device.scratch_alignment.max(1);
+        Ok(ws.scratch.as_ref().map_or(0, |s| s.address.div_ceil(align) * align))
+    }
+
+    /// Grows the ring so `more` bytes fit after what this recording already wrote. Data
+    /// already pushed stays valid: the old ring is retired, not freed, until this ticket is back.
+    pub fn ensure_ring(&mut self, more: u64) -> Result<()> {
+        let st = &mut *self.st;
+        let ws = &mut st.working_sets[self.ws];
+        if ws.ring.remaining() >= more {
+            return Ok(());
+        }
+        let size = (ws.ring.capacity() + more).max(ws.ring.capacity() * 3 / 2);
+        let fresh = UploadRing::new(self.memory, size)?;
+        let old = std::mem::replace(&mut ws.ring, fresh);
+        st.deferred.retire(self.serial, Garbage::Buffer(old.buffer));
+        Ok(())
+    }
+
+    pub fn working_set(&mut self) -> &mut WorkingSet {
+        &mut self.st.working_sets[self.ws]
+    }
+}
