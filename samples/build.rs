@@ -22,7 +22,9 @@ fn main() {
         let file = src.file_name().unwrap().to_str().unwrap().to_string();
         let spv = out.join(format!("{file}.spv"));
         let o = Command::new(&compiler)
-            .args(["-V", "--target-env", "vulkan1.2", "-o"])
+            // Vulkan 1.3 (SPIR-V 1.6): compute workgroup sizes as LocalSizeId, not the deprecated
+            // WorkgroupSize built-in (the device enables maintenance4 for it).
+            .args(["-V", "--target-env", "vulkan1.3", "-o"])
             .arg(&spv)
             .arg(&src)
             .output()

@@ -50,9 +50,20 @@ fn main() {
     std::fs::write(out.join("shaders.rs"), rust).unwrap();
 }
 
+/// Ray-tracing stages are SPIR-V 1.4 (what VK_KHR_ray_tracing_pipeline needs); compute shaders
+/// are SPIR-V 1.6, where the workgroup size is an execution mode (LocalSizeId) instead of the
+/// WorkgroupSize built-in that 1.6 deprecates (and the best-practices layer warns about).
+fn spirv_version(src: &Path) -> &'static str {
+    if src.extension().is_some_and(|e| e == "comp") {
+        "spirv1.6"
+    } else {
+        "spirv1.4"
+    }
+}
+
 fn compile(compiler: &str, src: &Path, spv: &Path) {
     let output = Command::new(compiler)
-        .args(["-V", "--target-env", "spirv1.4", "-o"])
+        .args(["-V", "--target-env", spirv_version(src), "-o"])
         .arg(spv)
         .arg(src)
         .output()
@@ -68,7 +79,7 @@ fn compile(compiler: &str, src: &Path, spv: &Path) {
 }
 
 fn validate(spv: &Path, name: &str) {
-    let output = Command::new("spirv-val").args(["--target-env", "vulkan1.2"]).arg(spv).output().expect("run spirv-val");
+    let output = Command::new("spirv-val").args(["--target-env", "vulkan1.3"]).arg(spv).output().expect("run spirv-val");
     if !output.status.success() {
         panic!("shader {name} failed spirv-val:\n{}", String::from_utf8_lossy(&output.stderr));
     }

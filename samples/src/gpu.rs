@@ -255,7 +255,7 @@ impl GpuTimer {
         // SAFETY: cmd is recording, outside a render pass.
         unsafe {
             host.device.cmd_reset_query_pool(cmd, self.pool, 0, MAX_MARKS + 1);
-            host.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, 0);
+            host.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, self.pool, 0);
         }
     }
 
@@ -267,7 +267,7 @@ impl GpuTimer {
         self.labels.push(label);
         // SAFETY: cmd is recording; the query was reset in `begin`.
         unsafe {
-            host.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, self.labels.len() as u32)
+            host.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, self.pool, self.labels.len() as u32)
         };
     }
 

@@ -7,7 +7,7 @@ use crate::renderer::{Renderer, Settings, Stats};
 use crate::scene::SampleScene;
 use ash::vk;
 use glam::Vec3;
-use hybrid_rt_testkit::host::{Host, HostResult};
+use hybrid_rt_testkit::host::{Host, HostResult, WORK_STAGES};
 use hybrid_rt_testkit::reference::Camera;
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 use std::path::PathBuf;
@@ -206,17 +206,18 @@ impl App<'_> {
             base_array_layer: 0,
             layer_count: 1,
         };
-        let barrier = |from, to, src: vk::AccessFlags2, dst: vk::AccessFlags2| {
+        let barrier_of = |image, from, to, src: vk::AccessFlags2, dst: vk::AccessFlags2| {
             vk::ImageMemoryBarrier2::default()
-                .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                .src_stage_mask(WORK_STAGES)
                 .src_access_mask(src)
-                .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                .dst_stage_mask(WORK_STAGES)
                 .dst_access_mask(dst)
                 .old_layout(from)
                 .new_layout(to)
                 .image(image)
                 .subresource_range(range)
         };
+        let barrier = |from, to, src, dst| barrier_of(image, from, to, src, dst);
         let blit = vk::ImageBlit {
             src_subresource: layers,
             src_offsets: [vk::Offset3D::default(), vk::Offset3D { x: display.width as i32, y: display.height as i32, z: 1 }],
@@ -226,32 +227,53 @@ impl App<'_> {
         // SAFETY: cmd is recording; the swapchain image was acquired for this frame.
         unsafe {
             host.full_barrier(cmd);
-            let to_dst = [barrier(
-                vk::ImageLayout::UNDEFINED,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                vk::AccessFlags2::NONE,
-                vk::AccessFlags2::TRANSFER_WRITE,
-            )];
+            // The view image lives in GENERAL (a storage image); blits read best from
+            // TRANSFER_SRC_OPTIMAL, and it goes back to GENERAL for the next frame's view pass.
+            let to_dst = [
+                barrier(
+                    vk::ImageLayout::UNDEFINED,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    vk::AccessFlags2::NONE,
+                    vk::AccessFlags2::TRANSFER_WRITE,
+                ),
+                barrier_of(
+                    display.image,
+                    vk::ImageLayout::GENERAL,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    vk::AccessFlags2::SHADER_STORAGE_WRITE,
+                    vk::AccessFlags2::TRANSFER_READ,
+                ),
+            ];
             host.device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_dst));
             host.device.cmd_blit_image(
                 cmd,
                 display.image,
-                vk::ImageLayout::GENERAL,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
                 image,
                 vk::ImageLayout::TRANSFER_DST_OPTIMAL,
                 &[blit],
                 vk::Filter::LINEAR,
             );
-            let to_present = [barrier(
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                vk::ImageLayout::PRESENT_SRC_KHR,
-                vk::AccessFlags2::TRANSFER_WRITE,
-                vk::AccessFlags2::NONE,
-            )];
+            let to_present = [
+                barrier(
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    vk::ImageLayout::PRESENT_SRC_KHR,
+                    vk::AccessFlags2::TRANSFER_WRITE,
+                    vk::AccessFlags2::NONE,
+                ),
+                barrier_of(
+                    display.image,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    vk::ImageLayout::GENERAL,
+                    vk::AccessFlags2::NONE,
+                    vk::AccessFlags2::SHADER_STORAGE_WRITE,
+                ),
+            ];
             host.device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().image_memory_barriers(&to_present));
         }
         let rendered = sc.rendered[index as usize];
-        self.renderer.submit_frame(slot, &[(self.acquired[slot], vk::PipelineStageFlags::ALL_COMMANDS)], &[rendered])?;
+        // The acquired image is first touched by the blit (transfer stage).
+        self.renderer.submit_frame(slot, &[(self.acquired[slot], vk::PipelineStageFlags::TRANSFER)], &[rendered])?;
         let (swapchains, indices, waits) = ([sc.swapchain], [index], [rendered]);
         let present = vk::PresentInfoKHR::default().wait_semaphores(&waits).swapchains(&swapchains).image_indices(&indices);
         // SAFETY: the image was acquired and the submit signals `rendered`.

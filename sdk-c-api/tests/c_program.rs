@@ -42,7 +42,13 @@ fn c_program_runs_ao_end_to_end() {
         .status()
         .expect("run the C compiler (install gcc: scripts/setup.sh)");
     assert!(status.success(), "the C sample did not compile");
-    let out = Command::new(&exe).output().expect("run the C sample");
+    // The layer's own settings variable: synchronization validation always, best practices when
+    // the suite runs with them (the C program makes its own instance). A ':'-separated list.
+    let mut checks = vec!["VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT"];
+    if std::env::var("HRT_BEST_PRACTICES").is_ok_and(|v| v != "0") {
+        checks.push("VK_VALIDATION_FEATURE_ENABLE_BEST_PRACTICES_EXT");
+    }
+    let out = Command::new(&exe).env("VK_LAYER_ENABLES", checks.join(":")).output().expect("run the C sample");
     let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     eprintln!("{text}");
     assert!(out.status.success(), "the C sample failed");

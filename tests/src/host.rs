@@ -4,8 +4,12 @@
 //! command buffers, and moves images and buffers between host and GPU.
 //!
 //! The Khronos validation layer is enabled when installed (set HRT_VALIDATION=0 to turn it
-//! off); every error it reports is counted, and `Host::validation_errors` lets a test fail on
-//! it. Device choice: the first device with ray tracing, or the first whose name contains
+//! off), with synchronization validation (HRT_SYNC_VALIDATION=0 turns that part off) and,
+//! with HRT_BEST_PRACTICES=1, the best-practices checks. Every error and warning it reports
+//! about this host's instance is counted per host, and dropping a host that saw any panics with
+//! the messages: a test passes only with a clean log, whether or not it asks. Warnings on the
+//! short list in `IGNORED_WARNINGS` (each says why) are logged, not counted.
+//! Device choice: the first device with ray tracing, or the first whose name contains
 //! HRT_DEVICE (e.g. HRT_DEVICE=llvmpipe).
 use ash::{ext, vk};
 use hybrid_rt::{DeviceDesc, DeviceFeatures};
@@ -13,30 +17,66 @@ use std::ffi::{c_void, CStr};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
+/// Errors and counted warnings of every host of the process (what `Host::validation_errors`
+/// reports).
 static VALIDATION_ERRORS: AtomicUsize = AtomicUsize::new(0);
 static VALIDATION_MESSAGES: Mutex<Vec<String>> = Mutex::new(Vec::new());
+
+/// Warnings that are not counted, by message id, each with the reason. Everything else the
+/// layer says fails the test.
+/// The best-practices checks among them can only come from calls the test host makes and the
+/// SDK never does (the SDK allocates through gpu-allocator's large blocks, creates no command
+/// pools and submits nothing), so they say nothing about the SDK.
+const IGNORED_WARNINGS: &[(&str, &str)] = &[
+    ("UNASSIGNED-BestPractices-vkAllocateMemory-small-allocation", "the test host allocates memory per resource"),
+    ("UNASSIGNED-BestPractices-vkBindMemory-small-dedicated-allocation", "the test host allocates memory per resource"),
+    ("UNASSIGNED-BestPractices-vkCreateCommandPool-command-buffer-reset", "the test host resets command buffers one by one"),
+];
+
+/// What the validation layer said about one host's instance (the messenger's user data).
+#[derive(Default)]
+struct ValidationLog {
+    problems: Mutex<Vec<String>>,
+}
 
 unsafe extern "system" fn debug_callback(
     severity: vk::DebugUtilsMessageSeverityFlagsEXT,
     _types: vk::DebugUtilsMessageTypeFlagsEXT,
     data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
-    _user: *mut c_void,
+    user: *mut c_void,
 ) -> vk::Bool32 {
-    let msg = if data.is_null() || (*data).p_message.is_null() {
-        String::from("(no message)")
+    let text =
+        |p: *const std::ffi::c_char| if p.is_null() { String::new() } else { CStr::from_ptr(p).to_string_lossy().into_owned() };
+    let (msg, id) = if data.is_null() {
+        (String::from("(no message)"), String::new())
     } else {
-        CStr::from_ptr((*data).p_message).to_string_lossy().into_owned()
+        (text((*data).p_message), text((*data).p_message_id_name))
     };
-    if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
-        VALIDATION_ERRORS.fetch_add(1, Ordering::SeqCst);
-        eprintln!("[vulkan validation error] {msg}");
-        if let Ok(mut m) = VALIDATION_MESSAGES.lock() {
-            m.push(msg);
+    let error = severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR);
+    if !error && !severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING) {
+        return vk::FALSE;
+    }
+    if let Some((_, why)) = IGNORED_WARNINGS.iter().find(|(ignored, _)| !error && id == *ignored) {
+        log::info!("[vulkan validation, ignored: {why}] {msg}");
+        return vk::FALSE;
+    }
+    let line = format!("{} {msg}", if error { "error:" } else { "warning:" });
+    eprintln!("[vulkan validation] {line}");
+    VALIDATION_ERRORS.fetch_add(1, Ordering::SeqCst);
+    if let Ok(mut m) = VALIDATION_MESSAGES.lock() {
+        m.push(line.clone());
+    }
+    // SAFETY: `user` is the host's boxed log, which outlives its messenger.
+    if let Some(log) = (user as *const ValidationLog).as_ref() {
+        if let Ok(mut p) = log.problems.lock() {
+            p.push(line);
         }
-    } else if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING) {
-        log::warn!("[vulkan validation] {msg}");
     }
     vk::FALSE
+}
+
+fn env_flag(name: &str, default: bool) -> bool {
+    std::env::var(name).map(|v| v != "0").unwrap_or(default)
 }
 
 pub struct Host {
@@ -51,6 +91,8 @@ pub struct Host {
     pub device_name: String,
     pool: vk::CommandPool,
     debug: Option<(ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    /// Boxed: the messenger holds its address.
+    validation_log: Box<ValidationLog>,
     memory_props: vk::PhysicalDeviceMemoryProperties,
 }
 
@@ -91,6 +133,44 @@ pub struct HostBuffer {
 
 pub type HostResult<T> = Result<T, String>;
 
+/// Every stage the host, the sample and the SDK run work in: what a "full" barrier of theirs
+/// waits for and blocks. (ALL_COMMANDS would say the same and draw a best-practices warning.)
+pub const WORK_STAGES: vk::PipelineStageFlags2 = vk::PipelineStageFlags2::from_raw(
+    vk::PipelineStageFlags2::COPY.as_raw()
+        | vk::PipelineStageFlags2::BLIT.as_raw()
+        | vk::PipelineStageFlags2::CLEAR.as_raw()
+        | vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR.as_raw()
+        | vk::PipelineStageFlags2::COMPUTE_SHADER.as_raw()
+        | vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR.as_raw()
+        | vk::PipelineStageFlags2::VERTEX_INPUT.as_raw()
+        | vk::PipelineStageFlags2::VERTEX_SHADER.as_raw()
+        | vk::PipelineStageFlags2::FRAGMENT_SHADER.as_raw()
+        | vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS.as_raw()
+        | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS.as_raw()
+        | vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT.as_raw(),
+);
+
+/// The accesses an image in `layout` is used with: what a barrier leaving the layout (`src`)
+/// waits for, or entering it makes visible.
+pub fn layout_access(layout: vk::ImageLayout, src: bool) -> vk::AccessFlags2 {
+    use vk::AccessFlags2 as A;
+    use vk::ImageLayout as L;
+    match layout {
+        L::UNDEFINED | L::PRESENT_SRC_KHR => A::NONE,
+        L::TRANSFER_DST_OPTIMAL => A::TRANSFER_WRITE,
+        L::TRANSFER_SRC_OPTIMAL => A::TRANSFER_READ,
+        L::SHADER_READ_ONLY_OPTIMAL | L::DEPTH_READ_ONLY_OPTIMAL | L::DEPTH_STENCIL_READ_ONLY_OPTIMAL | L::READ_ONLY_OPTIMAL => {
+            A::SHADER_READ
+        }
+        L::COLOR_ATTACHMENT_OPTIMAL => A::COLOR_ATTACHMENT_WRITE | A::COLOR_ATTACHMENT_READ,
+        L::DEPTH_ATTACHMENT_OPTIMAL | L::DEPTH_STENCIL_ATTACHMENT_OPTIMAL => {
+            A::DEPTH_STENCIL_ATTACHMENT_WRITE | A::DEPTH_STENCIL_ATTACHMENT_READ
+        }
+        _ if src => A::MEMORY_WRITE,
+        _ => A::MEMORY_READ | A::MEMORY_WRITE,
+    }
+}
+
 fn vkerr(what: &'static str) -> impl Fn(vk::Result) -> String {
     move |e| format!("{what}: {e:?}")
 }
@@ -106,7 +186,7 @@ impl Host {
     pub fn with_extensions(instance_extensions: &[&CStr], device_extensions: &[&'static CStr]) -> HostResult<Host> {
         let entry = unsafe { ash::Entry::load() }.map_err(|e| format!("no Vulkan loader: {e}"))?;
         let layers = unsafe { entry.enumerate_instance_layer_properties() }.unwrap_or_default();
-        let want_validation = std::env::var("HRT_VALIDATION").map(|v| v != "0").unwrap_or(true);
+        let want_validation = env_flag("HRT_VALIDATION", true);
         let validation_name = c"VK_LAYER_KHRONOS_validation";
         let validation_enabled = want_validation && layers.iter().any(|l| l.layer_name_as_c_str() == Ok(validation_name));
         let exts = unsafe { entry.enumerate_instance_extension_properties(None) }.unwrap_or_default();
@@ -120,8 +200,19 @@ impl Host {
             .application_info(&app)
             .enabled_layer_names(&layer_names)
             .enabled_extension_names(&ext_names);
+        // Synchronization validation always (it found real hazards); best practices on request.
+        let mut checks = Vec::new();
+        if env_flag("HRT_SYNC_VALIDATION", true) {
+            checks.push(vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION);
+        }
+        if env_flag("HRT_BEST_PRACTICES", false) {
+            checks.push(vk::ValidationFeatureEnableEXT::BEST_PRACTICES);
+        }
+        let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&checks);
+        let info = if validation_enabled && !checks.is_empty() { info.push_next(&mut features) } else { info };
         let instance = unsafe { entry.create_instance(&info, None) }.map_err(vkerr("vkCreateInstance"))?;
 
+        let validation_log = Box::<ValidationLog>::default();
         let debug = if has_debug {
             let loader = ext::debug_utils::Instance::new(&entry, &instance);
             let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
@@ -131,7 +222,8 @@ impl Host {
                         | vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
                         | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
                 )
-                .pfn_user_callback(Some(debug_callback));
+                .pfn_user_callback(Some(debug_callback))
+                .user_data(&*validation_log as *const ValidationLog as *mut c_void);
             let m = unsafe { loader.create_debug_utils_messenger(&info, None) }.map_err(vkerr("debug messenger"))?;
             Some((loader, m))
         } else {
@@ -200,6 +292,7 @@ impl Host {
             device_name,
             pool,
             debug,
+            validation_log,
             memory_props,
         })
     }
@@ -215,7 +308,12 @@ impl Host {
         }
     }
 
-    /// Validation errors reported so far in this process.
+    /// Validation errors and counted warnings reported so far by this host's instance.
+    pub fn validation_problems(&self) -> Vec<String> {
+        self.validation_log.problems.lock().map(|p| p.clone()).unwrap_or_default()
+    }
+
+    /// Validation errors and counted warnings reported so far in this process.
     pub fn validation_errors() -> usize {
         VALIDATION_ERRORS.load(Ordering::SeqCst)
     }
@@ -382,13 +480,14 @@ impl Host {
         }
     }
 
-    /// Records a layout transition with a full memory dependency (test code: simple > tight).
+    /// Records a layout transition after every earlier use of the image (test code: simple >
+    /// tight), with the access masks each layout implies.
     pub fn transition(&self, cmd: vk::CommandBuffer, img: &HostImage, from: vk::ImageLayout, to: vk::ImageLayout) {
         let b = [vk::ImageMemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-            .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
-            .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)
+            .src_stage_mask(WORK_STAGES)
+            .src_access_mask(layout_access(from, true))
+            .dst_stage_mask(WORK_STAGES)
+            .dst_access_mask(layout_access(to, false))
             .old_layout(from)
             .new_layout(to)
             .image(img.image)
@@ -399,9 +498,9 @@ impl Host {
     /// A full memory barrier (what an engine places between its work and the SDK's).
     pub fn full_barrier(&self, cmd: vk::CommandBuffer) {
         let b = [vk::MemoryBarrier2::default()
-            .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            .src_stage_mask(WORK_STAGES)
             .src_access_mask(vk::AccessFlags2::MEMORY_WRITE)
-            .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+            .dst_stage_mask(WORK_STAGES)
             .dst_access_mask(vk::AccessFlags2::MEMORY_READ | vk::AccessFlags2::MEMORY_WRITE)];
         unsafe { self.device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&b)) };
     }
@@ -525,6 +624,9 @@ impl Drop for Host {
             }
             self.instance.destroy_instance(None);
         }
+        // Leaks are reported at vkDestroyDevice: check after it.
+        let problems = self.validation_problems();
+        assert!(problems.is_empty(), "the validation layer reported {} problem(s):\n{}", problems.len(), problems.join("\n"));
     }
 }
 

@@ -586,11 +586,14 @@ impl<'h> Renderer<'h> {
         let d = &self.host.device;
         let cmds = [s.cmd];
         let (wait_sems, wait_stages): (Vec<_>, Vec<_>) = waits.iter().copied().unzip();
-        let info = vk::SubmitInfo::default()
-            .command_buffers(&cmds)
-            .wait_semaphores(&wait_sems)
-            .wait_dst_stage_mask(&wait_stages)
-            .signal_semaphores(signals);
+        let mut info = vk::SubmitInfo::default().command_buffers(&cmds);
+        // Empty lists stay null (an empty slice would still set the pointers).
+        if !waits.is_empty() {
+            info = info.wait_semaphores(&wait_sems).wait_dst_stage_mask(&wait_stages);
+        }
+        if !signals.is_empty() {
+            info = info.signal_semaphores(signals);
+        }
         // SAFETY: the command buffer was recorded by `record_frame`; the fence was reset.
         unsafe {
             d.end_command_buffer(s.cmd).map_err(|e| format!("end: {e:?}"))?;

@@ -40,7 +40,8 @@ impl DeviceFeatures {
                 vk::PhysicalDeviceFeatures::default().shader_storage_image_write_without_format(true).shader_int64(false),
             ),
             vulkan12: vk::PhysicalDeviceVulkan12Features::default().buffer_device_address(true),
-            vulkan13: vk::PhysicalDeviceVulkan13Features::default().synchronization2(true),
+            // maintenance4: compute shaders are SPIR-V 1.6, whose workgroup size is LocalSizeId.
+            vulkan13: vk::PhysicalDeviceVulkan13Features::default().synchronization2(true).maintenance4(true),
             acceleration_structure: vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true),
             ray_tracing_pipeline: vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default().ray_tracing_pipeline(true),
             ray_query: vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(with_ray_query),
@@ -111,10 +112,11 @@ pub fn query_device_support(instance: &ash::Instance, pdev: vk::PhysicalDevice) 
         unsafe { instance.get_physical_device_features2(pdev, &mut f2) };
         f2.features
     };
-    let checks: [(&str, vk::Bool32); 6] = [
+    let checks: [(&str, vk::Bool32); 7] = [
         ("feature shaderBufferFloat32AtomicAdd", faf.shader_buffer_float32_atomic_add),
         ("feature bufferDeviceAddress", f12.buffer_device_address),
         ("feature synchronization2", f13.synchronization2),
+        ("feature maintenance4", f13.maintenance4),
         ("feature accelerationStructure", fas.acceleration_structure),
         ("feature rayTracingPipeline", frt.ray_tracing_pipeline),
         ("feature shaderStorageImageWriteWithoutFormat", core.shader_storage_image_write_without_format),

@@ -32,6 +32,14 @@ pub(crate) const AS_COPY: Use = Use {
     ),
 };
 
+/// Every stage the SDK's own commands run in (what its persistent state was written by).
+pub(crate) const SDK_STAGES: vk::PipelineStageFlags2 = vk::PipelineStageFlags2::from_raw(
+    vk::PipelineStageFlags2::COPY.as_raw()
+        | vk::PipelineStageFlags2::ACCELERATION_STRUCTURE_BUILD_KHR.as_raw()
+        | vk::PipelineStageFlags2::COMPUTE_SHADER.as_raw()
+        | vk::PipelineStageFlags2::RAY_TRACING_SHADER_KHR.as_raw(),
+);
+
 /// Reads and writes of a trace or compute pass at `stage`.
 pub(crate) fn shader_read(stage: vk::PipelineStageFlags2) -> Use {
     Use {
@@ -63,10 +71,7 @@ impl Hazards {
     /// the TLAS) was written by earlier command buffers. Submission order alone does not make
     /// those writes visible, so the first use in this recording waits on them (one barrier).
     pub fn after_earlier_submissions() -> Hazards {
-        Hazards {
-            write: Some(Use { stages: vk::PipelineStageFlags2::ALL_COMMANDS, access: vk::AccessFlags2::MEMORY_WRITE }),
-            ..Default::default()
-        }
+        Hazards { write: Some(Use { stages: SDK_STAGES, access: vk::AccessFlags2::MEMORY_WRITE }), ..Default::default() }
     }
 
     /// Declares that the next commands read with `u`; records a barrier if an earlier write is

@@ -42,8 +42,10 @@ impl Timer {
 
     fn write(&mut self, device: &ash::Device, cmd: vk::CommandBuffer) -> u32 {
         let slot = self.next;
-        // ALL_COMMANDS: the stamp waits for earlier work, so intervals measure their own work.
-        unsafe { device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, slot) };
+        // BOTTOM_OF_PIPE: the stamp is written once earlier work has finished, so intervals
+        // measure their own work. (ALL_COMMANDS means the same here but draws a best-practices
+        // warning; the timestamp stage must be a single stage.)
+        unsafe { device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, self.pool, slot) };
         self.next += 1;
         slot
     }

@@ -168,7 +168,13 @@ impl DenoisePass {
                     vk::ImageMemoryBarrier2::default()
                         .src_stage_mask(vk::PipelineStageFlags2::NONE)
                         .dst_stage_mask(stage)
-                        .dst_access_mask(vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE)
+                        // Sampled too: a history image stands in for a missing roughness or
+                        // motion input, and a bound descriptor counts as read.
+                        .dst_access_mask(
+                            vk::AccessFlags2::SHADER_SAMPLED_READ
+                                | vk::AccessFlags2::SHADER_STORAGE_READ
+                                | vk::AccessFlags2::SHADER_STORAGE_WRITE,
+                        )
                         .old_layout(vk::ImageLayout::UNDEFINED)
                         .new_layout(vk::ImageLayout::GENERAL)
                         .image(i.raw)
