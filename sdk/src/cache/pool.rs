@@ -91,6 +91,23 @@ impl CachePool {
         self.retired.push((serial, r));
     }
 
+    /// Pages, free runs, high-water marks and retired ranges, for the state digest.
+    #[cfg(feature = "fault-injection")]
+    pub fn digest(&self) -> String {
+        let pages: Vec<_> = self.pages.iter().map(|p| (p.buffer.raw, p.capacity, &p.free, p.high_water)).collect();
+        format!("{pages:?} retired {:?}", self.retired)
+    }
+
+    /// How many ranges wait for their tickets (a failed build truncates back to it).
+    pub fn retired_len(&self) -> usize {
+        self.retired.len()
+    }
+
+    /// Forgets retirements made after `len` was read (their ranges stay in use).
+    pub fn truncate_retired(&mut self, len: usize) {
+        self.retired.truncate(len);
+    }
+
     /// Frees the retired ranges no in-flight ticket can still use.
     pub fn collect(&mut self, oldest_in_flight: Option<u64>) {
         let (free, keep): (Vec<_>, Vec<_>) =

@@ -1,8 +1,8 @@
 //! BVH recording: compactions of BLASes built earlier, throttled BLAS builds and refits in one
 //! batch, compacted-size queries, and the working set's TLAS.
+use super::journal::{Held, Slot};
 use super::record::Recorder;
 use crate::error::Result;
-use crate::gpu::deferred::Garbage;
 use crate::gpu::memory::MemoryKind;
 use crate::gpu::sync;
 use crate::scene::blas::{self, BuildJob};
@@ -14,36 +14,32 @@ use ash::vk;
 impl Recorder<'_> {
     /// Compactions, throttled BLAS builds and refits, in one batch where possible.
     pub fn record_blas_work(&mut self, max_builds: u32) -> Result<()> {
-        let (device, memory, cmd, serial) = (self.device, self.memory, self.cmd, self.serial);
+        let (device, memory, cmd) = (self.device, self.memory, self.cmd);
         let d = &device.raw;
         let st = &mut *self.st;
+        let journal = &mut self.journal;
 
         // Compactions of BLASes built in earlier tickets.
         let ready = std::mem::take(&mut st.scene.compaction_ready);
         let mut declared = false;
         for h in ready {
             let Ok(g) = st.scene.geometries.get_mut(h) else { continue };
-            let Some(size) = g.compacted_size.take() else { continue };
-            let Some(old) = g.blas.take() else { continue };
-            let compact =
-                match blas::create(device, memory, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, size, MemoryKind::Blas) {
-                    Ok(c) => c,
-                    Err(e) => {
-                        g.blas = Some(old);
-                        return Err(e);
-                    }
-                };
+            let (Some(size), Some(src)) = (g.compacted_size, g.blas.as_ref().map(|b| b.accel)) else { continue };
+            let compact = blas::create(device, memory, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, size, MemoryKind::Blas)?;
+            let dst = compact.accel;
+            journal.touch_geometry(h, g.meta());
+            g.compacted_size = None;
+            let old = g.blas.replace(compact);
+            journal.replaced(Slot::Blas(h), old.map(Held::Accel));
             if !declared {
                 self.hazards.read_write(d, cmd, sync::AS_COPY, sync::AS_COPY);
                 declared = true;
             }
             let info = vk::CopyAccelerationStructureInfoKHR::default()
-                .src(old.accel)
-                .dst(compact.accel)
+                .src(src)
+                .dst(dst)
                 .mode(vk::CopyAccelerationStructureModeKHR::COMPACT);
             unsafe { device.accel.cmd_copy_acceleration_structure(cmd, &info) };
-            g.blas = Some(compact);
-            st.deferred.retire(serial, Garbage::AccelerationStructure(old.accel, old.buffer));
             st.scene.snapshot_dirty = true;
         }
 
@@ -58,6 +54,7 @@ impl Recorder<'_> {
             if !g.needs_refit {
                 continue;
             }
+            journal.touch_geometry(h, g.meta());
             g.needs_refit = false;
             let (Some(layout), Some(copy), Some(b)) = (g.layout, g.copy.as_ref(), g.blas.as_ref()) else { continue };
             let geometry = blas::triangles(copy.address, &layout);
@@ -101,9 +98,9 @@ impl Recorder<'_> {
                 MemoryKind::Blas,
             )?;
             let dst = fresh.accel;
-            if let Some(old) = g.blas.replace(fresh) {
-                st.deferred.retire(serial, Garbage::AccelerationStructure(old.accel, old.buffer));
-            }
+            journal.touch_geometry(h, g.meta());
+            let old = g.blas.replace(fresh);
+            journal.replaced(Slot::Blas(h), old.map(Held::Accel));
             g.state = BlasState::Ready;
             g.needs_refit = false;
             if !layout.allow_update {
@@ -163,7 +160,9 @@ impl Recorder<'_> {
         self.ensure_ring(self.st.scene.snapshot.len() as u64 * 64 + 256)?;
         let st = &mut *self.st;
         let ws = &mut st.working_sets[self.ws];
-        ws.tlas.ensure_storage(device, memory, sizes.acceleration_structure_size)?;
+        if let Some(old) = ws.tlas.ensure_storage(device, memory, sizes.acceleration_structure_size)? {
+            self.journal.replaced(Slot::Tlas, old.map(Held::Accel));
+        }
         let upload = ws.ring.push(instance::instance_bytes(&st.scene.snapshot), 16);
         self.hazards.read_write(&device.raw, cmd, sync::AS_BUILD_READ, sync::AS_BUILD_WRITE);
         ws.tlas.record_build(device, cmd, upload, count, scratch);

@@ -8,13 +8,14 @@
 //! uploads it and gives every instance of the geometry its cache. Until then an instance reads
 //! as its `initial_tile_color` and injection skips it.
 use super::container::Task;
+use super::journal::{Held, Journal, Slot};
 use super::record::Recorder;
 use super::State;
 use crate::cache::layout;
 use crate::error::Result;
 use crate::gpu::deferred::Garbage;
-use crate::gpu::memory::{Memory, MemoryKind};
-use crate::gpu::sync;
+use crate::gpu::memory::{Buffer, Memory, MemoryKind};
+use crate::gpu::sync::{self, Hazards};
 use crate::passes::Recording;
 use crate::scene::geometry::{self, SurfelGpu};
 use crate::scene::instance::Placement;
@@ -54,9 +55,9 @@ impl Recorder<'_> {
     pub fn update_caches(&mut self, tasks: &[Task]) -> Result<()> {
         let clears: Vec<InstanceHandle> =
             tasks.iter().filter_map(|t| if let Task::ClearCache(c) = t { Some(c.instance) } else { None }).collect();
-        let (device, cmd, serial) = (self.device, self.cmd, self.serial);
+        let (device, memory, cmd, serial) = (self.device, self.memory, self.cmd, self.serial);
         let d = &device.raw;
-        let hazards = &mut self.hazards;
+        let (hazards, journal) = (&mut self.hazards, &mut self.journal);
         let st = &mut *self.st;
         if !st.scene.caches_dirty && clears.is_empty() {
             return Ok(());
@@ -64,59 +65,24 @@ impl Recorder<'_> {
 
         // 1. Layouts: a staging buffer (freed when this ticket is back — layouts are too big
         //    and too rare for the per-frame upload ring) -> device-local buffers.
-        let pending: Vec<GeometryHandle> =
-            st.scene.geometries.iter().filter(|(_, g)| g.pending_layout.is_some()).map(|(h, _)| h).collect();
-        let bytes: u64 = pending
+        let pending: Vec<(GeometryHandle, u64)> = st
+            .scene
+            .geometries
             .iter()
-            .filter_map(|h| {
-                st.scene.geometries.get(*h).ok()?.pending_layout.as_ref().map(|l| (l.words.len() as u64 * 4).div_ceil(16) * 16)
-            })
-            .sum();
-        let mut staging = if pending.is_empty() {
-            None
-        } else {
-            hazards.write(d, cmd, sync::TRANSFER_WRITE);
-            Some(self.memory.create_buffer(
+            .filter_map(|(h, g)| g.pending_layout.as_ref().map(|l| (h, l.words.len() as u64 * 4)))
+            .collect();
+        if !pending.is_empty() {
+            let total: u64 = pending.iter().map(|(_, size)| size.div_ceil(16) * 16).sum();
+            let mut staging = memory.create_buffer(
                 "surfel layout staging",
-                bytes,
+                total,
                 vk::BufferUsageFlags::TRANSFER_SRC,
                 MemoryLocation::CpuToGpu,
                 MemoryKind::Readback,
-            )?)
-        };
-        let mut offset = 0u64;
-        for h in pending {
-            let g = st.scene.geometries.get_mut(h)?;
-            let Some(l) = g.pending_layout.take() else { continue };
-            let Some(staging) = staging.as_mut() else { break };
-            let size = l.words.len() as u64 * 4;
-            let buffer = self.memory.create_buffer(
-                "surfel layout",
-                size,
-                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuOnly,
-                MemoryKind::Cache,
             )?;
-            staging.mapped()[offset as usize..(offset + size) as usize].copy_from_slice(bytemuck::cast_slice(&l.words));
-            let region = [vk::BufferCopy { src_offset: offset, dst_offset: 0, size }];
-            unsafe { d.cmd_copy_buffer(cmd, staging.raw, buffer.raw, &region) };
-            offset += size.div_ceil(16) * 16;
-            st.scene.next_layout_id += 1;
-            let id = st.scene.next_layout_id;
-            let g = st.scene.geometries.get_mut(h)?;
-            let fresh = SurfelGpu {
-                buffer,
-                sample_count: l.sample_count,
-                surfel_type: l.surfel_type,
-                id,
-                max_resolution: l.max_resolution,
-            };
-            if let Some(old) = g.surfel.replace(fresh) {
-                st.deferred.retire(serial, Garbage::Buffer(old.buffer));
-            }
-        }
-        if let Some(staging) = staging {
-            st.deferred.retire(serial, Garbage::Buffer(staging));
+            let made = Self::upload_layouts(st, journal, memory, d, cmd, hazards, &pending, &mut staging);
+            journal.retire_at_commit(Garbage::Buffer(staging));
+            made?;
         }
 
         // 2. Caches for instances whose geometry has a (new) layout; 3. clears.
@@ -133,10 +99,12 @@ impl Recorder<'_> {
                 if p.cache.is_some_and(|(_, made_for)| made_for == id) {
                     continue;
                 }
+                let range = st.cache_pool.allocate(memory, count as u64)?;
+                journal.allocated_cache(range);
+                journal.touch_instance(h, Some(p));
                 if let Some((old, _)) = p.cache {
                     st.cache_pool.free_after(st.next_serial, old);
                 }
-                let range = st.cache_pool.allocate(self.memory, count as u64)?;
                 fills.push((range.address, range.count, p.initial_tile_color));
                 if let Some(pl) = st.scene.instances.get_mut(h)?.placement.as_mut() {
                     pl.cache = Some((range, id));
@@ -164,6 +132,53 @@ impl Recorder<'_> {
         };
         for (address, count, color) in fills {
             st.passes.cache_ops.fill(&mut r, address, count, color);
+        }
+        Ok(())
+    }
+
+    /// Copies each pending layout through `staging` into a buffer of its own and makes it the
+    /// geometry's surfel layout (the one it replaces waits in the journal).
+    #[allow(clippy::too_many_arguments)]
+    fn upload_layouts(
+        st: &mut State,
+        journal: &mut Journal,
+        memory: &Memory,
+        d: &ash::Device,
+        cmd: vk::CommandBuffer,
+        hazards: &mut Hazards,
+        pending: &[(GeometryHandle, u64)],
+        staging: &mut Buffer,
+    ) -> Result<()> {
+        hazards.write(d, cmd, sync::TRANSFER_WRITE);
+        let mut offset = 0u64;
+        for &(h, size) in pending {
+            let buffer = memory.create_buffer(
+                "surfel layout",
+                size,
+                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuOnly,
+                MemoryKind::Cache,
+            )?;
+            let g = st.scene.geometries.get_mut(h)?;
+            let Some(l) = g.pending_layout.take() else {
+                memory.destroy_buffer(buffer);
+                continue;
+            };
+            staging.mapped()[offset as usize..(offset + size) as usize].copy_from_slice(bytemuck::cast_slice(&l.words));
+            let region = [vk::BufferCopy { src_offset: offset, dst_offset: 0, size }];
+            unsafe { d.cmd_copy_buffer(cmd, staging.raw, buffer.raw, &region) };
+            offset += size.div_ceil(16) * 16;
+            st.scene.next_layout_id += 1;
+            let fresh = SurfelGpu {
+                buffer,
+                sample_count: l.sample_count,
+                surfel_type: l.surfel_type,
+                id: st.scene.next_layout_id,
+                max_resolution: l.max_resolution,
+            };
+            let old = g.surfel.replace(fresh);
+            journal.replaced(Slot::Surfel(h), old.map(Held::Surfel));
+            journal.took_layout(h, l);
         }
         Ok(())
     }

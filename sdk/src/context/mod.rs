@@ -18,6 +18,7 @@ mod bvh;
 mod cache;
 mod denoise;
 mod handles;
+mod journal;
 mod record;
 mod scene;
 mod tickets;
@@ -169,6 +170,75 @@ impl ExecuteContext {
         }
         st.passes.floor = on;
         Ok(())
+    }
+}
+
+/// Test hooks (cargo feature `fault-injection`): make an allocation fail, and print the state a
+/// failed build must leave untouched.
+#[cfg(feature = "fault-injection")]
+impl ExecuteContext {
+    /// The allocation after `after` more succeed fails with `Error::OutOfMemory` (None: none).
+    #[doc(hidden)]
+    pub fn inject_allocation_failure(&self, after: Option<u64>) {
+        self.shared.memory.inject_failure(after);
+    }
+
+    /// Every piece of state a build may change — registries, queues, the TLAS snapshot, caches,
+    /// GPU object handles, deferred frees, working sets, denoisers, memory counts — as text.
+    #[doc(hidden)]
+    pub fn debug_state_digest(&self) -> String {
+        use std::fmt::Write;
+        let st = self.shared.state.lock();
+        let s = &st.scene;
+        let mut out = String::new();
+        for (h, g) in s.geometries.iter() {
+            let _ = writeln!(
+                out,
+                "geometry {h:?} {:?} copy {:?} blas {:?} surfel {:?} pending {:?}",
+                g.meta(),
+                g.copy.as_ref().map(|b| b.raw),
+                g.blas.as_ref().map(|b| b.accel),
+                g.surfel.as_ref().map(|l| (l.buffer.raw, l.id, l.sample_count)),
+                g.pending_layout.as_ref().map(|l| l.words.len()),
+            );
+        }
+        for (h, i) in s.instances.iter() {
+            let _ = writeln!(out, "instance {h:?} {:?}", i.placement);
+        }
+        let snapshot = crate::scene::instance::instance_bytes(&s.snapshot);
+        let _ = writeln!(
+            out,
+            "queues {:?} {:?} {:?} snapshot {:?} v{} dirty {} caches {} layouts {}",
+            s.build_queue,
+            s.refit_queue,
+            s.compaction_ready,
+            snapshot,
+            s.snapshot_version,
+            s.snapshot_dirty,
+            s.caches_dirty,
+            s.next_layout_id
+        );
+        let _ = writeln!(out, "cache {}", st.cache_pool.digest());
+        let _ = writeln!(out, "deferred {:?} next serial {}", st.deferred.serials(), st.next_serial);
+        for w in &st.working_sets {
+            let _ = writeln!(
+                out,
+                "working set {:?} ring {:?}/{} scratch {:?} tlas {:?} v{} compactions {} readbacks {}",
+                w.in_flight,
+                w.ring.buffer.raw,
+                w.ring.capacity(),
+                w.scratch.as_ref().map(|b| (b.raw, b.size)),
+                w.tlas.accel.as_ref().map(|a| a.accel),
+                w.tlas.version,
+                w.compactions.len(),
+                w.readbacks.len()
+            );
+        }
+        for (h, d) in st.denoisers.iter() {
+            let _ = writeln!(out, "denoiser {h:?} {}", d.digest());
+        }
+        let _ = writeln!(out, "memory {:?}", self.shared.memory.allocations());
+        out
     }
 }
 

@@ -7,6 +7,7 @@
 //!    [`PassTask`](crate::passes::PassTask)'s business; this loop only sizes the upload ring,
 //!    writes the instance table once, and hands each task a `Recording`.
 use super::container::Task;
+use super::journal::Journal;
 use super::State;
 use crate::error::Result;
 use crate::gpu::device::Device;
@@ -33,6 +34,8 @@ pub(super) struct Recorder<'a> {
     pub hazards: Hazards,
     /// Set once the "no ray queries, using the pipeline" warning was logged.
     pub warned_inline: &'a AtomicBool,
+    /// What the recording changed, to commit or undo (see `journal`).
+    pub journal: Journal,
 }
 
 impl Recorder<'_> {
@@ -70,6 +73,7 @@ impl Recorder<'_> {
         }
         if max_builds.is_some() || has_render {
             if self.st.scene.snapshot_dirty {
+                self.journal.saved_snapshot(std::mem::take(&mut self.st.scene.snapshot));
                 self.st.scene.rebuild_snapshot();
             }
             if self.working_set().tlas.version != self.st.scene.snapshot_version {

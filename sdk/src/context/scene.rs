@@ -2,10 +2,10 @@
 //! recorded), then geometry and instance tasks applied to the registries with the geometry
 //! copies recorded.
 use super::container::Task;
+use super::journal::{Held, Slot};
 use super::record::Recorder;
 use super::State;
 use crate::error::{Error, HandleProblem, Result};
-use crate::gpu::deferred::Garbage;
 use crate::gpu::sync;
 use crate::passes::World;
 use crate::scene::geometry::{self, BlasState, GeometryLayout};
@@ -90,7 +90,7 @@ impl Recorder<'_> {
     /// Applies geometry and instance tasks to the registries and records the geometry copies
     /// (and the read-backs of geometry that needs a surfel layout).
     pub fn apply_scene_tasks(&mut self, tasks: &[Task]) -> Result<()> {
-        let (d, cmd, serial) = (&self.device.raw, self.cmd, self.serial);
+        let (d, cmd) = (&self.device.raw, self.cmd);
         let mut copies_declared = false;
         let mut read_back: Vec<GeometryHandle> = Vec::new();
         for task in tasks {
@@ -101,12 +101,13 @@ impl Recorder<'_> {
                         copies_declared = true;
                     }
                     let layout = GeometryLayout::of(&t.input);
+                    let meta = self.st.scene.geometries.get(t.handle)?.meta();
                     let copy = geometry::record_copy(d, self.memory, cmd, &t.input, &layout)?;
                     let st = &mut *self.st;
+                    self.journal.touch_geometry(t.handle, meta);
                     let g = st.scene.geometries.get_mut(t.handle)?;
-                    if let Some(old) = g.copy.replace(copy) {
-                        st.deferred.retire(serial, Garbage::Buffer(old));
-                    }
+                    let old = g.copy.replace(copy);
+                    self.journal.replaced(Slot::Copy(t.handle), old.map(Held::Buffer));
                     g.layout = Some(layout);
                     g.input = t.input;
                     let refit = t.operation == TaskOperation::Update && layout.allow_update && g.blas.is_some();
@@ -136,6 +137,14 @@ impl Recorder<'_> {
     fn apply_instance_task(&mut self, t: &InstanceTask) -> Result<()> {
         let st = &mut *self.st;
         let mut old = st.scene.instances.get(t.handle)?.placement;
+        self.journal.touch_instance(t.handle, old);
+        // Both geometries' instance counts change.
+        for h in old.map(|o| o.geometry).into_iter().chain((t.operation != InstanceOperation::Remove).then_some(t.input.geometry))
+        {
+            if let Ok(g) = st.scene.geometries.get(h) {
+                self.journal.touch_geometry(h, g.meta());
+            }
+        }
         // Moving an instance keeps its lighting; a new geometry needs a new cache.
         let keep =
             old.filter(|o| t.operation == InstanceOperation::Update && o.geometry == t.input.geometry).and_then(|o| o.cache);

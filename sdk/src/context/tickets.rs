@@ -2,6 +2,7 @@
 //! out a ticket; `mark_gpu_task_completed` takes it back once the GPU is done, returns the
 //! working set to the pool and reports per-task GPU times.
 use super::container::TaskContainer;
+use super::journal::Journal;
 use super::record::Recorder;
 use super::{scene, ExecuteContext};
 use crate::error::{Error, Result};
@@ -13,9 +14,10 @@ use std::sync::Arc;
 impl ExecuteContext {
     /// Records every task of `container` into `cmd`, which the engine has begun and will end,
     /// submit and wait for itself. On success the container is emptied and a ticket returned.
-    /// On error nothing usable was recorded, no state changed, and the container keeps its
-    /// tasks. (A Vulkan error in the middle of recording leaves `cmd` partly recorded: reset
-    /// it.)
+    /// On error nothing usable was recorded, no state changed (a build that fails halfway, out
+    /// of memory say, is undone: registries, queues, caches and GPU objects are as before), and
+    /// the container keeps its tasks, so the same build can be tried again. An error after
+    /// recording began leaves `cmd` partly recorded: reset it before reuse.
     pub fn build_gpu_task(&self, container: &mut TaskContainer, cmd: vk::CommandBuffer) -> Result<GpuTicket> {
         if !std::ptr::eq(container.shared.as_ptr(), Arc::as_ptr(&self.shared)) {
             return Err(Error::ForeignContainer);
@@ -35,6 +37,7 @@ impl ExecuteContext {
         st.collect_garbage(&shared.device, &shared.memory);
 
         let serial = st.next_serial;
+        let journal = Journal::begin(st, ws);
         let mut recorder = Recorder {
             device: &shared.device,
             memory: &shared.memory,
@@ -44,8 +47,17 @@ impl ExecuteContext {
             cmd,
             hazards: Hazards::after_earlier_submissions(),
             warned_inline: &shared.warned_inline,
+            journal,
         };
-        recorder.record(&container.tasks)?;
+        let recorded = recorder.record(&container.tasks);
+        let Recorder { journal, .. } = recorder;
+        if let Err(e) = recorded {
+            // Nothing of this build stays: the context is as it was, the container keeps its
+            // tasks, and `cmd` (partly recorded) must be reset by the engine.
+            journal.roll_back(st, ws, &shared.device, &shared.memory);
+            return Err(e);
+        }
+        journal.commit(st, serial);
         st.next_serial += 1;
         st.working_sets[ws].in_flight = Some(serial);
         container.tasks.clear();

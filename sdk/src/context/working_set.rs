@@ -1,9 +1,9 @@
 //! A working set: what one ticket in flight owns, so frames in flight never share mutable GPU
 //! memory — its upload ring, timestamp and compaction query pools, build scratch, the geometry
 //! read-backs it carries home, and its own TLAS.
+use super::journal::{Held, Slot};
 use super::record::Recorder;
 use crate::error::{Error, Result};
-use crate::gpu::deferred::Garbage;
 use crate::gpu::device::Device;
 use crate::gpu::memory::{self, Buffer, Memory, MemoryKind};
 use crate::gpu::timestamps::Timer;
@@ -98,13 +98,13 @@ impl WorkingSet {
 impl Recorder<'_> {
     /// Build scratch of at least `bytes` (plus alignment slack), returned for binding. Scratch
     /// written earlier in this recording may still be in use by the GPU when a larger one
-    /// replaces it, so the old one goes through deferred destruction; within one recording,
-    /// scratch is only reused after a barrier.
+    /// replaces it, so the old one is retired after this ticket (through the journal); within
+    /// one recording, scratch is only reused after a barrier.
     pub fn ensure_scratch(&mut self, bytes: u64) -> Result<vk::DeviceAddress> {
-        let (serial, memory) = (self.serial, self.memory);
-        let st = &mut *self.st;
-        let ws = &mut st.working_sets[self.ws];
-        let deferred = &mut st.deferred;
+        let memory = self.memory;
+        let ws = &mut self.st.working_sets[self.ws];
+        let journal = &mut self.journal;
+        let had = ws.scratch.is_some();
         memory::ensure_capacity(
             &mut ws.scratch,
             bytes + self.device.scratch_alignment,
@@ -117,25 +117,28 @@ impl Recorder<'_> {
                     MemoryKind::BuildScratch,
                 )
             },
-            |old| deferred.retire(serial, Garbage::Buffer(old)),
+            |old| journal.replaced(Slot::Scratch, Some(Held::Buffer(old))),
         )?;
+        if !had && ws.scratch.is_some() {
+            journal.replaced(Slot::Scratch, None);
+        }
         // The slack above lets the base meet minAccelerationStructureScratchOffsetAlignment.
         let align = self.device.scratch_alignment.max(1);
         Ok(ws.scratch.as_ref().map_or(0, |s| s.address.div_ceil(align) * align))
     }
 
     /// Grows the ring so `more` bytes fit after what this recording already wrote. Data
-    /// already pushed stays valid: the old ring is retired, not freed, until this ticket is back.
+    /// already pushed stays valid: the old ring is retired (through the journal), not freed,
+    /// until this ticket is back.
     pub fn ensure_ring(&mut self, more: u64) -> Result<()> {
-        let st = &mut *self.st;
-        let ws = &mut st.working_sets[self.ws];
+        let ws = &mut self.st.working_sets[self.ws];
         if ws.ring.remaining() >= more {
             return Ok(());
         }
         let size = (ws.ring.capacity() + more).max(ws.ring.capacity() * 3 / 2);
         let fresh = UploadRing::new(self.memory, size)?;
         let old = std::mem::replace(&mut ws.ring, fresh);
-        st.deferred.retire(self.serial, Garbage::Buffer(old.buffer));
+        self.journal.replaced(Slot::Ring, Some(Held::Ring(old)));
         Ok(())
     }
 

@@ -16,6 +16,12 @@ pub(crate) struct DeferredFrees {
 }
 
 impl DeferredFrees {
+    /// The serials of the resources waiting, for the state digest.
+    #[cfg(feature = "fault-injection")]
+    pub fn serials(&self) -> Vec<u64> {
+        self.items.iter().map(|(s, _)| *s).collect()
+    }
+
     pub fn retire(&mut self, last_issued_serial: u64, g: Garbage) {
         self.items.push((last_issued_serial, g));
     }

@@ -132,6 +132,9 @@ pub(crate) struct Memory {
     device: ash::Device,
     allocator: Mutex<Option<Allocator>>,
     counts: Mutex<[AllocationCount; MEMORY_KIND_COUNT]>,
+    /// Test builds: allocations left before one fails (u64::MAX: none fails).
+    #[cfg(feature = "fault-injection")]
+    fail_in: std::sync::atomic::AtomicU64,
 }
 
 impl Memory {
@@ -149,7 +152,34 @@ impl Memory {
             device: device.clone(),
             allocator: Mutex::new(Some(allocator)),
             counts: Mutex::new([AllocationCount::default(); MEMORY_KIND_COUNT]),
+            #[cfg(feature = "fault-injection")]
+            fail_in: std::sync::atomic::AtomicU64::new(u64::MAX),
         })
+    }
+
+    /// Test builds: the allocation after `after` more succeed fails with `OutOfMemory`
+    /// (None: none fails).
+    #[cfg(feature = "fault-injection")]
+    pub fn inject_failure(&self, after: Option<u64>) {
+        self.fail_in.store(after.unwrap_or(u64::MAX), std::sync::atomic::Ordering::SeqCst);
+    }
+
+    /// Counts an allocation down to an injected failure (test builds; a no-op otherwise).
+    fn injected_failure(&self, what: &'static str) -> Result<()> {
+        #[cfg(feature = "fault-injection")]
+        {
+            use std::sync::atomic::Ordering;
+            let left = self.fail_in.load(Ordering::SeqCst);
+            if left != u64::MAX {
+                if left == 0 {
+                    self.fail_in.store(u64::MAX, Ordering::SeqCst);
+                    return Err(Error::OutOfMemory { what, detail: "injected failure".into() });
+                }
+                self.fail_in.store(left - 1, Ordering::SeqCst);
+            }
+        }
+        let _ = what;
+        Ok(())
     }
 
     pub fn create_buffer(
@@ -160,6 +190,7 @@ impl Memory {
         location: MemoryLocation,
         kind: MemoryKind,
     ) -> Result<Buffer> {
+        self.injected_failure(name)?;
         let size = size.max(16);
         let usage = usage | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
         let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
@@ -223,6 +254,7 @@ impl Memory {
         height: u32,
         kind: MemoryKind,
     ) -> Result<Image> {
+        self.injected_failure(name)?;
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
             .format(format)

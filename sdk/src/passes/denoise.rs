@@ -109,6 +109,15 @@ impl DenoiserState {
         })
     }
 
+    /// The history bookkeeping a task advances, for the state digest.
+    #[cfg(feature = "fault-injection")]
+    pub fn digest(&self) -> String {
+        format!(
+            "newest {} initialized {} camera {:?} viewport {:?}",
+            self.newest, self.initialized, self.previous_camera, self.previous_viewport
+        )
+    }
+
     /// Every image, for (deferred) destruction.
     pub fn into_images(self) -> Vec<Image> {
         let DenoiserState { gbuffer, history, fast, temp, .. } = self;

@@ -110,7 +110,38 @@ pub(crate) struct SurfelGpu {
     pub max_resolution: u32,
 }
 
+/// Everything of a geometry record but its GPU objects and pending layout: what a failed build
+/// puts back (the GPU objects go back through the build's journal).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct GeometryMeta {
+    layout: Option<GeometryLayout>,
+    state: BlasState,
+    needs_refit: bool,
+    build_id: u64,
+    compacted_size: Option<u64>,
+    instance_refs: usize,
+    input: GeometryInput,
+}
+
 impl GeometryRecord {
+    pub fn meta(&self) -> GeometryMeta {
+        GeometryMeta {
+            layout: self.layout,
+            state: self.state,
+            needs_refit: self.needs_refit,
+            build_id: self.build_id,
+            compacted_size: self.compacted_size,
+            instance_refs: self.instance_refs,
+            input: self.input,
+        }
+    }
+
+    pub fn restore(&mut self, m: GeometryMeta) {
+        let GeometryMeta { layout, state, needs_refit, build_id, compacted_size, instance_refs, input } = m;
+        (self.layout, self.state, self.needs_refit, self.build_id) = (layout, state, needs_refit, build_id);
+        (self.compacted_size, self.instance_refs, self.input) = (compacted_size, instance_refs, input);
+    }
+
     pub fn new() -> GeometryRecord {
         GeometryRecord {
             layout: None,

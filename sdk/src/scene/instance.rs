@@ -9,7 +9,7 @@ pub(crate) struct InstanceRecord {
     pub placement: Option<Placement>,
 }
 
-#[derive(Clone, Copy)]
+#[derive(Debug, Clone, Copy)]
 pub(crate) struct Placement {
     pub geometry: GeometryHandle,
     pub transform: Affine3A,

@@ -31,20 +31,16 @@ pub(crate) fn sizes(device: &Device, count: u32) -> vk::AccelerationStructureBui
 }
 
 impl Tlas {
-    /// Makes sure the TLAS storage fits `size` bytes. The working set is idle, so the old one
-    /// can be destroyed at once.
-    pub fn ensure_storage(&mut self, device: &Device, memory: &Memory, size: u64) -> Result<()> {
+    /// Makes sure the TLAS storage fits `size` bytes; returns the storage it replaced (None
+    /// when it fits already) for the caller to retire — or put back, should the build fail.
+    pub fn ensure_storage(&mut self, device: &Device, memory: &Memory, size: u64) -> Result<Option<Option<Blas>>> {
         if self.accel.as_ref().is_some_and(|a| a.buffer.size >= size) {
-            return Ok(());
-        }
-        if let Some(old) = self.accel.take() {
-            unsafe { device.accel.destroy_acceleration_structure(old.accel, None) };
-            memory.destroy_buffer(old.buffer);
+            return Ok(None);
         }
         // Headroom so a slowly growing scene does not recreate the TLAS every frame.
         let size = size + size / 2;
-        self.accel = Some(blas::create(device, memory, vk::AccelerationStructureTypeKHR::TOP_LEVEL, size, MemoryKind::Tlas)?);
-        Ok(())
+        let fresh = blas::create(device, memory, vk::AccelerationStructureTypeKHR::TOP_LEVEL, size, MemoryKind::Tlas)?;
+        Ok(Some(self.accel.replace(fresh)))
     }
 
     /// Records the build into storage made by `ensure_storage` (nothing without it).
