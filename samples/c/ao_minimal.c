@@ -131,6 +131,7 @@ typedef struct {
     VkDeviceMemory memory;
     VkImageView view;
     VkFormat format;
+    VkImageUsageFlags usage; /* as created: the SDK checks each image has the usage it needs */
 } Image;
 
 static Image make_image(VkFormat format, VkImageUsageFlags usage) {
@@ -147,6 +148,7 @@ static Image make_image(VkFormat format, VkImageUsageFlags usage) {
     info.samples = VK_SAMPLE_COUNT_1_BIT;
     info.tiling = VK_IMAGE_TILING_OPTIMAL;
     info.usage = usage | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+    img.usage = info.usage;
     CHECK_VK(vkCreateImage(device, &info, NULL, &img.image));
     VkMemoryRequirements req;
     vkGetImageMemoryRequirements(device, img.image, &req);
@@ -180,10 +182,10 @@ static HrtImageInput sdk_image(const Image *i, VkImageLayout layout) {
     in.width = W;
     in.height = H;
     in.layout = layout;
+    in.usage = i->usage;
     return in;
 }
 
-/* A full barrier with a layout change: this sample favours brevity over tight stages. */
 /* The stages this program and the SDK work in (the SDK's reads and writes are ray-tracing and
  * compute shaders, acceleration-structure builds and copies). */
 static const VkPipelineStageFlags2 WORK_STAGES = VK_PIPELINE_STAGE_2_COPY_BIT | VK_PIPELINE_STAGE_2_CLEAR_BIT |
@@ -593,7 +595,9 @@ int main(void) {
     wrong.context = denoiser;
     wrong.common = denoise.common;
     wrong.input = wrong.output = sdk_image(&clean, VK_IMAGE_LAYOUT_GENERAL);
-    EXPECT(hrt_schedule_denoise_diffuse(frame, &wrong) == HRT_ERROR_UNSUPPORTED_FORMAT, "a scalar image is no diffuse input");
+    EXPECT(hrt_schedule_denoise_diffuse(frame, &wrong) == HRT_ERROR_INVALID_INPUT, "an image without SAMPLED usage is no input");
+    wrong.input = sdk_image(&noisy, VK_IMAGE_LAYOUT_GENERAL);
+    EXPECT(hrt_schedule_denoise_diffuse(frame, &wrong) == HRT_ERROR_UNSUPPORTED_FORMAT, "a two-channel image is no diffuse input");
     CHECK_HRT(hrt_destroy_denoising_context(ctx, denoiser));
     EXPECT(hrt_destroy_denoising_context(ctx, denoiser) == HRT_ERROR_INVALID_HANDLE, "destroyed twice");
     free_image(noisy);

@@ -90,6 +90,11 @@ typedef enum HrtStatus {
    * The container's context was destroyed.
    */
   HRT_ERROR_CONTEXT_DESTROYED = 17,
+  /**
+   * The ticket's command buffer has not finished on the GPU (submitted and waited for?):
+   * nothing was recycled; hand the same ticket back once its fence has signalled.
+   */
+  HRT_ERROR_TICKET_NOT_COMPLETE = 18,
 } HrtStatus;
 
 typedef enum HrtTaskKind {
@@ -381,6 +386,11 @@ typedef struct HrtImageInput {
    * outputs: VK_IMAGE_LAYOUT_GENERAL.
    */
   VkImageLayout layout;
+  /**
+   * The VkImageUsageFlags the image was created with (required: inputs need
+   * VK_IMAGE_USAGE_SAMPLED_BIT, outputs VK_IMAGE_USAGE_STORAGE_BIT; 0 is refused).
+   */
+  uint32_t usage;
 } HrtImageInput;
 
 typedef struct HrtDepthInput {
@@ -997,6 +1007,15 @@ enum HrtStatus hrt_schedule_direct_lighting_injection(struct HrtTaskContainer *c
 
 enum HrtStatus hrt_schedule_clear_cache(struct HrtTaskContainer *container,
                                         const struct HrtClearCacheTask *task);
+
+/**
+ * Triangles of a geometry's last registered or updated data whose indices reach past its
+ * vertex count: the SDK made them degenerate (the driver never sees the bad index) and logged
+ * a warning. 0 until the ticket that copied the data has come back.
+ */
+enum HrtStatus hrt_geometry_invalid_triangles(const struct HrtContext *ctx,
+                                              HrtGeometryHandle geometry,
+                                              uint32_t *triangles);
 
 /**
  * Bytes of an instance's direct-lighting cache (0 until allocated, one recording after the

@@ -552,6 +552,22 @@ pub unsafe extern "C" fn hrt_schedule_clear_cache(container: *mut HrtTaskContain
     })
 }
 
+/// Triangles of a geometry's last registered or updated data whose indices reach past its
+/// vertex count: the SDK made them degenerate (the driver never sees the bad index) and logged
+/// a warning. 0 until the ticket that copied the data has come back.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_geometry_invalid_triangles(
+    ctx: *const HrtContext,
+    geometry: HrtGeometryHandle,
+    triangles: *mut u32,
+) -> HrtStatus {
+    guard(|| {
+        let c = get(ctx, "ctx")?;
+        *get_mut(triangles, "triangles")? = c.ctx.geometry_invalid_triangles(rt::GeometryHandle(geometry))?;
+        Ok(())
+    })
+}
+
 /// Bytes of an instance's direct-lighting cache (0 until allocated, one recording after the
 /// ticket that registered its geometry came back).
 #[no_mangle]

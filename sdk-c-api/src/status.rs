@@ -31,6 +31,9 @@ pub enum HrtStatus {
     HRT_ERROR_INTERNAL = 16,
     /// The container's context was destroyed.
     HRT_ERROR_CONTEXT_DESTROYED = 17,
+    /// The ticket's command buffer has not finished on the GPU (submitted and waited for?):
+    /// nothing was recycled; hand the same ticket back once its fence has signalled.
+    HRT_ERROR_TICKET_NOT_COMPLETE = 18,
 }
 
 thread_local! {
@@ -58,6 +61,7 @@ pub(crate) fn status_of(e: &Error) -> HrtStatus {
         Error::InvalidTransform { .. } => HRT_ERROR_INVALID_TRANSFORM,
         Error::WorkingSetsExhausted { .. } => HRT_ERROR_WORKING_SETS_EXHAUSTED,
         Error::UnknownTicket { .. } => HRT_ERROR_UNKNOWN_TICKET,
+        Error::TicketNotComplete { .. } => HRT_ERROR_TICKET_NOT_COMPLETE,
         Error::TicketsInFlight { .. } => HRT_ERROR_TICKETS_IN_FLIGHT,
         Error::GeometryInUse { .. } => HRT_ERROR_GEOMETRY_IN_USE,
         Error::ForeignContainer => HRT_ERROR_FOREIGN_CONTAINER,

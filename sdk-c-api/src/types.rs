@@ -197,6 +197,9 @@ pub struct HrtImageInput {
     /// Inputs: VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL (default) or another read-only layout;
     /// outputs: VK_IMAGE_LAYOUT_GENERAL.
     pub layout: VkImageLayout,
+    /// The VkImageUsageFlags the image was created with (required: inputs need
+    /// VK_IMAGE_USAGE_SAMPLED_BIT, outputs VK_IMAGE_USAGE_STORAGE_BIT; 0 is refused).
+    pub usage: u32,
 }
 
 #[repr(C)]
@@ -561,6 +564,7 @@ pub(crate) fn image(i: &HrtImageInput) -> rt::ImageInput {
         width: i.width,
         height: i.height,
         layout: vk::ImageLayout::from_raw(i.layout),
+        usage: vk::ImageUsageFlags::from_raw(i.usage),
     }
 }
 pub(crate) fn image_c(i: &rt::ImageInput) -> HrtImageInput {
@@ -571,6 +575,7 @@ pub(crate) fn image_c(i: &rt::ImageInput) -> HrtImageInput {
         width: i.width,
         height: i.height,
         layout: i.layout.as_raw(),
+        usage: i.usage.as_raw(),
     }
 }
 

@@ -70,9 +70,11 @@ pub enum Error {
     #[error("GPU ticket {serial} is not in flight (returned twice or foreign)")]
     UnknownTicket { serial: u64 },
 
-    /// The GPU has not finished the ticket's commands (its timestamps are not written yet).
-    #[error("GPU ticket {serial} is not complete on the GPU yet")]
-    TicketNotComplete { serial: u64 },
+    /// The GPU has not finished the ticket's commands (the last one, a marker the SDK writes,
+    /// has not run): the ticket stays in flight. Hand it back once the engine's fence says the
+    /// command buffer is done — `GpuTicket::from_raw(raw)` rebuilds it.
+    #[error("GPU ticket {serial} is not complete on the GPU yet (submitted and waited for?)")]
+    TicketNotComplete { serial: u64, raw: u64 },
 
     /// `release_device_resources_immediately` while tickets are out.
     #[error("tickets still in flight: {serials:?}")]

@@ -105,6 +105,8 @@ pub struct HostImage {
     pub width: u32,
     pub height: u32,
     pub aspect: vk::ImageAspectFlags,
+    /// The usage it was created with (what the SDK's `ImageInput` declares).
+    pub usage: vk::ImageUsageFlags,
 }
 
 impl HostImage {
@@ -117,6 +119,7 @@ impl HostImage {
             width: self.width,
             height: self.height,
             layout,
+            usage: self.usage,
         }
     }
 }
@@ -455,6 +458,7 @@ impl Host {
                 .samples(vk::SampleCountFlags::TYPE_1)
                 .tiling(vk::ImageTiling::OPTIMAL)
                 .usage(usage | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::TRANSFER_DST);
+            let usage = info.usage;
             let image = self.device.create_image(&info, None).map_err(vkerr("create image"))?;
             let req = self.device.get_image_memory_requirements(image);
             let alloc = vk::MemoryAllocateInfo::default()
@@ -468,7 +472,7 @@ impl Host {
                 .format(format)
                 .subresource_range(range(aspect));
             let view = self.device.create_image_view(&view_info, None).map_err(vkerr("create view"))?;
-            Ok(HostImage { image, view, memory, format, width, height, aspect })
+            Ok(HostImage { image, view, memory, format, width, height, aspect, usage })
         }
     }
 

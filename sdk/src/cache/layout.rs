@@ -29,10 +29,36 @@ pub(crate) fn resolution(tri: [Vec3; 3], s: &SurfelSettings) -> u32 {
     (if r.is_finite() { r as u32 } else { 1 }).clamp(1, s.tile_resolution_limit.clamp(1, MAX_RESOLUTION))
 }
 
-pub(crate) fn build(positions: &[Vec3], triangles: &[[u32; 3]], s: &SurfelSettings) -> SurfelLayout {
-    match s.surfel_type {
-        SurfelType::Tiles => tiles(positions, triangles, s),
-        SurfelType::MeshColors => mesh_colors(positions, triangles, s),
+/// The layout of a geometry, with at most `max_samples` samples: a layout that would need more
+/// (a huge mesh at a fine resolution) is built again at half the resolution limit until it
+/// fits, so a sample index never wraps and no cache outgrows what one buffer can hold. None
+/// when even one sample per edge is too many (the geometry then has no cache).
+pub(crate) fn build(positions: &[Vec3], triangles: &[[u32; 3]], s: &SurfelSettings, max_samples: u64) -> Option<SurfelLayout> {
+    let max_samples = max_samples.min(u32::MAX as u64);
+    let mut settings = *s;
+    loop {
+        let layout = match settings.surfel_type {
+            SurfelType::Tiles => tiles(positions, triangles, &settings, max_samples),
+            SurfelType::MeshColors => mesh_colors(positions, triangles, &settings, max_samples),
+        };
+        match layout {
+            Some(l) => {
+                if settings.tile_resolution_limit != s.tile_resolution_limit {
+                    log::warn!(
+                        "surfel layout of {} triangles: tile_resolution_limit {} needs more than {max_samples} samples; using {}",
+                        triangles.len(),
+                        s.tile_resolution_limit,
+                        settings.tile_resolution_limit
+                    );
+                }
+                return Some(l);
+            }
+            None if settings.tile_resolution_limit > 1 => settings.tile_resolution_limit /= 2,
+            None => {
+                log::error!("surfel layout of {} triangles needs more than {max_samples} samples: no cache", triangles.len());
+                return None;
+            }
+        }
     }
 }
 
@@ -41,17 +67,21 @@ fn corners(positions: &[Vec3], t: &[u32; 3]) -> [Vec3; 3] {
 }
 
 /// An R x R tile of samples per triangle.
-fn tiles(positions: &[Vec3], triangles: &[[u32; 3]], s: &SurfelSettings) -> SurfelLayout {
+/// (Sample counts run in u64: offsets below the final count fit u32 once it is checked.)
+fn tiles(positions: &[Vec3], triangles: &[[u32; 3]], s: &SurfelSettings, max_samples: u64) -> Option<SurfelLayout> {
     let mut words = Vec::with_capacity(triangles.len() * 2);
-    let mut next = 0u32;
+    let mut next = 0u64;
     let mut max_resolution = 1;
     for t in triangles {
         let r = resolution(corners(positions, t), s);
         max_resolution = max_resolution.max(r);
-        words.extend_from_slice(&[next, r]);
-        next += r * r;
+        words.extend_from_slice(&[next as u32, r]);
+        next += (r * r) as u64;
+        if next > max_samples {
+            return None;
+        }
     }
-    SurfelLayout { surfel_type: SurfelType::Tiles, words, sample_count: next, max_resolution }
+    Some(SurfelLayout { surfel_type: SurfelType::Tiles, words, sample_count: next as u32, max_resolution })
 }
 
 /// Interior lattice points of a triangle of resolution r.
@@ -65,17 +95,18 @@ pub(crate) fn interior_count(r: u32) -> u32 {
 
 /// Mesh colors: one sample per distinct vertex position, r_e - 1 per edge (r_e: the finest
 /// resolution of the triangles sharing it), and the interior lattice points per triangle.
-fn mesh_colors(positions: &[Vec3], triangles: &[[u32; 3]], s: &SurfelSettings) -> SurfelLayout {
+fn mesh_colors(positions: &[Vec3], triangles: &[[u32; 3]], s: &SurfelSettings, max_samples: u64) -> Option<SurfelLayout> {
     // Samples are shared through the mesh's own topology (shared vertex indices), not by
     // position: engines split vertices at hard edges, and a cube's faces must not share
     // lighting across a 90-degree crease. (A UV seam that splits vertices of a smooth surface
     // keeps two rows of samples that injection fills alike.)
     let mut vertex_sample: HashMap<u32, u32> = HashMap::new();
-    let mut next = 0u32;
-    let mut weld = |i: u32, next: &mut u32| -> u32 {
+    // Vertex samples number at most the distinct indices, so they fit u32.
+    let mut next = 0u64;
+    let mut weld = |i: u32, next: &mut u64| -> u32 {
         *vertex_sample.entry(i).or_insert_with(|| {
             *next += 1;
-            *next - 1
+            (*next - 1) as u32
         })
     };
     let welded: Vec<[u32; 3]> = triangles.iter().map(|t| t.map(|i| weld(i, &mut next))).collect();
@@ -95,8 +126,11 @@ fn mesh_colors(positions: &[Vec3], triangles: &[[u32; 3]], s: &SurfelSettings) -
     let mut keys: Vec<_> = edge_res.keys().copied().collect();
     keys.sort_unstable();
     for key in keys {
-        edge_base.insert(key, next);
-        next += edge_res[&key] - 1;
+        edge_base.insert(key, next as u32);
+        next += (edge_res[&key] - 1) as u64;
+        if next > max_samples {
+            return None;
+        }
     }
     let mut words = Vec::with_capacity(triangles.len() * 9);
     for (t, &r) in welded.iter().zip(&res) {
@@ -109,17 +143,41 @@ fn mesh_colors(positions: &[Vec3], triangles: &[[u32; 3]], s: &SurfelSettings) -
             let reversed = (a > b) as u32;
             info |= (edge_res[&key] | (reversed << 9)) << (10 * k);
         }
-        let face = next;
-        next += interior_count(r);
+        let face = next as u32;
+        next += interior_count(r) as u64;
+        if next > max_samples {
+            return None;
+        }
         words.extend_from_slice(&[t[0], t[1], t[2], e[0], e[1], e[2], info, face, r]);
     }
     let max_resolution = res.iter().copied().max().unwrap_or(1);
-    SurfelLayout { surfel_type: SurfelType::MeshColors, words, sample_count: next, max_resolution }
+    Some(SurfelLayout { surfel_type: SurfelType::MeshColors, words, sample_count: next as u32, max_resolution })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn build_all(p: &[Vec3], t: &[[u32; 3]], s: &SurfelSettings) -> SurfelLayout {
+        build(p, t, s, u64::MAX).expect("fits")
+    }
+
+    /// 65,536 triangles x 256^2 tiles is 2^32 samples: the count must never wrap. Too many
+    /// samples halve the resolution limit until the layout fits; too many even at one sample
+    /// per edge leave the geometry without a cache.
+    #[test]
+    fn a_layout_over_the_sample_budget_is_coarsened_not_wrapped() {
+        let (p, t) = quad();
+        let fine = settings(SurfelType::Tiles, 0.01, 64);
+        assert_eq!(build_all(&p, &t, &fine).sample_count, 2 * 64 * 64);
+        let l = build(&p, &t, &fine, 1000).expect("coarsened");
+        assert_eq!(l.sample_count, 2 * 16 * 16, "limit 64 -> 32 (2048 samples) -> 16 (512)");
+        assert!(build(&p, &t, &fine, 1).is_none(), "two triangles never fit one sample");
+        let colors = build(&p, &t, &settings(SurfelType::MeshColors, 0.01, 64), 500).expect("coarsened");
+        assert!(colors.sample_count <= 500 && colors.max_resolution < 64, "{} samples", colors.sample_count);
+        // A count past the budget is refused by the builders themselves, not wrapped.
+        assert!(tiles(&p, &t, &settings(SurfelType::Tiles, 0.001, 256), 10_000).is_none());
+    }
 
     fn settings(t: SurfelType, unit: f32, limit: u32) -> SurfelSettings {
         SurfelSettings { surfel_type: t, tile_unit_length: unit, tile_resolution_limit: limit }
@@ -134,17 +192,17 @@ mod tests {
     fn tiles_hold_r_squared_samples_per_triangle() {
         let (p, t) = quad();
         // Longest edge is the diagonal, sqrt(2): 0.25 units per sample -> 6 samples along it.
-        let l = build(&p, &t, &settings(SurfelType::Tiles, 0.25, 64));
+        let l = build_all(&p, &t, &settings(SurfelType::Tiles, 0.25, 64));
         assert_eq!(l.words, vec![0, 6, 36, 6]);
         assert_eq!(l.sample_count, 72);
-        let limited = build(&p, &t, &settings(SurfelType::Tiles, 0.25, 4));
+        let limited = build_all(&p, &t, &settings(SurfelType::Tiles, 0.25, 4));
         assert_eq!(limited.sample_count, 32);
     }
 
     #[test]
     fn mesh_colors_share_vertices_and_edges() {
         let (p, t) = quad();
-        let l = build(&p, &t, &settings(SurfelType::MeshColors, 0.25, 64));
+        let l = build_all(&p, &t, &settings(SurfelType::MeshColors, 0.25, 64));
         let r = 6;
         // 4 vertices + 5 edges of (r - 1) + 2 interiors of (r-1)(r-2)/2.
         assert_eq!(l.sample_count, 4 + 5 * (r - 1) + 2 * interior_count(r));
@@ -166,9 +224,9 @@ mod tests {
         // triangles keep separate vertex and edge samples.
         let p = vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 0.0, 1.0), Vec3::ZERO, Vec3::new(1.0, 0.0, 1.0), Vec3::Z];
         let t = vec![[0, 1, 2], [3, 4, 5]];
-        let split = build(&p, &t, &settings(SurfelType::MeshColors, 0.25, 64));
+        let split = build_all(&p, &t, &settings(SurfelType::MeshColors, 0.25, 64));
         let (qp, qt) = quad();
-        let shared = build(&qp, &qt, &settings(SurfelType::MeshColors, 0.25, 64));
+        let shared = build_all(&qp, &qt, &settings(SurfelType::MeshColors, 0.25, 64));
         // Two more vertices and one more diagonal edge (r - 1 = 5 samples).
         assert_eq!(split.sample_count, shared.sample_count + 2 + 5);
     }
@@ -176,7 +234,7 @@ mod tests {
     #[test]
     fn memory_scales_with_inverse_square_unit_until_the_limit() {
         let (p, t) = quad();
-        let count = |unit| build(&p, &t, &settings(SurfelType::Tiles, unit, 32)).sample_count as f32;
+        let count = |unit| build_all(&p, &t, &settings(SurfelType::Tiles, unit, 32)).sample_count as f32;
         let ratio = count(0.05) / count(0.1);
         assert!((ratio - 4.0).abs() < 0.5, "{ratio}");
         assert_eq!(count(0.001), count(0.0001), "clamped by the limit");

@@ -186,13 +186,14 @@ impl Recorder<'_> {
 
 impl State {
     /// A ticket came back: builds the surfel layouts of the geometry it read back.
-    pub(super) fn finish_readbacks(&mut self, memory: &Memory, ws_index: usize) {
+    /// `max_samples` bounds one geometry's cache (see `cache::layout::build`).
+    pub(super) fn finish_readbacks(&mut self, memory: &Memory, ws_index: usize, max_samples: u64) {
         let readbacks = std::mem::take(&mut self.working_sets[ws_index].readbacks);
         for (h, build_id, buffer) in readbacks {
             if let Ok(g) = self.scene.geometries.get_mut(h) {
                 if let (true, Some(gl), Some(bytes)) = (g.build_id == build_id, g.layout, buffer.mapped_bytes()) {
                     let (positions, triangles) = geometry::read_geometry(bytes, &gl);
-                    g.pending_layout = Some(layout::build(&positions, &triangles, &g.input.surfels));
+                    g.pending_layout = layout::build(&positions, &triangles, &g.input.surfels, max_samples);
                     self.scene.caches_dirty = true;
                 }
             }

@@ -39,7 +39,7 @@ impl TaskContainer {
     pub fn schedule_geometry(&mut self, task: &GeometryTask) -> Result<()> {
         let shared = self.shared()?;
         shared.check_geometry_alive(task.handle)?;
-        validate::geometry_input(&shared.device.raw, &task.input)?;
+        validate::geometry_input(&shared.device, &task.input)?;
         self.tasks.push(Task::Geometry(*task));
         Ok(())
     }
@@ -65,47 +65,48 @@ impl TaskContainer {
     }
 
     pub fn schedule_ambient_occlusion(&mut self, task: &TraceAmbientOcclusionTask) -> Result<()> {
-        self.shared()?;
-        validate::ambient_occlusion(task)?;
+        let shared = self.shared()?;
+        validate::ambient_occlusion(task, &shared.device.limits)?;
         self.tasks.push(Task::Render(RenderTask::AmbientOcclusion(*task)));
         Ok(())
     }
 
     /// Shadows from one light (see `TraceShadowTask`).
     pub fn schedule_shadow(&mut self, task: &TraceShadowTask) -> Result<()> {
-        self.shared()?;
-        validate::shadow(task)?;
+        let shared = self.shared()?;
+        validate::shadow(task, &shared.device.limits)?;
         self.tasks.push(Task::Render(RenderTask::Shadow(*task)));
         Ok(())
     }
 
     /// Shadows from several lights in one pass (see `TraceMultiShadowTask`).
     pub fn schedule_multi_shadow(&mut self, task: &TraceMultiShadowTask) -> Result<()> {
-        self.shared()?;
-        validate::multi_shadow(task)?;
+        let shared = self.shared()?;
+        validate::multi_shadow(task, &shared.device.limits)?;
         self.tasks.push(Task::Render(RenderTask::MultiShadow(task.clone())));
         Ok(())
     }
 
     /// Diffuse GI shaded from the cache (see `TraceDiffuseTask`).
     pub fn schedule_diffuse(&mut self, task: &TraceDiffuseTask) -> Result<()> {
-        self.shared()?;
-        validate::diffuse(task)?;
+        let shared = self.shared()?;
+        validate::diffuse(task, &shared.device.limits)?;
         self.tasks.push(Task::Render(RenderTask::Diffuse(*task)));
         Ok(())
     }
 
     /// Specular reflections shaded from the cache (see `TraceSpecularTask`).
     pub fn schedule_specular(&mut self, task: &TraceSpecularTask) -> Result<()> {
-        self.shared()?;
-        validate::specular(task)?;
+        let shared = self.shared()?;
+        validate::specular(task, &shared.device.limits)?;
         self.tasks.push(Task::Render(RenderTask::Specular(*task)));
         Ok(())
     }
 
     fn schedule_denoise(&mut self, job: DenoiseJob) -> Result<()> {
-        self.shared()?.check_denoising_context_alive(job.context)?;
-        validate::denoise(&job)?;
+        let shared = self.shared()?;
+        shared.check_denoising_context_alive(job.context)?;
+        validate::denoise(&job, &shared.device.limits)?;
         self.tasks.push(Task::Render(RenderTask::Denoise(Box::new(job))));
         Ok(())
     }
@@ -142,8 +143,8 @@ impl TaskContainer {
 
     /// Bakes a lit view into the direct-lighting caches (see `DirectLightingInjectionTask`).
     pub fn schedule_direct_lighting_injection(&mut self, task: &DirectLightingInjectionTask) -> Result<()> {
-        self.shared()?;
-        validate::injection(task)?;
+        let shared = self.shared()?;
+        validate::injection(task, &shared.device.limits)?;
         self.tasks.push(Task::Render(RenderTask::DirectLightingInjection(*task)));
         Ok(())
     }

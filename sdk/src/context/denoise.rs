@@ -16,6 +16,10 @@ impl ExecuteContext {
             if !(1..=MAX_DENOISING_EXTENT).contains(&v) {
                 return Err(Error::invalid(what, format!("{v} is not in 1..={MAX_DENOISING_EXTENT}")));
             }
+            let device_max = self.shared.device.limits.max_image_dimension_2d;
+            if v > device_max {
+                return Err(Error::invalid(what, format!("{v} exceeds the device's maxImageDimension2D {device_max}")));
+            }
         }
         let state = DenoiserState::new(&self.shared.memory, input)?;
         Ok(self.shared.state.lock().denoisers.insert(state))

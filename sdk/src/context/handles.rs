@@ -74,6 +74,14 @@ impl ExecuteContext {
         self.shared.state.lock().scene.pending_blas_builds()
     }
 
+    /// Triangles of the geometry's last registered or updated data whose indices went past its
+    /// vertex count. The SDK makes them degenerate (they are in no BLAS and no cache), so the
+    /// driver never sees the bad index, and logs a warning; 0 until the ticket that copied the
+    /// data has come back.
+    pub fn geometry_invalid_triangles(&self, geometry: GeometryHandle) -> Result<u32> {
+        Ok(self.shared.state.lock().scene.geometries.get(geometry)?.invalid_triangles)
+    }
+
     /// Instances in the TLAS as of the last build.
     pub fn tlas_instance_count(&self) -> usize {
         self.shared.state.lock().scene.snapshot.len()

@@ -25,6 +25,7 @@ pub(super) enum Slot {
     Blas(GeometryHandle),
     Surfel(GeometryHandle),
     Scratch,
+    IndexCounters,
     Ring,
     Tlas,
 }
@@ -172,6 +173,7 @@ impl Journal {
                     std::mem::replace(&mut g.surfel, old).map(Held::Surfel)
                 }),
                 Slot::Scratch => Held::swap_buffer(&mut w.scratch, old),
+                Slot::IndexCounters => Held::swap_buffer(&mut w.index_counters, old),
                 Slot::Tlas => Held::swap_accel(&mut w.tlas.accel, old),
                 Slot::Ring => match old {
                     Some(Held::Ring(old)) => Some(Held::Ring(std::mem::replace(&mut w.ring, old))),
@@ -216,6 +218,7 @@ impl Journal {
         w.tlas.version = self.tlas_version;
         // A working set is recorded only when idle, so these started empty.
         w.compactions.clear();
+        w.index_checks.clear();
         for (_, _, b) in w.readbacks.drain(..) {
             memory.destroy_buffer(b);
         }

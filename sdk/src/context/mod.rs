@@ -105,7 +105,14 @@ impl ExecuteContext {
             return Err(Error::invalid("InitSettings.max_timed_tasks", "must be in 1..=4096"));
         }
         let device = Device::new(desc)?;
-        let memory = Memory::new(desc.instance, desc.device, desc.physical_device)?;
+        let max_buffer = device.limits.max_buffer_size;
+        if settings.upload_ring_bytes > max_buffer {
+            return Err(Error::invalid(
+                "InitSettings.upload_ring_bytes",
+                format!("{} exceeds the device's maxBufferSize {max_buffer}", settings.upload_ring_bytes),
+            ));
+        }
+        let memory = Memory::new(desc.instance, desc.device, desc.physical_device, max_buffer)?;
         let passes = match Passes::new(&device, &memory) {
             Ok(p) => p,
             Err(e) => {

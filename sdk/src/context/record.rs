@@ -12,7 +12,7 @@ use super::State;
 use crate::error::Result;
 use crate::gpu::device::Device;
 use crate::gpu::memory::Memory;
-use crate::gpu::sync::Hazards;
+use crate::gpu::sync::{self, Hazards};
 use crate::gpu::timestamps::Span;
 use crate::passes::{Recording, RenderTask, World};
 use crate::scene::table;
@@ -94,7 +94,22 @@ impl Recorder<'_> {
         }
 
         // ---- Render tasks, in scheduled order.
-        self.record_render(tasks)
+        self.record_render(tasks)?;
+
+        // ---- What the host reads when the ticket is back (read-backs, index-check counters)
+        // must reach the host domain.
+        // ---- The completion marker, after everything else: the ticket's serial, read when it
+        // comes back. With it, read-backs and counters reach the host domain.
+        let (d, cmd) = (&self.device.raw, self.cmd);
+        self.hazards.write(d, cmd, sync::TRANSFER_WRITE);
+        let marker = self.st.working_sets[self.ws].marker.raw;
+        let serial = self.serial;
+        unsafe {
+            d.cmd_fill_buffer(cmd, marker, 0, 4, serial as u32);
+            d.cmd_fill_buffer(cmd, marker, 4, 4, (serial >> 32) as u32);
+        }
+        self.hazards.read(d, cmd, sync::HOST_READ);
+        Ok(())
     }
 
     fn record_render(&mut self, tasks: &[Task]) -> Result<()> {
@@ -115,7 +130,8 @@ impl Recorder<'_> {
         let ws = &mut st.working_sets[self.ws];
         let instance_table = ws.ring.push(bytemuck::cast_slice(&table::instance_table(&st.scene)), 16).address;
         let tlas = ws.tlas_handle();
-        let mut world = World { scene: &st.scene, cache_pool: &st.cache_pool, denoisers: &mut st.denoisers };
+        let mut world =
+            World { scene: &st.scene, cache_pool: &st.cache_pool, denoisers: &mut st.denoisers, limits: &device.limits };
         for (index, task) in renders {
             let describe = task.describe();
             // Inline ray queries where asked for and available; otherwise the pipeline (once a

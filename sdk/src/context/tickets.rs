@@ -7,7 +7,7 @@ use super::record::Recorder;
 use super::{scene, ExecuteContext};
 use crate::error::{Error, Result};
 use crate::gpu::sync::Hazards;
-use crate::types::{CompletedTask, GpuTicket};
+use crate::types::{CompletedTask, GpuTicket, MAX_CACHE_SAMPLES};
 use ash::vk;
 use std::sync::Arc;
 
@@ -33,7 +33,7 @@ impl ExecuteContext {
             .iter()
             .position(|w| w.in_flight.is_none())
             .ok_or(Error::WorkingSetsExhausted { in_flight: st.working_sets.len() as u32 })?;
-        scene::validate_handles(st, &container.tasks)?;
+        scene::validate_handles(st, &container.tasks, &shared.device.limits)?;
         st.collect_garbage(&shared.device, &shared.memory);
 
         let serial = st.next_serial;
@@ -74,6 +74,11 @@ impl ExecuteContext {
             return Err(unknown);
         }
         let ws_index = st.working_sets.iter().position(|w| w.in_flight == Some(ticket.serial)).ok_or(unknown)?;
+        // Handed back before the GPU ran it (or before the engine waited for it): nothing is
+        // recycled, the ticket stays in flight, and the engine can try again with `raw`.
+        if !st.working_sets[ws_index].completed(ticket.serial) {
+            return Err(Error::TicketNotComplete { serial: ticket.serial, raw: ticket.into_raw() });
+        }
         let d = &self.shared.device;
         let ws = &mut st.working_sets[ws_index];
         let mut done = CompletedTask { serial: ticket.serial, timings: Vec::new() };
@@ -98,7 +103,29 @@ impl ExecuteContext {
                 }
             }
         }
-        st.finish_readbacks(&self.shared.memory, ws_index);
+        let ws = &mut st.working_sets[ws_index];
+        let checks = std::mem::take(&mut ws.index_checks);
+        if let Some(counters) = ws.index_counters.as_ref().and_then(|b| b.mapped_bytes()) {
+            for (h, copy, slot) in checks {
+                let at = slot as usize * 4;
+                let Some(bytes) = counters.get(at..at + 4) else { continue };
+                let bad = u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]);
+                let Ok(g) = st.scene.geometries.get_mut(h) else { continue };
+                if g.copy.as_ref().is_some_and(|c| c.raw == copy) {
+                    if bad > 0 {
+                        log::warn!(
+                            "geometry {:#x}: {bad} triangle(s) index past its {} vertices; made degenerate",
+                            h.0,
+                            g.layout.map_or(0, |l| l.vertex_count)
+                        );
+                    }
+                    g.invalid_triangles = bad;
+                }
+            }
+        }
+        // One cache must fit one buffer, and stay within MAX_CACHE_SAMPLES.
+        let max_samples = MAX_CACHE_SAMPLES.min(d.limits.max_buffer_size / crate::cache::pool::SAMPLE_BYTES);
+        st.finish_readbacks(&self.shared.memory, ws_index, max_samples);
         st.working_sets[ws_index].in_flight = None;
         st.collect_garbage(d, &self.shared.memory);
         Ok(done)

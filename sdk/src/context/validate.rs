@@ -2,12 +2,13 @@
 //! it, with the field's name. Handle *states* (registered or not) are checked again when the
 //! container is built, since handles can be destroyed in between.
 use crate::error::{Error, Result};
+use crate::gpu::device::{Device, Limits};
 use crate::scene::geometry::{check_region, GeometryLayout};
 use crate::types::*;
 use ash::vk;
 use glam::{Affine3A, Mat4};
 
-pub(crate) fn geometry_input(device: &ash::Device, input: &GeometryInput) -> Result<()> {
+pub(crate) fn geometry_input(device: &Device, input: &GeometryInput) -> Result<()> {
     let v = &input.vertices;
     if v.buffer == vk::Buffer::null() {
         return Err(Error::invalid("GeometryInput.vertices.buffer", "is null"));
@@ -61,7 +62,27 @@ pub(crate) fn geometry_input(device: &ash::Device, input: &GeometryInput) -> Res
             format!("{} is not in 1..={}", t.tile_resolution_limit, crate::cache::layout::MAX_RESOLUTION),
         ));
     }
-    let layout = GeometryLayout::of(input);
+    let layout = GeometryLayout::of(input)?;
+    if layout.primitive_count as u64 > device.limits.max_primitive_count {
+        return Err(Error::invalid(
+            "GeometryInput",
+            format!(
+                "{} triangles exceed the device's maxPrimitiveCount {}",
+                layout.primitive_count, device.limits.max_primitive_count
+            ),
+        ));
+    }
+    if layout.total_bytes() > device.limits.max_buffer_size {
+        return Err(Error::invalid(
+            "GeometryInput",
+            format!(
+                "its {}-byte copy exceeds the device's maxBufferSize {}",
+                layout.total_bytes(),
+                device.limits.max_buffer_size
+            ),
+        ));
+    }
+    let device = &device.raw;
     check_region(device, "GeometryInput.vertices", v.buffer, v.offset, layout.vertex_bytes)?;
     if indexed {
         check_region(device, "GeometryInput.indices", i.buffer, i.offset, layout.index_size() * i.count as u64)?;
@@ -92,9 +113,28 @@ const INPUT_LAYOUTS: &[vk::ImageLayout] = &[
     vk::ImageLayout::READ_ONLY_OPTIMAL,
 ];
 
-fn image(what: &'static str, img: &ImageInput, vp: &Viewport, layouts: &[vk::ImageLayout]) -> Result<()> {
+/// How a task uses an image: read through a sampler, or written as a storage image.
+#[derive(Clone, Copy)]
+enum Use {
+    Sampled,
+    Storage,
+}
+
+fn image(what: &'static str, img: &ImageInput, vp: &Viewport, role: Use) -> Result<()> {
     if img.image == vk::Image::null() || img.view == vk::ImageView::null() {
         return Err(Error::invalid(what, "image or view is null"));
+    }
+    let (layouts, usage, usage_name): (&[vk::ImageLayout], _, _) = match role {
+        Use::Sampled => (INPUT_LAYOUTS, vk::ImageUsageFlags::SAMPLED, "SAMPLED"),
+        Use::Storage => (&[vk::ImageLayout::GENERAL], vk::ImageUsageFlags::STORAGE, "STORAGE"),
+    };
+    // Vulkan cannot tell an image's usage, and binding one without it is undefined behaviour
+    // (a crash at descriptor write on some drivers): the engine declares it.
+    if img.usage.is_empty() {
+        return Err(Error::invalid(what, "usage is empty: declare the flags the image was created with"));
+    }
+    if !img.usage.contains(usage) {
+        return Err(Error::invalid(what, format!("usage {:?} lacks {usage_name}, which this task needs", img.usage)));
     }
     if !layouts.contains(&img.layout) {
         return Err(Error::invalid(what, format!("layout {:?} is not one of {layouts:?}", img.layout)));
@@ -164,7 +204,31 @@ fn normal_format_ok(f: vk::Format, needed: u32) -> bool {
         || (needed <= 2 && NORMAL_FORMATS_2.contains(&f))
 }
 
-pub(crate) fn trace_common(c: &TraceCommon) -> Result<()> {
+/// A width x height launch fits the device: the ray-tracing pipeline's invocation limit, and
+/// 8x8 compute groups (inline traces, denoisers) within the group-count limits.
+pub(crate) fn dispatch_size(what: &'static str, vp: &Viewport, limits: &Limits) -> Result<()> {
+    let invocations = vp.width as u64 * vp.height as u64;
+    if invocations > limits.max_ray_dispatch as u64 {
+        return Err(Error::invalid(
+            what,
+            format!("{}x{} exceeds the device's maxRayDispatchInvocationCount {}", vp.width, vp.height, limits.max_ray_dispatch),
+        ));
+    }
+    let groups = [vp.width.div_ceil(8), vp.height.div_ceil(8)];
+    if groups[0] > limits.max_dispatch_groups[0] || groups[1] > limits.max_dispatch_groups[1] {
+        return Err(Error::invalid(
+            what,
+            format!(
+                "{}x{} needs {groups:?} compute groups, over the device's maxComputeWorkGroupCount {:?}",
+                vp.width, vp.height, limits.max_dispatch_groups
+            ),
+        ));
+    }
+    Ok(())
+}
+
+pub(crate) fn trace_common(c: &TraceCommon, limits: &Limits) -> Result<()> {
+    dispatch_size("TraceCommon.viewport", &c.viewport, limits)?;
     let vp = &c.viewport;
     if vp.width == 0 || vp.height == 0 {
         return Err(Error::invalid("TraceCommon.viewport", "has zero width or height"));
@@ -172,7 +236,7 @@ pub(crate) fn trace_common(c: &TraceCommon) -> Result<()> {
     if !(vp.min_depth.is_finite() && vp.max_depth.is_finite()) {
         return Err(Error::invalid("TraceCommon.viewport", "depth range is not finite"));
     }
-    image("TraceCommon.depth.image", &c.depth.image, vp, INPUT_LAYOUTS)?;
+    image("TraceCommon.depth.image", &c.depth.image, vp, Use::Sampled)?;
     match c.depth.depth_type {
         DepthType::ClipSpace => format_in(
             "TraceCommon.depth.image.format",
@@ -187,7 +251,7 @@ pub(crate) fn trace_common(c: &TraceCommon) -> Result<()> {
             "R32G32B32A32_SFLOAT or R16G16B16A16_SFLOAT (DepthType::WorldPosition)",
         )?,
     }
-    image("TraceCommon.normals.image", &c.normals.image, vp, INPUT_LAYOUTS)?;
+    image("TraceCommon.normals.image", &c.normals.image, vp, Use::Sampled)?;
     if !normal_format_ok(c.normals.image.format, c.normals.normal_type.channels_needed()) {
         return Err(Error::UnsupportedFormat {
             what: "TraceCommon.normals.image.format",
@@ -196,12 +260,12 @@ pub(crate) fn trace_common(c: &TraceCommon) -> Result<()> {
         });
     }
     if c.direct_lighting.image != vk::Image::null() {
-        image("TraceCommon.direct_lighting", &c.direct_lighting, vp, INPUT_LAYOUTS)?;
+        image("TraceCommon.direct_lighting", &c.direct_lighting, vp, Use::Sampled)?;
         format_in("TraceCommon.direct_lighting.format", c.direct_lighting.format, LIT_FORMATS, "an RGB(A) colour format")?;
     }
     let r = &c.roughness;
     if r.has_image() {
-        image("TraceCommon.roughness.image", &r.image, vp, INPUT_LAYOUTS)?;
+        image("TraceCommon.roughness.image", &r.image, vp, Use::Sampled)?;
         if !NORMAL_FORMATS_4.contains(&r.image.format)
             && !NORMAL_FORMATS_2.contains(&r.image.format)
             && !matches!(
@@ -231,7 +295,7 @@ pub(crate) fn trace_common(c: &TraceCommon) -> Result<()> {
 }
 
 pub(crate) fn output_image(what: &'static str, img: &ImageInput, vp: &Viewport, formats: &[vk::Format]) -> Result<()> {
-    image(what, img, vp, &[vk::ImageLayout::GENERAL])?;
+    image(what, img, vp, Use::Storage)?;
     format_in(what, img.format, formats, "R8/R16/R32 single channel or an RGBA 8/16/32-bit format")
 }
 
@@ -239,10 +303,10 @@ pub(crate) fn output_image(what: &'static str, img: &ImageInput, vp: &Viewport, 
 pub(crate) const COLOR_OUTPUT_FORMATS: &[vk::Format] =
     &[vk::Format::R8G8B8A8_UNORM, vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT];
 
-pub(crate) fn ambient_occlusion(t: &TraceAmbientOcclusionTask) -> Result<()> {
-    trace_common(&t.common)?;
+pub(crate) fn ambient_occlusion(t: &TraceAmbientOcclusionTask, limits: &Limits) -> Result<()> {
+    trace_common(&t.common, limits)?;
     if t.common.debug_output != DebugOutput::Default {
-        image("TraceAmbientOcclusionTask.output", &t.output, &t.common.viewport, &[vk::ImageLayout::GENERAL])?;
+        image("TraceAmbientOcclusionTask.output", &t.output, &t.common.viewport, Use::Storage)?;
         format_in(
             "TraceAmbientOcclusionTask.output (debug output)",
             t.output.format,
@@ -275,13 +339,17 @@ const LIT_FORMATS: &[vk::Format] = &[
     vk::Format::R32G32B32A32_SFLOAT,
 ];
 
-pub(crate) fn injection(t: &DirectLightingInjectionTask) -> Result<()> {
+pub(crate) fn injection(t: &DirectLightingInjectionTask, limits: &Limits) -> Result<()> {
     let common = TraceCommon { depth: t.depth, viewport: t.viewport, camera: t.camera, ..Default::default() };
     let vp = &t.viewport;
     if vp.width == 0 || vp.height == 0 {
         return Err(Error::invalid("DirectLightingInjectionTask.viewport", "has zero width or height"));
     }
-    image("DirectLightingInjectionTask.depth.image", &t.depth.image, vp, INPUT_LAYOUTS)?;
+    if !(vp.min_depth.is_finite() && vp.max_depth.is_finite()) {
+        return Err(Error::invalid("DirectLightingInjectionTask.viewport", "depth range is not finite"));
+    }
+    dispatch_size("DirectLightingInjectionTask.viewport", vp, limits)?;
+    image("DirectLightingInjectionTask.depth.image", &t.depth.image, vp, Use::Sampled)?;
     let depth_formats = if t.depth.depth_type == DepthType::ClipSpace { CLIP_DEPTH_FORMATS } else { POSITION_FORMATS };
     format_in(
         "DirectLightingInjectionTask.depth.image.format",
@@ -289,7 +357,7 @@ pub(crate) fn injection(t: &DirectLightingInjectionTask) -> Result<()> {
         depth_formats,
         "a depth format matching depth_type",
     )?;
-    image("DirectLightingInjectionTask.lit", &t.lit, vp, INPUT_LAYOUTS)?;
+    image("DirectLightingInjectionTask.lit", &t.lit, vp, Use::Sampled)?;
     format_in("DirectLightingInjectionTask.lit.format", t.lit.format, LIT_FORMATS, "an RGB(A) colour format")?;
     matrix("DirectLightingInjectionTask.camera.world_to_view", &common.camera.world_to_view)?;
     matrix("DirectLightingInjectionTask.camera.view_to_clip", &common.camera.view_to_clip)?;
@@ -308,10 +376,10 @@ const SHADOW_OUTPUT_FORMATS: &[vk::Format] = &[
     vk::Format::R32G32B32A32_SFLOAT,
 ];
 
-pub(crate) fn shadow(t: &TraceShadowTask) -> Result<()> {
-    trace_common(&t.common)?;
+pub(crate) fn shadow(t: &TraceShadowTask, limits: &Limits) -> Result<()> {
+    trace_common(&t.common, limits)?;
     if t.common.debug_output != DebugOutput::Default {
-        image("TraceShadowTask.output", &t.output, &t.common.viewport, &[vk::ImageLayout::GENERAL])?;
+        image("TraceShadowTask.output", &t.output, &t.common.viewport, Use::Storage)?;
         return format_in(
             "TraceShadowTask.output (debug output)",
             t.output.format,
@@ -319,7 +387,7 @@ pub(crate) fn shadow(t: &TraceShadowTask) -> Result<()> {
             "an RGBA format for a debug visualisation",
         );
     }
-    image("TraceShadowTask.output", &t.output, &t.common.viewport, &[vk::ImageLayout::GENERAL])?;
+    image("TraceShadowTask.output", &t.output, &t.common.viewport, Use::Storage)?;
     format_in("TraceShadowTask.output", t.output.format, SHADOW_OUTPUT_FORMATS, "a signed float format (R16/R32, RG or RGBA)")?;
     light("TraceShadowTask.light", &t.light)?;
     if !(1..=64).contains(&t.rays_per_pixel) {
@@ -328,9 +396,9 @@ pub(crate) fn shadow(t: &TraceShadowTask) -> Result<()> {
     Ok(())
 }
 
-pub(crate) fn diffuse(t: &TraceDiffuseTask) -> Result<()> {
-    trace_common(&t.common)?;
-    image("TraceDiffuseTask.output", &t.output, &t.common.viewport, &[vk::ImageLayout::GENERAL])?;
+pub(crate) fn diffuse(t: &TraceDiffuseTask, limits: &Limits) -> Result<()> {
+    trace_common(&t.common, limits)?;
+    image("TraceDiffuseTask.output", &t.output, &t.common.viewport, Use::Storage)?;
     format_in(
         "TraceDiffuseTask.output",
         t.output.format,
@@ -349,9 +417,9 @@ pub(crate) fn diffuse(t: &TraceDiffuseTask) -> Result<()> {
     Ok(())
 }
 
-pub(crate) fn specular(t: &TraceSpecularTask) -> Result<()> {
-    trace_common(&t.common)?;
-    image("TraceSpecularTask.output", &t.output, &t.common.viewport, &[vk::ImageLayout::GENERAL])?;
+pub(crate) fn specular(t: &TraceSpecularTask, limits: &Limits) -> Result<()> {
+    trace_common(&t.common, limits)?;
+    image("TraceSpecularTask.output", &t.output, &t.common.viewport, Use::Storage)?;
     let formats = [vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT];
     if t.common.debug_output == DebugOutput::Default {
         format_in("TraceSpecularTask.output", t.output.format, &formats, "R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT")?;
@@ -359,7 +427,7 @@ pub(crate) fn specular(t: &TraceSpecularTask) -> Result<()> {
         format_in("TraceSpecularTask.output (debug output)", t.output.format, COLOR_OUTPUT_FORMATS, "an RGBA format")?;
     }
     if t.demodulated_output.image != vk::Image::null() {
-        image("TraceSpecularTask.demodulated_output", &t.demodulated_output, &t.common.viewport, &[vk::ImageLayout::GENERAL])?;
+        image("TraceSpecularTask.demodulated_output", &t.demodulated_output, &t.common.viewport, Use::Storage)?;
         format_in(
             "TraceSpecularTask.demodulated_output",
             t.demodulated_output.format,
@@ -369,7 +437,7 @@ pub(crate) fn specular(t: &TraceSpecularTask) -> Result<()> {
     }
     let s = &t.common.specular;
     if s.image.image != vk::Image::null() {
-        image("TraceCommon.specular.image", &s.image, &t.common.viewport, INPUT_LAYOUTS)?;
+        image("TraceCommon.specular.image", &s.image, &t.common.viewport, Use::Sampled)?;
         format_in("TraceCommon.specular.image.format", s.image.format, LIT_FORMATS, "an RGB(A) colour format")?;
     }
     if !(s.global_metalness.is_finite() && s.global_metalness >= 0.0) {
@@ -406,8 +474,8 @@ fn light(what: &'static str, l: &LightInfo) -> Result<()> {
     Ok(())
 }
 
-pub(crate) fn multi_shadow(t: &TraceMultiShadowTask) -> Result<()> {
-    trace_common(&t.common)?;
+pub(crate) fn multi_shadow(t: &TraceMultiShadowTask, limits: &Limits) -> Result<()> {
+    trace_common(&t.common, limits)?;
     if t.common.debug_output != DebugOutput::Default {
         return Err(Error::invalid(
             "TraceMultiShadowTask.common.debug_output",
@@ -424,7 +492,7 @@ pub(crate) fn multi_shadow(t: &TraceMultiShadowTask) -> Result<()> {
         light("TraceMultiShadowTask.lights[]", l)?;
     }
     let vp = &t.common.viewport;
-    image("TraceMultiShadowTask.visibility", &t.visibility, vp, &[vk::ImageLayout::GENERAL])?;
+    image("TraceMultiShadowTask.visibility", &t.visibility, vp, Use::Storage)?;
     let vis_formats: &[vk::Format] = if t.lights.len() <= 4 {
         &[vk::Format::R32_UINT, vk::Format::R32G32B32A32_UINT]
     } else {
@@ -436,7 +504,7 @@ pub(crate) fn multi_shadow(t: &TraceMultiShadowTask) -> Result<()> {
         vis_formats,
         "R32_UINT (up to 4 lights) or R32G32B32A32_UINT",
     )?;
-    image("TraceMultiShadowTask.packed", &t.packed, vp, &[vk::ImageLayout::GENERAL])?;
+    image("TraceMultiShadowTask.packed", &t.packed, vp, Use::Storage)?;
     format_in(
         "TraceMultiShadowTask.packed",
         t.packed.format,
@@ -455,7 +523,7 @@ const MOTION_FORMATS_2: &[vk::Format] =
 
 /// A denoise task, normalised (see `DenoiseJob`): G-buffer, cameras, motion, settings, and the
 /// formats its signal reads and writes.
-pub(crate) fn denoise(j: &DenoiseJob) -> Result<()> {
+pub(crate) fn denoise(j: &DenoiseJob, limits: &Limits) -> Result<()> {
     let c = &j.common;
     let as_trace = TraceCommon {
         depth: c.depth,
@@ -465,7 +533,7 @@ pub(crate) fn denoise(j: &DenoiseJob) -> Result<()> {
         roughness: c.roughness,
         ..Default::default()
     };
-    trace_common(&as_trace)?;
+    trace_common(&as_trace, limits)?;
     if let Some(p) = &c.previous_camera {
         matrix("DenoisingCommon.previous_camera.world_to_view", &p.world_to_view)?;
         matrix("DenoisingCommon.previous_camera (view_to_clip * world_to_view)", &(p.view_to_clip * p.world_to_view))?;
@@ -476,7 +544,7 @@ pub(crate) fn denoise(j: &DenoiseJob) -> Result<()> {
     let vp = &c.viewport;
     let m = &c.motion;
     if m.has_image() {
-        image("DenoisingCommon.motion.image", &m.image, vp, INPUT_LAYOUTS)?;
+        image("DenoisingCommon.motion.image", &m.image, vp, Use::Sampled)?;
         let formats = if m.motion_type == MotionType::RgbWorldSpace { RADIANCE_FORMATS } else { MOTION_FORMATS_2 };
         format_in(
             "DenoisingCommon.motion.image.format",
@@ -513,9 +581,9 @@ pub(crate) fn denoise(j: &DenoiseJob) -> Result<()> {
         SignalType::MultiShadow => (RADIANCE_FORMATS, SCALAR_OUTPUT_FORMATS),
     };
     for k in 0..j.count {
-        image("denoise task input", &j.inputs[k], vp, INPUT_LAYOUTS)?;
+        image("denoise task input", &j.inputs[k], vp, Use::Sampled)?;
         format_in("denoise task input", j.inputs[k].format, inputs, "the format of the trace task's output for this signal")?;
-        image("denoise task output", &j.outputs[k], vp, &[vk::ImageLayout::GENERAL])?;
+        image("denoise task output", &j.outputs[k], vp, Use::Storage)?;
         format_in(
             "denoise task output",
             j.outputs[k].format,

@@ -25,7 +25,14 @@ pub(super) struct WorkingSet {
     pub compactions: Vec<(GeometryHandle, u64)>,
     /// Geometry copies read back for their surfel layouts: (geometry, build id, buffer).
     pub readbacks: Vec<(GeometryHandle, u64, Buffer)>,
+    /// Host-visible counters of the index checks: one u32 per checked copy.
+    pub index_counters: Option<Buffer>,
+    /// Copies this ticket checked: (geometry, the copy's buffer, counter slot).
+    pub index_checks: Vec<(GeometryHandle, vk::Buffer, u32)>,
     pub tlas: Tlas,
+    /// Host-visible: the last command of every recording writes its ticket's serial here, so
+    /// a ticket handed back before its commands ran is recognised (`TicketNotComplete`).
+    pub marker: Buffer,
 }
 
 impl WorkingSet {
@@ -40,6 +47,18 @@ impl WorkingSet {
                 return Err(e);
             }
         };
+        let usage = vk::BufferUsageFlags::TRANSFER_DST;
+        let mut marker =
+            match memory.create_buffer("completion marker", 16, usage, MemoryLocation::GpuToCpu, MemoryKind::Readback) {
+                Ok(m) => m,
+                Err(e) => {
+                    timer.destroy(d);
+                    memory.destroy_buffer(ring.buffer);
+                    return Err(e);
+                }
+            };
+        // No ticket has serial 0.
+        marker.mapped().fill(0);
         Ok(WorkingSet {
             in_flight: None,
             ring,
@@ -49,7 +68,10 @@ impl WorkingSet {
             compaction_slots: 0,
             compactions: Vec::new(),
             readbacks: Vec::new(),
+            index_counters: None,
+            index_checks: Vec::new(),
             tlas: Tlas { accel: None, version: 0 },
+            marker,
         })
     }
 
@@ -78,6 +100,14 @@ impl WorkingSet {
         Ok(())
     }
 
+    /// Whether the GPU has run the recording of ticket `serial` to its end (its marker).
+    pub fn completed(&self, serial: u64) -> bool {
+        self.marker
+            .mapped_bytes()
+            .and_then(|b| b.get(..8))
+            .is_some_and(|b| u64::from_le_bytes(b.try_into().unwrap_or([0; 8])) == serial)
+    }
+
     /// Destroys everything it owns (no ticket of it may be in flight).
     pub fn destroy(mut self, device: &Device, memory: &Memory) {
         self.tlas.destroy(device, memory);
@@ -85,8 +115,9 @@ impl WorkingSet {
             memory.destroy_buffer(b);
         }
         memory.destroy_buffer(self.ring.buffer);
-        if let Some(s) = self.scratch.take() {
-            memory.destroy_buffer(s);
+        memory.destroy_buffer(self.marker);
+        for b in [self.scratch.take(), self.index_counters.take()].into_iter().flatten() {
+            memory.destroy_buffer(b);
         }
         self.timer.destroy(&device.raw);
         if self.compaction_pool != vk::QueryPool::null() {
@@ -140,6 +171,33 @@ impl Recorder<'_> {
         let old = std::mem::replace(&mut ws.ring, fresh);
         self.journal.replaced(Slot::Ring, Some(Held::Ring(old)));
         Ok(())
+    }
+
+    /// Host-visible index-check counters for `n` copies (zeroed by the caller's fill), their
+    /// buffer returned.
+    pub fn ensure_index_counters(&mut self, n: u32) -> Result<vk::Buffer> {
+        let memory = self.memory;
+        let ws = &mut self.st.working_sets[self.ws];
+        let journal = &mut self.journal;
+        let had = ws.index_counters.is_some();
+        memory::ensure_capacity(
+            &mut ws.index_counters,
+            n as u64 * 4,
+            |size| {
+                memory.create_buffer(
+                    "index check counters",
+                    size.max(256),
+                    vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                    MemoryLocation::GpuToCpu,
+                    MemoryKind::Readback,
+                )
+            },
+            |old| journal.replaced(Slot::IndexCounters, Some(Held::Buffer(old))),
+        )?;
+        if !had && ws.index_counters.is_some() {
+            journal.replaced(Slot::IndexCounters, None);
+        }
+        Ok(ws.index_counters.as_ref().map_or(vk::Buffer::null(), |b| b.raw))
     }
 
     pub fn working_set(&mut self) -> &mut WorkingSet {

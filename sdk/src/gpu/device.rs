@@ -143,6 +143,24 @@ pub struct DeviceDesc<'a> {
     pub enabled_extensions: &'a [&'a CStr],
 }
 
+/// The device limits the SDK checks inputs against, so no size or count it hands the driver
+/// exceeds what the device supports (an error names the limit instead).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Limits {
+    /// VkPhysicalDeviceAccelerationStructurePropertiesKHR::maxPrimitiveCount (per BLAS).
+    pub max_primitive_count: u64,
+    /// ...::maxInstanceCount (per TLAS).
+    pub max_instance_count: u64,
+    /// VkPhysicalDeviceVulkan13Properties::maxBufferSize.
+    pub max_buffer_size: u64,
+    /// maxComputeWorkGroupCount[0] and [1].
+    pub max_dispatch_groups: [u32; 2],
+    /// VkPhysicalDeviceRayTracingPipelinePropertiesKHR::maxRayDispatchInvocationCount.
+    pub max_ray_dispatch: u32,
+    /// maxImageDimension2D (denoiser history images).
+    pub max_image_dimension_2d: u32,
+}
+
 /// Loaders and properties used by the layers above.
 pub(crate) struct Device {
     pub raw: ash::Device,
@@ -156,6 +174,7 @@ pub(crate) struct Device {
     pub timestamp_period_ns: Option<f64>,
     pub ray_query: bool,
     pub device_name: String,
+    pub limits: Limits,
 }
 
 impl Device {
@@ -174,7 +193,9 @@ impl Device {
 
         let mut rt_props = vk::PhysicalDeviceRayTracingPipelinePropertiesKHR::default();
         let mut as_props = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
-        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut rt_props).push_next(&mut as_props);
+        let mut props13 = vk::PhysicalDeviceVulkan13Properties::default();
+        let mut props2 =
+            vk::PhysicalDeviceProperties2::default().push_next(&mut rt_props).push_next(&mut as_props).push_next(&mut props13);
         unsafe { desc.instance.get_physical_device_properties2(desc.physical_device, &mut props2) };
         let limits = props2.properties.limits;
         let device_name = props2.properties.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
@@ -185,6 +206,14 @@ impl Device {
             ..rt_props
         };
         let timestamp_period_ns = (limits.timestamp_compute_and_graphics == vk::TRUE).then_some(limits.timestamp_period as f64);
+        let device_limits = Limits {
+            max_primitive_count: as_props.max_primitive_count,
+            max_instance_count: as_props.max_instance_count,
+            max_buffer_size: props13.max_buffer_size,
+            max_dispatch_groups: [limits.max_compute_work_group_count[0], limits.max_compute_work_group_count[1]],
+            max_ray_dispatch: rt_props.max_ray_dispatch_invocation_count,
+            max_image_dimension_2d: limits.max_image_dimension2_d,
+        };
 
         Ok(Device {
             raw: desc.device.clone(),
@@ -197,6 +226,7 @@ impl Device {
             timestamp_period_ns,
             ray_query,
             device_name,
+            limits: device_limits,
         })
     }
 }

@@ -103,6 +103,11 @@ pub(crate) const COLOR_RANGE: vk::ImageSubresourceRange = vk::ImageSubresourceRa
     layer_count: 1,
 };
 
+/// The usage of every SDK-owned image.
+const IMAGE_USAGE: vk::ImageUsageFlags = vk::ImageUsageFlags::from_raw(
+    vk::ImageUsageFlags::STORAGE.as_raw() | vk::ImageUsageFlags::SAMPLED.as_raw() | vk::ImageUsageFlags::TRANSFER_DST.as_raw(),
+);
+
 /// An SDK-owned image (denoiser history), always used in GENERAL layout after creation.
 pub(crate) struct Image {
     pub raw: vk::Image,
@@ -124,6 +129,7 @@ impl Image {
             width: self.width,
             height: self.height,
             layout: vk::ImageLayout::GENERAL,
+            usage: IMAGE_USAGE,
         }
     }
 }
@@ -132,13 +138,15 @@ pub(crate) struct Memory {
     device: ash::Device,
     allocator: Mutex<Option<Allocator>>,
     counts: Mutex<[AllocationCount; MEMORY_KIND_COUNT]>,
+    /// The device's maxBufferSize: a larger buffer is refused before it reaches the driver.
+    max_buffer_size: u64,
     /// Test builds: allocations left before one fails (u64::MAX: none fails).
     #[cfg(feature = "fault-injection")]
     fail_in: std::sync::atomic::AtomicU64,
 }
 
 impl Memory {
-    pub fn new(instance: &ash::Instance, device: &ash::Device, pdev: vk::PhysicalDevice) -> Result<Memory> {
+    pub fn new(instance: &ash::Instance, device: &ash::Device, pdev: vk::PhysicalDevice, max_buffer_size: u64) -> Result<Memory> {
         let allocator = Allocator::new(&AllocatorCreateDesc {
             instance: instance.clone(),
             device: device.clone(),
@@ -152,6 +160,7 @@ impl Memory {
             device: device.clone(),
             allocator: Mutex::new(Some(allocator)),
             counts: Mutex::new([AllocationCount::default(); MEMORY_KIND_COUNT]),
+            max_buffer_size,
             #[cfg(feature = "fault-injection")]
             fail_in: std::sync::atomic::AtomicU64::new(u64::MAX),
         })
@@ -192,6 +201,12 @@ impl Memory {
     ) -> Result<Buffer> {
         self.injected_failure(name)?;
         let size = size.max(16);
+        if size > self.max_buffer_size {
+            return Err(Error::OutOfMemory {
+                what: name,
+                detail: format!("{size} bytes exceed the device's maxBufferSize {}", self.max_buffer_size),
+            });
+        }
         let usage = usage | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
         let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
         // SAFETY: valid create info; the buffer is destroyed in `destroy_buffer`.
@@ -228,6 +243,9 @@ impl Memory {
     }
 
     pub fn destroy_buffer(&self, mut buffer: Buffer) {
+        // The buffer goes before the memory bound to it (a buffer must not outlive its memory).
+        // SAFETY: the caller guarantees no pending GPU use (deferred destruction).
+        unsafe { self.device.destroy_buffer(buffer.raw, None) };
         if let Some(allocation) = buffer.allocation.take() {
             let mut counts = self.counts.lock();
             let c = &mut counts[buffer.kind as usize];
@@ -240,8 +258,6 @@ impl Memory {
                 }
             }
         }
-        // SAFETY: the caller guarantees no pending GPU use (deferred destruction).
-        unsafe { self.device.destroy_buffer(buffer.raw, None) };
     }
 
     /// A 2D storage image in device memory, with its view (layout UNDEFINED until its first
@@ -263,7 +279,7 @@ impl Memory {
             .array_layers(1)
             .samples(vk::SampleCountFlags::TYPE_1)
             .tiling(vk::ImageTiling::OPTIMAL)
-            .usage(vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST)
+            .usage(IMAGE_USAGE)
             .initial_layout(vk::ImageLayout::UNDEFINED);
         // SAFETY: valid create info; destroyed in `destroy_image`.
         let raw = unsafe { self.device.create_image(&info, None) }.map_err(Error::vk("vkCreateImage"))?;
@@ -310,6 +326,12 @@ impl Memory {
     }
 
     pub fn destroy_image(&self, mut image: Image) {
+        // View, then image, then the memory bound to it.
+        // SAFETY: the caller guarantees no pending GPU use (deferred destruction).
+        unsafe {
+            self.device.destroy_image_view(image.view, None);
+            self.device.destroy_image(image.raw, None);
+        }
         if let Some(allocation) = image.allocation.take() {
             let mut counts = self.counts.lock();
             let c = &mut counts[image.kind as usize];
@@ -321,11 +343,6 @@ impl Memory {
                     log::error!("freeing an image failed: {e}");
                 }
             }
-        }
-        // SAFETY: the caller guarantees no pending GPU use (deferred destruction).
-        unsafe {
-            self.device.destroy_image_view(image.view, None);
-            self.device.destroy_image(image.raw, None);
         }
     }
 

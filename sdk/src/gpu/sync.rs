@@ -32,6 +32,9 @@ pub(crate) const AS_COPY: Use = Use {
     ),
 };
 
+/// Host reads after the ticket's fence (read-backs, counters): a barrier to the host domain.
+pub(crate) const HOST_READ: Use = Use { stages: vk::PipelineStageFlags2::HOST, access: vk::AccessFlags2::HOST_READ };
+
 /// Every stage the SDK's own commands run in (what its persistent state was written by).
 pub(crate) const SDK_STAGES: vk::PipelineStageFlags2 = vk::PipelineStageFlags2::from_raw(
     vk::PipelineStageFlags2::COPY.as_raw()

@@ -42,13 +42,28 @@ impl CacheOps {
         Ok(CacheOps { layout, fill, resolve })
     }
 
-    fn dispatch(&self, r: &mut Recording<'_>, pipeline: vk::Pipeline, push: &[u8], count: u64) {
+    /// Runs `pipeline` over `count` samples from `address`, in as many dispatches as the
+    /// device's group-count limit needs (each with its part's address and count).
+    fn dispatch(
+        &self,
+        r: &mut Recording<'_>,
+        pipeline: vk::Pipeline,
+        address: u64,
+        count: u64,
+        push: impl Fn(u64, u32) -> Vec<u8>,
+    ) {
         let d = &r.device.raw;
-        unsafe {
-            d.cmd_bind_pipeline(r.cmd, vk::PipelineBindPoint::COMPUTE, pipeline);
-            d.cmd_push_constants(r.cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
-            // Large ranges: the x dimension is enough up to 16M groups (4G samples).
-            d.cmd_dispatch(r.cmd, count.div_ceil(GROUP) as u32, 1, 1);
+        let per_dispatch = r.device.limits.max_dispatch_groups[0].max(1) as u64 * GROUP;
+        unsafe { d.cmd_bind_pipeline(r.cmd, vk::PipelineBindPoint::COMPUTE, pipeline) };
+        let mut first = 0u64;
+        while first < count {
+            let n = (count - first).min(per_dispatch);
+            let bytes = push(address + first * crate::cache::pool::SAMPLE_BYTES, n as u32);
+            unsafe {
+                d.cmd_push_constants(r.cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, &bytes);
+                d.cmd_dispatch(r.cmd, n.div_ceil(GROUP) as u32, 1, 1);
+            }
+            first += n;
         }
     }
 
@@ -56,15 +71,18 @@ impl CacheOps {
     pub fn fill(&self, r: &mut Recording<'_>, address: u64, count: u64, color: [f32; 3]) {
         let stage = vk::PipelineStageFlags2::COMPUTE_SHADER;
         r.hazards.write(&r.device.raw, r.cmd, sync::shader_write(stage));
-        let push = FillPush { samples: address, count: count as u32, pad: 0, color: [color[0], color[1], color[2], 0.0] };
-        self.dispatch(r, self.fill, bytemuck::bytes_of(&push), count);
+        let color = [color[0], color[1], color[2], 0.0];
+        self.dispatch(r, self.fill, address, count, |samples, count| {
+            bytemuck::bytes_of(&FillPush { samples, count, pad: 0, color }).to_vec()
+        });
     }
 
     /// Folds accumulated injections of `count` samples at `address` into their averages.
     pub fn resolve(&self, r: &mut Recording<'_>, address: u64, count: u64, average_window: f32) {
         let stage = vk::PipelineStageFlags2::COMPUTE_SHADER;
         r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
-        let push = ResolvePush { samples: address, count: count as u32, average_window };
-        self.dispatch(r, self.resolve, bytemuck::bytes_of(&push), count);
+        self.dispatch(r, self.resolve, address, count, |samples, count| {
+            bytemuck::bytes_of(&ResolvePush { samples, count, average_window }).to_vec()
+        });
     }
 }

@@ -13,6 +13,7 @@ pub(crate) mod debug;
 pub(crate) mod denoise;
 pub(crate) mod descriptors;
 pub(crate) mod diffuse;
+pub(crate) mod index_check;
 pub(crate) mod inject;
 pub(crate) mod program;
 pub(crate) mod shadow;
@@ -53,6 +54,7 @@ pub(crate) struct World<'a> {
     pub scene: &'a Scene,
     pub cache_pool: &'a CachePool,
     pub denoisers: &'a mut Registry<DenoisingContextHandle, denoise::DenoiserState>,
+    pub limits: &'a crate::gpu::device::Limits,
 }
 
 /// The one description of a render task kind (see the module doc).
@@ -138,6 +140,7 @@ pub(crate) struct Passes {
     pub transfer: transfer::TransferPass,
     pub cache_ops: cache_ops::CacheOps,
     pub denoise: denoise::DenoisePass,
+    pub index_check: index_check::IndexCheck,
     /// The one sampler of every sampled G-buffer binding (nearest, clamped: texel fetches).
     sampler: vk::Sampler,
     arena: PipelineArena,
@@ -178,6 +181,7 @@ impl Passes {
         let transfer = transfer::TransferPass::new(b)?;
         let cache_ops = cache_ops::CacheOps::new(b)?;
         let denoise = denoise::DenoisePass::new(b, sampler)?;
+        let index_check = index_check::IndexCheck::new(b)?;
         Ok(Passes {
             ao,
             shadow,
@@ -189,6 +193,7 @@ impl Passes {
             transfer,
             cache_ops,
             denoise,
+            index_check,
             sampler,
             arena: PipelineArena::default(),
             floor: false,

@@ -106,6 +106,19 @@ impl PassTask for DirectLightTransferTask {
     fn check(&self, world: &World<'_>) -> Result<()> {
         world.scene.instances.get(self.source)?;
         world.scene.instances.get(self.target)?;
+        // One ray per target sample: the launch must fit the device.
+        if let Some(job) = TransferJob::new(world.scene, self) {
+            let rays = job.target_triangles as u64 * job.samples_per_triangle as u64;
+            if rays > world.limits.max_ray_dispatch as u64 {
+                return Err(crate::Error::invalid(
+                    "DirectLightTransferTask.target",
+                    format!(
+                        "its cache needs {rays} rays, over the device's maxRayDispatchInvocationCount {}",
+                        world.limits.max_ray_dispatch
+                    ),
+                ));
+            }
+        }
         Ok(())
     }
     fn record(&self, r: &mut Recording<'_>, passes: &Passes, world: &mut World<'_>) {

@@ -28,10 +28,18 @@ pub(crate) struct GeometryLayout {
 }
 
 impl GeometryLayout {
-    pub fn of(input: &GeometryInput) -> GeometryLayout {
+    /// The copy's layout, with every size computed in checked arithmetic: an engine's stride
+    /// or count that overflows is an error here, never a wrapped size that reaches the driver.
+    pub fn of(input: &GeometryInput) -> Result<GeometryLayout> {
         let v = &input.vertices;
+        let overflow =
+            || Error::invalid("GeometryInput.vertices", format!("{} vertices of stride {} overflow 64 bits", v.count, v.stride));
         let position_bytes = if v.format == vk::Format::R32G32B32A32_SFLOAT { 16 } else { 12 };
-        let vertex_bytes = v.stride * (v.count as u64 - 1) + position_bytes;
+        let vertex_bytes = v
+            .stride
+            .checked_mul(u64::from(v.count.max(1)) - 1)
+            .and_then(|b| b.checked_add(position_bytes))
+            .ok_or_else(overflow)?;
         let indexed = input.indices.buffer != vk::Buffer::null();
         let index_type = indexed.then(|| {
             if input.indices.format == vk::Format::R16_UINT {
@@ -40,16 +48,20 @@ impl GeometryLayout {
                 vk::IndexType::UINT32
             }
         });
-        GeometryLayout {
+        let layout = GeometryLayout {
             vertex_count: v.count,
             vertex_stride: v.stride,
             vertex_bytes,
             index_type,
-            index_offset: vertex_bytes.div_ceil(4) * 4,
+            index_offset: vertex_bytes.checked_next_multiple_of(4).ok_or_else(overflow)?,
             index_count: if indexed { input.indices.count } else { 0 },
             primitive_count: if indexed { input.indices.count / 3 } else { v.count / 3 },
             allow_update: input.allow_update,
-        }
+        };
+        // The whole copy (rounded up to words) must be addressable too.
+        let end = layout.index_offset.checked_add(layout.index_size() * layout.index_count as u64);
+        end.and_then(|e| e.checked_next_multiple_of(4)).ok_or_else(overflow)?;
+        Ok(layout)
     }
 
     pub fn index_size(&self) -> u64 {
@@ -60,8 +72,10 @@ impl GeometryLayout {
         }
     }
 
+    /// Bytes of the copy (checked when the layout was made), rounded up to whole words so the
+    /// index check can read 16-bit indices a word at a time.
     pub fn total_bytes(&self) -> u64 {
-        self.index_offset + self.index_size() * self.index_count as u64
+        (self.index_offset + self.index_size() * self.index_count as u64).next_multiple_of(4)
     }
 }
 
@@ -98,6 +112,9 @@ pub(crate) struct GeometryRecord {
     pub surfel: Option<SurfelGpu>,
     /// A layout built from a read-back, to upload at the next recording.
     pub pending_layout: Option<SurfelLayout>,
+    /// Triangles of the current copy whose indices went past the vertex count (made
+    /// degenerate by the index check; known once the copying ticket is back).
+    pub invalid_triangles: u32,
 }
 
 /// A geometry's surfel layout on the GPU. `id` changes with every new layout, so instance
@@ -155,6 +172,7 @@ impl GeometryRecord {
             input: GeometryInput::default(),
             surfel: None,
             pending_layout: None,
+            invalid_triangles: 0,
         }
     }
 

@@ -118,10 +118,13 @@ impl<H: RawHandle, T> Registry<H, T> {
         let i = self.check(h)?;
         let slot = &mut self.slots[i as usize];
         let value = slot.value.take().ok_or_else(|| Self::stale(h))?;
-        // Skip generation 0 on wrap-around so no handle can equal NULL.
-        slot.generation = slot.generation.wrapping_add(1).max(1);
-        self.free.push(i);
         self.len -= 1;
+        // A slot whose 16-bit generation is spent is retired, never reused: a wrapped
+        // generation would make a long-dead handle equal a live one.
+        if slot.generation < u16::MAX {
+            slot.generation += 1;
+            self.free.push(i);
+        }
         Ok(value)
     }
 
@@ -150,6 +153,25 @@ impl<H: RawHandle, T> Registry<H, T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// After 65,535 reuses a slot retires instead of wrapping its generation: no stale handle
+    /// ever becomes valid again.
+    #[test]
+    fn a_spent_slot_is_retired_not_wrapped() {
+        let mut r: Registry<crate::types::GeometryHandle, u32> = Registry::new(1);
+        let first = r.insert(0);
+        r.remove(first).unwrap();
+        let mut last = first;
+        for k in 1..u16::MAX as u32 {
+            last = r.insert(k);
+            assert_eq!(r.index_of(last).unwrap(), 0, "slot 0 is reused while its generation lasts");
+            r.remove(last).unwrap();
+        }
+        let fresh = r.insert(7);
+        assert_eq!(r.index_of(fresh).unwrap(), 1, "the spent slot 0 is not reused");
+        assert!(r.get(first).is_err() && r.get(last).is_err(), "no old handle of slot 0 is valid");
+        assert_eq!(r.slot_count(), 2);
+    }
 
     #[test]
     fn stale_foreign_and_null_handles_are_refused() {

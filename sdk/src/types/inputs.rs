@@ -23,6 +23,10 @@ pub struct ImageInput {
     /// DEPTH_STENCIL_READ_ONLY_OPTIMAL or READ_ONLY_OPTIMAL; the image needs SAMPLED usage.
     /// Outputs: GENERAL, with STORAGE usage.
     pub layout: vk::ImageLayout,
+    /// The usage flags the image was created with (Vulkan cannot report them, and binding an
+    /// image without the usage a task needs is undefined behaviour). Required: inputs need
+    /// SAMPLED, outputs STORAGE; empty is refused. Default empty.
+    pub usage: vk::ImageUsageFlags,
 }
 
 impl Default for ImageInput {
@@ -34,6 +38,7 @@ impl Default for ImageInput {
             width: 0,
             height: 0,
             layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+            usage: vk::ImageUsageFlags::empty(),
         }
     }
 }

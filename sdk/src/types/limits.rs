@@ -6,5 +6,10 @@ pub const MAX_SHADOW_LIGHTS: usize = 16;
 /// Largest `SurfelSettings::tile_resolution_limit`: cache samples along one triangle edge.
 pub const MAX_TILE_RESOLUTION: u32 = 256;
 
+/// Most direct-lighting cache samples of one geometry (64 Mi samples, 2 GiB per instance): a
+/// geometry whose `SurfelSettings` would need more gets a coarser layout (its resolution limit
+/// halved until it fits, with a warning in the log).
+pub const MAX_CACHE_SAMPLES: u64 = 1 << 26;
+
 /// Largest `DenoisingContextInput::max_width` / `max_height`.
 pub const MAX_DENOISING_EXTENT: u32 = 16384;
