@@ -735,8 +735,18 @@ int main(void) {
     CHECK_HRT(hrt_destroy_all_instance_handles(ctx));
     CHECK_HRT(hrt_destroy_geometry_handles(ctx, geometries, 2));
     CHECK_HRT(hrt_release_device_resources_immediately(ctx));
-    hrt_task_container_destroy(frame);
-    hrt_context_destroy(ctx);
+    CHECK_HRT(hrt_task_container_destroy(frame));
+    /* Destroyed objects are recognised, not dereferenced: a second destroy, or any call on a
+     * destroyed object, is HRT_ERROR_INVALID_HANDLE (and so is a container passed as a context). */
+    EXPECT(hrt_task_container_destroy(frame) == HRT_ERROR_INVALID_HANDLE, "container destroyed twice");
+    EXPECT(hrt_schedule_bvh_build(frame, &bvh) == HRT_ERROR_INVALID_HANDLE, "a destroyed container");
+    EXPECT(hrt_task_container_len(frame) == 0, "a destroyed container has no tasks");
+    EXPECT(hrt_release_device_resources_immediately((HrtContext *)frame) == HRT_ERROR_INVALID_HANDLE, "not a context");
+    CHECK_HRT(hrt_context_destroy(ctx));
+    EXPECT(hrt_context_destroy(ctx) == HRT_ERROR_INVALID_HANDLE, "context destroyed twice");
+    HrtTaskContainer *late = NULL;
+    EXPECT(hrt_task_container_create(ctx, &late) == HRT_ERROR_INVALID_HANDLE && !late, "a destroyed context");
+    EXPECT(hrt_context_destroy(NULL) == HRT_OK, "NULL is ignored");
     free_image(depth);
     free_image(normals);
     free_image(out);

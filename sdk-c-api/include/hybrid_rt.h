@@ -898,10 +898,11 @@ struct HrtInitSettings hrt_init_settings_default(void);
 enum HrtStatus hrt_context_create(const struct HrtContextDesc *desc, struct HrtContext **out);
 
 /**
- * Destroys a context (NULL is ignored). Every ticket must be complete; destroy containers
- * first or after, in any order.
+ * Destroys a context (NULL is ignored: HRT_OK). Every ticket must be complete; destroy
+ * containers first or after, in any order. Destroying it twice, or any call on it afterwards,
+ * is HRT_ERROR_INVALID_HANDLE.
  */
-void hrt_context_destroy(struct HrtContext *ctx);
+enum HrtStatus hrt_context_destroy(struct HrtContext *ctx);
 
 bool hrt_supports_inline_rt(const struct HrtContext *ctx);
 
@@ -925,7 +926,10 @@ enum HrtStatus hrt_destroy_all_instance_handles(struct HrtContext *ctx);
 
 enum HrtStatus hrt_task_container_create(struct HrtContext *ctx, struct HrtTaskContainer **out);
 
-void hrt_task_container_destroy(struct HrtTaskContainer *container);
+/**
+ * Destroys a container (NULL is ignored: HRT_OK); twice is HRT_ERROR_INVALID_HANDLE.
+ */
+enum HrtStatus hrt_task_container_destroy(struct HrtTaskContainer *container);
 
 /**
  * Tasks scheduled and not yet built.

@@ -4,7 +4,7 @@
 use crate::status::Failure;
 use crate::status::{guard, HrtStatus};
 use crate::types::*;
-use crate::{get, get_mut, HrtContext, HrtTaskContainer};
+use crate::{container_mut, context, get, get_mut, HrtContext, HrtTaskContainer};
 use hybrid_rt as rt;
 
 pub type HrtDenoisingContextHandle = u64;
@@ -241,7 +241,7 @@ pub unsafe extern "C" fn hrt_create_denoising_context(
     out: *mut HrtDenoisingContextHandle,
 ) -> HrtStatus {
     guard(|| {
-        let c = get(ctx, "ctx")?;
+        let c = context(ctx)?;
         let i = get(input, "input")?;
         let out = get_mut(out, "out")?;
         let method = match i.method {
@@ -271,7 +271,7 @@ pub unsafe extern "C" fn hrt_create_denoising_context(
 /// Destroys a denoising context; its images are freed once the tickets issued so far return.
 #[no_mangle]
 pub unsafe extern "C" fn hrt_destroy_denoising_context(ctx: *mut HrtContext, handle: HrtDenoisingContextHandle) -> HrtStatus {
-    guard(|| Ok(get(ctx, "ctx")?.ctx.destroy_denoising_context(rt::DenoisingContextHandle(handle))?))
+    guard(|| Ok(context(ctx)?.ctx.destroy_denoising_context(rt::DenoisingContextHandle(handle))?))
 }
 
 #[no_mangle]
@@ -307,7 +307,7 @@ unsafe fn schedule_plain<T>(
     schedule: impl FnOnce(&mut rt::TaskContainer, &T) -> rt::Result<()>,
 ) -> HrtStatus {
     guard(|| {
-        let c = get_mut(container, "container")?;
+        let c = container_mut(container)?;
         let t = get(task, "task")?;
         let task = make(rt::DenoisingContextHandle(t.context), common(&t.common)?, image(&t.input), image(&t.output));
         Ok(schedule(&mut c.inner, &task)?)
@@ -372,7 +372,7 @@ pub unsafe extern "C" fn hrt_schedule_denoise_shadow(
     task: *const HrtDenoiseShadowTask,
 ) -> HrtStatus {
     guard(|| {
-        let c = get_mut(container, "container")?;
+        let c = container_mut(container)?;
         let t = get(task, "task")?;
         Ok(c.inner.schedule_denoise_shadow(&rt::DenoiseShadowTask {
             context: rt::DenoisingContextHandle(t.context),
@@ -390,7 +390,7 @@ pub unsafe extern "C" fn hrt_schedule_denoise_specular_and_diffuse(
     task: *const HrtDenoiseSpecularAndDiffuseTask,
 ) -> HrtStatus {
     guard(|| {
-        let c = get_mut(container, "container")?;
+        let c = container_mut(container)?;
         let t = get(task, "task")?;
         Ok(c.inner.schedule_denoise_specular_and_diffuse(&rt::DenoiseSpecularAndDiffuseTask {
             context: rt::DenoisingContextHandle(t.context),

@@ -9,6 +9,7 @@
 //! tickets are 64-bit integers that the SDK checks (stale, foreign, returned twice).
 #![allow(non_camel_case_types, clippy::missing_safety_doc)]
 mod denoise;
+mod live;
 mod log_bridge;
 mod status;
 mod types;
@@ -43,6 +44,21 @@ pub struct HrtContext {
 /// Opaque task container: fill on one thread, build on any.
 pub struct HrtTaskContainer {
     pub(crate) inner: rt::TaskContainer,
+}
+
+/// A live context (see `live`): NULL is HRT_ERROR_NULL_POINTER, a destroyed or foreign pointer
+/// HRT_ERROR_INVALID_HANDLE.
+pub(crate) fn context<'a>(p: *const HrtContext) -> Result<&'a HrtContext, Failure> {
+    live::check(p, live::Kind::Context, "ctx")?;
+    // SAFETY: registered pointers come from Box::into_raw and are live until destroyed.
+    Ok(unsafe { &*p })
+}
+
+/// A live task container (see `context`).
+pub(crate) fn container_mut<'a>(p: *mut HrtTaskContainer) -> Result<&'a mut HrtTaskContainer, Failure> {
+    live::check(p, live::Kind::Container, "container")?;
+    // SAFETY: as for `context`; a container is filled on one thread at a time (the header says).
+    Ok(unsafe { &mut *p })
 }
 
 pub(crate) fn get<'a, T>(p: *const T, what: &str) -> Result<&'a T, Failure> {
@@ -228,29 +244,37 @@ pub unsafe extern "C" fn hrt_context_create(desc: *const HrtContextDesc, out: *m
             },
             &(&desc.settings).into(),
         )?;
-        *out = Box::into_raw(Box::new(HrtContext { ctx, _entry: entry }));
+        let p = Box::into_raw(Box::new(HrtContext { ctx, _entry: entry }));
+        live::register(p, live::Kind::Context);
+        *out = p;
         Ok(())
     })
 }
 
-/// Destroys a context (NULL is ignored). Every ticket must be complete; destroy containers
-/// first or after, in any order.
+/// Destroys a context (NULL is ignored: HRT_OK). Every ticket must be complete; destroy
+/// containers first or after, in any order. Destroying it twice, or any call on it afterwards,
+/// is HRT_ERROR_INVALID_HANDLE.
 #[no_mangle]
-pub unsafe extern "C" fn hrt_context_destroy(ctx: *mut HrtContext) {
-    if !ctx.is_null() {
-        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(ctx))));
+pub unsafe extern "C" fn hrt_context_destroy(ctx: *mut HrtContext) -> HrtStatus {
+    if ctx.is_null() {
+        return HrtStatus::HRT_OK;
     }
+    guard(|| {
+        live::unregister(ctx, live::Kind::Context, "ctx")?;
+        drop(Box::from_raw(ctx));
+        Ok(())
+    })
 }
 
 #[no_mangle]
 pub unsafe extern "C" fn hrt_supports_inline_rt(ctx: *const HrtContext) -> bool {
-    ctx.as_ref().is_some_and(|c| c.ctx.supports_inline_rt())
+    context(ctx).is_ok_and(|c| c.ctx.supports_inline_rt())
 }
 
 #[no_mangle]
 pub unsafe extern "C" fn hrt_create_geometry_handles(ctx: *mut HrtContext, count: u32, out: *mut HrtGeometryHandle) -> HrtStatus {
     guard(|| {
-        let c = get(ctx, "ctx")?;
+        let c = context(ctx)?;
         if count > 0 && out.is_null() {
             return Err(null("out"));
         }
@@ -268,7 +292,7 @@ pub unsafe extern "C" fn hrt_destroy_geometry_handles(
     count: u32,
 ) -> HrtStatus {
     guard(|| {
-        let c = get(ctx, "ctx")?;
+        let c = context(ctx)?;
         let hs: Vec<rt::GeometryHandle> = slice(handles, count, "handles")?.iter().map(|&h| rt::GeometryHandle(h)).collect();
         Ok(c.ctx.destroy_geometry_handles(&hs)?)
     })
@@ -277,7 +301,7 @@ pub unsafe extern "C" fn hrt_destroy_geometry_handles(
 #[no_mangle]
 pub unsafe extern "C" fn hrt_create_instance_handles(ctx: *mut HrtContext, count: u32, out: *mut HrtInstanceHandle) -> HrtStatus {
     guard(|| {
-        let c = get(ctx, "ctx")?;
+        let c = context(ctx)?;
         if count > 0 && out.is_null() {
             return Err(null("out"));
         }
@@ -295,7 +319,7 @@ pub unsafe extern "C" fn hrt_destroy_instance_handles(
     count: u32,
 ) -> HrtStatus {
     guard(|| {
-        let c = get(ctx, "ctx")?;
+        let c = context(ctx)?;
         let hs: Vec<rt::InstanceHandle> = slice(handles, count, "handles")?.iter().map(|&h| rt::InstanceHandle(h)).collect();
         Ok(c.ctx.destroy_instance_handles(&hs)?)
     })
@@ -304,7 +328,7 @@ pub unsafe extern "C" fn hrt_destroy_instance_handles(
 #[no_mangle]
 pub unsafe extern "C" fn hrt_destroy_all_instance_handles(ctx: *mut HrtContext) -> HrtStatus {
     guard(|| {
-        get(ctx, "ctx")?.ctx.destroy_all_instance_handles();
+        context(ctx)?.ctx.destroy_all_instance_handles();
         Ok(())
     })
 }
@@ -312,29 +336,37 @@ pub unsafe extern "C" fn hrt_destroy_all_instance_handles(ctx: *mut HrtContext) 
 #[no_mangle]
 pub unsafe extern "C" fn hrt_task_container_create(ctx: *mut HrtContext, out: *mut *mut HrtTaskContainer) -> HrtStatus {
     guard(|| {
-        let c = get(ctx, "ctx")?;
+        let c = context(ctx)?;
         let out = get_mut(out, "out")?;
-        *out = Box::into_raw(Box::new(HrtTaskContainer { inner: c.ctx.create_task_container() }));
+        let p = Box::into_raw(Box::new(HrtTaskContainer { inner: c.ctx.create_task_container() }));
+        live::register(p, live::Kind::Container);
+        *out = p;
         Ok(())
     })
 }
 
+/// Destroys a container (NULL is ignored: HRT_OK); twice is HRT_ERROR_INVALID_HANDLE.
 #[no_mangle]
-pub unsafe extern "C" fn hrt_task_container_destroy(container: *mut HrtTaskContainer) {
-    if !container.is_null() {
-        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| drop(Box::from_raw(container))));
+pub unsafe extern "C" fn hrt_task_container_destroy(container: *mut HrtTaskContainer) -> HrtStatus {
+    if container.is_null() {
+        return HrtStatus::HRT_OK;
     }
+    guard(|| {
+        live::unregister(container, live::Kind::Container, "container")?;
+        drop(Box::from_raw(container));
+        Ok(())
+    })
 }
 
 /// Tasks scheduled and not yet built.
 #[no_mangle]
 pub unsafe extern "C" fn hrt_task_container_len(container: *const HrtTaskContainer) -> u32 {
-    container.as_ref().map_or(0, |c| c.inner.len() as u32)
+    container_mut(container.cast_mut()).map_or(0, |c| c.inner.len() as u32)
 }
 
 #[no_mangle]
 pub unsafe extern "C" fn hrt_task_container_clear(container: *mut HrtTaskContainer) {
-    if let Some(c) = container.as_mut() {
+    if let Ok(c) = container_mut(container) {
         c.inner.clear();
     }
 }
@@ -347,7 +379,7 @@ pub extern "C" fn hrt_geometry_task_default() -> HrtGeometryTask {
 #[no_mangle]
 pub unsafe extern "C" fn hrt_schedule_geometry(container: *mut HrtTaskContainer, task: *const HrtGeometryTask) -> HrtStatus {
     guard(|| {
-        let c = get_mut(container, "container")?;
+        let c = container_mut(container)?;
         Ok(c.inner.schedule_geometry(&types::geometry_task(get(task, "task")?)?)?)
     })
 }
@@ -360,7 +392,7 @@ pub extern "C" fn hrt_instance_task_default() -> HrtInstanceTask {
 #[no_mangle]
 pub unsafe extern "C" fn hrt_schedule_instance(container: *mut HrtTaskContainer, task: *const HrtInstanceTask) -> HrtStatus {
     guard(|| {
-        let c = get_mut(container, "container")?;
+        let c = container_mut(container)?;
         Ok(c.inner.schedule_instance(&types::instance_task(get(task, "task")?)?)?)
     })
 }
@@ -373,7 +405,7 @@ pub extern "C" fn hrt_bvh_build_task_default() -> HrtBvhBuildTask {
 #[no_mangle]
 pub unsafe extern "C" fn hrt_schedule_bvh_build(container: *mut HrtTaskContainer, task: *const HrtBvhBuildTask) -> HrtStatus {
     guard(|| {
-        let c = get_mut(container, "container")?;
+        let c = container_mut(container)?;
         let t = get(task, "task")?;
         Ok(c.inner.schedule_bvh_build(&rt::BvhBuildTask { max_blas_build_count: t.max_blas_build_count })?)
     })
@@ -395,7 +427,7 @@ pub unsafe extern "C" fn hrt_schedule_ambient_occlusion(
     task: *const HrtTraceAmbientOcclusionTask,
 ) -> HrtStatus {
     guard(|| {
-        let c = get_mut(container, "container")?;
+        let c = container_mut(container)?;
         Ok(c.inner.schedule_ambient_occlusion(&types::ao_task(get(task, "task")?)?)?)
     })
 }
@@ -411,8 +443,8 @@ pub unsafe extern "C" fn hrt_build_gpu_task(
     ticket: *mut HrtTicket,
 ) -> HrtStatus {
     guard(|| {
-        let c = get(ctx, "ctx")?;
-        let k = get_mut(container, "container")?;
+        let c = context(ctx)?;
+        let k = container_mut(container)?;
         let out = get_mut(ticket, "ticket")?;
         let t = c.ctx.build_gpu_task(&mut k.inner, vk::CommandBuffer::from_raw(command_buffer as u64))?;
         *out = t.into_raw();
@@ -432,7 +464,7 @@ pub unsafe extern "C" fn hrt_mark_gpu_task_completed(
     timing_count: *mut u32,
 ) -> HrtStatus {
     guard(|| {
-        let c = get(ctx, "ctx")?;
+        let c = context(ctx)?;
         let done = c.ctx.mark_gpu_task_completed(rt::GpuTicket::from_raw(ticket))?;
         if let Some(n) = timing_count.as_mut() {
             *n = done.timings.len() as u32;
@@ -470,23 +502,23 @@ pub unsafe extern "C" fn hrt_mark_gpu_task_completed(
 
 #[no_mangle]
 pub unsafe extern "C" fn hrt_release_device_resources_immediately(ctx: *mut HrtContext) -> HrtStatus {
-    guard(|| Ok(get(ctx, "ctx")?.ctx.release_device_resources_immediately()?))
+    guard(|| Ok(context(ctx)?.ctx.release_device_resources_immediately()?))
 }
 
 #[no_mangle]
 pub unsafe extern "C" fn hrt_pending_blas_builds(ctx: *const HrtContext) -> u32 {
-    ctx.as_ref().map_or(0, |c| c.ctx.pending_blas_builds() as u32)
+    context(ctx).map_or(0, |c| c.ctx.pending_blas_builds() as u32)
 }
 
 #[no_mangle]
 pub unsafe extern "C" fn hrt_tlas_instance_count(ctx: *const HrtContext) -> u32 {
-    ctx.as_ref().map_or(0, |c| c.ctx.tlas_instance_count() as u32)
+    context(ctx).map_or(0, |c| c.ctx.tlas_instance_count() as u32)
 }
 
 #[no_mangle]
 pub unsafe extern "C" fn hrt_resource_allocations(ctx: *const HrtContext, out: *mut HrtResourceAllocations) -> HrtStatus {
     guard(|| {
-        let c = get(ctx, "ctx")?;
+        let c = context(ctx)?;
         *get_mut(out, "out")? = c.ctx.resource_allocations().into();
         Ok(())
     })
@@ -502,7 +534,7 @@ pub unsafe extern "C" fn hrt_tickets_in_flight(
     count: *mut u32,
 ) -> HrtStatus {
     guard(|| {
-        let c = get(ctx, "ctx")?;
+        let c = context(ctx)?;
         let all = c.ctx.tickets_in_flight();
         *get_mut(count, "count")? = all.len() as u32;
         if !serials.is_null() {
@@ -517,7 +549,7 @@ pub unsafe extern "C" fn hrt_tickets_in_flight(
 /// The device's name (NUL-terminated, truncated to `capacity`). Returns its full length.
 #[no_mangle]
 pub unsafe extern "C" fn hrt_device_name(ctx: *const HrtContext, buffer: *mut c_char, capacity: u32) -> u32 {
-    let Some(c) = ctx.as_ref() else { return 0 };
+    let Ok(c) = context(ctx) else { return 0 };
     let name = c.ctx.device_name();
     if !buffer.is_null() && capacity > 0 {
         let n = name.len().min(capacity as usize - 1);
@@ -538,7 +570,7 @@ pub unsafe extern "C" fn hrt_schedule_direct_lighting_injection(
     task: *const HrtDirectLightingInjectionTask,
 ) -> HrtStatus {
     guard(|| {
-        let c = get_mut(container, "container")?;
+        let c = container_mut(container)?;
         Ok(c.inner.schedule_direct_lighting_injection(&types::injection_task(get(task, "task")?)?)?)
     })
 }
@@ -546,7 +578,7 @@ pub unsafe extern "C" fn hrt_schedule_direct_lighting_injection(
 #[no_mangle]
 pub unsafe extern "C" fn hrt_schedule_clear_cache(container: *mut HrtTaskContainer, task: *const HrtClearCacheTask) -> HrtStatus {
     guard(|| {
-        let c = get_mut(container, "container")?;
+        let c = container_mut(container)?;
         let t = get(task, "task")?;
         Ok(c.inner.schedule_clear_cache(&rt::ClearCacheTask { instance: rt::InstanceHandle(t.instance) })?)
     })
@@ -562,7 +594,7 @@ pub unsafe extern "C" fn hrt_geometry_invalid_triangles(
     triangles: *mut u32,
 ) -> HrtStatus {
     guard(|| {
-        let c = get(ctx, "ctx")?;
+        let c = context(ctx)?;
         *get_mut(triangles, "triangles")? = c.ctx.geometry_invalid_triangles(rt::GeometryHandle(geometry))?;
         Ok(())
     })
@@ -577,7 +609,7 @@ pub unsafe extern "C" fn hrt_instance_cache_bytes(
     bytes: *mut u64,
 ) -> HrtStatus {
     guard(|| {
-        let c = get(ctx, "ctx")?;
+        let c = context(ctx)?;
         *get_mut(bytes, "bytes")? = c.ctx.instance_cache_bytes(rt::InstanceHandle(instance))?;
         Ok(())
     })
@@ -600,7 +632,7 @@ pub unsafe extern "C" fn hrt_schedule_direct_light_transfer(
     task: *const HrtDirectLightTransferTask,
 ) -> HrtStatus {
     guard(|| {
-        let c = get_mut(container, "container")?;
+        let c = container_mut(container)?;
         let t = get(task, "task")?;
         Ok(c.inner.schedule_direct_light_transfer(&rt::DirectLightTransferTask {
             source: rt::InstanceHandle(t.source),
@@ -619,7 +651,7 @@ pub extern "C" fn hrt_trace_shadow_task_default() -> HrtTraceShadowTask {
 #[no_mangle]
 pub unsafe extern "C" fn hrt_schedule_shadow(container: *mut HrtTaskContainer, task: *const HrtTraceShadowTask) -> HrtStatus {
     guard(|| {
-        let c = get_mut(container, "container")?;
+        let c = container_mut(container)?;
         Ok(c.inner.schedule_shadow(&types::shadow_task(get(task, "task")?)?)?)
     })
 }
@@ -641,7 +673,7 @@ pub extern "C" fn hrt_trace_diffuse_task_default() -> HrtTraceDiffuseTask {
 #[no_mangle]
 pub unsafe extern "C" fn hrt_schedule_diffuse(container: *mut HrtTaskContainer, task: *const HrtTraceDiffuseTask) -> HrtStatus {
     guard(|| {
-        let c = get_mut(container, "container")?;
+        let c = container_mut(container)?;
         let t = get(task, "task")?;
         let common = types::trace_common(&t.common)?;
         let ao = types::ao_task(&HrtTraceAmbientOcclusionTask { output: t.output, ..types::ao_task_default() })?;
@@ -677,7 +709,7 @@ pub extern "C" fn hrt_trace_specular_task_default() -> HrtTraceSpecularTask {
 #[no_mangle]
 pub unsafe extern "C" fn hrt_schedule_specular(container: *mut HrtTaskContainer, task: *const HrtTraceSpecularTask) -> HrtStatus {
     guard(|| {
-        let c = get_mut(container, "container")?;
+        let c = container_mut(container)?;
         let t = get(task, "task")?;
         let ao =
             types::ao_task(&HrtTraceAmbientOcclusionTask { common: t.common, output: t.output, ..types::ao_task_default() })?;
@@ -714,7 +746,7 @@ pub unsafe extern "C" fn hrt_schedule_multi_shadow(
     task: *const HrtTraceMultiShadowTask,
 ) -> HrtStatus {
     guard(|| {
-        let c = get_mut(container, "container")?;
+        let c = container_mut(container)?;
         let t = get(task, "task")?;
         let lights = slice(t.lights, t.light_count, "task->lights")?;
         Ok(c.inner.schedule_multi_shadow(&types::multi_shadow_task(t, lights)?)?)

@@ -369,6 +369,11 @@ impl Host {
         Ok(())
     }
 
+    /// Frees a command buffer of the host's pool (after its work completed).
+    pub fn free_command_buffer(&self, cmd: vk::CommandBuffer) {
+        unsafe { self.device.free_command_buffers(self.pool, &[cmd]) };
+    }
+
     /// Records with `f` into a fresh command buffer, submits, and waits.
     pub fn run<R>(&self, f: impl FnOnce(vk::CommandBuffer) -> R) -> HostResult<R> {
         let cmd = self.allocate_command_buffer()?;

@@ -31,7 +31,8 @@ struct Page {
 
 #[derive(Default)]
 pub(crate) struct CachePool {
-    pages: Vec<Page>,
+    /// None: a page given back by `trim` (its index stays, so ranges keep their page number).
+    pages: Vec<Option<Page>>,
     /// Ranges out of use that a ticket in flight may still touch: (newest serial then, range).
     retired: Vec<(u64, CacheRange)>,
 }
@@ -39,7 +40,7 @@ pub(crate) struct CachePool {
 impl CachePool {
     pub fn allocate(&mut self, memory: &Memory, count: u64) -> Result<CacheRange> {
         let count = count.max(1);
-        for (p, page) in self.pages.iter_mut().enumerate() {
+        for (p, page) in self.pages.iter_mut().enumerate().filter_map(|(p, page)| Some((p, page.as_mut()?))) {
             if let Some(i) = page.free.iter().position(|&(_, n)| n >= count) {
                 let (first, n) = page.free[i];
                 if n == count {
@@ -64,12 +65,22 @@ impl CachePool {
             free.push((count, capacity - count));
         }
         let address = buffer.address;
-        self.pages.push(Page { buffer, capacity, free, high_water: count });
-        Ok(CacheRange { page: self.pages.len() - 1, first: 0, count, address })
+        let page = Page { buffer, capacity, free, high_water: count };
+        let index = match self.pages.iter().position(Option::is_none) {
+            Some(i) => {
+                self.pages[i] = Some(page);
+                i
+            }
+            None => {
+                self.pages.push(Some(page));
+                self.pages.len() - 1
+            }
+        };
+        Ok(CacheRange { page: index, first: 0, count, address })
     }
 
     pub fn free(&mut self, r: CacheRange) {
-        let Some(page) = self.pages.get_mut(r.page) else { return };
+        let Some(Some(page)) = self.pages.get_mut(r.page) else { return };
         let at = page.free.partition_point(|&(f, _)| f < r.first);
         page.free.insert(at, (r.first, r.count));
         // Coalesce with the neighbours.
@@ -94,7 +105,7 @@ impl CachePool {
     /// Pages, free runs, high-water marks and retired ranges, for the state digest.
     #[cfg(feature = "fault-injection")]
     pub fn digest(&self) -> String {
-        let pages: Vec<_> = self.pages.iter().map(|p| (p.buffer.raw, p.capacity, &p.free, p.high_water)).collect();
+        let pages: Vec<_> = self.pages.iter().flatten().map(|p| (p.buffer.raw, p.capacity, &p.free, p.high_water)).collect();
         format!("{pages:?} retired {:?}", self.retired)
     }
 
@@ -120,11 +131,23 @@ impl CachePool {
 
     /// (address, samples) of every page's used span, for whole-cache passes (resolve).
     pub fn spans(&self) -> impl Iterator<Item = (vk::DeviceAddress, u64)> + '_ {
-        self.pages.iter().filter(|p| p.high_water > 0).map(|p| (p.buffer.address, p.high_water))
+        self.pages.iter().flatten().filter(|p| p.high_water > 0).map(|p| (p.buffer.address, p.high_water))
+    }
+
+    /// Gives back every page no cache uses (no ticket may still use them: the caller checked
+    /// none is in flight, and retired ranges were collected).
+    pub fn trim(&mut self, memory: &Memory) {
+        for slot in &mut self.pages {
+            if slot.as_ref().is_some_and(|p| p.free.len() == 1 && p.free[0] == (0, p.capacity)) {
+                if let Some(p) = slot.take() {
+                    memory.destroy_buffer(p.buffer);
+                }
+            }
+        }
     }
 
     pub fn destroy(&mut self, memory: &Memory) {
-        for p in self.pages.drain(..) {
+        for p in self.pages.drain(..).flatten() {
             memory.destroy_buffer(p.buffer);
         }
     }

@@ -104,8 +104,9 @@ impl ExecuteContext {
         self.shared.state.lock().in_flight().collect()
     }
 
-    /// Frees every deferred GPU resource now. Only when no ticket is in flight (a level load
-    /// after the engine waited for its queue idle): otherwise `Error::TicketsInFlight`.
+    /// Frees every deferred GPU resource now, and gives back cache pages no instance uses. Only
+    /// when no ticket is in flight (a level load after the engine waited for its queue idle):
+    /// otherwise `Error::TicketsInFlight`.
     pub fn release_device_resources_immediately(&self) -> Result<()> {
         let mut st = self.shared.state.lock();
         let serials: Vec<u64> = st.in_flight().collect();
@@ -113,6 +114,7 @@ impl ExecuteContext {
             return Err(Error::TicketsInFlight { serials });
         }
         st.collect_garbage(&self.shared.device, &self.shared.memory);
+        st.cache_pool.trim(&self.shared.memory);
         Ok(())
     }
 }
