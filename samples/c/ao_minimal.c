@@ -362,27 +362,15 @@ int main(void) {
     if (ray_query)
         for (uint32_t i = 0; i < n_optional; i++) exts[n_exts++] = optional[i];
 
-    VkPhysicalDeviceShaderAtomicFloatFeaturesEXT aff = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_ATOMIC_FLOAT_FEATURES_EXT};
-    aff.shaderBufferFloat32AtomicAdd = VK_TRUE;
-    VkPhysicalDeviceRayQueryFeaturesKHR rqf = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_QUERY_FEATURES_KHR};
-    rqf.rayQuery = VK_TRUE;
-    rqf.pNext = &aff;
-    VkPhysicalDeviceRayTracingPipelineFeaturesKHR rtf = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_RAY_TRACING_PIPELINE_FEATURES_KHR};
-    rtf.rayTracingPipeline = VK_TRUE;
-    rtf.pNext = ray_query ? (void *)&rqf : (void *)&aff;
-    VkPhysicalDeviceAccelerationStructureFeaturesKHR asf = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_FEATURES_KHR};
-    asf.accelerationStructure = VK_TRUE;
-    asf.pNext = &rtf;
-    VkPhysicalDeviceVulkan13Features f13 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
-    f13.synchronization2 = VK_TRUE;
-    f13.maintenance4 = VK_TRUE; /* the SDK's compute shaders are SPIR-V 1.6 (LocalSizeId) */
-    f13.pNext = &asf;
-    VkPhysicalDeviceVulkan12Features f12 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-    f12.bufferDeviceAddress = VK_TRUE;
-    f12.pNext = &f13;
+    /* The engine's own feature chain (here: Vulkan 1.3 features it wants for itself). The SDK's
+     * features are merged into it: switched on in the structs it has, the others appended. */
+    VkPhysicalDeviceVulkan13Features own13 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+    own13.dynamicRendering = VK_TRUE;
     VkPhysicalDeviceFeatures2 f2 = {VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
-    f2.features.shaderStorageImageWriteWithoutFormat = VK_TRUE;
-    f2.pNext = &f12;
+    f2.pNext = &own13;
+    HrtDeviceFeatures *sdk_features = hrt_device_features_create(ray_query);
+    CHECK_HRT(hrt_device_features_merge(sdk_features, &f2));
+    EXPECT(own13.synchronization2 && own13.maintenance4, "the SDK's 1.3 features are set in the engine's own struct");
 
     float priority = 1.0f;
     VkDeviceQueueCreateInfo qci = {VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
@@ -412,12 +400,22 @@ int main(void) {
     desc.device = device;
     desc.enabled_extensions = exts;
     desc.enabled_extension_count = n_exts;
+    desc.instance_api_version = VK_API_VERSION_1_3;
+    desc.enabled_features = &f2;
+    desc.debug_utils = validation; /* the instance enables VK_EXT_debug_utils with validation */
     desc.settings = hrt_init_settings_default();
     HrtContext *ctx = NULL;
     desc.api_version = HRT_API_VERSION + 1;
     EXPECT(hrt_context_create(&desc, &ctx) == HRT_ERROR_VERSION_MISMATCH, "a header/library mismatch is refused");
     desc.api_version = HRT_API_VERSION;
+    desc.enabled_features = NULL;
+    EXPECT(hrt_context_create(&desc, &ctx) == HRT_ERROR_MISSING_DEVICE_SUPPORT && !ctx, "no feature chain: refused, named");
+    desc.enabled_features = &f2;
+    desc.instance_api_version = VK_API_VERSION_1_2;
+    EXPECT(hrt_context_create(&desc, &ctx) == HRT_ERROR_MISSING_DEVICE_SUPPORT && !ctx, "a 1.2 instance is refused");
+    desc.instance_api_version = VK_API_VERSION_1_3;
     CHECK_HRT(hrt_context_create(&desc, &ctx));
+    hrt_device_features_destroy(sdk_features); /* read by hrt_context_create; no longer needed */
     char device_name[256];
     hrt_device_name(ctx, device_name, sizeof device_name);
     printf("hybrid-rt on %s\n", device_name);

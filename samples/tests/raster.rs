@@ -56,7 +56,7 @@ fn rasterized_gbuffer_matches_the_reference_and_motion_follows_the_camera() {
     assert!(motion.chunks(2).any(|m| m[0].abs() > 0.5), "the camera move shows in the motion vectors");
 
     // The SDK takes the rasterized buffers as they are (hardware depth, fp16 normals).
-    let ctx = hybrid_rt::ExecuteContext::new(&host.device_desc(), &Default::default()).unwrap();
+    let ctx = host.create_context(&Default::default()).unwrap();
     let mut frame = ctx.create_task_container();
     let gpu = hybrid_rt_testkit::sdk_scene::SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
     frame.schedule_bvh_build(&Default::default()).unwrap();
@@ -115,7 +115,7 @@ fn deferred_lighting_with_sdk_shadows_matches_the_reference_lit_frame() {
     host.run(|cmd| pass.record(&host, cmd, 0, &targets, &meshes, &draws, &camera, &camera)).unwrap().unwrap();
 
     // The engine's frame: SDK shadows from its own G-buffer, denoised, then its lighting.
-    let ctx = ExecuteContext::new(&host.device_desc(), &Default::default()).unwrap();
+    let ctx = host.create_context(&Default::default()).unwrap();
     let mut frame = ctx.create_task_container();
     let gpu = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
     frame.schedule_bvh_build(&Default::default()).unwrap();

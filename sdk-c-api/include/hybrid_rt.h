@@ -228,6 +228,11 @@ typedef enum HrtMotionType {
 typedef struct HrtContext HrtContext;
 
 /**
+ * Opaque: the feature structs the SDK needs enabled (`DeviceFeatures`).
+ */
+typedef struct HrtDeviceFeatures HrtDeviceFeatures;
+
+/**
  * Opaque task container: fill on one thread, build on any.
  */
 typedef struct HrtTaskContainer HrtTaskContainer;
@@ -250,6 +255,11 @@ typedef struct HrtInitSettings {
    * Timed tasks per ticket. Default 64.
    */
   uint32_t max_timed_tasks;
+  /**
+   * An engine-owned VkPipelineCache the SDK creates its pipelines through (0: none).
+   * Save it with vkGetPipelineCacheData and reload it next run to skip shader compilation.
+   */
+  uint64_t pipeline_cache;
 } HrtInitSettings;
 
 /**
@@ -272,6 +282,21 @@ typedef struct HrtContextDesc {
    */
   const char *const *enabled_extensions;
   uint32_t enabled_extension_count;
+  /**
+   * VkApplicationInfo::apiVersion of the instance: VK_API_VERSION_1_3 or later.
+   */
+  uint32_t instance_api_version;
+  /**
+   * The pNext chain given to vkCreateDevice (a VkDevice cannot be asked which features it
+   * has): your VkPhysicalDeviceFeatures2 after hrt_device_features_merge, or
+   * hrt_device_features_chain. Read during hrt_context_create only.
+   */
+  const void *enabled_features;
+  /**
+   * VK_EXT_debug_utils is enabled on the instance: the SDK names its objects and labels its
+   * tasks ("hybrid-rt ..."), for RenderDoc, Nsight and validation messages.
+   */
+  bool debug_utils;
   struct HrtInitSettings settings;
 } HrtContextDesc;
 
@@ -863,6 +888,30 @@ bool hrt_set_log_callback(HrtLogCallback callback,
                           void *user_data);
 
 /**
+ * The SDK's device features (rayQuery too when `ray_query`), to enable with
+ * hrt_device_features_merge (into your own chain) or hrt_device_features_chain (as the
+ * whole chain). Keep it alive until hrt_context_create has returned, then destroy it.
+ */
+struct HrtDeviceFeatures *hrt_device_features_create(bool ray_query);
+
+/**
+ * Enables the SDK's features in your chain headed by `features2`: switched on in the structs
+ * your chain already has (your own VkPhysicalDeviceVulkan13Features, say), the missing ones
+ * appended from `features` (which must stay alive while the chain is used). Never adds a
+ * second struct of a type the chain holds. Then pass `features2` as VkDeviceCreateInfo::pNext
+ * and HrtContextDesc::enabled_features.
+ */
+enum HrtStatus hrt_device_features_merge(struct HrtDeviceFeatures *features, void *features2);
+
+/**
+ * All the SDK's features as one chain (VkPhysicalDeviceFeatures2 first), for an engine with
+ * no chain of its own: VkDeviceCreateInfo::pNext and HrtContextDesc::enabled_features.
+ */
+const void *hrt_device_features_chain(struct HrtDeviceFeatures *features);
+
+void hrt_device_features_destroy(struct HrtDeviceFeatures *features);
+
+/**
  * The device extensions the SDK needs (static strings). Enable all of them, plus
  * VK_KHR_ray_query where the device has it (`hrt_optional_device_extensions`), and these
  * features: bufferDeviceAddress (1.2), synchronization2 and maintenance4 (1.3), accelerationStructure,
@@ -898,9 +947,11 @@ struct HrtInitSettings hrt_init_settings_default(void);
 enum HrtStatus hrt_context_create(const struct HrtContextDesc *desc, struct HrtContext **out);
 
 /**
- * Destroys a context (NULL is ignored: HRT_OK). Every ticket must be complete; destroy
- * containers first or after, in any order. Destroying it twice, or any call on it afterwards,
- * is HRT_ERROR_INVALID_HANDLE.
+ * Destroys a context (NULL is ignored: HRT_OK). While the GPU may still run one of its
+ * tickets' command buffers it refuses with HRT_ERROR_TICKETS_IN_FLIGHT and the context stays
+ * valid: wait for the fences, hand the tickets back, destroy again. Destroy containers first
+ * or after, in any order. Destroying it twice, or any call on it afterwards, is
+ * HRT_ERROR_INVALID_HANDLE.
  */
 enum HrtStatus hrt_context_destroy(struct HrtContext *ctx);
 
@@ -937,6 +988,14 @@ enum HrtStatus hrt_task_container_destroy(struct HrtTaskContainer *container);
 uint32_t hrt_task_container_len(const struct HrtTaskContainer *container);
 
 void hrt_task_container_clear(struct HrtTaskContainer *container);
+
+/**
+ * The frame number of the next build of `container`: it seeds the random sequences and picks
+ * the checkerboard half (same index + same inputs = same image). Applies to the next
+ * successful build only; without it the ticket serial is used.
+ */
+enum HrtStatus hrt_task_container_set_frame_index(struct HrtTaskContainer *container,
+                                                  uint64_t frame_index);
 
 struct HrtGeometryTask hrt_geometry_task_default(void);
 

@@ -125,6 +125,58 @@ pub unsafe extern "C" fn hrt_set_log_callback(
     std::panic::catch_unwind(|| log_bridge::install(callback, min_severity, user_data)).unwrap_or(false)
 }
 
+/// Opaque: the feature structs the SDK needs enabled (`DeviceFeatures`).
+pub struct HrtDeviceFeatures {
+    inner: rt::DeviceFeatures,
+}
+
+/// The SDK's device features (rayQuery too when `ray_query`), to enable with
+/// hrt_device_features_merge (into your own chain) or hrt_device_features_chain (as the
+/// whole chain). Keep it alive until hrt_context_create has returned, then destroy it.
+#[no_mangle]
+pub extern "C" fn hrt_device_features_create(ray_query: bool) -> *mut HrtDeviceFeatures {
+    Box::into_raw(Box::new(HrtDeviceFeatures { inner: rt::DeviceFeatures::required(ray_query) }))
+}
+
+/// Enables the SDK's features in your chain headed by `features2`: switched on in the structs
+/// your chain already has (your own VkPhysicalDeviceVulkan13Features, say), the missing ones
+/// appended from `features` (which must stay alive while the chain is used). Never adds a
+/// second struct of a type the chain holds. Then pass `features2` as VkDeviceCreateInfo::pNext
+/// and HrtContextDesc::enabled_features.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_device_features_merge(features: *mut HrtDeviceFeatures, features2: *mut c_void) -> HrtStatus {
+    guard(|| {
+        let f = get_mut(features, "features")?;
+        let chain = get_mut(features2 as *mut vk::PhysicalDeviceFeatures2<'static>, "features2")?;
+        if chain.s_type != vk::StructureType::PHYSICAL_DEVICE_FEATURES_2 {
+            return Err(Failure(HrtStatus::HRT_ERROR_INVALID_INPUT, "features2 is not a VkPhysicalDeviceFeatures2".into()));
+        }
+        // SAFETY: the caller passes a valid chain (header) and keeps `features` alive.
+        f.inner.merge_into(chain);
+        Ok(())
+    })
+}
+
+/// All the SDK's features as one chain (VkPhysicalDeviceFeatures2 first), for an engine with
+/// no chain of its own: VkDeviceCreateInfo::pNext and HrtContextDesc::enabled_features.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_device_features_chain(features: *mut HrtDeviceFeatures) -> *const c_void {
+    match features.as_mut() {
+        Some(f) => {
+            let _ = f.inner.push_to(vk::DeviceCreateInfo::default());
+            f.inner.chain()
+        }
+        None => std::ptr::null(),
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_device_features_destroy(features: *mut HrtDeviceFeatures) {
+    if !features.is_null() {
+        drop(Box::from_raw(features));
+    }
+}
+
 /// The device extensions the SDK needs (static strings). Enable all of them, plus
 /// VK_KHR_ray_query where the device has it (`hrt_optional_device_extensions`), and these
 /// features: bufferDeviceAddress (1.2), synchronization2 and maintenance4 (1.3), accelerationStructure,
@@ -234,6 +286,8 @@ pub unsafe extern "C" fn hrt_context_create(desc: *const HrtContextDesc, out: *m
         let entry = entry_from(desc.get_instance_proc_addr)?;
         let instance = ash::Instance::load(entry.static_fn(), vk::Instance::from_raw(desc.instance as u64));
         let device = ash::Device::load(instance.fp_v1_0(), vk::Device::from_raw(desc.device as u64));
+        // SAFETY: the caller promises (header) that the handles are valid and belong together,
+        // and that the device was created with these extensions and this feature chain.
         let ctx = rt::ExecuteContext::new(
             &rt::DeviceDesc {
                 entry: &entry,
@@ -241,6 +295,9 @@ pub unsafe extern "C" fn hrt_context_create(desc: *const HrtContextDesc, out: *m
                 physical_device: vk::PhysicalDevice::from_raw(desc.physical_device as u64),
                 device: &device,
                 enabled_extensions: &exts,
+                instance_api_version: desc.instance_api_version,
+                enabled_features: desc.enabled_features,
+                debug_utils: desc.debug_utils,
             },
             &(&desc.settings).into(),
         )?;
@@ -251,15 +308,22 @@ pub unsafe extern "C" fn hrt_context_create(desc: *const HrtContextDesc, out: *m
     })
 }
 
-/// Destroys a context (NULL is ignored: HRT_OK). Every ticket must be complete; destroy
-/// containers first or after, in any order. Destroying it twice, or any call on it afterwards,
-/// is HRT_ERROR_INVALID_HANDLE.
+/// Destroys a context (NULL is ignored: HRT_OK). While the GPU may still run one of its
+/// tickets' command buffers it refuses with HRT_ERROR_TICKETS_IN_FLIGHT and the context stays
+/// valid: wait for the fences, hand the tickets back, destroy again. Destroy containers first
+/// or after, in any order. Destroying it twice, or any call on it afterwards, is
+/// HRT_ERROR_INVALID_HANDLE.
 #[no_mangle]
 pub unsafe extern "C" fn hrt_context_destroy(ctx: *mut HrtContext) -> HrtStatus {
     if ctx.is_null() {
         return HrtStatus::HRT_OK;
     }
     guard(|| {
+        // Refused while the GPU may still run a ticket: the context stays valid.
+        let serials = context(ctx)?.ctx.unfinished_tickets();
+        if !serials.is_empty() {
+            return Err(rt::Error::TicketsInFlight { serials }.into());
+        }
         live::unregister(ctx, live::Kind::Context, "ctx")?;
         drop(Box::from_raw(ctx));
         Ok(())
@@ -369,6 +433,17 @@ pub unsafe extern "C" fn hrt_task_container_clear(container: *mut HrtTaskContain
     if let Ok(c) = container_mut(container) {
         c.inner.clear();
     }
+}
+
+/// The frame number of the next build of `container`: it seeds the random sequences and picks
+/// the checkerboard half (same index + same inputs = same image). Applies to the next
+/// successful build only; without it the ticket serial is used.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_task_container_set_frame_index(container: *mut HrtTaskContainer, frame_index: u64) -> HrtStatus {
+    guard(|| {
+        container_mut(container)?.inner.set_frame_index(frame_index);
+        Ok(())
+    })
 }
 
 #[no_mangle]

@@ -37,6 +37,9 @@ pub struct HrtInitSettings {
     pub upload_ring_bytes: u64,
     /// Timed tasks per ticket. Default 64.
     pub max_timed_tasks: u32,
+    /// An engine-owned VkPipelineCache the SDK creates its pipelines through (0: none).
+    /// Save it with vkGetPipelineCacheData and reload it next run to skip shader compilation.
+    pub pipeline_cache: u64,
 }
 
 impl From<rt::InitSettings> for HrtInitSettings {
@@ -45,6 +48,7 @@ impl From<rt::InitSettings> for HrtInitSettings {
             supported_working_sets: s.supported_working_sets,
             upload_ring_bytes: s.upload_ring_bytes,
             max_timed_tasks: s.max_timed_tasks,
+            pipeline_cache: s.pipeline_cache.as_raw(),
         }
     }
 }
@@ -54,6 +58,7 @@ impl From<&HrtInitSettings> for rt::InitSettings {
             supported_working_sets: s.supported_working_sets,
             upload_ring_bytes: s.upload_ring_bytes,
             max_timed_tasks: s.max_timed_tasks,
+            pipeline_cache: vk::PipelineCache::from_raw(s.pipeline_cache),
         }
     }
 }
@@ -71,6 +76,15 @@ pub struct HrtContextDesc {
     /// The device extensions the engine enabled (see hrt_required_device_extensions).
     pub enabled_extensions: *const *const std::ffi::c_char,
     pub enabled_extension_count: u32,
+    /// VkApplicationInfo::apiVersion of the instance: VK_API_VERSION_1_3 or later.
+    pub instance_api_version: u32,
+    /// The pNext chain given to vkCreateDevice (a VkDevice cannot be asked which features it
+    /// has): your VkPhysicalDeviceFeatures2 after hrt_device_features_merge, or
+    /// hrt_device_features_chain. Read during hrt_context_create only.
+    pub enabled_features: *const c_void,
+    /// VK_EXT_debug_utils is enabled on the instance: the SDK names its objects and labels its
+    /// tasks ("hybrid-rt ..."), for RenderDoc, Nsight and validation messages.
+    pub debug_utils: bool,
     pub settings: HrtInitSettings,
 }
 

@@ -37,9 +37,8 @@ pub mod types;
 pub use context::container::TaskContainer;
 pub use context::ExecuteContext;
 pub use error::{Error, HandleProblem, Result};
-pub use gpu::device::{
-    query_device_support, DeviceDesc, DeviceFeatures, DeviceSupport, OPTIONAL_DEVICE_EXTENSIONS, REQUIRED_DEVICE_EXTENSIONS,
-};
+pub use gpu::device::{query_device_support, DeviceDesc, DeviceSupport, OPTIONAL_DEVICE_EXTENSIONS, REQUIRED_DEVICE_EXTENSIONS};
+pub use gpu::features::DeviceFeatures;
 pub use gpu::memory::{AllocationCount, ResourceAllocations};
 // The public data, family by family (not `types::*`, which would also export the family
 // modules under names the crate's own layers use).

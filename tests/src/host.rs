@@ -93,6 +93,9 @@ pub struct Host {
     debug: Option<(ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     /// Boxed: the messenger holds its address.
     validation_log: Box<ValidationLog>,
+    /// The feature chain the device was created with (boxed: the chain links their fields;
+    /// `ExecuteContext::new` reads it).
+    features: Box<EngineFeatures>,
     memory_props: vk::PhysicalDeviceMemoryProperties,
 }
 
@@ -135,6 +138,22 @@ pub struct HostBuffer {
 }
 
 pub type HostResult<T> = Result<T, String>;
+
+/// The host's own device features with the SDK's merged in (`DeviceFeatures::merge_into`).
+struct EngineFeatures {
+    features2: vk::PhysicalDeviceFeatures2<'static>,
+    vulkan13: vk::PhysicalDeviceVulkan13Features<'static>,
+    sdk: DeviceFeatures,
+}
+
+impl EngineFeatures {
+    fn chain(&self) -> *const c_void {
+        &self.features2 as *const _ as *const c_void
+    }
+}
+
+/// The Vulkan version the host's instance asks for.
+pub const API_VERSION: u32 = vk::API_VERSION_1_3;
 
 /// Every stage the host, the sample and the SDK run work in: what a "full" barrier of theirs
 /// waits for and blocks. (ALL_COMMANDS would say the same and draw a best-practices warning.)
@@ -195,7 +214,7 @@ impl Host {
         let exts = unsafe { entry.enumerate_instance_extension_properties(None) }.unwrap_or_default();
         let has_debug = exts.iter().any(|e| e.extension_name_as_c_str() == Ok(ext::debug_utils::NAME));
 
-        let app = vk::ApplicationInfo::default().application_name(c"hybrid-rt host").api_version(vk::API_VERSION_1_3);
+        let app = vk::ApplicationInfo::default().application_name(c"hybrid-rt host").api_version(API_VERSION);
         let layer_names: Vec<*const i8> = if validation_enabled { vec![validation_name.as_ptr()] } else { vec![] };
         let mut ext_names: Vec<*const i8> = if has_debug { vec![ext::debug_utils::NAME.as_ptr()] } else { vec![] };
         ext_names.extend(instance_extensions.iter().map(|e| e.as_ptr()));
@@ -270,12 +289,19 @@ impl Host {
         let ext_ptrs: Vec<*const i8> = enabled_extensions.iter().map(|e| e.as_ptr()).collect();
         let priorities = [1.0f32];
         let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
-        let mut features = DeviceFeatures::required(support.ray_query && !disable_rq);
-        // The engine side rasterizes too (the sample's G-buffer): dynamic rendering is core in
-        // Vulkan 1.3 and always supported there.
-        features.vulkan13 = features.vulkan13.dynamic_rendering(true);
-        let info =
-            features.push_to(vk::DeviceCreateInfo::default().queue_create_infos(&queues).enabled_extension_names(&ext_ptrs));
+        // Like an engine with a feature chain of its own (it rasterizes too: the sample's
+        // G-buffer uses dynamic rendering), the SDK's features are merged into it.
+        let mut features = Box::new(EngineFeatures {
+            features2: vk::PhysicalDeviceFeatures2::default(),
+            vulkan13: vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true),
+            sdk: DeviceFeatures::required(support.ray_query && !disable_rq),
+        });
+        features.features2.p_next = &mut features.vulkan13 as *mut _ as *mut c_void;
+        let EngineFeatures { features2, sdk, .. } = &mut *features;
+        // SAFETY: the chain is the box's own structs, which stay in place for the host's life.
+        unsafe { sdk.merge_into(features2) };
+        let mut info = vk::DeviceCreateInfo::default().queue_create_infos(&queues).enabled_extension_names(&ext_ptrs);
+        info.p_next = features.chain();
         let device = unsafe { instance.create_device(physical_device, &info, None) }.map_err(vkerr("vkCreateDevice"))?;
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
         let pool_info = vk::CommandPoolCreateInfo::default()
@@ -296,6 +322,7 @@ impl Host {
             pool,
             debug,
             validation_log,
+            features,
             memory_props,
         })
     }
@@ -308,7 +335,19 @@ impl Host {
             physical_device: self.physical_device,
             device: &self.device,
             enabled_extensions: &self.enabled_extensions,
+            instance_api_version: API_VERSION,
+            enabled_features: self.features.chain(),
+            debug_utils: self.debug.is_some(),
         }
+    }
+
+    /// An SDK context on this host's device.
+    pub fn create_context(&self, settings: &hybrid_rt::InitSettings) -> hybrid_rt::Result<hybrid_rt::ExecuteContext> {
+        // SAFETY: the host's handles belong together, its device was created with exactly these
+        // extensions and this feature chain, and it outlives every context (drop order: tests
+        // drop their context before the host, and the host waits for its queue before
+        // destroying the device).
+        unsafe { hybrid_rt::ExecuteContext::new(&self.device_desc(), settings) }
     }
 
     /// Validation errors and counted warnings reported so far by this host's instance.

@@ -53,7 +53,7 @@ struct World<'h> {
 impl<'h> World<'h> {
     fn new(host: &'h Host) -> World<'h> {
         let (scene, camera) = scene();
-        let ctx = ExecuteContext::new(&host.device_desc(), &InitSettings::default()).unwrap();
+        let ctx = host.create_context(&InitSettings::default()).unwrap();
         let g = GBuffer::render(&Tracer::new(&scene), &camera, W, H);
         let images = GBufferImages::upload(host, &g).unwrap();
         let lit = host

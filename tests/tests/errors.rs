@@ -125,7 +125,7 @@ fn bad_geometry_inputs_are_refused() {
 #[test]
 fn stale_foreign_and_null_handles_are_refused() {
     let (host, ctx) = host_and_context(InitSettings::default());
-    let other = hybrid_rt::ExecuteContext::new(&host.device_desc(), &InitSettings::default()).unwrap();
+    let other = host.create_context(&InitSettings::default()).unwrap();
     let (vb, _ib) = triangle_buffers(&host);
     let input =
         GeometryInput { vertices: VertexBufferInput { buffer: vb.buffer, count: 3, ..Default::default() }, ..Default::default() };
@@ -270,10 +270,9 @@ fn non_finite_transforms_and_cameras_are_refused() {
 #[test]
 fn tickets_working_sets_and_settings() {
     assert!(matches!(
-        hybrid_rt::ExecuteContext::new(
-            &hybrid_rt_testkit::host::Host::new().unwrap().device_desc(),
-            &InitSettings { supported_working_sets: 0, ..Default::default() }
-        ),
+        hybrid_rt_testkit::host::Host::new()
+            .unwrap()
+            .create_context(&InitSettings { supported_working_sets: 0, ..Default::default() }),
         Err(Error::InvalidInput { .. })
     ));
     let (host, ctx) = host_and_context(InitSettings { supported_working_sets: 1, ..Default::default() });

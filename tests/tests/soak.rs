@@ -37,8 +37,7 @@ struct Live {
 #[ignore = "soak: .ci/run runs it in release (cargo test --release -p hybrid-rt-testkit --test soak -- --ignored)"]
 fn two_thousand_frames_of_churn_keep_memory_flat() {
     let host = Host::new().expect("a Vulkan device with ray tracing (run scripts/setup.sh)");
-    let ctx =
-        ExecuteContext::new(&host.device_desc(), &InitSettings { supported_working_sets: 3, ..Default::default() }).unwrap();
+    let ctx = host.create_context(&InitSettings { supported_working_sets: 3, ..Default::default() }).unwrap();
     let fresh = ctx.resource_allocations();
     let usage = vk::BufferUsageFlags::TRANSFER_SRC;
     let shapes: Vec<Shape> = [Mesh::cuboid(Vec3::splat(0.3)), Mesh::grid(1.0, 3), Mesh::quad(0.8)]

@@ -120,8 +120,7 @@ fn run() -> Result<(), String> {
     let e = |e: hybrid_rt::Error| e.to_string();
 
     let host = Host::new()?;
-    let ctx = ExecuteContext::new(&host.device_desc(), &InitSettings { upload_ring_bytes: 4 << 20, ..Default::default() })
-        .map_err(e)?;
+    let ctx = host.create_context(&InitSettings { upload_ring_bytes: 4 << 20, ..Default::default() }).map_err(e)?;
     println!(
         "device: {}{}",
         host.device_name,

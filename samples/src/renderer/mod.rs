@@ -117,11 +117,8 @@ fn sdk_err(e: hybrid_rt::Error) -> String {
 impl<'h> Renderer<'h> {
     pub fn new(host: &'h Host, scene: SampleScene, settings: Settings) -> HostResult<Renderer<'h>> {
         let (w, h) = (settings.width, settings.height);
-        let ctx = ExecuteContext::new(
-            &host.device_desc(),
-            &InitSettings { supported_working_sets: SLOTS as u32, ..Default::default() },
-        )
-        .map_err(sdk_err)?;
+        let ctx =
+            host.create_context(&InitSettings { supported_working_sets: SLOTS as u32, ..Default::default() }).map_err(sdk_err)?;
         let mut container = ctx.create_task_container();
         let meshes = MeshBuffers::upload(host, &scene.scene)?;
         // Register every mesh and instance (one BLAS per mesh; the flag's may be refit).

@@ -55,7 +55,7 @@ impl Recorder<'_> {
     pub fn update_caches(&mut self, tasks: &[Task]) -> Result<()> {
         let clears: Vec<InstanceHandle> =
             tasks.iter().filter_map(|t| if let Task::ClearCache(c) = t { Some(c.instance) } else { None }).collect();
-        let (device, memory, cmd, serial) = (self.device, self.memory, self.cmd, self.serial);
+        let (device, memory, cmd) = (self.device, self.memory, self.cmd);
         let d = &device.raw;
         let (hazards, journal) = (&mut self.hazards, &mut self.journal);
         let st = &mut *self.st;
@@ -125,7 +125,7 @@ impl Recorder<'_> {
             ring: &mut ws.ring,
             hazards,
             tlas,
-            seed: serial as u32,
+            seed: self.seed,
             instance_table: 0,
             inline: false,
             floor: false,

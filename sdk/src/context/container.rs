@@ -29,6 +29,8 @@ pub(crate) enum Task {
 pub struct TaskContainer {
     pub(crate) shared: Weak<Shared>,
     pub(crate) tasks: Vec<Task>,
+    /// The frame the next build belongs to (see `set_frame_index`).
+    pub(crate) frame_index: Option<u64>,
 }
 
 impl TaskContainer {
@@ -171,6 +173,16 @@ impl TaskContainer {
         Ok(())
     }
 
+    /// The engine's frame number for the next build of this container: it seeds every random
+    /// sequence (ray directions, light samples) and picks the checkerboard half, so the same
+    /// frame index with the same inputs gives the same image, and two containers built for one
+    /// frame (BVH work on an async-compute queue, tracing on graphics) trace the same
+    /// checkerboard half. Applies to the next successful build only; without it the ticket's
+    /// serial is used (fresh samples every build).
+    pub fn set_frame_index(&mut self, index: u64) {
+        self.frame_index = Some(index);
+    }
+
     pub fn len(&self) -> usize {
         self.tasks.len()
     }
@@ -179,9 +191,10 @@ impl TaskContainer {
         self.tasks.is_empty()
     }
 
-    /// Drops every scheduled task.
+    /// Drops every scheduled task (and a frame index set for the next build).
     pub fn clear(&mut self) {
         self.tasks.clear();
+        self.frame_index = None;
     }
 }
 

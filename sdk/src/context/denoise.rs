@@ -22,7 +22,9 @@ impl ExecuteContext {
             }
         }
         let state = DenoiserState::new(&self.shared.memory, input)?;
-        Ok(self.shared.state.lock().denoisers.insert(state))
+        let h = self.shared.state.lock().denoisers.insert(state);
+        self.shared.live.write().denoisers.insert(h.0);
+        Ok(h)
     }
 
     /// Destroys a denoising context. Tasks still scheduled with it fail at build; its images
@@ -30,6 +32,7 @@ impl ExecuteContext {
     pub fn destroy_denoising_context(&self, handle: DenoisingContextHandle) -> Result<()> {
         let mut st = self.shared.state.lock();
         let state = st.denoisers.remove(handle)?;
+        self.shared.live.write().denoisers.remove(&handle.0);
         let serial = st.last_issued();
         for image in state.into_images() {
             st.deferred.retire(serial, Garbage::Image(image));
@@ -40,6 +43,9 @@ impl ExecuteContext {
 
 impl Shared {
     pub(crate) fn check_denoising_context_alive(&self, h: DenoisingContextHandle) -> Result<()> {
-        self.state.lock().denoisers.check(h).map(|_| ())
+        if self.live.read().denoisers.contains(&h.0) {
+            return Ok(());
+        }
+        Err(super::handles::not_live(DenoisingContextHandle::KIND, h.0, self.id))
     }
 }

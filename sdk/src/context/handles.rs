@@ -6,16 +6,42 @@ use crate::gpu::memory::ResourceAllocations;
 use crate::scene::geometry::GeometryRecord;
 use crate::scene::instance::InstanceRecord;
 use crate::types::{GeometryHandle, InstanceHandle};
+use std::collections::HashSet;
+
+/// The raw values of every live handle, by kind (see `Shared::live`).
+#[derive(Default)]
+pub(crate) struct Live {
+    pub geometries: HashSet<u64>,
+    pub instances: HashSet<u64>,
+    pub denoisers: HashSet<u64>,
+}
+
+/// Why `raw` is not a live handle of context `ctx`: null, foreign, or destroyed.
+pub(crate) fn not_live(kind: &'static str, raw: u64, ctx: u16) -> Error {
+    let problem = if raw == 0 {
+        HandleProblem::Null
+    } else if crate::types::handles::context_of(raw) != ctx {
+        HandleProblem::Foreign
+    } else {
+        HandleProblem::Destroyed
+    };
+    Error::InvalidHandle { kind, raw, problem }
+}
 
 impl ExecuteContext {
     pub fn create_geometry_handles(&self, count: usize) -> Vec<GeometryHandle> {
         let mut st = self.shared.state.lock();
-        (0..count).map(|_| st.scene.geometries.insert(GeometryRecord::new())).collect()
+        let handles: Vec<GeometryHandle> = (0..count).map(|_| st.scene.geometries.insert(GeometryRecord::new())).collect();
+        self.shared.live.write().geometries.extend(handles.iter().map(|h| h.0));
+        handles
     }
 
     pub fn create_instance_handles(&self, count: usize) -> Vec<InstanceHandle> {
         let mut st = self.shared.state.lock();
-        (0..count).map(|_| st.scene.instances.insert(InstanceRecord { placement: None })).collect()
+        let handles: Vec<InstanceHandle> =
+            (0..count).map(|_| st.scene.instances.insert(InstanceRecord { placement: None })).collect();
+        self.shared.live.write().instances.extend(handles.iter().map(|h| h.0));
+        handles
     }
 
     /// Destroys geometries. All-or-nothing: if any handle is invalid or still used by a
@@ -34,8 +60,10 @@ impl ExecuteContext {
             }
         }
         let serial = st.last_issued();
+        let mut live = self.shared.live.write();
         for h in handles {
             let g = st.scene.geometries.remove(*h)?;
+            live.geometries.remove(&h.0);
             retire_geometry(&mut st.deferred, serial, g);
         }
         Ok(())
@@ -50,8 +78,10 @@ impl ExecuteContext {
                 return Err(Error::InvalidHandle { kind: InstanceHandle::KIND, raw: h.0, problem: HandleProblem::Destroyed });
             }
         }
+        let mut live = self.shared.live.write();
         for h in handles {
             let rec = st.scene.instances.remove(*h)?;
+            live.instances.remove(&h.0);
             st.unplace(rec.placement);
         }
         Ok(())
@@ -61,6 +91,7 @@ impl ExecuteContext {
     pub fn destroy_all_instance_handles(&self) {
         let mut st = self.shared.state.lock();
         let all: Vec<InstanceHandle> = st.scene.instances.iter().map(|(h, _)| h).collect();
+        self.shared.live.write().instances.clear();
         for h in all {
             if let Ok(rec) = st.scene.instances.remove(h) {
                 st.unplace(rec.placement);
@@ -121,10 +152,16 @@ impl ExecuteContext {
 
 impl Shared {
     pub(crate) fn check_geometry_alive(&self, h: GeometryHandle) -> Result<()> {
-        self.state.lock().scene.geometries.check(h).map(|_| ())
+        if self.live.read().geometries.contains(&h.0) {
+            return Ok(());
+        }
+        Err(not_live(GeometryHandle::KIND, h.0, self.id))
     }
 
     pub(crate) fn check_instance_alive(&self, h: InstanceHandle) -> Result<()> {
-        self.state.lock().scene.instances.check(h).map(|_| ())
+        if self.live.read().instances.contains(&h.0) {
+            return Ok(());
+        }
+        Err(not_live(InstanceHandle::KIND, h.0, self.id))
     }
 }

@@ -37,7 +37,7 @@ use crate::scene::Scene;
 use crate::types::handles::Registry;
 use crate::types::*;
 pub use container::TaskContainer;
-use parking_lot::Mutex;
+use parking_lot::{Mutex, RwLock};
 use std::sync::atomic::{AtomicBool, AtomicU16, Ordering};
 use std::sync::Arc;
 use working_set::WorkingSet;
@@ -56,6 +56,10 @@ pub(crate) struct Shared {
     pub device: Device,
     pub memory: Memory,
     state: Mutex<State>,
+    /// The live handles, apart from `state`: scheduling checks them here and so never waits
+    /// for a recording (or a ticket's completion) that holds the state lock. Written only
+    /// where handles are created and destroyed, inside the state lock.
+    live: RwLock<handles::Live>,
     warned_inline: AtomicBool,
 }
 
@@ -96,8 +100,17 @@ impl State {
 
 impl ExecuteContext {
     /// Creates the context from the engine's device. Fails with
-    /// `Error::MissingDeviceSupport` naming every missing extension or feature.
-    pub fn new(desc: &DeviceDesc<'_>, settings: &InitSettings) -> Result<ExecuteContext> {
+    /// `Error::MissingDeviceSupport` naming every missing extension, feature, device function
+    /// and API version.
+    ///
+    /// # Safety
+    /// The SDK cannot check what raw Vulkan handles are; as with ash, the caller guarantees:
+    /// - `desc.instance`, `physical_device` and `device` are valid and belong together, and the
+    ///   device was created with `desc.enabled_extensions` and the `desc.enabled_features`
+    ///   chain (null, or valid for this call);
+    /// - the device outlives the context, and is not destroyed while a ticket is in flight;
+    /// - command buffers given to `build_gpu_task` belong to this device.
+    pub unsafe fn new(desc: &DeviceDesc<'_>, settings: &InitSettings) -> Result<ExecuteContext> {
         if !(1..=16).contains(&settings.supported_working_sets) {
             return Err(Error::invalid("InitSettings.supported_working_sets", "must be in 1..=16"));
         }
@@ -112,8 +125,8 @@ impl ExecuteContext {
                 format!("{} exceeds the device's maxBufferSize {max_buffer}", settings.upload_ring_bytes),
             ));
         }
-        let memory = Memory::new(desc.instance, desc.device, desc.physical_device, max_buffer)?;
-        let passes = match Passes::new(&device, &memory) {
+        let memory = Memory::new(desc.instance, desc.device, desc.physical_device, max_buffer, device.debug.clone())?;
+        let passes = match Passes::new(&device, &memory, settings.pipeline_cache) {
             Ok(p) => p,
             Err(e) => {
                 memory.shutdown();
@@ -135,6 +148,7 @@ impl ExecuteContext {
                 next_serial: 1,
                 passes,
             }),
+            live: RwLock::new(handles::Live::default()),
             warned_inline: AtomicBool::new(false),
         });
         {
@@ -162,8 +176,26 @@ impl ExecuteContext {
         self.shared.device.ray_query
     }
 
+    /// Tickets in flight whose command buffers the GPU has not run to their end (by their
+    /// completion markers): what must finish before the context may be destroyed.
+    pub fn unfinished_tickets(&self) -> Vec<u64> {
+        self.shared.unfinished_tickets()
+    }
+
+    /// Destroys the context, or refuses with `Error::TicketsInFlight` (and gives the context
+    /// back) while the GPU may still run a ticket's commands. A ticket the GPU has finished but
+    /// the engine never handed back does not hold it up.
+    pub fn destroy(self) -> std::result::Result<(), (ExecuteContext, Error)> {
+        let serials = self.unfinished_tickets();
+        if !serials.is_empty() {
+            return Err((self, Error::TicketsInFlight { serials }));
+        }
+        drop(self);
+        Ok(())
+    }
+
     pub fn create_task_container(&self) -> TaskContainer {
-        TaskContainer { shared: Arc::downgrade(&self.shared), tasks: Vec::new() }
+        TaskContainer { shared: Arc::downgrade(&self.shared), tasks: Vec::new(), frame_index: None }
     }
 
     /// Bench only (cargo feature `bench-floor`): trace with empty hit/miss shaders (the
@@ -262,10 +294,27 @@ fn retire_geometry(deferred: &mut DeferredFrees, serial: u64, g: GeometryRecord)
     }
 }
 
+impl Shared {
+    fn unfinished_tickets(&self) -> Vec<u64> {
+        let st = self.state.lock();
+        st.working_sets.iter().filter_map(|w| w.in_flight.filter(|&serial| !w.completed(serial))).collect()
+    }
+}
+
 impl Drop for Shared {
-    /// The engine drops the context after the GPU finished every ticket (as for any Vulkan
-    /// object it destroys); nothing here waits.
+    /// Frees everything — unless a ticket the GPU may still be running is out (dropped without
+    /// `destroy`'s check): then the SDK's GPU objects and memory are leaked, with an error in
+    /// the log, rather than freed under the GPU. Nothing here waits: the SDK owns no queue.
     fn drop(&mut self) {
+        let unfinished = self.unfinished_tickets();
+        if !unfinished.is_empty() {
+            log::error!(
+                "hybrid-rt context dropped with tickets {unfinished:?} still running on the GPU: leaking its GPU objects \
+                 (wait for the tickets' fences and hand them back, or use ExecuteContext::destroy)"
+            );
+            self.memory.leak();
+            return;
+        }
         let st = self.state.get_mut();
         let (device, memory) = (&self.device, &self.memory);
         let geometries: Vec<GeometryHandle> = st.scene.geometries.iter().map(|(h, _)| h).collect();

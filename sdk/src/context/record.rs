@@ -28,8 +28,11 @@ pub(super) struct Recorder<'a> {
     pub st: &'a mut State,
     /// Index of the working set this ticket will own.
     pub ws: usize,
-    /// The ticket's serial (also its random seed).
+    /// The ticket's serial.
     pub serial: u64,
+    /// What seeds the recording's random sequences and checkerboard phase: the container's
+    /// frame index, or the serial.
+    pub seed: u32,
     pub cmd: vk::CommandBuffer,
     pub hazards: Hazards,
     /// Set once the "no ray queries, using the pipeline" warning was logged.
@@ -39,14 +42,17 @@ pub(super) struct Recorder<'a> {
 }
 
 impl Recorder<'_> {
+    /// Opens a timed (and, with debug utils, labelled) span of the recording.
     pub fn begin(&mut self, kind: TaskKind, task_index: u32) -> Span {
         let (d, cmd) = (&self.device.raw, self.cmd);
+        self.device.begin_label(cmd, &format!("{kind:?}"));
         self.working_set().timer.begin(d, cmd, kind, task_index)
     }
 
     pub fn end(&mut self, span: Span) {
         let (d, cmd) = (&self.device.raw, self.cmd);
         self.working_set().timer.end(d, cmd, span);
+        self.device.end_label(cmd);
     }
 
     /// Records every task of a container (validated: errors here are Vulkan/memory failures).
@@ -125,7 +131,7 @@ impl Recorder<'_> {
         let task_bytes: u64 = renders.iter().map(|(_, t)| t.upload_bytes() + align).sum();
         self.ensure_ring(table::instance_table_bytes(&self.st.scene) + 16 + task_bytes)?;
 
-        let (device, cmd, seed) = (self.device, self.cmd, self.serial as u32);
+        let (device, cmd, seed) = (self.device, self.cmd, self.seed);
         let st = &mut *self.st;
         let ws = &mut st.working_sets[self.ws];
         let instance_table = ws.ring.push(bytemuck::cast_slice(&table::instance_table(&st.scene)), 16).address;
@@ -140,6 +146,7 @@ impl Recorder<'_> {
             if wants_inline && !device.ray_query && !self.warned_inline.swap(true, Ordering::Relaxed) {
                 log::warn!("use_inline_rt: the device has no VK_KHR_ray_query enabled; using the ray-tracing pipeline");
             }
+            device.begin_label(cmd, &format!("{:?} (task {index})", describe.kind()));
             let span = ws.timer.begin(&device.raw, cmd, describe.kind(), index);
             let mut r = Recording {
                 device,
@@ -154,6 +161,7 @@ impl Recorder<'_> {
             };
             task.record(&mut r, &st.passes, &mut world);
             ws.timer.end(&device.raw, cmd, span);
+            device.end_label(cmd);
         }
         Ok(())
     }

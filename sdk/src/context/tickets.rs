@@ -44,6 +44,8 @@ impl ExecuteContext {
             st,
             ws,
             serial,
+            // Low 32 bits: the shaders' sequences and the checkerboard parity use them.
+            seed: container.frame_index.unwrap_or(serial) as u32,
             cmd,
             hazards: Hazards::after_earlier_submissions(),
             warned_inline: &shared.warned_inline,
@@ -61,6 +63,7 @@ impl ExecuteContext {
         st.next_serial += 1;
         st.working_sets[ws].in_flight = Some(serial);
         container.tasks.clear();
+        container.frame_index = None;
         Ok(GpuTicket { ctx: shared.id, serial })
     }
 

@@ -91,7 +91,7 @@ impl WorkingSet {
             self.compaction_pool = vk::QueryPool::null();
             self.compaction_slots = 0;
         }
-        let slots = n.max(16).next_power_of_two();
+        let slots = n.max(16).checked_next_power_of_two().unwrap_or(n);
         let info = vk::QueryPoolCreateInfo::default()
             .query_type(vk::QueryType::ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR)
             .query_count(slots);

@@ -18,54 +18,6 @@ pub const REQUIRED_DEVICE_EXTENSIONS: &[&CStr] = &[
 /// queries (NVIDIA's 580 driver on H100 does not expose it; lavapipe does).
 pub const OPTIONAL_DEVICE_EXTENSIONS: &[&CStr] = &[khr::ray_query::NAME];
 
-/// The feature structs the SDK needs enabled. Fill a `VkDeviceCreateInfo` with
-/// [`DeviceFeatures::push_to`]; the `pNext` chain borrows `self`, so keep it alive until
-/// `vkCreateDevice` returns.
-pub struct DeviceFeatures {
-    pub core: vk::PhysicalDeviceFeatures2<'static>,
-    pub vulkan12: vk::PhysicalDeviceVulkan12Features<'static>,
-    pub vulkan13: vk::PhysicalDeviceVulkan13Features<'static>,
-    pub acceleration_structure: vk::PhysicalDeviceAccelerationStructureFeaturesKHR<'static>,
-    pub ray_tracing_pipeline: vk::PhysicalDeviceRayTracingPipelineFeaturesKHR<'static>,
-    pub ray_query: vk::PhysicalDeviceRayQueryFeaturesKHR<'static>,
-    pub atomic_float: vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT<'static>,
-}
-
-impl DeviceFeatures {
-    /// The features to enable. `with_ray_query` adds `rayQuery` (only if the device has
-    /// VK_KHR_ray_query: see [`DeviceSupport`]).
-    pub fn required(with_ray_query: bool) -> Self {
-        DeviceFeatures {
-            core: vk::PhysicalDeviceFeatures2::default().features(
-                vk::PhysicalDeviceFeatures::default().shader_storage_image_write_without_format(true).shader_int64(false),
-            ),
-            vulkan12: vk::PhysicalDeviceVulkan12Features::default().buffer_device_address(true),
-            // maintenance4: compute shaders are SPIR-V 1.6, whose workgroup size is LocalSizeId.
-            vulkan13: vk::PhysicalDeviceVulkan13Features::default().synchronization2(true).maintenance4(true),
-            acceleration_structure: vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true),
-            ray_tracing_pipeline: vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default().ray_tracing_pipeline(true),
-            ray_query: vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(with_ray_query),
-            atomic_float: vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default().shader_buffer_float32_atomic_add(true),
-        }
-    }
-
-    /// Chains the features into `info` (as `pNext`, with `pEnabledFeatures` left null).
-    pub fn push_to<'a>(&'a mut self, info: vk::DeviceCreateInfo<'a>) -> vk::DeviceCreateInfo<'a> {
-        let with_rq = self.ray_query.ray_query == vk::TRUE;
-        let mut info = info
-            .push_next(&mut self.core)
-            .push_next(&mut self.vulkan12)
-            .push_next(&mut self.vulkan13)
-            .push_next(&mut self.acceleration_structure)
-            .push_next(&mut self.ray_tracing_pipeline)
-            .push_next(&mut self.atomic_float);
-        if with_rq {
-            info = info.push_next(&mut self.ray_query);
-        }
-        info
-    }
-}
-
 /// What a physical device offers, for the engine to decide before it creates its device.
 #[derive(Debug, Clone)]
 pub struct DeviceSupport {
@@ -130,8 +82,9 @@ pub fn query_device_support(instance: &ash::Instance, pdev: vk::PhysicalDevice) 
     DeviceSupport { supported: missing.is_empty(), missing, ray_query }
 }
 
-/// The engine's objects the context is made from. The SDK clones the function tables; it does
-/// not take ownership: the engine destroys its device after dropping the context.
+/// The engine's objects the context is made from, and how the engine made them (a `VkDevice`
+/// cannot be asked which extensions and features it has). The SDK clones the function tables;
+/// it does not take ownership: the engine destroys its device after dropping the context.
 #[derive(Clone)]
 pub struct DeviceDesc<'a> {
     pub entry: &'a ash::Entry,
@@ -139,8 +92,19 @@ pub struct DeviceDesc<'a> {
     pub physical_device: vk::PhysicalDevice,
     pub device: &'a ash::Device,
     /// The device extensions the engine enabled: the SDK checks its needs against this list
-    /// (a VkDevice cannot be asked) and uses ray queries only when VK_KHR_ray_query is here.
+    /// and uses ray queries only when VK_KHR_ray_query is here.
     pub enabled_extensions: &'a [&'a CStr],
+    /// `VkApplicationInfo::apiVersion` of the instance: 1.3 or later (the SDK records Vulkan
+    /// 1.3 commands; with a 1.2 instance their function pointers may be missing).
+    pub instance_api_version: u32,
+    /// The `pNext` chain given to `vkCreateDevice` (its feature structs), read during
+    /// `ExecuteContext::new` only: [`crate::DeviceFeatures::chain`] after `push_to`, or the
+    /// engine's own `VkPhysicalDeviceFeatures2` after `merge_into`.
+    pub enabled_features: *const std::ffi::c_void,
+    /// VK_EXT_debug_utils is enabled on the instance: the SDK then names every object it
+    /// creates ("hybrid-rt ...") and labels every task in the command buffer, so RenderDoc,
+    /// Nsight and validation messages show its passes. Default false.
+    pub debug_utils: bool,
 }
 
 /// The device limits the SDK checks inputs against, so no size or count it hands the driver
@@ -175,21 +139,64 @@ pub(crate) struct Device {
     pub ray_query: bool,
     pub device_name: String,
     pub limits: Limits,
+    /// Object names and command-buffer labels (VK_EXT_debug_utils), when the engine has it.
+    pub debug: Option<ash::ext::debug_utils::Device>,
 }
 
+/// Device functions the SDK calls that a 1.2 instance, or a device without an extension, may
+/// leave unloaded (ash then installs a stub that panics — in a function that cannot unwind).
+const DEVICE_FUNCTIONS: &[&CStr] = &[
+    c"vkCmdPipelineBarrier2",
+    c"vkCmdWriteTimestamp2",
+    c"vkGetBufferDeviceAddress",
+    c"vkCmdTraceRaysKHR",
+    c"vkCmdBuildAccelerationStructuresKHR",
+    c"vkCmdPushDescriptorSetKHR",
+];
+
 impl Device {
-    pub fn new(desc: &DeviceDesc<'_>) -> Result<Device> {
+    /// # Safety
+    /// As `ExecuteContext::new`: the handles are valid and belong together, and
+    /// `enabled_features` is null or a valid chain.
+    pub unsafe fn new(desc: &DeviceDesc<'_>) -> Result<Device> {
         let support = query_device_support(desc.instance, desc.physical_device);
         let mut missing = support.missing.clone();
+        let api = desc.instance_api_version;
+        if vk::api_version_major(api) < 1 || (vk::api_version_major(api) == 1 && vk::api_version_minor(api) < 3) {
+            missing.push(format!(
+                "a VkInstance of apiVersion 1.3 (DeviceDesc.instance_api_version is {}.{})",
+                vk::api_version_major(api),
+                vk::api_version_minor(api)
+            ));
+        }
         for name in REQUIRED_DEVICE_EXTENSIONS {
             if !desc.enabled_extensions.contains(name) {
                 missing.push(format!("{} (not enabled on the VkDevice)", name.to_string_lossy()));
             }
         }
+        if desc.enabled_features.is_null() {
+            missing.push("DeviceDesc.enabled_features (null: give the pNext chain vkCreateDevice was given)".into());
+        } else {
+            let enabled = crate::gpu::features::enabled_in(desc.enabled_features);
+            for f in crate::gpu::features::Feature::REQUIRED {
+                if !enabled.contains(&f) {
+                    missing.push(format!("feature {} (not enabled on the VkDevice)", f.name()));
+                }
+            }
+        }
+        if missing.is_empty() {
+            for name in DEVICE_FUNCTIONS {
+                if desc.instance.get_device_proc_addr(desc.device.handle(), name.as_ptr()).is_none() {
+                    missing.push(format!("device function {} (not loaded)", name.to_string_lossy()));
+                }
+            }
+        }
         if !missing.is_empty() {
             return Err(Error::MissingDeviceSupport { missing });
         }
-        let ray_query = support.ray_query && desc.enabled_extensions.contains(&khr::ray_query::NAME);
+        let rq_feature =
+            crate::gpu::features::enabled_in(desc.enabled_features).contains(&crate::gpu::features::Feature::RayQuery);
+        let ray_query = support.ray_query && rq_feature && desc.enabled_extensions.contains(&khr::ray_query::NAME);
 
         let mut rt_props = vk::PhysicalDeviceRayTracingPipelinePropertiesKHR::default();
         let mut as_props = vk::PhysicalDeviceAccelerationStructurePropertiesKHR::default();
@@ -227,6 +234,39 @@ impl Device {
             ray_query,
             device_name,
             limits: device_limits,
+            debug: desc.debug_utils.then(|| ash::ext::debug_utils::Device::new(desc.instance, desc.device)),
         })
     }
+}
+
+impl Device {
+    /// Names an SDK object for debuggers and validation messages ("hybrid-rt <name>").
+    pub fn name<H: vk::Handle>(&self, handle: H, name: &str) {
+        name_object(self.debug.as_ref(), handle, name);
+    }
+
+    /// Opens a labelled region of `cmd` ("hybrid-rt <name>"); close it with `end_label`.
+    pub fn begin_label(&self, cmd: vk::CommandBuffer, name: &str) {
+        if let Some(d) = &self.debug {
+            let text = std::ffi::CString::new(format!("hybrid-rt {name}")).unwrap_or_default();
+            let label = vk::DebugUtilsLabelEXT::default().label_name(&text);
+            // SAFETY: cmd is recording; the label outlives the call.
+            unsafe { d.cmd_begin_debug_utils_label(cmd, &label) };
+        }
+    }
+
+    pub fn end_label(&self, cmd: vk::CommandBuffer) {
+        if let Some(d) = &self.debug {
+            unsafe { d.cmd_end_debug_utils_label(cmd) };
+        }
+    }
+}
+
+/// Names `handle` through `debug`, if the engine has VK_EXT_debug_utils.
+pub(crate) fn name_object<H: vk::Handle>(debug: Option<&ash::ext::debug_utils::Device>, handle: H, name: &str) {
+    let Some(d) = debug else { return };
+    let Ok(text) = std::ffi::CString::new(format!("hybrid-rt {name}")) else { return };
+    let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&text);
+    // SAFETY: `handle` is a live object of this device. A failed naming changes nothing.
+    let _ = unsafe { d.set_debug_utils_object_name(&info) };
 }

@@ -140,13 +140,21 @@ pub(crate) struct Memory {
     counts: Mutex<[AllocationCount; MEMORY_KIND_COUNT]>,
     /// The device's maxBufferSize: a larger buffer is refused before it reaches the driver.
     max_buffer_size: u64,
+    /// Names buffers and images (VK_EXT_debug_utils), when the engine has it.
+    debug: Option<ash::ext::debug_utils::Device>,
     /// Test builds: allocations left before one fails (u64::MAX: none fails).
     #[cfg(feature = "fault-injection")]
     fail_in: std::sync::atomic::AtomicU64,
 }
 
 impl Memory {
-    pub fn new(instance: &ash::Instance, device: &ash::Device, pdev: vk::PhysicalDevice, max_buffer_size: u64) -> Result<Memory> {
+    pub fn new(
+        instance: &ash::Instance,
+        device: &ash::Device,
+        pdev: vk::PhysicalDevice,
+        max_buffer_size: u64,
+        debug: Option<ash::ext::debug_utils::Device>,
+    ) -> Result<Memory> {
         let allocator = Allocator::new(&AllocatorCreateDesc {
             instance: instance.clone(),
             device: device.clone(),
@@ -161,6 +169,7 @@ impl Memory {
             allocator: Mutex::new(Some(allocator)),
             counts: Mutex::new([AllocationCount::default(); MEMORY_KIND_COUNT]),
             max_buffer_size,
+            debug,
             #[cfg(feature = "fault-injection")]
             fail_in: std::sync::atomic::AtomicU64::new(u64::MAX),
         })
@@ -236,6 +245,7 @@ impl Memory {
             return Err(Error::Vulkan { call: "vkBindBufferMemory", result: e });
         }
         let address = unsafe { self.device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(raw)) };
+        crate::gpu::device::name_object(self.debug.as_ref(), raw, name);
         let mut counts = self.counts.lock();
         counts[kind as usize].count += 1;
         counts[kind as usize].bytes += allocation.size();
@@ -319,6 +329,8 @@ impl Memory {
                 return Err(e);
             }
         };
+        crate::gpu::device::name_object(self.debug.as_ref(), raw, name);
+        crate::gpu::device::name_object(self.debug.as_ref(), view, name);
         let mut counts = self.counts.lock();
         counts[kind as usize].count += 1;
         counts[kind as usize].bytes += allocation.size();
@@ -364,6 +376,14 @@ impl Memory {
     /// Drops the allocator (its memory blocks) before the device goes away.
     pub fn shutdown(&self) {
         self.allocator.lock().take();
+    }
+
+    /// Forgets the allocator without freeing its memory: what a context dropped while the GPU
+    /// may still use that memory does (a leak, never a use after free).
+    pub fn leak(&self) {
+        if let Some(a) = self.allocator.lock().take() {
+            std::mem::forget(a);
+        }
     }
 }
 

@@ -2,6 +2,7 @@
 //! Nothing here knows what a pass computes.
 pub(crate) mod deferred;
 pub mod device;
+pub mod features;
 pub(crate) mod formats;
 pub mod memory;
 pub(crate) mod pipeline;

@@ -86,6 +86,7 @@ pub(crate) struct RtShaders<'a> {
 fn rt_pipeline(
     device: &Device,
     memory: &Memory,
+    cache: vk::PipelineCache,
     layout: vk::PipelineLayout,
     shaders: &RtShaders<'_>,
 ) -> Result<(RtPipeline, Buffer)> {
@@ -152,12 +153,7 @@ fn rt_pipeline(
         .max_pipeline_ray_recursion_depth(1)
         .layout(layout);
     let result = unsafe {
-        device.rt.create_ray_tracing_pipelines(
-            vk::DeferredOperationKHR::null(),
-            vk::PipelineCache::null(),
-            std::slice::from_ref(&info),
-            None,
-        )
+        device.rt.create_ray_tracing_pipelines(vk::DeferredOperationKHR::null(), cache, std::slice::from_ref(&info), None)
     };
     modules.iter().for_each(|&m| unsafe { d.destroy_shader_module(m, None) });
     let pipeline = result.map_err(|(_, e)| Error::Vulkan { call: "vkCreateRayTracingPipelinesKHR", result: e })?[0];
@@ -224,11 +220,16 @@ fn rt_pipeline(
     Ok((rt, sbt))
 }
 
-fn compute_pipeline(device: &ash::Device, layout: vk::PipelineLayout, spirv: &[u8]) -> Result<vk::Pipeline> {
+fn compute_pipeline(
+    device: &ash::Device,
+    cache: vk::PipelineCache,
+    layout: vk::PipelineLayout,
+    spirv: &[u8],
+) -> Result<vk::Pipeline> {
     let module = shader_module(device, spirv)?;
     let stage = vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::COMPUTE).module(module).name(c"main");
     let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
-    let result = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) };
+    let result = unsafe { device.create_compute_pipelines(cache, &[info], None) };
     unsafe { device.destroy_shader_module(module, None) };
     result.map(|p| p[0]).map_err(|(_, e)| Error::Vulkan { call: "vkCreateComputePipelines", result: e })
 }
@@ -247,6 +248,10 @@ pub(crate) struct PipelineBuilder<'a> {
     pub device: &'a Device,
     pub memory: &'a Memory,
     pub arena: &'a mut PipelineArena,
+    /// The engine's pipeline cache (or null).
+    pub cache: vk::PipelineCache,
+    /// Names the objects made next (debug utils: "hybrid-rt <label> pipeline", ...).
+    pub label: &'static str,
 }
 
 impl PipelineBuilder<'_> {
@@ -254,6 +259,7 @@ impl PipelineBuilder<'_> {
     pub fn set_layout(&mut self, bindings: &[Binding], stages: vk::ShaderStageFlags) -> Result<vk::DescriptorSetLayout> {
         let l = push_set_layout(&self.device.raw, bindings, stages)?;
         self.arena.set_layouts.push(l);
+        self.device.name(l, &format!("{} descriptor set layout", self.label));
         Ok(l)
     }
 
@@ -266,18 +272,22 @@ impl PipelineBuilder<'_> {
     ) -> Result<vk::PipelineLayout> {
         let l = pipeline_layout(&self.device.raw, set, push_bytes, stages)?;
         self.arena.layouts.push(l);
+        self.device.name(l, &format!("{} pipeline layout", self.label));
         Ok(l)
     }
 
     pub fn compute(&mut self, layout: vk::PipelineLayout, spirv: &[u8]) -> Result<vk::Pipeline> {
-        let p = compute_pipeline(&self.device.raw, layout, spirv)?;
+        let p = compute_pipeline(&self.device.raw, self.cache, layout, spirv)?;
         self.arena.pipelines.push(p);
+        self.device.name(p, &format!("{} pipeline", self.label));
         Ok(p)
     }
 
     pub fn ray_tracing(&mut self, layout: vk::PipelineLayout, shaders: &RtShaders<'_>) -> Result<RtPipeline> {
-        let (p, sbt) = rt_pipeline(self.device, self.memory, layout, shaders)?;
+        let (p, sbt) = rt_pipeline(self.device, self.memory, self.cache, layout, shaders)?;
         self.arena.pipelines.push(p.pipeline);
+        self.device.name(p.pipeline, &format!("{} pipeline", self.label));
+        self.device.name(sbt.raw, &format!("{} shader binding table", self.label));
         self.arena.sbts.push(sbt);
         Ok(p)
     }

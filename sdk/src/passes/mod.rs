@@ -39,7 +39,8 @@ pub(crate) struct Recording<'a> {
     pub ring: &'a mut UploadRing,
     pub hazards: &'a mut Hazards,
     pub tlas: vk::AccelerationStructureKHR,
-    /// Per-ticket random seed (the ticket serial), so successive frames get fresh samples.
+    /// The random seed (the container's frame index, else the ticket serial), so successive
+    /// frames get fresh samples and a replayed frame the same ones.
     pub seed: u32,
     /// Device address of this recording's instance table (0 when the recording has none).
     pub instance_table: u64,
@@ -146,10 +147,13 @@ pub(crate) struct Passes {
     arena: PipelineArena,
     /// Bench only: trace through the floor pipelines (see `program`).
     pub floor: bool,
+    /// The engine's pipeline cache, for pipelines made later (the bench floor).
+    #[cfg_attr(not(feature = "bench-floor"), allow(dead_code))]
+    cache: vk::PipelineCache,
 }
 
 impl Passes {
-    pub fn new(device: &Device, memory: &Memory) -> Result<Passes> {
+    pub fn new(device: &Device, memory: &Memory, cache: vk::PipelineCache) -> Result<Passes> {
         let sampler_info = vk::SamplerCreateInfo::default()
             .mag_filter(vk::Filter::NEAREST)
             .min_filter(vk::Filter::NEAREST)
@@ -159,7 +163,8 @@ impl Passes {
         // SAFETY: valid create info; destroyed in `destroy`.
         let sampler = unsafe { device.raw.create_sampler(&sampler_info, None) }.map_err(Error::vk("vkCreateSampler"))?;
         let mut arena = PipelineArena::default();
-        match Self::make(&mut PipelineBuilder { device, memory, arena: &mut arena }, sampler) {
+        device.name(sampler, "G-buffer sampler");
+        match Self::make(&mut PipelineBuilder { device, memory, arena: &mut arena, cache, label: "" }, sampler) {
             Ok(passes) => Ok(Passes { arena, ..passes }),
             Err(e) => {
                 arena.destroy(device, memory);
@@ -171,16 +176,28 @@ impl Passes {
 
     /// Makes every pass into the builder's arena (which `new` then moves into the result).
     fn make(b: &mut PipelineBuilder<'_>, sampler: vk::Sampler) -> Result<Passes> {
+        // Each pass's objects are named after it (debug utils).
+        b.label = "ambient occlusion";
         let ao = ao::AoPass::new(b, sampler)?;
+        b.label = "shadow";
         let shadow = shadow::ShadowPass::new(b, sampler)?;
+        b.label = "multi-light shadow";
         let multi_shadow = shadow::MultiShadowPass::new(b, sampler)?;
+        b.label = "diffuse GI";
         let diffuse = diffuse::DiffusePass::new(b, sampler)?;
+        b.label = "specular";
         let specular = specular::SpecularPass::new(b, sampler)?;
+        b.label = "debug view";
         let debug = debug::DebugPass::new(b)?;
+        b.label = "injection";
         let inject = inject::InjectPass::new(b, sampler)?;
+        b.label = "cache transfer";
         let transfer = transfer::TransferPass::new(b)?;
+        b.label = "cache fill/resolve";
         let cache_ops = cache_ops::CacheOps::new(b)?;
+        b.label = "denoiser";
         let denoise = denoise::DenoisePass::new(b, sampler)?;
+        b.label = "index check";
         let index_check = index_check::IndexCheck::new(b)?;
         Ok(Passes {
             ao,
@@ -197,13 +214,14 @@ impl Passes {
             sampler,
             arena: PipelineArena::default(),
             floor: false,
+            cache: b.cache,
         })
     }
 
     /// Builds the bench's floor pipelines of every trace that has one (on first use).
     #[cfg(feature = "bench-floor")]
     pub fn ensure_floor(&mut self, device: &Device, memory: &Memory) -> Result<()> {
-        let b = &mut PipelineBuilder { device, memory, arena: &mut self.arena };
+        let b = &mut PipelineBuilder { device, memory, arena: &mut self.arena, cache: self.cache, label: "bench floor" };
         for p in [
             &mut self.ao.program,
             &mut self.shadow.program,

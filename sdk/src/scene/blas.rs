@@ -89,6 +89,7 @@ pub(crate) fn create(
             &vk::AccelerationStructureDeviceAddressInfoKHR::default().acceleration_structure(accel),
         )
     };
+    device.name(accel, if ty == vk::AccelerationStructureTypeKHR::TOP_LEVEL { "TLAS" } else { "BLAS" });
     Ok(Blas { accel, buffer, address })
 }
 

@@ -46,6 +46,11 @@ fn pack(ctx: u16, generation: u16, index: u32) -> u64 {
     ((ctx as u64) << (INDEX_BITS + GEN_BITS)) | ((generation as u64) << INDEX_BITS) | index as u64
 }
 
+/// The context a raw handle was made by.
+pub(crate) fn context_of(raw: u64) -> u16 {
+    unpack(raw).0
+}
+
 fn unpack(raw: u64) -> (u16, u16, u32) {
     ((raw >> (INDEX_BITS + GEN_BITS)) as u16, (raw >> INDEX_BITS) as u16, raw as u32)
 }

@@ -1,4 +1,5 @@
 //! Context-wide settings.
+use ash::vk;
 
 /// Settings fixed when the context is created.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -15,10 +16,21 @@ pub struct InitSettings {
     /// Timestamp slots per working set (default 64: 31 timed tasks per ticket plus the BVH
     /// work). Tasks past the limit run untimed.
     pub max_timed_tasks: u32,
+    /// An engine-owned `VkPipelineCache` the SDK creates its pipelines through (null: none,
+    /// the default). Save it with `vkGetPipelineCacheData` and create it from that data on the
+    /// next run: context creation then skips shader compilation (docs/benchmarks.md has the
+    /// cold and warm times). The SDK only reads and adds to it, during `ExecuteContext::new`
+    /// (and the bench floor's pipelines).
+    pub pipeline_cache: vk::PipelineCache,
 }
 
 impl Default for InitSettings {
     fn default() -> Self {
-        InitSettings { supported_working_sets: 2, upload_ring_bytes: 1 << 20, max_timed_tasks: 64 }
+        InitSettings {
+            supported_working_sets: 2,
+            upload_ring_bytes: 1 << 20,
+            max_timed_tasks: 64,
+            pipeline_cache: vk::PipelineCache::null(),
+        }
     }
 }

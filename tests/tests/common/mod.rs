@@ -5,7 +5,7 @@ use hybrid_rt_testkit::host::Host;
 
 pub fn host_and_context(settings: InitSettings) -> (Host, ExecuteContext) {
     let host = Host::new().expect("a Vulkan device with ray tracing (run scripts/setup.sh)");
-    let ctx = ExecuteContext::new(&host.device_desc(), &settings).expect("context");
+    let ctx = host.create_context(&settings).expect("context");
     (host, ctx)
 }
 
