@@ -529,6 +529,34 @@ int main(void) {
     EXPECT(centre < 0.6f, "the ceiling occludes the centre (%f)", centre);
     EXPECT(corner > 0.999f, "nothing occludes the corner (%f)", corner);
 
+    /* ---- The ticket contract: a ticket handed back before its command buffer ran is refused
+     * (and stays in flight), and the context is not destroyed under the GPU. */
+    {
+        ao.rays_per_pixel = 2;
+        CHECK_HRT(hrt_schedule_ambient_occlusion(frame, &ao));
+        VkCommandBuffer early_cmd = begin();
+        HrtTicket early;
+        CHECK_HRT(hrt_build_gpu_task(ctx, frame, early_cmd, &early));
+        EXPECT(hrt_mark_gpu_task_completed(ctx, early, NULL, 0, NULL) == HRT_ERROR_TICKET_NOT_COMPLETE, "not submitted yet");
+        EXPECT(hrt_context_destroy(ctx) == HRT_ERROR_TICKETS_IN_FLIGHT, "not destroyed while the GPU may run a ticket");
+        uint32_t unfinished = 0;
+        CHECK_HRT(hrt_unfinished_tickets(ctx, NULL, 0, &unfinished));
+        EXPECT(unfinished == 1, "one unfinished ticket (%u)", unfinished);
+        submit_and_wait(early_cmd);
+        CHECK_HRT(hrt_unfinished_tickets(ctx, NULL, 0, &unfinished));
+        EXPECT(unfinished == 0, "the GPU ran it");
+        CHECK_HRT(hrt_mark_gpu_task_completed(ctx, early, NULL, 0, NULL));
+        /* A frame index replays a frame's noise exactly (2 rays per pixel: noisy). */
+        static float replay[2][W * H];
+        for (int k = 0; k < 2; k++) {
+            CHECK_HRT(hrt_task_container_set_frame_index(frame, 9));
+            CHECK_HRT(hrt_schedule_ambient_occlusion(frame, &ao));
+            run_frame(ctx, frame, &out, 4, replay[k]);
+        }
+        EXPECT(memcmp(replay[0], replay[1], sizeof replay[0]) == 0, "frame 9 twice: the same image");
+        ao.rays_per_pixel = 16;
+    }
+
     HrtResourceAllocations mem;
     CHECK_HRT(hrt_resource_allocations(ctx, &mem));
     EXPECT(mem.blas.count == 2, "two BLASes");

@@ -260,6 +260,12 @@ typedef struct HrtInitSettings {
    * Save it with vkGetPipelineCacheData and reload it next run to skip shader compilation.
    */
   uint64_t pipeline_cache;
+  /**
+   * Queue families recording SDK work (first `queue_family_count`; 2+: SDK memory is
+   * VK_SHARING_MODE_CONCURRENT over them, for BVH work on an async-compute queue).
+   */
+  uint32_t queue_family_indices[4];
+  uint32_t queue_family_count;
 } HrtInitSettings;
 
 /**
@@ -1057,6 +1063,15 @@ enum HrtStatus hrt_tickets_in_flight(const struct HrtContext *ctx,
                                      uint64_t *serials,
                                      uint32_t capacity,
                                      uint32_t *count);
+
+/**
+ * Tickets in flight whose command buffers the GPU has not run to the end (what must finish
+ * before hrt_context_destroy succeeds); same conventions as hrt_tickets_in_flight.
+ */
+enum HrtStatus hrt_unfinished_tickets(const struct HrtContext *ctx,
+                                      uint64_t *serials,
+                                      uint32_t capacity,
+                                      uint32_t *count);
 
 /**
  * The device's name (NUL-terminated, truncated to `capacity`). Returns its full length.

@@ -621,6 +621,28 @@ pub unsafe extern "C" fn hrt_tickets_in_flight(
     })
 }
 
+/// Tickets in flight whose command buffers the GPU has not run to the end (what must finish
+/// before hrt_context_destroy succeeds); same conventions as hrt_tickets_in_flight.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_unfinished_tickets(
+    ctx: *const HrtContext,
+    serials: *mut u64,
+    capacity: u32,
+    count: *mut u32,
+) -> HrtStatus {
+    guard(|| {
+        let c = context(ctx)?;
+        let all = c.ctx.unfinished_tickets();
+        *get_mut(count, "count")? = all.len() as u32;
+        if !serials.is_null() {
+            for (i, s) in all.iter().take(capacity as usize).enumerate() {
+                *serials.add(i) = *s;
+            }
+        }
+        Ok(())
+    })
+}
+
 /// The device's name (NUL-terminated, truncated to `capacity`). Returns its full length.
 #[no_mangle]
 pub unsafe extern "C" fn hrt_device_name(ctx: *const HrtContext, buffer: *mut c_char, capacity: u32) -> u32 {

@@ -40,6 +40,10 @@ pub struct HrtInitSettings {
     /// An engine-owned VkPipelineCache the SDK creates its pipelines through (0: none).
     /// Save it with vkGetPipelineCacheData and reload it next run to skip shader compilation.
     pub pipeline_cache: u64,
+    /// Queue families recording SDK work (first `queue_family_count`; 2+: SDK memory is
+    /// VK_SHARING_MODE_CONCURRENT over them, for BVH work on an async-compute queue).
+    pub queue_family_indices: [u32; 4],
+    pub queue_family_count: u32,
 }
 
 impl From<rt::InitSettings> for HrtInitSettings {
@@ -49,6 +53,8 @@ impl From<rt::InitSettings> for HrtInitSettings {
             upload_ring_bytes: s.upload_ring_bytes,
             max_timed_tasks: s.max_timed_tasks,
             pipeline_cache: s.pipeline_cache.as_raw(),
+            queue_family_indices: s.queue_family_indices,
+            queue_family_count: s.queue_family_count,
         }
     }
 }
@@ -59,6 +65,8 @@ impl From<&HrtInitSettings> for rt::InitSettings {
             upload_ring_bytes: s.upload_ring_bytes,
             max_timed_tasks: s.max_timed_tasks,
             pipeline_cache: vk::PipelineCache::from_raw(s.pipeline_cache),
+            queue_family_indices: s.queue_family_indices,
+            queue_family_count: s.queue_family_count,
         }
     }
 }

@@ -90,6 +90,8 @@ pub struct Host {
     pub validation_enabled: bool,
     pub device_name: String,
     pool: vk::CommandPool,
+    /// A queue of a second compute-capable family, where the device has one.
+    pub async_compute: Option<AsyncCompute>,
     debug: Option<(ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     /// Boxed: the messenger holds its address.
     validation_log: Box<ValidationLog>,
@@ -138,6 +140,13 @@ pub struct HostBuffer {
 }
 
 pub type HostResult<T> = Result<T, String>;
+
+/// A queue of a second compute family and its command pool.
+pub struct AsyncCompute {
+    pub queue: vk::Queue,
+    pub family: u32,
+    pub pool: vk::CommandPool,
+}
 
 /// The host's own device features with the SDK's merged in (`DeviceFeatures::merge_into`).
 struct EngineFeatures {
@@ -288,7 +297,18 @@ impl Host {
         enabled_extensions.extend_from_slice(device_extensions);
         let ext_ptrs: Vec<*const i8> = enabled_extensions.iter().map(|e| e.as_ptr()).collect();
         let priorities = [1.0f32];
-        let queues = [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
+        // A second, compute-capable family where the device has one (an async-compute queue:
+        // NVIDIA has; lavapipe has a single family).
+        let async_family = families
+            .iter()
+            .enumerate()
+            .position(|(i, f)| i as u32 != queue_family && f.queue_flags.contains(vk::QueueFlags::COMPUTE))
+            .map(|i| i as u32);
+        let mut queues =
+            vec![vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
+        if let Some(f) = async_family {
+            queues.push(vk::DeviceQueueCreateInfo::default().queue_family_index(f).queue_priorities(&priorities));
+        }
         // Like an engine with a feature chain of its own (it rasterizes too: the sample's
         // G-buffer uses dynamic rendering), the SDK's features are merged into it.
         let mut features = Box::new(EngineFeatures {
@@ -308,6 +328,16 @@ impl Host {
             .queue_family_index(queue_family)
             .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
         let pool = unsafe { device.create_command_pool(&pool_info, None) }.map_err(vkerr("command pool"))?;
+        let async_compute = match async_family {
+            Some(f) => {
+                let info = vk::CommandPoolCreateInfo::default()
+                    .queue_family_index(f)
+                    .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+                let p = unsafe { device.create_command_pool(&info, None) }.map_err(vkerr("command pool"))?;
+                Some(AsyncCompute { queue: unsafe { device.get_device_queue(f, 0) }, family: f, pool: p })
+            }
+            None => None,
+        };
         let memory_props = unsafe { instance.get_physical_device_memory_properties(physical_device) };
         Ok(Host {
             entry,
@@ -320,6 +350,7 @@ impl Host {
             validation_enabled,
             device_name,
             pool,
+            async_compute,
             debug,
             validation_log,
             features,
@@ -666,6 +697,9 @@ impl Drop for Host {
         unsafe {
             let _ = self.device.device_wait_idle();
             self.device.destroy_command_pool(self.pool, None);
+            if let Some(a) = self.async_compute.take() {
+                self.device.destroy_command_pool(a.pool, None);
+            }
             self.device.destroy_device(None);
             if let Some((loader, m)) = self.debug.take() {
                 loader.destroy_debug_utils_messenger(m, None);

@@ -106,6 +106,28 @@ fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
+/// Milliseconds to create a context with an empty pipeline cache and with the data that left
+/// in it, and the cache's size.
+fn context_creation(host: &Host) -> Result<(f64, f64, usize), String> {
+    let d = &host.device;
+    let e = |e: ash::vk::Result| format!("pipeline cache: {e:?}");
+    let empty = unsafe { d.create_pipeline_cache(&ash::vk::PipelineCacheCreateInfo::default(), None) }.map_err(e)?;
+    let t = std::time::Instant::now();
+    drop(host.create_context(&InitSettings { pipeline_cache: empty, ..Default::default() }).map_err(|e| e.to_string())?);
+    let cold = t.elapsed().as_secs_f64() * 1e3;
+    let data = unsafe { d.get_pipeline_cache_data(empty) }.map_err(e)?;
+    let warm_cache =
+        unsafe { d.create_pipeline_cache(&ash::vk::PipelineCacheCreateInfo::default().initial_data(&data), None) }.map_err(e)?;
+    let t = std::time::Instant::now();
+    drop(host.create_context(&InitSettings { pipeline_cache: warm_cache, ..Default::default() }).map_err(|e| e.to_string())?);
+    let warm = t.elapsed().as_secs_f64() * 1e3;
+    unsafe {
+        d.destroy_pipeline_cache(empty, None);
+        d.destroy_pipeline_cache(warm_cache, None);
+    }
+    Ok((cold, warm, data.len()))
+}
+
 fn run() -> Result<(), String> {
     let args = Args::parse(USAGE);
     let triangles = args.get("triangles", 1usize << 20);
@@ -120,6 +142,9 @@ fn run() -> Result<(), String> {
     let e = |e: hybrid_rt::Error| e.to_string();
 
     let host = Host::new()?;
+    // ---- 0. Context creation, cold (an empty pipeline cache) and warm (the cache saved by the
+    // cold one, as an engine reloads it on its next run).
+    let (cold_ms, warm_ms, cache_bytes) = context_creation(&host)?;
     let ctx = host.create_context(&InitSettings { upload_ring_bytes: 4 << 20, ..Default::default() }).map_err(e)?;
     println!(
         "device: {}{}",
@@ -129,6 +154,11 @@ fn run() -> Result<(), String> {
     let mut json = String::from("{\n");
     let _ = writeln!(json, "  \"device\": \"{}\",", host.device_name);
     let mut rows: Vec<(String, String)> = Vec::new();
+    rows.push((
+        "Context creation (every pipeline), cold / warm pipeline cache".into(),
+        format!("{cold_ms:.1} ms / {warm_ms:.1} ms ({} KiB of cache)", cache_bytes / 1024),
+    ));
+    let _ = writeln!(json, "  \"context_creation_cold_ms\": {cold_ms:.3},\n  \"context_creation_warm_ms\": {warm_ms:.3},");
 
     // ---- 1. One big mesh: BLAS build throughput.
     let n = ((big as f64 / 2.0).sqrt().ceil() as u32).max(1);

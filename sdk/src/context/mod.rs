@@ -125,7 +125,8 @@ impl ExecuteContext {
                 format!("{} exceeds the device's maxBufferSize {max_buffer}", settings.upload_ring_bytes),
             ));
         }
-        let memory = Memory::new(desc.instance, desc.device, desc.physical_device, max_buffer, device.debug.clone())?;
+        let families = queue_families(desc, settings)?;
+        let memory = Memory::new(desc.instance, desc.device, desc.physical_device, max_buffer, device.debug.clone(), families)?;
         let passes = match Passes::new(&device, &memory, settings.pipeline_cache) {
             Ok(p) => p,
             Err(e) => {
@@ -279,6 +280,30 @@ impl ExecuteContext {
         let _ = writeln!(out, "memory {:?}", self.shared.memory.allocations());
         out
     }
+}
+
+/// The distinct queue families of `InitSettings::queue_family_indices`, each checked against
+/// the device.
+fn queue_families(desc: &DeviceDesc<'_>, settings: &InitSettings) -> Result<Vec<u32>> {
+    let n = settings.queue_family_count as usize;
+    if n > settings.queue_family_indices.len() {
+        return Err(Error::invalid("InitSettings.queue_family_count", format!("{n} is not in 0..=4")));
+    }
+    // SAFETY: a plain query on the engine's physical device.
+    let available = unsafe { desc.instance.get_physical_device_queue_family_properties(desc.physical_device) }.len() as u32;
+    let mut families = Vec::new();
+    for &f in &settings.queue_family_indices[..n] {
+        if f >= available {
+            return Err(Error::invalid(
+                "InitSettings.queue_family_indices",
+                format!("family {f}: the device has {available} queue families"),
+            ));
+        }
+        if !families.contains(&f) {
+            families.push(f);
+        }
+    }
+    Ok(families)
 }
 
 /// Every GPU object of a geometry, retired after the tickets issued up to `serial`.

@@ -142,6 +142,9 @@ pub(crate) struct Memory {
     max_buffer_size: u64,
     /// Names buffers and images (VK_EXT_debug_utils), when the engine has it.
     debug: Option<ash::ext::debug_utils::Device>,
+    /// Distinct queue families that use SDK memory: two or more make every buffer and image
+    /// CONCURRENT over them (`InitSettings::queue_family_indices`).
+    families: Vec<u32>,
     /// Test builds: allocations left before one fails (u64::MAX: none fails).
     #[cfg(feature = "fault-injection")]
     fail_in: std::sync::atomic::AtomicU64,
@@ -154,6 +157,7 @@ impl Memory {
         pdev: vk::PhysicalDevice,
         max_buffer_size: u64,
         debug: Option<ash::ext::debug_utils::Device>,
+        families: Vec<u32>,
     ) -> Result<Memory> {
         let allocator = Allocator::new(&AllocatorCreateDesc {
             instance: instance.clone(),
@@ -170,6 +174,7 @@ impl Memory {
             counts: Mutex::new([AllocationCount::default(); MEMORY_KIND_COUNT]),
             max_buffer_size,
             debug,
+            families,
             #[cfg(feature = "fault-injection")]
             fail_in: std::sync::atomic::AtomicU64::new(u64::MAX),
         })
@@ -217,7 +222,12 @@ impl Memory {
             });
         }
         let usage = usage | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
-        let info = vk::BufferCreateInfo::default().size(size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let info = vk::BufferCreateInfo::default().size(size).usage(usage);
+        let info = if self.families.len() >= 2 {
+            info.sharing_mode(vk::SharingMode::CONCURRENT).queue_family_indices(&self.families)
+        } else {
+            info.sharing_mode(vk::SharingMode::EXCLUSIVE)
+        };
         // SAFETY: valid create info; the buffer is destroyed in `destroy_buffer`.
         let raw = unsafe { self.device.create_buffer(&info, None) }.map_err(Error::vk("vkCreateBuffer"))?;
         let requirements = unsafe { self.device.get_buffer_memory_requirements(raw) };
@@ -291,6 +301,11 @@ impl Memory {
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(IMAGE_USAGE)
             .initial_layout(vk::ImageLayout::UNDEFINED);
+        let info = if self.families.len() >= 2 {
+            info.sharing_mode(vk::SharingMode::CONCURRENT).queue_family_indices(&self.families)
+        } else {
+            info
+        };
         // SAFETY: valid create info; destroyed in `destroy_image`.
         let raw = unsafe { self.device.create_image(&info, None) }.map_err(Error::vk("vkCreateImage"))?;
         let requirements = unsafe { self.device.get_image_memory_requirements(raw) };

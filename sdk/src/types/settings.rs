@@ -22,6 +22,13 @@ pub struct InitSettings {
     /// cold and warm times). The SDK only reads and adds to it, during `ExecuteContext::new`
     /// (and the bench floor's pipelines).
     pub pipeline_cache: vk::PipelineCache,
+    /// The queue families whose command buffers the engine records SDK work into (the first
+    /// `queue_family_count` entries; default 0: one family). With two or more — BVH work on an
+    /// async-compute queue, tracing on graphics — every SDK buffer and image is created with
+    /// `VK_SHARING_MODE_CONCURRENT` over them, so no ownership transfer is needed; the engine
+    /// orders the two submissions with a semaphore. Indices must be the device's families.
+    pub queue_family_indices: [u32; 4],
+    pub queue_family_count: u32,
 }
 
 impl Default for InitSettings {
@@ -31,6 +38,8 @@ impl Default for InitSettings {
             upload_ring_bytes: 1 << 20,
             max_timed_tasks: 64,
             pipeline_cache: vk::PipelineCache::null(),
+            queue_family_indices: [0; 4],
+            queue_family_count: 0,
         }
     }
 }
