@@ -679,7 +679,7 @@ pub(crate) fn instance_task(t: &HrtInstanceTask) -> Result<rt::InstanceTask, Fai
         input: rt::InstanceInput {
             geometry: rt::GeometryHandle(t.input.geometry),
             transform,
-            mask: rt::InstanceInclusionMask(t.input.mask as u8),
+            mask: rt::InstanceInclusionMask::from_bits_truncate(t.input.mask as u8),
             initial_tile_color: t.input.initial_tile_color,
         },
     })
@@ -693,7 +693,7 @@ pub(crate) fn instance_task_default() -> HrtInstanceTask {
         input: HrtInstanceInput {
             geometry: 0,
             transform: [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
-            mask: d.mask.0 as u32,
+            mask: d.mask.bits() as u32,
             initial_tile_color: d.initial_tile_color,
         },
     }

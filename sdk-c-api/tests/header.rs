@@ -20,3 +20,19 @@ fn header_is_current() {
         "sdk-c-api/include/hybrid_rt.h is stale: run `HRT_BLESS=1 cargo test -p hybrid-rt-c --test header` and commit it"
     );
 }
+
+/// The version is written once (the workspace's Cargo.toml): the Rust SDK, the C library and
+/// the header agree with it.
+#[test]
+fn versions_agree() {
+    let (major, minor, patch) = hybrid_rt::VERSION;
+    let cargo = (
+        env!("CARGO_PKG_VERSION_MAJOR").parse::<u32>().unwrap(),
+        env!("CARGO_PKG_VERSION_MINOR").parse::<u32>().unwrap(),
+        env!("CARGO_PKG_VERSION_PATCH").parse::<u32>().unwrap(),
+    );
+    assert_eq!((major, minor, patch), cargo, "the SDK's VERSION is the workspace version");
+    assert_eq!(hybrid_rt_c::HRT_API_VERSION, (major << 22) | (minor << 12) | patch, "HRT_API_VERSION follows it");
+    let header = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/include/hybrid_rt.h")).unwrap();
+    assert!(header.contains("#define HRT_API_VERSION"), "the header defines HRT_API_VERSION");
+}

@@ -4,6 +4,7 @@ use ash::vk;
 
 /// Why a handle was refused.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum HandleProblem {
     /// The null handle (0).
     Null,
@@ -29,60 +30,126 @@ impl std::fmt::Display for HandleProblem {
     }
 }
 
+/// Every way an SDK call can fail. Each leaves the context as it was before the call (a
+/// failed build included), and names the field, handle or limit at fault.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum Error {
     /// The device lacks, or the engine did not enable, something the SDK needs.
     #[error("the Vulkan device is missing: {}", .missing.join(", "))]
-    MissingDeviceSupport { missing: Vec<String> },
+    MissingDeviceSupport {
+        /// Every missing extension, feature, device function or API version, by name.
+        missing: Vec<String>,
+    },
 
     /// A Vulkan call failed.
     #[error("{call} failed: {result:?}")]
-    Vulkan { call: &'static str, result: vk::Result },
+    Vulkan {
+        /// The Vulkan function.
+        call: &'static str,
+        /// What it returned.
+        result: vk::Result,
+    },
 
-    /// Device memory could not be allocated.
+    /// Device memory could not be allocated (or a buffer would exceed `maxBufferSize`).
     #[error("out of memory allocating {what}: {detail}")]
-    OutOfMemory { what: &'static str, detail: String },
+    OutOfMemory {
+        /// What the memory was for.
+        what: &'static str,
+        /// The allocator's or the limit's message.
+        detail: String,
+    },
 
+    /// A handle that is null, foreign, stale, or in the wrong state for the task.
     #[error("{kind} handle {raw:#x} {problem}")]
-    InvalidHandle { kind: &'static str, raw: u64, problem: HandleProblem },
+    InvalidHandle {
+        /// "geometry", "instance" or "denoising context".
+        kind: &'static str,
+        /// The handle's raw value.
+        raw: u64,
+        /// Why it was refused.
+        problem: HandleProblem,
+    },
 
-    /// A parameter is out of range, null, or inconsistent with another.
+    /// A parameter is out of range, null, or inconsistent with another or with a device limit.
     #[error("invalid {what}: {why}")]
-    InvalidInput { what: &'static str, why: String },
+    InvalidInput {
+        /// The field (`TraceCommon.viewport`, ...).
+        what: &'static str,
+        /// What is wrong with it.
+        why: String,
+    },
 
     /// An image or buffer format the SDK cannot read or write for that input.
     #[error("{what}: format {format:?} is not supported (expected {expected})")]
-    UnsupportedFormat { what: &'static str, format: vk::Format, expected: &'static str },
+    UnsupportedFormat {
+        /// The field.
+        what: &'static str,
+        /// The format given.
+        format: vk::Format,
+        /// The formats it accepts.
+        expected: &'static str,
+    },
 
     /// A buffer region lies past the end of the buffer.
     #[error("{what}: needs {needed} bytes but the buffer holds at most {available}")]
-    BufferTooSmall { what: &'static str, needed: u64, available: u64 },
+    BufferTooSmall {
+        /// The field.
+        what: &'static str,
+        /// Bytes the region reaches (offset + size).
+        needed: u64,
+        /// Bytes the buffer can hold (its memory requirement).
+        available: u64,
+    },
 
     /// A matrix or transform holds NaN/infinity, or cannot be inverted.
     #[error("{what} is not a finite, invertible transform")]
-    InvalidTransform { what: &'static str },
+    InvalidTransform {
+        /// The field.
+        what: &'static str,
+    },
 
     /// Every working set is in flight: hand tickets back before building more.
     #[error("all {in_flight} working sets are in flight; mark a GPU task completed first")]
-    WorkingSetsExhausted { in_flight: u32 },
+    WorkingSetsExhausted {
+        /// Tickets in flight (`InitSettings::supported_working_sets`).
+        in_flight: u32,
+    },
 
     /// The ticket is not in flight: returned twice, forged, or from another context.
     #[error("GPU ticket {serial} is not in flight (returned twice or foreign)")]
-    UnknownTicket { serial: u64 },
+    UnknownTicket {
+        /// The ticket's serial.
+        serial: u64,
+    },
 
     /// The GPU has not finished the ticket's commands (the last one, a marker the SDK writes,
     /// has not run): the ticket stays in flight. Hand it back once the engine's fence says the
     /// command buffer is done — `GpuTicket::from_raw(raw)` rebuilds it.
     #[error("GPU ticket {serial} is not complete on the GPU yet (submitted and waited for?)")]
-    TicketNotComplete { serial: u64, raw: u64 },
+    TicketNotComplete {
+        /// The ticket's serial.
+        serial: u64,
+        /// The ticket as `GpuTicket::into_raw` gives it, to hand back later.
+        raw: u64,
+    },
 
-    /// `release_device_resources_immediately` while tickets are out.
+    /// `release_device_resources_immediately` or `ExecuteContext::destroy` while tickets are
+    /// out.
     #[error("tickets still in flight: {serials:?}")]
-    TicketsInFlight { serials: Vec<u64> },
+    TicketsInFlight {
+        /// Their serials.
+        serials: Vec<u64>,
+    },
 
     /// A geometry cannot be destroyed while registered instances use it.
     #[error("geometry handle {raw:#x} is used by {instances} registered instance(s)")]
-    GeometryInUse { raw: u64, instances: usize },
+    GeometryInUse {
+        /// The geometry handle's raw value.
+        raw: u64,
+        /// Registered instances that use it.
+        instances: usize,
+    },
 
     /// A task container made by another context.
     #[error("the task container belongs to another ExecuteContext")]
@@ -97,6 +164,7 @@ pub enum Error {
     Internal(String),
 }
 
+/// The SDK's result type.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 impl Error {

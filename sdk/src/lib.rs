@@ -4,17 +4,42 @@
 //! engine. The engine keeps its renderer and its queues: it hands the SDK its G-buffer and
 //! camera, and the SDK records ray-tracing work into a command buffer the engine owns.
 //!
-//! ```text
-//! let ctx = ExecuteContext::new(&DeviceDesc { .. }, &InitSettings::default())?;
-//! let [mesh] = ctx.create_geometry_handles(1)[..] else { .. };
-//! let mut frame = ctx.create_task_container();
-//! frame.schedule_geometry(&GeometryTask { handle: mesh, input, ..Default::default() })?;
-//! frame.schedule_instance(&InstanceTask { handle: inst, input: InstanceInput { geometry: mesh, .. }, .. })?;
-//! frame.schedule_bvh_build(&BvhBuildTask::default())?;
-//! frame.schedule_ambient_occlusion(&ao_task)?;
-//! let ticket = ctx.build_gpu_task(&mut frame, cmd)?;   // records into the engine's cmd
-//! // engine: end, submit, wait on its fence
-//! let done = ctx.mark_gpu_task_completed(ticket)?;     // per-task GPU times in done.timings
+//! One frame: register a mesh and an instance, build the BVH, and trace AO into the engine's
+//! command buffer; once the engine's fence says the GPU is done, hand the ticket back.
+//!
+//! ```no_run
+//! use hybrid_rt::ash::vk;
+//! use hybrid_rt::*;
+//!
+//! fn frame(
+//!     ctx: &ExecuteContext,
+//!     cmd: vk::CommandBuffer,
+//!     mesh_data: GeometryInput,
+//!     transform: glam::Affine3A,
+//!     ao: &TraceAmbientOcclusionTask,
+//! ) -> hybrid_rt::Result<GpuTicket> {
+//!     let mesh = ctx.create_geometry_handles(1)[0];
+//!     let inst = ctx.create_instance_handles(1)[0];
+//!     let mut frame = ctx.create_task_container(); // Send; one per thread; reuse it
+//!     frame.schedule_geometry(&GeometryTask { handle: mesh, input: mesh_data, ..Default::default() })?;
+//!     frame.schedule_instance(&InstanceTask {
+//!         handle: inst,
+//!         input: InstanceInput { geometry: mesh, transform, ..Default::default() },
+//!         ..Default::default()
+//!     })?;
+//!     frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 4 })?;
+//!     frame.schedule_ambient_occlusion(ao)?;
+//!     ctx.build_gpu_task(&mut frame, cmd) // records into *your* command buffer
+//! }
+//!
+//! fn frame_done(ctx: &ExecuteContext, ticket: GpuTicket) -> hybrid_rt::Result<()> {
+//!     // After your fence for that command buffer signalled.
+//!     let done = ctx.mark_gpu_task_completed(ticket)?;
+//!     for t in &done.timings {
+//!         println!("{:?}: {:.3} ms", t.kind, t.gpu_ms);
+//!     }
+//!     Ok(())
+//! }
 //! ```
 //!
 //! ## Layers
@@ -24,6 +49,8 @@
 //! pages) → `gpu` (ash helpers) → `types` (the public plain data) and `error`.
 //!
 //! See docs/ for the integration guide and shared/DESIGN.md for the architecture.
+#![deny(missing_docs)]
+
 pub(crate) mod cache;
 pub(crate) mod context;
 pub mod error;
@@ -52,8 +79,21 @@ pub use types::settings::*;
 pub use types::ticket::*;
 pub use types::trace::*;
 
-/// Version of the SDK (the C ABI checks it at context creation).
-pub const VERSION: (u32, u32, u32) = (0, 1, 0);
+/// Version of the SDK (major, minor, patch), from the workspace's Cargo.toml — the one place
+/// the version is written. The C ABI checks it at context creation.
+pub const VERSION: (u32, u32, u32) =
+    (parse(env!("CARGO_PKG_VERSION_MAJOR")), parse(env!("CARGO_PKG_VERSION_MINOR")), parse(env!("CARGO_PKG_VERSION_PATCH")));
+
+const fn parse(digits: &str) -> u32 {
+    let bytes = digits.as_bytes();
+    let mut i = 0;
+    let mut v = 0;
+    while i < bytes.len() {
+        v = v * 10 + (bytes[i] - b'0') as u32;
+        i += 1;
+    }
+    v
+}
 
 // Re-exported so users name the same versions the SDK was built with.
 pub use ash;

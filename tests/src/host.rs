@@ -360,16 +360,16 @@ impl Host {
 
     /// What `hybrid_rt::ExecuteContext::new` takes.
     pub fn device_desc(&self) -> DeviceDesc<'_> {
-        DeviceDesc {
-            entry: &self.entry,
-            instance: &self.instance,
-            physical_device: self.physical_device,
-            device: &self.device,
-            enabled_extensions: &self.enabled_extensions,
-            instance_api_version: API_VERSION,
-            enabled_features: self.features.chain(),
-            debug_utils: self.debug.is_some(),
-        }
+        DeviceDesc::new(
+            &self.entry,
+            &self.instance,
+            self.physical_device,
+            &self.device,
+            &self.enabled_extensions,
+            API_VERSION,
+            self.features.chain(),
+        )
+        .with_debug_utils(self.debug.is_some())
     }
 
     /// An SDK context on this host's device.

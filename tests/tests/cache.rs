@@ -368,7 +368,7 @@ fn transfer_between_tessellations_preserves_colours() {
     let mut w = world(scene, settings(SurfelType::MeshColors, 0.15));
     let (source, target) = (w.gpu_scene.instances[0], w.gpu_scene.instances[1]);
     // The fine LOD is not lit by injection: only the coarse one is.
-    let no_injection = InstanceInclusionMask(InstanceInclusionMask::ALL.0 & !InstanceInclusionMask::LIGHT_INJECTION.0);
+    let no_injection = InstanceInclusionMask::ALL - InstanceInclusionMask::LIGHT_INJECTION;
     w.frame
         .schedule_instance(&InstanceTask {
             handle: target,

@@ -38,6 +38,7 @@ impl TaskContainer {
         self.shared.upgrade().ok_or(crate::Error::ContextDestroyed)
     }
 
+    /// Registers or updates a geometry (its data is checked against the buffers and device limits now).
     pub fn schedule_geometry(&mut self, task: &GeometryTask) -> Result<()> {
         let shared = self.shared()?;
         shared.check_geometry_alive(task.handle)?;
@@ -46,6 +47,7 @@ impl TaskContainer {
         Ok(())
     }
 
+    /// Registers, updates or removes an instance (its transform must be finite and invertible).
     pub fn schedule_instance(&mut self, task: &InstanceTask) -> Result<()> {
         let shared = self.shared()?;
         shared.check_instance_alive(task.handle)?;
@@ -60,12 +62,14 @@ impl TaskContainer {
         Ok(())
     }
 
+    /// Builds queued BLASes (throttled), refits, and the TLAS (see `BvhBuildTask`).
     pub fn schedule_bvh_build(&mut self, task: &BvhBuildTask) -> Result<()> {
         self.shared()?;
         self.tasks.push(Task::BvhBuild(*task));
         Ok(())
     }
 
+    /// Ambient occlusion from the G-buffer (see `TraceAmbientOcclusionTask`).
     pub fn schedule_ambient_occlusion(&mut self, task: &TraceAmbientOcclusionTask) -> Result<()> {
         let shared = self.shared()?;
         validate::ambient_occlusion(task, &shared.device.limits)?;
@@ -183,10 +187,12 @@ impl TaskContainer {
         self.frame_index = Some(index);
     }
 
+    /// Tasks scheduled and not yet built.
     pub fn len(&self) -> usize {
         self.tasks.len()
     }
 
+    /// Whether no task is scheduled.
     pub fn is_empty(&self) -> bool {
         self.tasks.is_empty()
     }

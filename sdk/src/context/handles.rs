@@ -29,6 +29,7 @@ pub(crate) fn not_live(kind: &'static str, raw: u64, ctx: u16) -> Error {
 }
 
 impl ExecuteContext {
+    /// `count` new geometry handles (not registered yet: schedule a `GeometryTask`).
     pub fn create_geometry_handles(&self, count: usize) -> Vec<GeometryHandle> {
         let mut st = self.shared.state.lock();
         let handles: Vec<GeometryHandle> = (0..count).map(|_| st.scene.geometries.insert(GeometryRecord::new())).collect();
@@ -36,6 +37,7 @@ impl ExecuteContext {
         handles
     }
 
+    /// `count` new instance handles (not registered yet: schedule an `InstanceTask`).
     pub fn create_instance_handles(&self, count: usize) -> Vec<InstanceHandle> {
         let mut st = self.shared.state.lock();
         let handles: Vec<InstanceHandle> =
@@ -126,6 +128,7 @@ impl ExecuteContext {
         Ok(rec.placement.and_then(|p| p.cache).map_or(0, |(r, _)| r.count * crate::cache::pool::SAMPLE_BYTES))
     }
 
+    /// Device memory the SDK holds now, per kind.
     pub fn resource_allocations(&self) -> ResourceAllocations {
         self.shared.memory.allocations()
     }

@@ -168,6 +168,7 @@ impl ExecuteContext {
         Ok(ExecuteContext { shared })
     }
 
+    /// The device's name (`VkPhysicalDeviceProperties::deviceName`).
     pub fn device_name(&self) -> &str {
         &self.shared.device.device_name
     }
@@ -195,6 +196,7 @@ impl ExecuteContext {
         Ok(())
     }
 
+    /// A new, empty task container (`Send`: fill it on any thread).
     pub fn create_task_container(&self) -> TaskContainer {
         TaskContainer { shared: Arc::downgrade(&self.shared), tasks: Vec::new(), frame_index: None }
     }

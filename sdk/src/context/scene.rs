@@ -223,7 +223,7 @@ impl Recorder<'_> {
         let placement = (t.operation != InstanceOperation::Remove).then_some(Placement {
             geometry: t.input.geometry,
             transform: t.input.transform,
-            mask: t.input.mask.0,
+            mask: t.input.mask.bits(),
             initial_tile_color: t.input.initial_tile_color,
             cache: keep,
         });

@@ -69,6 +69,19 @@ impl ExecuteContext {
 
     /// Hands a ticket back once the GPU has finished its command buffer: returns its working
     /// set to the pool, frees what only it still used, and reports per-task GPU times.
+    ///
+    /// A ticket whose commands have not run yet is refused and stays in flight:
+    ///
+    /// ```no_run
+    /// # fn poll(ctx: &hybrid_rt::ExecuteContext, ticket: hybrid_rt::GpuTicket) -> hybrid_rt::Result<Option<hybrid_rt::GpuTicket>> {
+    /// match ctx.mark_gpu_task_completed(ticket) {
+    ///     Ok(done) => println!("{} task timings", done.timings.len()),
+    ///     // Not submitted, or the fence was not waited for: keep it, try next frame.
+    ///     Err(hybrid_rt::Error::TicketNotComplete { raw, .. }) => return Ok(Some(hybrid_rt::GpuTicket::from_raw(raw))),
+    ///     Err(e) => return Err(e),
+    /// }
+    /// # Ok(None) }
+    /// ```
     pub fn mark_gpu_task_completed(&self, ticket: GpuTicket) -> Result<CompletedTask> {
         let mut guard = self.shared.state.lock();
         let st = &mut *guard;

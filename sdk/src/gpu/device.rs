@@ -20,6 +20,7 @@ pub const OPTIONAL_DEVICE_EXTENSIONS: &[&CStr] = &[khr::ray_query::NAME];
 
 /// What a physical device offers, for the engine to decide before it creates its device.
 #[derive(Debug, Clone)]
+#[non_exhaustive]
 pub struct DeviceSupport {
     /// Everything required is present (`missing` is empty).
     pub supported: bool,
@@ -86,10 +87,15 @@ pub fn query_device_support(instance: &ash::Instance, pdev: vk::PhysicalDevice) 
 /// cannot be asked which extensions and features it has). The SDK clones the function tables;
 /// it does not take ownership: the engine destroys its device after dropping the context.
 #[derive(Clone)]
+#[non_exhaustive]
 pub struct DeviceDesc<'a> {
+    /// The loader the engine uses.
     pub entry: &'a ash::Entry,
+    /// The engine's instance.
     pub instance: &'a ash::Instance,
+    /// The physical device of `device`.
     pub physical_device: vk::PhysicalDevice,
+    /// The engine's device.
     pub device: &'a ash::Device,
     /// The device extensions the engine enabled: the SDK checks its needs against this list
     /// and uses ray queries only when VK_KHR_ray_query is here.
@@ -123,6 +129,36 @@ pub(crate) struct Limits {
     pub max_ray_dispatch: u32,
     /// maxImageDimension2D (denoiser history images).
     pub max_image_dimension_2d: u32,
+}
+
+impl<'a> DeviceDesc<'a> {
+    /// The engine's objects and how it made them (see the fields); `debug_utils` starts off.
+    pub fn new(
+        entry: &'a ash::Entry,
+        instance: &'a ash::Instance,
+        physical_device: vk::PhysicalDevice,
+        device: &'a ash::Device,
+        enabled_extensions: &'a [&'a CStr],
+        instance_api_version: u32,
+        enabled_features: *const std::ffi::c_void,
+    ) -> DeviceDesc<'a> {
+        DeviceDesc {
+            entry,
+            instance,
+            physical_device,
+            device,
+            enabled_extensions,
+            instance_api_version,
+            enabled_features,
+            debug_utils: false,
+        }
+    }
+
+    /// Says VK_EXT_debug_utils is enabled on the instance (object names and task labels).
+    pub fn with_debug_utils(mut self, on: bool) -> DeviceDesc<'a> {
+        self.debug_utils = on;
+        self
+    }
 }
 
 /// Loaders and properties used by the layers above.

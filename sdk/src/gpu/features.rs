@@ -125,17 +125,27 @@ pub(crate) unsafe fn enabled_in(chain: *const c_void) -> Vec<Feature> {
 /// with no feature chain of its own), or merge them into the chain you already have with
 /// [`DeviceFeatures::merge_into`]. Both link to fields of `self`: keep it alive, and in place,
 /// until `vkCreateDevice` — and `ExecuteContext::new`, which reads the chain — have returned.
+#[non_exhaustive]
 pub struct DeviceFeatures {
+    /// `shaderStorageImageWriteWithoutFormat`; the head of the chain `push_to` builds.
     pub core: vk::PhysicalDeviceFeatures2<'static>,
+    /// `bufferDeviceAddress` (`push_to`).
     pub vulkan12: vk::PhysicalDeviceVulkan12Features<'static>,
+    /// `synchronization2`, `maintenance4` (`push_to`).
     pub vulkan13: vk::PhysicalDeviceVulkan13Features<'static>,
+    /// `accelerationStructure`.
     pub acceleration_structure: vk::PhysicalDeviceAccelerationStructureFeaturesKHR<'static>,
+    /// `rayTracingPipeline`.
     pub ray_tracing_pipeline: vk::PhysicalDeviceRayTracingPipelineFeaturesKHR<'static>,
+    /// `rayQuery`, when asked for.
     pub ray_query: vk::PhysicalDeviceRayQueryFeaturesKHR<'static>,
+    /// `shaderBufferFloat32AtomicAdd` (cache injection).
     pub atomic_float: vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT<'static>,
     /// The per-extension forms `merge_into` appends to a chain without Vulkan12/13Features.
     pub buffer_device_address: vk::PhysicalDeviceBufferDeviceAddressFeatures<'static>,
+    /// `synchronization2` as a per-extension struct (`merge_into`).
     pub synchronization2: vk::PhysicalDeviceSynchronization2Features<'static>,
+    /// `maintenance4` as a per-extension struct (`merge_into`).
     pub maintenance4: vk::PhysicalDeviceMaintenance4Features<'static>,
 }
 
@@ -201,6 +211,32 @@ impl DeviceFeatures {
     /// as `VkPhysicalDeviceSynchronization2Features`) is switched on there; the structs it
     /// lacks are appended from `self`. The chain's `VkPhysicalDeviceFeatures2` (`features2`)
     /// stays its head: give it to `VkDeviceCreateInfo::pNext` and `DeviceDesc::enabled_features`.
+    ///
+    /// ```no_run
+    /// use hybrid_rt::ash::{self, vk};
+    /// use hybrid_rt::{DeviceDesc, DeviceFeatures, ExecuteContext, InitSettings, REQUIRED_DEVICE_EXTENSIONS};
+    ///
+    /// unsafe fn create(
+    ///     entry: &ash::Entry,
+    ///     instance: &ash::Instance,
+    ///     pdev: vk::PhysicalDevice,
+    ///     queues: &[vk::DeviceQueueCreateInfo<'_>],
+    /// ) -> Result<(ash::Device, ExecuteContext), Box<dyn std::error::Error>> {
+    ///     // The engine's own features, with the SDK's merged in.
+    ///     let mut own13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true);
+    ///     let mut features2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut own13);
+    ///     let mut sdk = DeviceFeatures::required(false);
+    ///     sdk.merge_into(&mut features2);
+    ///     let names: Vec<_> = REQUIRED_DEVICE_EXTENSIONS.iter().map(|n| n.as_ptr()).collect();
+    ///     let mut info = vk::DeviceCreateInfo::default().queue_create_infos(queues).enabled_extension_names(&names);
+    ///     info.p_next = &features2 as *const _ as *const std::ffi::c_void;
+    ///     let device = instance.create_device(pdev, &info, None)?;
+    ///     let chain = &features2 as *const _ as *const std::ffi::c_void;
+    ///     let desc = DeviceDesc::new(entry, instance, pdev, &device, REQUIRED_DEVICE_EXTENSIONS, vk::API_VERSION_1_3, chain);
+    ///     let ctx = ExecuteContext::new(&desc, &InitSettings::default())?;
+    ///     Ok((device, ctx))
+    /// }
+    /// ```
     ///
     /// # Safety
     /// `features2` heads a valid chain of Vulkan structs; `self` stays alive and in place while

@@ -9,6 +9,7 @@ use parking_lot::Mutex;
 /// What a piece of SDK memory holds (the rows of [`ResourceAllocations`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[repr(u32)]
+#[non_exhaustive]
 pub enum MemoryKind {
     /// The SDK's copies of geometry vertices and indices (BLAS build inputs).
     GeometryCopy = 0,
@@ -30,32 +31,47 @@ pub enum MemoryKind {
     Denoiser = 8,
 }
 
+/// Number of `MemoryKind`s.
 pub const MEMORY_KIND_COUNT: usize = 9;
 
 /// Bytes and counts of live SDK allocations, per kind.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 #[repr(C)]
+#[non_exhaustive]
 pub struct AllocationCount {
+    /// Live allocations.
     pub count: u64,
+    /// Their bytes (of device memory, as allocated).
     pub bytes: u64,
 }
 
 /// A snapshot of the SDK's device memory use, for budgeting.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 #[repr(C)]
+#[non_exhaustive]
 pub struct ResourceAllocations {
+    /// The SDK's copies of geometry (`MemoryKind::GeometryCopy`).
     pub geometry_copies: AllocationCount,
+    /// BLASes.
     pub blas: AllocationCount,
+    /// Build scratch.
     pub build_scratch: AllocationCount,
+    /// TLASes (one per working set).
     pub tlas: AllocationCount,
+    /// Upload rings (one per working set).
     pub upload_rings: AllocationCount,
+    /// Shader binding tables.
     pub pipelines: AllocationCount,
+    /// Direct-lighting cache pages and surfel layouts.
     pub cache: AllocationCount,
+    /// Read-backs, completion markers and index-check counters.
     pub readback: AllocationCount,
+    /// Denoiser history.
     pub denoiser: AllocationCount,
 }
 
 impl ResourceAllocations {
+    /// Bytes over every kind.
     pub fn total_bytes(&self) -> u64 {
         [
             self.geometry_copies,

@@ -40,7 +40,7 @@ impl AoPass {
 
     pub fn record(&self, r: &mut Recording<'_>, task: &TraceAmbientOcclusionTask) {
         let constants = AoConstantsGpu {
-            common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::AMBIENT_OCCLUSION.0),
+            common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::AMBIENT_OCCLUSION.bits()),
             params: [task.ray_length, task.falloff_power, 0.0, 0.0],
             counts: [task.rays_per_pixel, 0, 0, 0],
         };

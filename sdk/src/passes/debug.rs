@@ -52,7 +52,7 @@ impl DebugPass {
         let table = r.instance_table;
         let constants = DebugConstantsGpu {
             // Debug rays see every instance.
-            common: TraceCommonGpu::new(common, r.seed, InstanceInclusionMask::ALL.0),
+            common: TraceCommonGpu::new(common, r.seed, InstanceInclusionMask::ALL.bits()),
             mode: [common.debug_output as u32, common.enable_bilinear_sampling as u32, table as u32, (table >> 32) as u32],
         };
         debug_assert!(common.debug_output != DebugOutput::Default);

@@ -49,7 +49,7 @@ impl DiffusePass {
         let table = r.instance_table;
         let m = task.miss_radiance;
         let constants = DiffuseConstantsGpu {
-            common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::DIFFUSE_GI.0),
+            common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::DIFFUSE_GI.bits()),
             miss: [m[0], m[1], m[2], task.ray_length],
             params: [task.rays_per_pixel, task.common.enable_bilinear_sampling as u32, table as u32, (table >> 32) as u32],
             roughness_mask: task.common.roughness.channel_mask,

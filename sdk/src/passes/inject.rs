@@ -50,7 +50,7 @@ impl InjectPass {
         let common = TraceCommon { depth: task.depth, viewport: task.viewport, camera: task.camera, ..Default::default() };
         let table = r.instance_table;
         let constants = InjectConstantsGpu {
-            common: TraceCommonGpu::new(&common, r.seed, InstanceInclusionMask::LIGHT_INJECTION.0),
+            common: TraceCommonGpu::new(&common, r.seed, InstanceInclusionMask::LIGHT_INJECTION.bits()),
             table: [table as u32, (table >> 32) as u32, 0, 0],
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);

@@ -65,7 +65,7 @@ impl ShadowPass {
 
     pub fn record(&self, r: &mut Recording<'_>, task: &TraceShadowTask) {
         let constants = ShadowConstantsGpu {
-            common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::SHADOWS.0),
+            common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::SHADOWS.bits()),
             light: LightGpu::new(&task.light),
             counts: [task.rays_per_pixel, 0, 0, 0],
         };
@@ -120,7 +120,7 @@ impl MultiShadowPass {
             *g = LightGpu::new(l);
         }
         let constants = MultiShadowConstantsGpu {
-            common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::SHADOWS.0),
+            common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::SHADOWS.bits()),
             counts: [task.rays_per_pixel, task.lights.len() as u32, 0, 0],
             lights,
         };

@@ -60,7 +60,7 @@ impl SpecularPass {
         let table = r.instance_table;
         let m = task.miss_radiance;
         let constants = SpecularConstantsGpu {
-            common: TraceCommonGpu::new(c, r.seed, InstanceInclusionMask::REFLECTIONS.0),
+            common: TraceCommonGpu::new(c, r.seed, InstanceInclusionMask::REFLECTIONS.bits()),
             roughness_mask: c.roughness.channel_mask,
             params: [c.roughness.global_roughness, c.roughness.has_image() as u32 as f32, task.ray_length, task.firefly_clamp],
             miss: [m[0], m[1], m[2], 0.0],

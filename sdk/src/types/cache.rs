@@ -12,11 +12,14 @@ use super::inputs::{Camera, DepthInput, ImageInput, Viewport};
 /// surfaces the main camera has not seen).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DirectLightingInjectionTask {
+    /// The depth of the lit view (the surface under each pixel is found from it).
     pub depth: DepthInput,
     /// The rasterized, lit frame (RGB radiance): RGBA16F/32F, RGBA8, B10G11R11 …, in a
     /// read-only layout with SAMPLED usage.
     pub lit: ImageInput,
+    /// The pixels injected.
     pub viewport: Viewport,
+    /// The camera the lit view was rendered with.
     pub camera: Camera,
     /// Frames of the running average (>= 1). Default 200, as in the guide: stable, slow to
     /// react; lower it for fast-changing lights.
@@ -42,6 +45,7 @@ impl Default for DirectLightingInjectionTask {
 /// re-registering it. A no-op for an instance whose cache does not exist yet.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ClearCacheTask {
+    /// The instance whose cache is reset.
     pub instance: InstanceHandle,
 }
 
@@ -53,7 +57,9 @@ pub struct ClearCacheTask {
 /// their caches (one recording after registration).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DirectLightTransferTask {
+    /// The instance whose cache is read.
     pub source: InstanceHandle,
+    /// The instance whose cache is written (another instance).
     pub target: InstanceHandle,
     /// How far apart the two surfaces may be, in world units (> 0). Default 0.1.
     pub max_distance: f32,

@@ -71,8 +71,11 @@ pub enum SignalType {
 pub struct DenoisingContextInput {
     /// 1..=16384 each.
     pub max_width: u32,
+    /// Largest height, 1..=16384 (and the device's maxImageDimension2D).
     pub max_height: u32,
+    /// Temporal (default) or spatial only.
     pub method: DenoisingMethod,
+    /// The signal its tasks denoise.
     pub signal: SignalType,
 }
 
@@ -105,6 +108,7 @@ pub struct MotionInput {
     /// only, the guide's check that the matrices are right). Read-only layout or GENERAL,
     /// SAMPLED usage; a float format with the channels `motion_type` needs.
     pub image: ImageInput,
+    /// What the motion image holds. Default `RgViewSpace` (pixels).
     pub motion_type: MotionType,
     /// Per-component factor. Default [1, 1, 1].
     pub scale: [f32; 3],
@@ -117,6 +121,7 @@ impl Default for MotionInput {
 }
 
 impl MotionInput {
+    /// Whether a motion image is given (else the cameras reproject).
     pub fn has_image(&self) -> bool {
         self.image.image != vk::Image::null()
     }
@@ -171,11 +176,15 @@ impl Default for DenoiserSettings {
 /// and the cameras.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DenoisingCommon {
+    /// The G-buffer depth the noisy image was traced from.
     pub depth: DepthInput,
+    /// The G-buffer normals it was traced from.
     pub normals: NormalInput,
     /// Specular: the roughness the trace used (same rules as `TraceCommon::roughness`).
     pub roughness: RoughnessInput,
+    /// Motion vectors (optional: leave the image null to reproject with the cameras).
     pub motion: MotionInput,
+    /// The pixels denoised (the trace's viewport).
     pub viewport: Viewport,
     /// The camera of this frame, as rendered (jitter included in `view_to_clip`).
     pub camera: Camera,
@@ -192,6 +201,7 @@ pub struct DenoisingCommon {
     pub half_resolution_mode: bool,
     /// Drop the history (a camera cut, a teleport, a new level). Default false.
     pub reset_history: bool,
+    /// Filter settings (documented defaults).
     pub settings: DenoiserSettings,
 }
 
@@ -223,29 +233,43 @@ fn general() -> ImageInput {
 /// Denoises `TraceSpecularTask` output (RGBA16F/32F in and out).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DenoiseSpecularTask {
+    /// The denoising context (of this task's signal, at least as large as the viewport's far corner).
     pub context: DenoisingContextHandle,
+    /// The G-buffer, motion and cameras.
     pub common: DenoisingCommon,
+    /// The specular trace's output (RGBA16F/32F, sampled).
     pub input: ImageInput,
+    /// The denoised specular (RGBA16F/32F, GENERAL, storage; may be the input).
     pub output: ImageInput,
 }
 
 /// Denoises `TraceDiffuseTask` output (RGBA16F/32F in and out).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DenoiseDiffuseTask {
+    /// The denoising context (of this task's signal, at least as large as the viewport's far corner).
     pub context: DenoisingContextHandle,
+    /// The G-buffer, motion and cameras.
     pub common: DenoisingCommon,
+    /// The diffuse trace's output (RGBA16F/32F, sampled).
     pub input: ImageInput,
+    /// The denoised diffuse (RGBA16F/32F, GENERAL, storage; may be the input).
     pub output: ImageInput,
 }
 
 /// Denoises specular and diffuse together: one reprojection and one set of passes for both.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DenoiseSpecularAndDiffuseTask {
+    /// The denoising context (of this task's signal, at least as large as the viewport's far corner).
     pub context: DenoisingContextHandle,
+    /// The G-buffer, motion and cameras.
     pub common: DenoisingCommon,
+    /// The specular trace's output.
     pub input_specular: ImageInput,
+    /// The diffuse trace's output.
     pub input_diffuse: ImageInput,
+    /// The denoised specular.
     pub output_specular: ImageInput,
+    /// The denoised diffuse.
     pub output_diffuse: ImageInput,
 }
 
@@ -253,9 +277,13 @@ pub struct DenoiseSpecularAndDiffuseTask {
 /// gets the visibility, A = 1).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DenoiseDiffuseOcclusionTask {
+    /// The denoising context (of this task's signal, at least as large as the viewport's far corner).
     pub context: DenoisingContextHandle,
+    /// The G-buffer, motion and cameras.
     pub common: DenoisingCommon,
+    /// The AO trace's output (R = visibility, sampled).
     pub input: ImageInput,
+    /// The denoised visibility (GENERAL, storage).
     pub output: ImageInput,
 }
 
@@ -263,10 +291,15 @@ pub struct DenoiseDiffuseOcclusionTask {
 /// sets the penumbra widths). Output: visibility in every channel (A = 1).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DenoiseShadowTask {
+    /// The denoising context (of this task's signal, at least as large as the viewport's far corner).
     pub context: DenoisingContextHandle,
+    /// The G-buffer, motion and cameras.
     pub common: DenoisingCommon,
+    /// The light the shadow was traced from.
     pub light: LightInfo,
+    /// The shadow trace's output (R = occluder distance, G = visibility).
     pub input: ImageInput,
+    /// The denoised visibility (GENERAL, storage).
     pub output: ImageInput,
 }
 
@@ -274,9 +307,13 @@ pub struct DenoiseShadowTask {
 /// over the lights) in every channel of `output` (A = 1).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DenoiseMultiShadowTask {
+    /// The denoising context (of this task's signal, at least as large as the viewport's far corner).
     pub context: DenoisingContextHandle,
+    /// The G-buffer, motion and cameras.
     pub common: DenoisingCommon,
+    /// The multi-light trace's `packed` output.
     pub input: ImageInput,
+    /// The denoised mean visibility (GENERAL, storage).
     pub output: ImageInput,
 }
 

@@ -10,9 +10,11 @@ macro_rules! handle_type {
         pub struct $name(pub u64);
 
         impl $name {
+            /// The null handle: never a live one.
             pub const NULL: $name = $name(0);
             #[allow(dead_code)]
             pub(crate) const KIND: &'static str = $kind;
+            /// Whether this is the null handle.
             pub fn is_null(self) -> bool { self.0 == 0 }
         }
         impl RawHandle for $name {

@@ -13,11 +13,15 @@ use glam::Mat4;
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[repr(C)]
 pub struct ImageInput {
+    /// The engine's image (null: no image, for optional inputs).
     pub image: vk::Image,
+    /// The view the SDK binds, as given (one mip level, one layer).
     pub view: vk::ImageView,
     /// Format of the view.
     pub format: vk::Format,
+    /// Width in pixels (of the view's mip level): the viewport must fit inside it.
     pub width: u32,
+    /// Height in pixels.
     pub height: u32,
     /// Inputs: SHADER_READ_ONLY_OPTIMAL (default), GENERAL, DEPTH_READ_ONLY_OPTIMAL,
     /// DEPTH_STENCIL_READ_ONLY_OPTIMAL or READ_ONLY_OPTIMAL; the image needs SAMPLED usage.
@@ -43,6 +47,7 @@ impl Default for ImageInput {
     }
 }
 
+/// What the depth input holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[repr(u32)]
 pub enum DepthType {
@@ -56,10 +61,13 @@ pub enum DepthType {
     WorldPosition = 1,
 }
 
+/// The G-buffer's depth: read through `image` (sampled, nearest) at each viewport pixel.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[repr(C)]
 pub struct DepthInput {
+    /// The image (read only; `SAMPLED` usage).
     pub image: ImageInput,
+    /// How to read it. Default `ClipSpace`.
     pub depth_type: DepthType,
 }
 
@@ -99,20 +107,26 @@ impl NormalType {
     }
 }
 
+/// The space the normals are in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[repr(u32)]
 pub enum NormalSpace {
     /// Default.
     #[default]
     World = 0,
+    /// View space of `TraceCommon::camera` (the SDK rotates them to world space).
     View = 1,
 }
 
+/// The G-buffer's normals: the surface normal each secondary ray leaves from.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[repr(C)]
 pub struct NormalInput {
+    /// The image (read only; `SAMPLED` usage).
     pub image: ImageInput,
+    /// The encoding. Default `RgbNormalizedVector`.
     pub normal_type: NormalType,
+    /// World (default) or view space.
     pub space: NormalSpace,
 }
 
@@ -120,16 +134,22 @@ pub struct NormalInput {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[repr(C)]
 pub struct Viewport {
+    /// Left edge, in pixels of every image of the task.
     pub x: u32,
+    /// Top edge, in pixels.
     pub y: u32,
+    /// Width in pixels (1.. the images' width - x).
     pub width: u32,
+    /// Height in pixels.
     pub height: u32,
     /// The rasterizer's viewport depth range (default 0..1 when both are 0).
     pub min_depth: f32,
+    /// The far end of that range.
     pub max_depth: f32,
 }
 
 impl Viewport {
+    /// The whole of a `width` x `height` image, depth range 0..1.
     pub fn full(width: u32, height: u32) -> Viewport {
         Viewport { x: 0, y: 0, width, height, min_depth: 0.0, max_depth: 1.0 }
     }
@@ -139,6 +159,7 @@ impl Viewport {
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[repr(C)]
 pub struct Camera {
+    /// World to view (the camera's inverse pose). Right-handed, the camera looks down -z.
     pub world_to_view: Mat4,
     /// Vulkan clip space: y down, depth 0..1 (standard or reversed, finite or infinite far).
     pub view_to_clip: Mat4,
@@ -150,9 +171,11 @@ impl Default for Camera {
     }
 }
 
+/// How a secondary ray's origin is moved off the G-buffer surface.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[repr(u32)]
 pub enum RayOffsetType {
+    /// No offset: the origin is the reconstructed surface point (tests, analytic G-buffers).
     Disabled = 0,
     /// Offset in the position's own float precision (Ray Tracing Gems ch. 6).
     WorldPosition = 1,
@@ -167,14 +190,19 @@ pub enum RayOffsetType {
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[repr(C)]
 pub struct RayOffset {
+    /// The method. Default `CameraDistance`.
     pub offset_type: RayOffsetType,
     /// WorldPosition: below this magnitude a float offset is used, above it an integer one.
     pub world_threshold: f32,
+    /// WorldPosition: the float offset's scale. Default 1/65536.
     pub world_float_scale: f32,
+    /// WorldPosition: the integer (ulp) offset's scale. Default 256.
     pub world_int_scale: f32,
     /// CameraDistance: offset = constant + linear * d + quadratic * d².
     pub cam_constant: f32,
+    /// CameraDistance: per unit of distance.
     pub cam_linear: f32,
+    /// CameraDistance: per squared unit of distance.
     pub cam_quadratic: f32,
 }
 
@@ -212,6 +240,7 @@ impl Default for RoughnessInput {
 }
 
 impl RoughnessInput {
+    /// Whether a roughness image is given (else `global_roughness` alone).
     pub fn has_image(&self) -> bool {
         self.image.image != vk::Image::null()
     }
@@ -258,10 +287,15 @@ pub enum DebugOutput {
 /// Inputs every trace task shares.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TraceCommon {
+    /// The G-buffer depth of the view the rays start from.
     pub depth: DepthInput,
+    /// The G-buffer normals (the surfaces the rays leave).
     pub normals: NormalInput,
+    /// The pixels traced and written.
     pub viewport: Viewport,
+    /// The camera the G-buffer was rendered with.
     pub camera: Camera,
+    /// How rays leave the surface. Default `CameraDistance` with the guide's parameters.
     pub ray_offset: RayOffset,
     /// Roughness, for specular traces.
     pub roughness: RoughnessInput,

@@ -9,8 +9,10 @@ use glam::Affine3A;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[repr(u32)]
 pub enum TaskOperation {
+    /// Registers the geometry (its first task). Default.
     #[default]
     Register = 0,
+    /// Replaces its data: a refit for `allow_update` geometry, a queued rebuild otherwise.
     Update = 1,
 }
 
@@ -20,11 +22,13 @@ pub enum TaskOperation {
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[repr(C)]
 pub struct VertexBufferInput {
+    /// The engine's buffer (`TRANSFER_SRC` usage).
     pub buffer: vk::Buffer,
     /// Byte offset of the first vertex's position.
     pub offset: u64,
     /// Bytes between vertices (>= 12, a multiple of 4). Default 12.
     pub stride: u64,
+    /// Number of vertices (>= 1; a multiple of 3 for non-indexed triangles).
     pub count: u32,
     /// Position format: R32G32B32_SFLOAT (default) or R32G32B32A32_SFLOAT.
     pub format: vk::Format,
@@ -42,6 +46,7 @@ impl Default for VertexBufferInput {
 pub struct IndexBufferInput {
     /// Null for non-indexed triangles (every three vertices make one).
     pub buffer: vk::Buffer,
+    /// Byte offset of the first index.
     pub offset: u64,
     /// Number of indices (a multiple of 3).
     pub count: u32,
@@ -71,6 +76,7 @@ pub enum SurfelType {
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[repr(C)]
 pub struct SurfelSettings {
+    /// Tiles or mesh colors. Default `MeshColors`.
     pub surfel_type: SurfelType,
     /// World units per cache sample along a triangle edge. Default 1.0.
     pub tile_unit_length: f32,
@@ -84,62 +90,77 @@ impl Default for SurfelSettings {
     }
 }
 
+/// A mesh: where its positions and indices are, and how it is built and cached.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[repr(C)]
 pub struct GeometryInput {
+    /// The positions.
     pub vertices: VertexBufferInput,
+    /// The triangles' indices (a null buffer: non-indexed).
     pub indices: IndexBufferInput,
     /// Deforming/skinned meshes: later updates refit the BLAS in place (same triangle count)
     /// instead of queueing a rebuild. Such BLASes are not compacted. Default false.
     pub allow_update: bool,
+    /// The direct-lighting cache's resolution on it.
     pub surfels: SurfelSettings,
 }
 
+/// Registers or updates a geometry (`TaskContainer::schedule_geometry`).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct GeometryTask {
+    /// The geometry (from `create_geometry_handles`).
     pub handle: GeometryHandle,
+    /// Register or update.
     pub operation: TaskOperation,
+    /// Its data.
     pub input: GeometryInput,
 }
 
-/// Which rays see an instance (bits of the TLAS instance mask). Combine with `|`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(transparent)]
-pub struct InstanceInclusionMask(pub u8);
-
-impl InstanceInclusionMask {
-    pub const NONE: Self = Self(0);
-    pub const REFLECTIONS: Self = Self(1 << 0);
-    pub const DIFFUSE_GI: Self = Self(1 << 1);
-    pub const AMBIENT_OCCLUSION: Self = Self(1 << 2);
-    pub const SHADOWS: Self = Self(1 << 3);
-    pub const LIGHT_INJECTION: Self = Self(1 << 4);
-    pub const ALL: Self = Self(0x1f);
-
-    pub fn contains(self, other: Self) -> bool {
-        self.0 & other.0 == other.0
+bitflags::bitflags! {
+    /// Which rays see an instance: the bits of its TLAS instance mask, matched against each
+    /// task's rays. Combine with `|`; `InstanceInclusionMask::empty()` hides it from all.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    #[repr(transparent)]
+    pub struct InstanceInclusionMask: u8 {
+        /// Specular reflection rays.
+        const REFLECTIONS = 1 << 0;
+        /// Diffuse GI rays.
+        const DIFFUSE_GI = 1 << 1;
+        /// Ambient-occlusion rays.
+        const AMBIENT_OCCLUSION = 1 << 2;
+        /// Shadow rays (single- and multi-light).
+        const SHADOWS = 1 << 3;
+        /// The rays that find the surface under each pixel of a lit image to inject.
+        const LIGHT_INJECTION = 1 << 4;
+        /// Every ray type (the default of an instance).
+        const ALL = 0x1f;
     }
 }
 
-impl std::ops::BitOr for InstanceInclusionMask {
-    type Output = Self;
-    fn bitor(self, rhs: Self) -> Self {
-        Self(self.0 | rhs.0)
+impl Default for InstanceInclusionMask {
+    /// Visible to every ray type.
+    fn default() -> Self {
+        InstanceInclusionMask::ALL
     }
 }
 
+/// What an instance task does.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[repr(u32)]
 pub enum InstanceOperation {
+    /// Places a geometry (the instance's first task, or after a `Remove`). Default.
     #[default]
     Register = 0,
+    /// Moves it, or gives it another geometry or mask (its cache is kept when the geometry stays).
     Update = 1,
     /// Takes the instance out of the TLAS; the handle stays alive and may be registered again.
     Remove = 2,
 }
 
+/// Where and how an instance places its geometry.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct InstanceInput {
+    /// The geometry placed (registered, in this container or before).
     pub geometry: GeometryHandle,
     /// Object to world. Must be finite.
     pub transform: Affine3A,
@@ -160,10 +181,14 @@ impl Default for InstanceInput {
     }
 }
 
+/// Registers, updates or removes an instance (`TaskContainer::schedule_instance`).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct InstanceTask {
+    /// The instance (from `create_instance_handles`).
     pub handle: InstanceHandle,
+    /// Register, update or remove.
     pub operation: InstanceOperation,
+    /// Its placement (ignored by `Remove`).
     pub input: InstanceInput,
 }
 

@@ -28,6 +28,7 @@ pub struct InitSettings {
     /// `VK_SHARING_MODE_CONCURRENT` over them, so no ownership transfer is needed; the engine
     /// orders the two submissions with a semaphore. Indices must be the device's families.
     pub queue_family_indices: [u32; 4],
+    /// How many entries of `queue_family_indices` are used (0..=4). Default 0.
     pub queue_family_count: u32,
 }
 

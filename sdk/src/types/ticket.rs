@@ -34,6 +34,7 @@ impl GpuTicket {
 pub enum TaskKind {
     /// All BVH work of the ticket: geometry copies, BLAS builds/refits/compactions, TLAS.
     Bvh = 0,
+    /// `TraceAmbientOcclusionTask` (or its debug view).
     AmbientOcclusion = 1,
     /// Inside `Bvh`: the batched BLAS builds and refits (and compaction copies).
     BlasBuild = 2,
@@ -45,21 +46,34 @@ pub enum TaskKind {
     CacheUpdate = 5,
     /// A cache transfer between two instances.
     CacheTransfer = 6,
+    /// `TraceShadowTask`.
     Shadow = 7,
+    /// `TraceDiffuseTask`.
     Diffuse = 8,
+    /// `TraceSpecularTask`.
     Specular = 9,
+    /// `TraceMultiShadowTask`.
     MultiShadow = 10,
+    /// `DenoiseSpecularTask`.
     DenoiseSpecular = 11,
+    /// `DenoiseDiffuseTask`.
     DenoiseDiffuse = 12,
+    /// `DenoiseSpecularAndDiffuseTask`.
     DenoiseSpecularAndDiffuse = 13,
+    /// `DenoiseDiffuseOcclusionTask`.
     DenoiseDiffuseOcclusion = 14,
+    /// `DenoiseShadowTask`.
     DenoiseShadow = 15,
+    /// `DenoiseMultiShadowTask`.
     DenoiseMultiShadow = 16,
 }
 
+/// The GPU time of one task of a ticket, from timestamp queries around it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[repr(C)]
+#[non_exhaustive]
 pub struct TaskTiming {
+    /// What the interval covers.
     pub kind: TaskKind,
     /// Position of the task in its container (for Bvh: the first BVH task).
     pub task_index: u32,
@@ -69,7 +83,9 @@ pub struct TaskTiming {
 
 /// What a completed ticket reports.
 #[derive(Debug, Clone, Default)]
+#[non_exhaustive]
 pub struct CompletedTask {
+    /// The ticket's serial.
     pub serial: u64,
     /// Per-task GPU times. Empty when the device cannot time compute work.
     pub timings: Vec<TaskTiming>,

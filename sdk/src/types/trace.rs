@@ -7,6 +7,7 @@ use ash::vk;
 /// every channel of `output` (RGB = AO, A = 1) inside the viewport.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TraceAmbientOcclusionTask {
+    /// The G-buffer the rays start from, the viewport and camera.
     pub common: TraceCommon,
     /// GENERAL layout, STORAGE usage; R8_UNORM, R16_SFLOAT, R32_SFLOAT, R16G16B16A16_SFLOAT,
     /// R32G32B32A32_SFLOAT or R8G8B8A8_UNORM.
@@ -32,6 +33,7 @@ impl Default for TraceAmbientOcclusionTask {
     }
 }
 
+/// The kind of a light.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[repr(u32)]
 pub enum LightType {
@@ -49,6 +51,7 @@ pub enum LightType {
 /// light's extent.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LightInfo {
+    /// Directional (default), point or spot.
     pub light_type: LightType,
     /// Point and spot: world-space centre.
     pub position: glam::Vec3,
@@ -60,6 +63,7 @@ pub struct LightInfo {
     pub radius: f32,
     /// Spot: inner and outer cone half-angles in radians (kept for the engine's shading).
     pub inner_cone: f32,
+    /// Spot: the outer cone's half-angle in radians.
     pub outer_cone: f32,
 }
 
@@ -82,7 +86,9 @@ impl Default for LightInfo {
 /// second channel, = the fraction of rays that reached the light (soft visibility).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TraceShadowTask {
+    /// The G-buffer the rays start from, the viewport and camera.
     pub common: TraceCommon,
+    /// The light.
     pub light: LightInfo,
     /// GENERAL layout, STORAGE usage: R16_SFLOAT, R32_SFLOAT, R16G16_SFLOAT, R32G32_SFLOAT,
     /// R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT.
@@ -112,9 +118,13 @@ impl Default for TraceShadowTask {
 ///   and the surface's distance to the camera.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TraceMultiShadowTask {
+    /// The G-buffer the rays start from, the viewport and camera.
     pub common: TraceCommon,
+    /// 1..=16 lights.
     pub lights: Vec<LightInfo>,
+    /// Per-light visibility (see above): R32_UINT or R32G32B32A32_UINT, GENERAL, STORAGE usage.
     pub visibility: ImageInput,
+    /// The denoiser's input (see above): RGBA16F or RGBA32F, GENERAL, STORAGE usage.
     pub packed: ImageInput,
     /// Rays per pixel and light, 1..=64. Default 1.
     pub rays_per_pixel: u32,
@@ -153,6 +163,7 @@ pub enum DiffuseBrdfType {
 /// `ray_length`), which the denoiser uses.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TraceDiffuseTask {
+    /// The G-buffer the rays start from (plus roughness and the optional lit frame), viewport and camera.
     pub common: TraceCommon,
     /// GENERAL layout, STORAGE usage: R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT.
     pub output: ImageInput,
@@ -191,6 +202,7 @@ impl Default for TraceDiffuseTask {
 /// roughness as its G-buffer.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TraceSpecularTask {
+    /// The G-buffer the rays start from (plus roughness, specular colour and the optional lit frame), viewport and camera.
     pub common: TraceCommon,
     /// GENERAL layout, STORAGE usage: R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT.
     pub output: ImageInput,
