@@ -303,14 +303,12 @@ impl Camera {
     }
 
     pub fn world_to_view(&self) -> Mat4 {
-        Mat4::look_at_rh(self.eye, self.target, self.up)
+        glam::camera::rh::view::look_at_mat4(self.eye, self.target, self.up)
     }
 
     /// Vulkan clip space: y down, depth 0 (near) .. 1 (far).
     pub fn view_to_clip(&self, aspect: f32) -> Mat4 {
-        let mut p = Mat4::perspective_rh(self.fov_y_radians, aspect, self.near, self.far);
-        p.y_axis.y = -p.y_axis.y;
-        p
+        glam::camera::rh::proj::vulkan::perspective(self.fov_y_radians, aspect, self.near, self.far)
     }
 
     pub fn sdk_camera(&self, width: u32, height: u32) -> hybrid_rt::Camera {

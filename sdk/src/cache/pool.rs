@@ -122,7 +122,7 @@ impl CachePool {
     /// Frees the retired ranges no in-flight ticket can still use.
     pub fn collect(&mut self, oldest_in_flight: Option<u64>) {
         let (free, keep): (Vec<_>, Vec<_>) =
-            self.retired.drain(..).partition(|(serial, _)| !oldest_in_flight.is_some_and(|o| o <= *serial));
+            self.retired.drain(..).partition(|(serial, _)| oldest_in_flight.is_none_or(|o| o > *serial));
         self.retired = keep;
         for (_, r) in free {
             self.free(r);
