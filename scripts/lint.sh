@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Formatting and lints, as CI runs them before the tests: `cargo fmt --check` (settings in
-# rustfmt.toml) and clippy on every crate and target with warnings as errors.
+# rustfmt.toml), clippy on every crate and target with warnings as errors, rustdoc.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 for component in rustfmt clippy; do
@@ -13,4 +13,7 @@ cargo fmt --all --check
 cargo clippy --workspace --all-targets --locked -- -D warnings
 # The SDK alone, without the features the workspace's other crates turn on (bench-floor).
 cargo clippy -p hybrid-rt --lib --locked -- -D warnings
-echo "lint: fmt and clippy clean"
+# The API reference: every public item documented (the crate denies missing_docs), no broken
+# intra-doc links.
+RUSTDOCFLAGS="-D warnings" cargo doc -p hybrid-rt -p hybrid-rt-c --no-deps --locked
+echo "lint: fmt, clippy and rustdoc clean"

@@ -19,4 +19,7 @@ if PATH="$work/bin" command -v glslangValidator >/dev/null 2>&1; then echo "glsl
 cd "$work/hybrid-rt-$version"
 PATH="$work/bin" CARGO_TARGET_DIR="$root/target/package-check" cargo build --locked --lib
 PATH="$work/bin" CARGO_TARGET_DIR="$root/target/package-check" cargo test --locked --lib
+# The doctests compile from the package, and so does the example (it runs in .ci/run).
+PATH="$work/bin" CARGO_TARGET_DIR="$root/target/package-check" cargo test --locked --doc
+PATH="$work/bin" CARGO_TARGET_DIR="$root/target/package-check" cargo build --locked --examples
 echo "package: hybrid-rt $version builds from the package, without a shader compiler"

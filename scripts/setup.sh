@@ -7,7 +7,8 @@
 #    from the machine's existing Debian source list, so no package host is written here.
 #  - glslangValidator (shader compiler) and spirv-val (shader validator)
 #  - the Khronos validation layer, so tests fail on validation errors
-#  - a C compiler and the Vulkan headers/loader (libvulkan-dev), for the C ABI test
+#  - a C compiler and the Vulkan headers/loader (libvulkan-dev), for the C ABI test, and
+#    pkg-config and CMake, which build the C sample against the installed C library
 #  - Xvfb and the X11 client libraries winit loads at run time, so the sample's window path
 #    is tested without a display
 #
@@ -78,6 +79,9 @@ main() {
   [ -e /usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json ] \
     || pkgs+=(vulkan-validationlayers)
   [ -e /usr/include/vulkan/vulkan.h ] || pkgs+=(libvulkan-dev)
+  # The C install tree is checked by building the C sample with pkg-config and with CMake.
+  have_cmd pkg-config || pkgs+=(pkg-config)
+  have_cmd cmake || pkgs+=(cmake)
   have_cmd Xvfb || pkgs+=(xvfb)
   # winit's X11 backend dlopens these (no -dev packages: nothing links against them).
   local lib

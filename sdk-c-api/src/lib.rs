@@ -34,14 +34,15 @@ pub const HRT_MAX_TILE_RESOLUTION: u32 = 256;
 /// Largest HrtDenoisingContextInput.max_width / max_height.
 pub const HRT_MAX_DENOISING_EXTENT: u32 = 16384;
 
-/// Opaque context.
+/// Opaque context. Thread-safe: any call from any thread, except that hrt_context_destroy
+/// must not race another call on it or its containers.
 pub struct HrtContext {
     pub(crate) ctx: rt::ExecuteContext,
     // Keeps the loader library alive when the SDK loaded it itself.
     _entry: ash::Entry,
 }
 
-/// Opaque task container: fill on one thread, build on any.
+/// Opaque task container: used by one thread at a time (fill on one, build on any).
 pub struct HrtTaskContainer {
     pub(crate) inner: rt::TaskContainer,
 }
@@ -125,7 +126,7 @@ pub unsafe extern "C" fn hrt_set_log_callback(
     std::panic::catch_unwind(|| log_bridge::install(callback, min_severity, user_data)).unwrap_or(false)
 }
 
-/// Opaque: the feature structs the SDK needs enabled (`DeviceFeatures`).
+/// Opaque: the feature structs the SDK needs enabled (`DeviceFeatures`). One thread at a time.
 pub struct HrtDeviceFeatures {
     inner: rt::DeviceFeatures,
 }
