@@ -15,5 +15,5 @@ cargo clippy --workspace --all-targets --locked -- -D warnings
 cargo clippy -p hybrid-rt --lib --locked -- -D warnings
 # The API reference: every public item documented (the crate denies missing_docs), no broken
 # intra-doc links.
-RUSTDOCFLAGS="-D warnings" cargo doc -p hybrid-rt -p hybrid-rt-c --no-deps --locked
+RUSTDOCFLAGS="-D warnings" cargo doc -p hybrid-rt -p hybrid-rt-c -p hybrid-rt-wgpu --no-deps --locked
 echo "lint: fmt, clippy and rustdoc clean"
