@@ -1,5 +1,5 @@
 //! Embeds the SDK's SPIR-V. By default it is the SPIR-V shipped in `spirv/` (generated from
-//! the GLSL in `../shaders` by `HRT_BLESS=1 cargo test -p hybrid-rt --test spirv`, which also
+//! the GLSL in `../shaders` by `HRT_BLESS=1 cargo test -p hybrid-rt --features compile-shaders --test spirv`, which also
 //! fails when it is stale), so building the crate needs no shader compiler. With the
 //! `compile-shaders` feature it compiles `../shaders` with glslangValidator instead (and
 //! validates with spirv-val when installed) — for editing shaders in the repository.

@@ -420,13 +420,19 @@ int main(void) {
     hrt_device_name(ctx, device_name, sizeof device_name);
     printf("hybrid-rt on %s\n", device_name);
 
-    /* ---- Geometry: a 20x20 ground quad at y = 0 and a 1x1 ceiling quad 0.2 above it. */
+    /* ---- Geometry: a 20x20 ground quad at y = 0 and a 1x1 ceiling quad 0.2 above it. The
+     * ground is tightly packed with 32-bit indices; the ceiling is held as engines often hold
+     * meshes: interleaved 24-byte vertices (uv, then the position at byte 12, then padding),
+     * 16-bit indices 2 bytes into a shared index buffer, modelled at y = 0 and lifted by its
+     * part transform. The SDK keeps the same compact copy either way. */
     const float ground[] = {-10, 0, -10, 10, 0, -10, 10, 0, 10, -10, 0, 10};
-    const float ceiling[] = {-0.5f, 0.2f, -0.5f, 0.5f, 0.2f, -0.5f, 0.5f, 0.2f, 0.5f, -0.5f, 0.2f, 0.5f};
+    const float ceiling[] = {0, 0, 0, -0.5f, 0, -0.5f, 1, 0, 0, 0.5f, 0, -0.5f, 1, 1, 0, 0.5f, 0, 0.5f, 0, 1, 0, -0.5f, 0, 0.5f};
     const uint32_t quad_indices[] = {0, 2, 1, 0, 3, 2};
+    const uint16_t shared_indices[] = {0xffff, 0, 2, 1, 0, 3, 2};
     Buffer vb_ground = make_buffer(sizeof ground, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, ground);
     Buffer vb_ceiling = make_buffer(sizeof ceiling, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, ceiling);
     Buffer ib = make_buffer(sizeof quad_indices, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, quad_indices);
+    Buffer ib16 = make_buffer(sizeof shared_indices, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, shared_indices);
 
     HrtGeometryHandle geometries[2];
     HrtInstanceHandle instances[2];
@@ -443,6 +449,18 @@ int main(void) {
         g.input.vertices.count = 4;
         g.input.indices.buffer = ib.buffer;
         g.input.indices.count = 6;
+        if (i == 1) {
+            g.input.vertices.offset = 12;
+            g.input.vertices.stride = 24;
+            g.input.indices.buffer = ib16.buffer;
+            g.input.indices.offset = 2;
+            g.input.indices.format = VK_FORMAT_R16_UINT;
+            g.input.has_transform = true;
+            const float lift[12] = {1, 0, 0, 0, 0, 1, 0, 0.2f, 0, 0, 1, 0}; /* row-major 3x4 */
+            memcpy(g.input.transform, lift, sizeof lift);
+            g.input.build_hint = HRT_BUILD_HINT_PREFER_FAST_TRACE;
+            CHECK_HRT(hrt_set_geometry_name(ctx, geometries[i], "ceiling"));
+        }
         CHECK_HRT(hrt_schedule_geometry(frame, &g));
         HrtInstanceTask inst = hrt_instance_task_default();
         inst.handle = instances[i];
@@ -528,6 +546,28 @@ int main(void) {
     printf("AO under the ceiling %.3f, at the corner %.3f\n", centre, corner);
     EXPECT(centre < 0.6f, "the ceiling occludes the centre (%f)", centre);
     EXPECT(corner > 0.999f, "nothing occludes the corner (%f)", corner);
+
+    /* ---- A named geometry is named in errors: registering the ceiling again is refused when
+     * the container is built, and the message quotes its name. */
+    {
+        HrtGeometryTask again = hrt_geometry_task_default();
+        again.handle = geometries[1];
+        again.input.vertices.buffer = vb_ground.buffer;
+        again.input.vertices.count = 4;
+        again.input.indices.buffer = ib.buffer;
+        again.input.indices.count = 6;
+        CHECK_HRT(hrt_schedule_geometry(frame, &again));
+        VkCommandBuffer cmd = begin();
+        HrtTicket unused;
+        EXPECT(hrt_build_gpu_task(ctx, frame, cmd, &unused) == HRT_ERROR_INVALID_HANDLE, "registered twice");
+        char why[256];
+        hrt_last_error_message(why, sizeof why);
+        EXPECT(strstr(why, "\"ceiling\"") != NULL, "the error names the geometry: %s", why);
+        submit_and_wait(cmd);
+        hrt_task_container_clear(frame);
+        HrtGeometryComponent part = hrt_geometry_component_default();
+        EXPECT(!part.has_transform && !part.has_vertex_range, "a default part: identity, all vertices");
+    }
 
     /* ---- The ticket contract: a ticket handed back before its command buffer ran is refused
      * (and stays in flight), and the context is not destroyed under the GPU. */
@@ -778,6 +818,7 @@ int main(void) {
     free_image(out);
     free_buffer(vb_ground);
     free_buffer(vb_ceiling);
+    free_buffer(ib16);
     free_buffer(ib);
     vkDestroyCommandPool(device, pool, NULL);
     vkDestroyDevice(device, NULL);

@@ -147,6 +147,27 @@ typedef enum HrtTaskKind {
   HRT_TASK_DENOISE_MULTI_SHADOW = 16,
 } HrtTaskKind;
 
+/**
+ * How a geometry's BLAS is built (BuildHint).
+ */
+enum HrtBuildHint
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+  HRT_BUILD_HINT_AUTO = 0,
+  HRT_BUILD_HINT_PREFER_FAST_TRACE = 1,
+  HRT_BUILD_HINT_PREFER_FAST_BUILD = 2,
+  HRT_BUILD_HINT_LOW_MEMORY = 3,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum HrtBuildHint HrtBuildHint;
+#else
+typedef uint32_t HrtBuildHint;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
 typedef enum HrtDiffuseBrdfType {
   HRT_DIFFUSE_LAMBERTIAN = 0,
   HRT_DIFFUSE_NORMALIZED_DISNEY = 1,
@@ -362,6 +383,26 @@ typedef struct HrtIndexBufferInput {
   VkFormat format;
 } HrtIndexBufferInput;
 
+/**
+ * One part of a geometry (GeometryComponent): a vertex/index buffer pair, an optional
+ * part-to-geometry transform and an optional vertex range.
+ */
+typedef struct HrtGeometryComponent {
+  struct HrtVertexBufferInput vertices;
+  struct HrtIndexBufferInput indices;
+  /**
+   * Apply `transform` (row-major 3x4, like VkTransformMatrixKHR). Default false: identity.
+   */
+  bool has_transform;
+  float transform[12];
+  /**
+   * Copy only vertices vertex_range_first..=vertex_range_last (indexed parts). Default false.
+   */
+  bool has_vertex_range;
+  uint32_t vertex_range_first;
+  uint32_t vertex_range_last;
+} HrtGeometryComponent;
+
 typedef struct HrtSurfelSettings {
   /**
    * An HrtSurfelType. Default HRT_SURFEL_MESH_COLORS.
@@ -378,12 +419,39 @@ typedef struct HrtSurfelSettings {
 } HrtSurfelSettings;
 
 typedef struct HrtGeometryInput {
+  /**
+   * The first part's positions.
+   */
   struct HrtVertexBufferInput vertices;
+  /**
+   * The first part's indices (VK_NULL_HANDLE buffer: non-indexed).
+   */
   struct HrtIndexBufferInput indices;
+  /**
+   * The first part's transform (row-major 3x4) when has_transform. Default identity.
+   */
+  bool has_transform;
+  float transform[12];
+  /**
+   * The first part's vertex range when has_vertex_range. Default all vertices.
+   */
+  bool has_vertex_range;
+  uint32_t vertex_range_first;
+  uint32_t vertex_range_last;
+  /**
+   * Further parts: `extra_component_count` structs at `extra_components` (read during
+   * hrt_schedule_geometry only). Default none.
+   */
+  const struct HrtGeometryComponent *extra_components;
+  uint32_t extra_component_count;
   /**
    * Deformable: updates refit the BLAS. Default false.
    */
   bool allow_update;
+  /**
+   * An HrtBuildHint. Default HRT_BUILD_HINT_AUTO.
+   */
+  uint32_t build_hint;
   struct HrtSurfelSettings surfels;
 } HrtGeometryInput;
 
@@ -1027,6 +1095,11 @@ enum HrtStatus hrt_task_container_set_frame_index(struct HrtTaskContainer *conta
 
 struct HrtGeometryTask hrt_geometry_task_default(void);
 
+/**
+ * A part for HrtGeometryInput.extra_components with the defaults (identity, all vertices).
+ */
+struct HrtGeometryComponent hrt_geometry_component_default(void);
+
 enum HrtStatus hrt_schedule_geometry(struct HrtTaskContainer *container,
                                      const struct HrtGeometryTask *task);
 
@@ -1116,6 +1189,21 @@ enum HrtStatus hrt_schedule_clear_cache(struct HrtTaskContainer *container,
 enum HrtStatus hrt_geometry_invalid_triangles(const struct HrtContext *ctx,
                                               HrtGeometryHandle geometry,
                                               uint32_t *triangles);
+
+/**
+ * Gives a geometry a debug name (NUL-terminated, copied): quoted in errors and log messages,
+ * and the Vulkan name of its BLAS and copy when debug_utils is on.
+ */
+enum HrtStatus hrt_set_geometry_name(const struct HrtContext *ctx,
+                                     HrtGeometryHandle geometry,
+                                     const char *name);
+
+/**
+ * Gives an instance a debug name (NUL-terminated, copied), quoted in errors and log messages.
+ */
+enum HrtStatus hrt_set_instance_name(const struct HrtContext *ctx,
+                                     HrtInstanceHandle instance,
+                                     const char *name);
 
 /**
  * Bytes of an instance's direct-lighting cache (0 until allocated, one recording after the

@@ -452,11 +452,18 @@ pub extern "C" fn hrt_geometry_task_default() -> HrtGeometryTask {
     types::geometry_task_default()
 }
 
+/// A part for HrtGeometryInput.extra_components with the defaults (identity, all vertices).
+#[no_mangle]
+pub extern "C" fn hrt_geometry_component_default() -> HrtGeometryComponent {
+    types::geometry_component_default()
+}
+
 #[no_mangle]
 pub unsafe extern "C" fn hrt_schedule_geometry(container: *mut HrtTaskContainer, task: *const HrtGeometryTask) -> HrtStatus {
     guard(|| {
         let c = container_mut(container)?;
-        Ok(c.inner.schedule_geometry(&types::geometry_task(get(task, "task")?)?)?)
+        // SAFETY: the header says extra_components points to extra_component_count parts.
+        Ok(c.inner.schedule_geometry(&unsafe { types::geometry_task(get(task, "task")?) }?)?)
     })
 }
 
@@ -695,6 +702,41 @@ pub unsafe extern "C" fn hrt_geometry_invalid_triangles(
         let c = context(ctx)?;
         *get_mut(triangles, "triangles")? = c.ctx.geometry_invalid_triangles(rt::GeometryHandle(geometry))?;
         Ok(())
+    })
+}
+
+/// A NUL-terminated UTF-8 name (lossy: invalid bytes become U+FFFD).
+unsafe fn name_arg(name: *const c_char) -> Result<String, Failure> {
+    if name.is_null() {
+        return Err(status::null("name"));
+    }
+    Ok(CStr::from_ptr(name).to_string_lossy().into_owned())
+}
+
+/// Gives a geometry a debug name (NUL-terminated, copied): quoted in errors and log messages,
+/// and the Vulkan name of its BLAS and copy when debug_utils is on.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_set_geometry_name(
+    ctx: *const HrtContext,
+    geometry: HrtGeometryHandle,
+    name: *const c_char,
+) -> HrtStatus {
+    guard(|| {
+        let c = context(ctx)?;
+        Ok(c.ctx.set_geometry_name(rt::GeometryHandle(geometry), &name_arg(name)?)?)
+    })
+}
+
+/// Gives an instance a debug name (NUL-terminated, copied), quoted in errors and log messages.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_set_instance_name(
+    ctx: *const HrtContext,
+    instance: HrtInstanceHandle,
+    name: *const c_char,
+) -> HrtStatus {
+    guard(|| {
+        let c = context(ctx)?;
+        Ok(c.ctx.set_instance_name(rt::InstanceHandle(instance), &name_arg(name)?)?)
     })
 }
 

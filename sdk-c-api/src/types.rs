@@ -153,14 +153,55 @@ pub struct HrtSurfelSettings {
     pub tile_resolution_limit: u32,
 }
 
+/// One part of a geometry (GeometryComponent): a vertex/index buffer pair, an optional
+/// part-to-geometry transform and an optional vertex range.
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtGeometryComponent {
+    pub vertices: HrtVertexBufferInput,
+    pub indices: HrtIndexBufferInput,
+    /// Apply `transform` (row-major 3x4, like VkTransformMatrixKHR). Default false: identity.
+    pub has_transform: bool,
+    pub transform: [f32; 12],
+    /// Copy only vertices vertex_range_first..=vertex_range_last (indexed parts). Default false.
+    pub has_vertex_range: bool,
+    pub vertex_range_first: u32,
+    pub vertex_range_last: u32,
+}
+
 #[repr(C)]
 #[derive(Clone, Copy)]
 pub struct HrtGeometryInput {
+    /// The first part's positions.
     pub vertices: HrtVertexBufferInput,
+    /// The first part's indices (VK_NULL_HANDLE buffer: non-indexed).
     pub indices: HrtIndexBufferInput,
+    /// The first part's transform (row-major 3x4) when has_transform. Default identity.
+    pub has_transform: bool,
+    pub transform: [f32; 12],
+    /// The first part's vertex range when has_vertex_range. Default all vertices.
+    pub has_vertex_range: bool,
+    pub vertex_range_first: u32,
+    pub vertex_range_last: u32,
+    /// Further parts: `extra_component_count` structs at `extra_components` (read during
+    /// hrt_schedule_geometry only). Default none.
+    pub extra_components: *const HrtGeometryComponent,
+    pub extra_component_count: u32,
     /// Deformable: updates refit the BLAS. Default false.
     pub allow_update: bool,
+    /// An HrtBuildHint. Default HRT_BUILD_HINT_AUTO.
+    pub build_hint: u32,
     pub surfels: HrtSurfelSettings,
+}
+
+/// How a geometry's BLAS is built (BuildHint).
+#[repr(u32)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtBuildHint {
+    HRT_BUILD_HINT_AUTO = 0,
+    HRT_BUILD_HINT_PREFER_FAST_TRACE = 1,
+    HRT_BUILD_HINT_PREFER_FAST_BUILD = 2,
+    HRT_BUILD_HINT_LOW_MEMORY = 3,
 }
 
 #[repr(C)]
@@ -601,26 +642,74 @@ pub(crate) fn image_c(i: &rt::ImageInput) -> HrtImageInput {
     }
 }
 
-pub(crate) fn geometry_task(t: &HrtGeometryTask) -> Result<rt::GeometryTask, Failure> {
+/// Row-major 3x4 (VkTransformMatrixKHR) to glam's affine.
+pub(crate) fn affine(m: &[f32; 12]) -> glam::Affine3A {
+    glam::Affine3A::from_cols_array(&[m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10], m[3], m[7], m[11]])
+}
+
+fn affine_c(t: &glam::Affine3A) -> [f32; 12] {
+    let (m, tr) = (t.matrix3, t.translation);
+    [m.x_axis.x, m.y_axis.x, m.z_axis.x, tr.x, m.x_axis.y, m.y_axis.y, m.z_axis.y, tr.y, m.x_axis.z, m.y_axis.z, m.z_axis.z, tr.z]
+}
+
+fn vertices(v: &HrtVertexBufferInput) -> rt::VertexBufferInput {
+    rt::VertexBufferInput {
+        buffer: buffer(v.buffer),
+        offset: v.offset,
+        stride: v.stride,
+        count: v.count,
+        format: vk::Format::from_raw(v.format),
+    }
+}
+
+fn indices(i: &HrtIndexBufferInput) -> rt::IndexBufferInput {
+    rt::IndexBufferInput { buffer: buffer(i.buffer), offset: i.offset, count: i.count, format: vk::Format::from_raw(i.format) }
+}
+
+fn component(c: &HrtGeometryComponent) -> rt::GeometryComponent {
+    rt::GeometryComponent {
+        vertices: vertices(&c.vertices),
+        indices: indices(&c.indices),
+        transform: c.has_transform.then(|| affine(&c.transform)),
+        vertex_range: c.has_vertex_range.then_some(rt::VertexRange { first: c.vertex_range_first, last: c.vertex_range_last }),
+    }
+}
+
+/// # Safety
+/// `t.input.extra_components` points to `extra_component_count` structs (or the count is 0).
+pub(crate) unsafe fn geometry_task(t: &HrtGeometryTask) -> Result<rt::GeometryTask, Failure> {
     let i = &t.input;
+    let extra = if i.extra_component_count == 0 {
+        Vec::new()
+    } else if i.extra_components.is_null() {
+        return Err(crate::status::null("HrtGeometryInput.extra_components"));
+    } else {
+        std::slice::from_raw_parts(i.extra_components, i.extra_component_count as usize).iter().map(component).collect()
+    };
+    let first = component(&HrtGeometryComponent {
+        vertices: i.vertices,
+        indices: i.indices,
+        has_transform: i.has_transform,
+        transform: i.transform,
+        has_vertex_range: i.has_vertex_range,
+        vertex_range_first: i.vertex_range_first,
+        vertex_range_last: i.vertex_range_last,
+    });
     Ok(rt::GeometryTask {
         handle: rt::GeometryHandle(t.handle),
         operation: pick("HrtGeometryTask.operation", t.operation, &[rt::TaskOperation::Register, rt::TaskOperation::Update])?,
         input: rt::GeometryInput {
-            vertices: rt::VertexBufferInput {
-                buffer: buffer(i.vertices.buffer),
-                offset: i.vertices.offset,
-                stride: i.vertices.stride,
-                count: i.vertices.count,
-                format: vk::Format::from_raw(i.vertices.format),
-            },
-            indices: rt::IndexBufferInput {
-                buffer: buffer(i.indices.buffer),
-                offset: i.indices.offset,
-                count: i.indices.count,
-                format: vk::Format::from_raw(i.indices.format),
-            },
+            vertices: first.vertices,
+            indices: first.indices,
+            transform: first.transform,
+            vertex_range: first.vertex_range,
+            extra_components: extra,
             allow_update: i.allow_update,
+            build_hint: pick(
+                "HrtGeometryInput.build_hint",
+                i.build_hint,
+                &[rt::BuildHint::Auto, rt::BuildHint::PreferFastTrace, rt::BuildHint::PreferFastBuild, rt::BuildHint::LowMemory],
+            )?,
             surfels: rt::SurfelSettings {
                 surfel_type: pick(
                     "HrtSurfelSettings.surfel_type",
@@ -634,22 +723,46 @@ pub(crate) fn geometry_task(t: &HrtGeometryTask) -> Result<rt::GeometryTask, Fai
     })
 }
 
+fn vertices_c(v: &rt::VertexBufferInput) -> HrtVertexBufferInput {
+    HrtVertexBufferInput { buffer: 0, offset: v.offset, stride: v.stride, count: v.count, format: v.format.as_raw() }
+}
+
+fn indices_c(i: &rt::IndexBufferInput) -> HrtIndexBufferInput {
+    HrtIndexBufferInput { buffer: 0, offset: i.offset, count: i.count, format: i.format.as_raw() }
+}
+
+pub(crate) fn geometry_component_default() -> HrtGeometryComponent {
+    let d = rt::GeometryComponent::default();
+    HrtGeometryComponent {
+        vertices: vertices_c(&d.vertices),
+        indices: indices_c(&d.indices),
+        has_transform: d.transform.is_some(),
+        transform: affine_c(&d.transform.unwrap_or(glam::Affine3A::IDENTITY)),
+        has_vertex_range: d.vertex_range.is_some(),
+        vertex_range_first: 0,
+        vertex_range_last: 0,
+    }
+}
+
 pub(crate) fn geometry_task_default() -> HrtGeometryTask {
     let d = rt::GeometryTask::default();
     let i = &d.input;
+    let c = geometry_component_default();
     HrtGeometryTask {
         handle: 0,
         operation: d.operation as u32,
         input: HrtGeometryInput {
-            vertices: HrtVertexBufferInput {
-                buffer: 0,
-                offset: i.vertices.offset,
-                stride: i.vertices.stride,
-                count: i.vertices.count,
-                format: i.vertices.format.as_raw(),
-            },
-            indices: HrtIndexBufferInput { buffer: 0, offset: 0, count: 0, format: i.indices.format.as_raw() },
+            vertices: c.vertices,
+            indices: c.indices,
+            has_transform: c.has_transform,
+            transform: c.transform,
+            has_vertex_range: c.has_vertex_range,
+            vertex_range_first: 0,
+            vertex_range_last: 0,
+            extra_components: std::ptr::null(),
+            extra_component_count: 0,
             allow_update: i.allow_update,
+            build_hint: i.build_hint as u32,
             surfels: HrtSurfelSettings {
                 surfel_type: i.surfels.surfel_type as u32,
                 tile_unit_length: i.surfels.tile_unit_length,
@@ -666,9 +779,7 @@ pub(crate) fn instance_task(t: &HrtInstanceTask) -> Result<rt::InstanceTask, Fai
             format!("invalid HrtInstanceInput.mask: {:#x} has bits outside HRT_MASK_ALL", t.input.mask),
         ));
     }
-    let m = &t.input.transform;
-    // Row-major 3x4 -> glam's columns.
-    let transform = glam::Affine3A::from_cols_array(&[m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10], m[3], m[7], m[11]]);
+    let transform = affine(&t.input.transform);
     Ok(rt::InstanceTask {
         handle: rt::InstanceHandle(t.handle),
         operation: pick(

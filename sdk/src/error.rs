@@ -61,7 +61,7 @@ pub enum Error {
     },
 
     /// A handle that is null, foreign, stale, or in the wrong state for the task.
-    #[error("{kind} handle {raw:#x} {problem}")]
+    #[error("{kind} handle {raw:#x}{} {problem}", .name.as_ref().map(|n| format!(" (\"{n}\")")).unwrap_or_default())]
     InvalidHandle {
         /// "geometry", "instance" or "denoising context".
         kind: &'static str,
@@ -69,6 +69,9 @@ pub enum Error {
         raw: u64,
         /// Why it was refused.
         problem: HandleProblem,
+        /// Its debug name, where the engine gave it one (`ExecuteContext::set_geometry_name`)
+        /// and the handle is still live.
+        name: Option<String>,
     },
 
     /// A parameter is out of range, null, or inconsistent with another or with a device limit.

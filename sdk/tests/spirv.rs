@@ -1,6 +1,7 @@
 //! The SPIR-V shipped in `sdk/spirv/` is what the GLSL in `shaders/` (the source of truth)
 //! compiles to: every shader has its SPIR-V, made from the current source (by hash), and no
-//! SPIR-V is left over. `HRT_BLESS=1 cargo test -p hybrid-rt --test spirv` regenerates it with
+//! SPIR-V is left over. `HRT_BLESS=1 cargo test -p hybrid-rt --features compile-shaders --test spirv`
+//! (the feature: so a new shader's constant exists before its SPIR-V is shipped) regenerates it with
 //! glslangValidator (and validates it with spirv-val).
 #[path = "../build/spirv.rs"]
 mod spirv;
@@ -32,7 +33,7 @@ fn shipped_spirv_is_made_from_the_current_glsl() {
     let recorded = std::fs::read_to_string(out.join("SOURCES")).unwrap_or_default();
     assert!(
         recorded == listing,
-        "sdk/spirv is stale against shaders/: run `HRT_BLESS=1 cargo test -p hybrid-rt --test spirv` and commit it\n\
+        "sdk/spirv is stale against shaders/: run `HRT_BLESS=1 cargo test -p hybrid-rt --features compile-shaders --test spirv` and commit it\n\
          recorded:\n{recorded}\ncurrent:\n{listing}"
     );
     let mut shipped: Vec<String> = std::fs::read_dir(&out)

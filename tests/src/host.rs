@@ -220,6 +220,11 @@ impl Host {
         let want_validation = env_flag("HRT_VALIDATION", true);
         let validation_name = c"VK_LAYER_KHRONOS_validation";
         let validation_enabled = want_validation && layers.iter().any(|l| l.layer_name_as_c_str() == Ok(validation_name));
+        // A run that must be validated (the device machine's, where the layer is carried) says
+        // so: a missing layer is then an error, not a silently unvalidated pass.
+        if env_flag("HRT_REQUIRE_VALIDATION", false) && !validation_enabled {
+            return Err("HRT_REQUIRE_VALIDATION=1 but VK_LAYER_KHRONOS_validation is not available".into());
+        }
         let exts = unsafe { entry.enumerate_instance_extension_properties(None) }.unwrap_or_default();
         let has_debug = exts.iter().any(|e| e.extension_name_as_c_str() == Ok(ext::debug_utils::NAME));
 

@@ -98,6 +98,7 @@ impl<'h> World<'h> {
                 indices: IndexBufferInput { buffer: ib.buffer, count: m.indices.len() as u32, ..Default::default() },
                 allow_update: i == 4,
                 surfels: SurfelSettings { tile_unit_length: 0.5, ..Default::default() },
+                ..Default::default()
             },
         }
     }

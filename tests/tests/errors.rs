@@ -56,14 +56,14 @@ fn bad_geometry_inputs_are_refused() {
     let cases: Vec<(&str, GeometryInput)> = vec![
         (
             "null vertex buffer",
-            GeometryInput { vertices: VertexBufferInput { buffer: vk::Buffer::null(), ..good.vertices }, ..good },
+            GeometryInput { vertices: VertexBufferInput { buffer: vk::Buffer::null(), ..good.vertices }, ..good.clone() },
         ),
-        ("zero vertices", GeometryInput { vertices: VertexBufferInput { count: 0, ..good.vertices }, ..good }),
-        ("stride 8", GeometryInput { vertices: VertexBufferInput { stride: 8, ..good.vertices }, ..good }),
-        ("index count 4", GeometryInput { indices: IndexBufferInput { count: 4, ..good.indices }, ..good }),
+        ("zero vertices", GeometryInput { vertices: VertexBufferInput { count: 0, ..good.vertices }, ..good.clone() }),
+        ("stride 8", GeometryInput { vertices: VertexBufferInput { stride: 8, ..good.vertices }, ..good.clone() }),
+        ("index count 4", GeometryInput { indices: IndexBufferInput { count: 4, ..good.indices }, ..good.clone() }),
         (
             "zero tile unit",
-            GeometryInput { surfels: hybrid_rt::SurfelSettings { tile_unit_length: 0.0, ..Default::default() }, ..good },
+            GeometryInput { surfels: hybrid_rt::SurfelSettings { tile_unit_length: 0.0, ..Default::default() }, ..good.clone() },
         ),
     ];
     for (what, input) in cases {
@@ -73,14 +73,14 @@ fn bad_geometry_inputs_are_refused() {
     let e = c
         .schedule_geometry(&task(GeometryInput {
             vertices: VertexBufferInput { format: vk::Format::R16G16B16A16_SFLOAT, ..good.vertices },
-            ..good
+            ..good.clone()
         }))
         .unwrap_err();
     assert!(matches!(e, Error::UnsupportedFormat { .. }), "{e}");
     let e = c
         .schedule_geometry(&task(GeometryInput {
             indices: IndexBufferInput { format: vk::Format::R8_UINT, ..good.indices },
-            ..good
+            ..good.clone()
         }))
         .unwrap_err();
     assert!(matches!(e, Error::UnsupportedFormat { .. }), "{e}");
@@ -89,28 +89,28 @@ fn bad_geometry_inputs_are_refused() {
         .schedule_geometry(&task(GeometryInput {
             vertices: VertexBufferInput { count: 999_999, ..good.vertices },
             indices: IndexBufferInput { buffer: vk::Buffer::null(), ..good.indices },
-            ..good
+            ..good.clone()
         }))
         .unwrap_err();
     assert!(matches!(e, Error::BufferTooSmall { .. }), "{e}");
     let e = c
-        .schedule_geometry(&task(GeometryInput { indices: IndexBufferInput { offset: 1 << 20, ..good.indices }, ..good }))
+        .schedule_geometry(&task(GeometryInput { indices: IndexBufferInput { offset: 1 << 20, ..good.indices }, ..good.clone() }))
         .unwrap_err();
     assert!(matches!(e, Error::BufferTooSmall { .. }), "{e}");
     assert!(c.is_empty(), "refused tasks are not scheduled");
 
     // Registering twice: the second register is refused when the container is built, and
     // the failed build leaves the container (and the context) as they were.
-    c.schedule_geometry(&task(good)).unwrap();
+    c.schedule_geometry(&task(good.clone())).unwrap();
     run_frame(&host, &ctx, &mut c).unwrap();
-    c.schedule_geometry(&task(good)).unwrap();
+    c.schedule_geometry(&task(good.clone())).unwrap();
     let e = run_frame(&host, &ctx, &mut c).unwrap_err();
     assert!(e.contains("already registered"), "{e}");
     assert_eq!(c.len(), 1, "a failed build keeps the tasks");
     c.clear();
     // An update of a never-registered handle.
     let fresh = ctx.create_geometry_handles(1)[0];
-    c.schedule_geometry(&GeometryTask { handle: fresh, operation: TaskOperation::Update, input: good }).unwrap();
+    c.schedule_geometry(&GeometryTask { handle: fresh, operation: TaskOperation::Update, input: good.clone() }).unwrap();
     assert!(run_frame(&host, &ctx, &mut c).unwrap_err().contains("not registered"));
     c.clear();
 
@@ -137,7 +137,7 @@ fn stale_foreign_and_null_handles_are_refused() {
         Error::InvalidHandle { problem, .. } => problem,
         e => panic!("expected InvalidHandle, got {e}"),
     };
-    let t = |handle| GeometryTask { handle, operation: TaskOperation::Register, input };
+    let t = |handle| GeometryTask { handle, operation: TaskOperation::Register, input: input.clone() };
     assert_eq!(problem(c.schedule_geometry(&t(stale)).unwrap_err()), HandleProblem::Destroyed);
     assert_eq!(problem(c.schedule_geometry(&t(hybrid_rt::GeometryHandle::NULL)).unwrap_err()), HandleProblem::Null);
     let foreign = other.create_geometry_handles(1)[0];

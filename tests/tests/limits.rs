@@ -33,10 +33,22 @@ fn sizes_and_counts_past_the_device_limits_are_refused() {
     };
     let register = |input| GeometryTask { handle: h, operation: TaskOperation::Register, input };
 
-    // A stride of 2^63: stride x (count - 1) overflowed, the region check passed, and a debug
-    // build panicked ("attempt to multiply with overflow").
+    // A stride of 2^63: stride x (count - 1) once overflowed, the region check passed, and a
+    // debug build panicked ("attempt to multiply with overflow"). Strides are now below 4 GiB.
     let e = c
-        .schedule_geometry(&register(GeometryInput { vertices: VertexBufferInput { stride: 1 << 63, ..good.vertices }, ..good }))
+        .schedule_geometry(&register(GeometryInput {
+            vertices: VertexBufferInput { stride: 1 << 63, ..good.vertices },
+            ..good.clone()
+        }))
+        .unwrap_err();
+    assert!(matches!(e, Error::InvalidInput { .. }) && message(&e).contains("stride"), "{e}");
+    // An offset near 2^64 plus the vertex range's start overflows: refused, named.
+    let e = c
+        .schedule_geometry(&register(GeometryInput {
+            vertices: VertexBufferInput { offset: u64::MAX - 4, ..good.vertices },
+            vertex_range: Some(hybrid_rt::VertexRange { first: 1, last: 2 }),
+            ..good.clone()
+        }))
         .unwrap_err();
     assert!(matches!(e, Error::InvalidInput { .. }) && message(&e).contains("overflow"), "{e}");
 
@@ -44,7 +56,7 @@ fn sizes_and_counts_past_the_device_limits_are_refused() {
     let e = c
         .schedule_geometry(&register(GeometryInput {
             indices: IndexBufferInput { count: u32::MAX / 3 * 3, ..good.indices },
-            ..good
+            ..good.clone()
         }))
         .unwrap_err();
     assert!(message(&e).contains("maxPrimitiveCount"), "{e}");

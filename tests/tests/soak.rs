@@ -89,6 +89,7 @@ fn two_thousand_frames_of_churn_keep_memory_flat() {
             },
             allow_update: deforming,
             surfels: SurfelSettings { tile_unit_length: 0.25, ..Default::default() },
+            ..Default::default()
         };
         // Destructions first, while this frame's container is still empty (a destroyed handle
         // must not be named by a task scheduled before it): an instance, a geometry with its

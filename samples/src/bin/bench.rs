@@ -177,7 +177,7 @@ fn run() -> Result<(), String> {
     let mut big_ms = Vec::new();
     for i in 0..6 {
         let operation = if i == 0 { TaskOperation::Register } else { TaskOperation::Update };
-        frame.schedule_geometry(&GeometryTask { handle: geo, operation, input }).map_err(e)?;
+        frame.schedule_geometry(&GeometryTask { handle: geo, operation, input: input.clone() }).map_err(e)?;
         frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 1 }).map_err(e)?;
         let ms = run_frame(&host, &ctx, &mut frame)?.gpu_ms(TaskKind::BlasBuild);
         if i >= 2 {

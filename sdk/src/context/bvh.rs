@@ -26,6 +26,9 @@ impl Recorder<'_> {
             let Ok(g) = st.scene.geometries.get_mut(h) else { continue };
             let (Some(size), Some(src)) = (g.compacted_size, g.blas.as_ref().map(|b| b.accel)) else { continue };
             let compact = blas::create(device, memory, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, size, MemoryKind::Blas)?;
+            if let Some(name) = &g.name {
+                device.name(compact.accel, &format!("BLAS {name}"));
+            }
             let dst = compact.accel;
             journal.touch_geometry(h, g.meta());
             g.compacted_size = None;
@@ -97,13 +100,16 @@ impl Recorder<'_> {
                 sizes.acceleration_structure_size,
                 MemoryKind::Blas,
             )?;
+            if let Some(name) = &g.name {
+                device.name(fresh.accel, &format!("BLAS {name}"));
+            }
             let dst = fresh.accel;
             journal.touch_geometry(h, g.meta());
             let old = g.blas.replace(fresh);
             journal.replaced(Slot::Blas(h), old.map(Held::Accel));
             g.state = BlasState::Ready;
             g.needs_refit = false;
-            if !layout.allow_update {
+            if blas::compacts(&layout) {
                 compaction_candidates.push((h, g.build_id, dst));
             }
             jobs.push(BuildJob {

@@ -43,7 +43,7 @@ impl TaskContainer {
         let shared = self.shared()?;
         shared.check_geometry_alive(task.handle)?;
         validate::geometry_input(&shared.device, &task.input)?;
-        self.tasks.push(Task::Geometry(*task));
+        self.tasks.push(Task::Geometry(task.clone()));
         Ok(())
     }
 

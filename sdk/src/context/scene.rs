@@ -6,14 +6,17 @@ use super::journal::{Held, Slot};
 use super::record::Recorder;
 use super::State;
 use crate::error::{Error, HandleProblem, Result};
+use crate::gpu::deferred::Garbage;
 use crate::gpu::device::Limits;
+use crate::gpu::memory::{Buffer, MemoryKind};
 use crate::gpu::sync;
-use crate::passes::index_check::IndexCheckJob;
+use crate::passes::geometry_pack::PackJob;
 use crate::passes::{Recording, World};
-use crate::scene::geometry::{self, BlasState, GeometryLayout};
+use crate::scene::geometry::{self, BlasState, CopyPlan, GeometryLayout};
 use crate::scene::instance::Placement;
 use crate::types::*;
 use ash::vk;
+use gpu_allocator::MemoryLocation;
 use std::collections::HashMap;
 
 /// Checks handle states in task order (a register earlier in the container counts), before
@@ -21,7 +24,8 @@ use std::collections::HashMap;
 pub(super) fn validate_handles(st: &mut State, tasks: &[Task], limits: &Limits) -> Result<()> {
     let mut geometry_registered: HashMap<GeometryHandle, bool> = HashMap::new();
     let mut instance_registered: HashMap<InstanceHandle, bool> = HashMap::new();
-    let problem = |kind, raw, problem| Err(Error::InvalidHandle { kind, raw, problem });
+    let problem =
+        |kind, raw, problem, name: &Option<String>| Err(Error::InvalidHandle { kind, raw, problem, name: name.clone() });
     let scene = &st.scene;
     for task in tasks {
         match task {
@@ -30,10 +34,10 @@ pub(super) fn validate_handles(st: &mut State, tasks: &[Task], limits: &Limits) 
                 let registered = *geometry_registered.entry(t.handle).or_insert(g.registered());
                 match t.operation {
                     TaskOperation::Register if registered => {
-                        return problem(GeometryHandle::KIND, t.handle.0, HandleProblem::AlreadyRegistered)
+                        return problem(GeometryHandle::KIND, t.handle.0, HandleProblem::AlreadyRegistered, &g.name)
                     }
                     TaskOperation::Update if !registered => {
-                        return problem(GeometryHandle::KIND, t.handle.0, HandleProblem::NotRegistered)
+                        return problem(GeometryHandle::KIND, t.handle.0, HandleProblem::NotRegistered, &g.name)
                     }
                     TaskOperation::Update => {
                         if let Some(old) = g.layout.filter(|l| l.allow_update) {
@@ -41,11 +45,15 @@ pub(super) fn validate_handles(st: &mut State, tasks: &[Task], limits: &Limits) 
                             if !t.input.allow_update
                                 || new.primitive_count != old.primitive_count
                                 || new.vertex_count != old.vertex_count
-                                || new.index_type != old.index_type
+                                || new.component_count != old.component_count
                             {
                                 return Err(Error::invalid(
                                     "GeometryTask.input",
-                                    "an update of an allow_update geometry must keep allow_update and its vertex, index and triangle counts (the BLAS is refitted)",
+                                    format!(
+                                        "an update of allow_update geometry {:#x}{} must keep allow_update, its parts and their vertex and triangle counts (the BLAS is refitted)",
+                                        t.handle.0,
+                                        g.label()
+                                    ),
                                 ));
                             }
                         }
@@ -59,10 +67,10 @@ pub(super) fn validate_handles(st: &mut State, tasks: &[Task], limits: &Limits) 
                 let registered = *instance_registered.entry(t.handle).or_insert(rec.placement.is_some());
                 match t.operation {
                     InstanceOperation::Register if registered => {
-                        return problem(InstanceHandle::KIND, t.handle.0, HandleProblem::AlreadyRegistered)
+                        return problem(InstanceHandle::KIND, t.handle.0, HandleProblem::AlreadyRegistered, &rec.name)
                     }
                     InstanceOperation::Update | InstanceOperation::Remove if !registered => {
-                        return problem(InstanceHandle::KIND, t.handle.0, HandleProblem::NotRegistered)
+                        return problem(InstanceHandle::KIND, t.handle.0, HandleProblem::NotRegistered, &rec.name)
                     }
                     _ => {}
                 }
@@ -73,7 +81,7 @@ pub(super) fn validate_handles(st: &mut State, tasks: &[Task], limits: &Limits) 
                     }
                     let g = scene.geometries.get(t.input.geometry)?;
                     if !*geometry_registered.get(&t.input.geometry).unwrap_or(&g.registered()) {
-                        return problem(GeometryHandle::KIND, t.input.geometry.0, HandleProblem::NotRegistered);
+                        return problem(GeometryHandle::KIND, t.input.geometry.0, HandleProblem::NotRegistered, &g.name);
                     }
                 }
                 instance_registered.insert(t.handle, t.operation != InstanceOperation::Remove);
@@ -108,30 +116,69 @@ impl Recorder<'_> {
     /// Applies geometry and instance tasks to the registries and records the geometry copies
     /// (and the read-backs of geometry that needs a surfel layout).
     pub fn apply_scene_tasks(&mut self, tasks: &[Task]) -> Result<()> {
+        // One staging buffer holds every geometry task's engine regions; it is freed when the
+        // ticket is back (or at once if this build fails).
+        let mut plans = Vec::new();
+        let mut staging_bytes = 0u64;
+        for task in tasks {
+            if let Task::Geometry(t) = task {
+                let plan = CopyPlan::of(&t.input)?;
+                let base = staging_bytes;
+                staging_bytes = base
+                    .checked_add(plan.staging_bytes)
+                    .and_then(|b| b.checked_next_multiple_of(16))
+                    .ok_or_else(|| Error::invalid("GeometryTask", "this container's geometry staging overflows"))?;
+                plans.push((plan, base));
+            }
+        }
+        let staging = if plans.is_empty() {
+            None
+        } else {
+            Some(self.memory.create_buffer(
+                "geometry staging",
+                staging_bytes,
+                vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryLocation::GpuOnly,
+                MemoryKind::Readback,
+            )?)
+        };
+        let applied = self.apply_with_staging(tasks, &plans, staging.as_ref());
+        if let Some(s) = staging {
+            self.journal.retire_at_commit(Garbage::Buffer(s));
+        }
+        applied
+    }
+
+    fn apply_with_staging(&mut self, tasks: &[Task], plans: &[(CopyPlan, u64)], staging: Option<&Buffer>) -> Result<()> {
         let (d, cmd) = (&self.device.raw, self.cmd);
-        let mut copies_declared = false;
+        if let Some(s) = staging {
+            self.hazards.write(d, cmd, sync::TRANSFER_WRITE);
+            for (plan, base) in plans {
+                plan.record_staging(d, cmd, s.raw, *base);
+            }
+        }
         let mut read_back: Vec<GeometryHandle> = Vec::new();
-        let mut indexed: Vec<GeometryHandle> = Vec::new();
+        let mut packs: Vec<(GeometryHandle, usize)> = Vec::new();
+        let mut next_plan = 0;
         for task in tasks {
             match task {
                 Task::Geometry(t) => {
-                    if !copies_declared {
-                        self.hazards.write(d, cmd, sync::TRANSFER_WRITE);
-                        copies_declared = true;
+                    let layout = plans[next_plan].0.layout;
+                    packs.push((t.handle, next_plan));
+                    next_plan += 1;
+                    let record = self.st.scene.geometries.get(t.handle)?;
+                    let (meta, meta_name) = (record.meta(), record.name.clone());
+                    let copy = geometry::create_copy(self.memory, &layout)?;
+                    if let Some(name) = &meta_name {
+                        self.device.name(copy.raw, &format!("geometry copy {name}"));
                     }
-                    let layout = GeometryLayout::of(&t.input)?;
-                    let meta = self.st.scene.geometries.get(t.handle)?.meta();
-                    let copy = geometry::record_copy(d, self.memory, cmd, &t.input, &layout)?;
                     let st = &mut *self.st;
                     self.journal.touch_geometry(t.handle, meta);
                     let g = st.scene.geometries.get_mut(t.handle)?;
                     let old = g.copy.replace(copy);
                     self.journal.replaced(Slot::Copy(t.handle), old.map(Held::Buffer));
                     g.layout = Some(layout);
-                    g.input = t.input;
-                    if layout.index_type.is_some() && !indexed.contains(&t.handle) {
-                        indexed.push(t.handle);
-                    }
+                    g.input = t.input.clone();
                     let refit = t.operation == TaskOperation::Update && layout.allow_update && g.blas.is_some();
                     if refit {
                         g.needs_refit = true;
@@ -153,17 +200,17 @@ impl Recorder<'_> {
                 _ => {}
             }
         }
-        self.record_index_checks(&indexed)?;
+        if let Some(s) = staging {
+            self.record_packs(&packs, plans, s)?;
+        }
         self.record_readbacks(&read_back)
     }
 
-    /// Index checks of this recording's copies (`passes::index_check`), counted into the
-    /// working set's host-visible counters, read when the ticket is back.
-    fn record_index_checks(&mut self, handles: &[GeometryHandle]) -> Result<()> {
-        if handles.is_empty() {
-            return Ok(());
-        }
-        let n = handles.len() as u32;
+    /// Packs this recording's copies from staging (`passes::geometry_pack`), bad triangles
+    /// counted per geometry task into the working set's host-visible counters, read when the
+    /// ticket is back.
+    fn record_packs(&mut self, packs: &[(GeometryHandle, usize)], plans: &[(CopyPlan, u64)], staging: &Buffer) -> Result<()> {
+        let n = packs.len() as u32;
         let counters = self.ensure_index_counters(n)?;
         let (device, cmd) = (self.device, self.cmd);
         let d = &device.raw;
@@ -172,17 +219,28 @@ impl Recorder<'_> {
         let st = &mut *self.st;
         let ws = &mut st.working_sets[self.ws];
         let base = ws.index_counters.as_ref().map_or(0, |b| b.address);
-        let mut jobs = Vec::with_capacity(handles.len());
-        for (slot, &h) in handles.iter().enumerate() {
+        let mut jobs = Vec::new();
+        for (slot, &(h, plan_index)) in packs.iter().enumerate() {
             let g = st.scene.geometries.get(h)?;
-            let (Some(copy), Some(l)) = (g.copy.as_ref(), g.layout) else { continue };
-            jobs.push(IndexCheckJob {
-                indices: copy.address + l.index_offset,
-                counter: base + slot as u64 * 4,
-                triangle_count: l.primitive_count,
-                vertex_count: l.vertex_count,
-                index_size: l.index_size() as u32,
-            });
+            let Some(copy) = g.copy.as_ref() else { continue };
+            let (plan, span) = &plans[plan_index];
+            let indices = copy.address + plan.layout.index_offset();
+            for p in &plan.parts {
+                jobs.push(PackJob {
+                    src_vertices: staging.address + span + p.staging_vertices,
+                    dst_vertices: copy.address + p.vertex_base as u64 * geometry::VERTEX_STRIDE,
+                    src_indices: staging.address + span + p.staging_indices,
+                    dst_indices: indices + p.triangle_base as u64 * 12,
+                    counter: base + slot as u64 * 4,
+                    stride: p.stride,
+                    vertex_count: p.vertex_count,
+                    triangle_count: p.triangle_count,
+                    index_size: p.index_size,
+                    first_vertex: p.first_vertex,
+                    vertex_base: p.vertex_base,
+                    rows: p.rows(),
+                });
+            }
             ws.index_checks.push((h, copy.raw, slot as u32));
         }
         let mut r = Recording {
@@ -196,7 +254,7 @@ impl Recorder<'_> {
             inline: false,
             floor: false,
         };
-        st.passes.index_check.record(&mut r, &jobs);
+        st.passes.geometry_pack.record(&mut r, &jobs);
         Ok(())
     }
 

@@ -130,9 +130,9 @@ impl ExecuteContext {
                 if g.copy.as_ref().is_some_and(|c| c.raw == copy) {
                     if bad > 0 {
                         log::warn!(
-                            "geometry {:#x}: {bad} triangle(s) index past its {} vertices; made degenerate",
+                            "geometry {:#x}{}: {bad} triangle(s) index outside its parts' vertices; made degenerate",
                             h.0,
-                            g.layout.map_or(0, |l| l.vertex_count)
+                            g.label()
                         );
                     }
                     g.invalid_triangles = bad;

@@ -25,7 +25,9 @@ pub enum MemoryKind {
     Pipeline = 5,
     /// Direct-lighting cache pages and surfel layouts.
     Cache = 6,
-    /// Read-back copies of geometry, alive from registration until their ticket returns.
+    /// Transient geometry data of a registration (the staging copy of the engine's vertices
+    /// and indices, the read-back for the cache layout), alive until its ticket returns;
+    /// completion markers and bad-triangle counters.
     Readback = 7,
     /// Denoising contexts' history and intermediate images.
     Denoiser = 8,
@@ -64,7 +66,7 @@ pub struct ResourceAllocations {
     pub pipelines: AllocationCount,
     /// Direct-lighting cache pages and surfel layouts.
     pub cache: AllocationCount,
-    /// Read-backs, completion markers and index-check counters.
+    /// Geometry staging and read-backs, completion markers and bad-triangle counters.
     pub readback: AllocationCount,
     /// Denoiser history.
     pub denoiser: AllocationCount,

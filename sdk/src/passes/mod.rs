@@ -13,7 +13,7 @@ pub(crate) mod debug;
 pub(crate) mod denoise;
 pub(crate) mod descriptors;
 pub(crate) mod diffuse;
-pub(crate) mod index_check;
+pub(crate) mod geometry_pack;
 pub(crate) mod inject;
 pub(crate) mod program;
 pub(crate) mod shadow;
@@ -141,7 +141,7 @@ pub(crate) struct Passes {
     pub transfer: transfer::TransferPass,
     pub cache_ops: cache_ops::CacheOps,
     pub denoise: denoise::DenoisePass,
-    pub index_check: index_check::IndexCheck,
+    pub geometry_pack: geometry_pack::GeometryPack,
     /// The one sampler of every sampled G-buffer binding (nearest, clamped: texel fetches).
     sampler: vk::Sampler,
     arena: PipelineArena,
@@ -198,7 +198,7 @@ impl Passes {
         b.label = "denoiser";
         let denoise = denoise::DenoisePass::new(b, sampler)?;
         b.label = "index check";
-        let index_check = index_check::IndexCheck::new(b)?;
+        let geometry_pack = geometry_pack::GeometryPack::new(b)?;
         Ok(Passes {
             ao,
             shadow,
@@ -210,7 +210,7 @@ impl Passes {
             transfer,
             cache_ops,
             denoise,
-            index_check,
+            geometry_pack,
             sampler,
             arena: PipelineArena::default(),
             floor: false,

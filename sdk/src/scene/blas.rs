@@ -1,35 +1,52 @@
 //! BLAS building: geometry descriptions, sizes, creation, batched build/refit recording and
-//! compaction. Static geometry is built for fast tracing and compacted once the compacted size
-//! has come back with a ticket (no stall: the copy happens in a later frame); deformable
-//! geometry is built for fast refits and never compacted.
-use super::geometry::{Blas, GeometryLayout};
+//! compaction. By default static geometry is built for fast tracing and compacted once the
+//! compacted size has come back with a ticket (no stall: the copy happens in a later frame);
+//! deformable geometry is built for fast refits and never compacted (`BuildHint` overrides the
+//! preference).
+use super::geometry::{Blas, GeometryLayout, VERTEX_STRIDE};
 use crate::error::{Error, Result};
 use crate::gpu::device::Device;
 use crate::gpu::memory::{Memory, MemoryKind};
+use crate::types::BuildHint;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
+/// A BLAS's build flags: the hint's preference (see `BuildHint`), ALLOW_UPDATE for deformable
+/// geometry, ALLOW_COMPACTION where `compacts` says.
 pub(crate) fn flags(layout: &GeometryLayout) -> vk::BuildAccelerationStructureFlagsKHR {
+    use vk::BuildAccelerationStructureFlagsKHR as F;
+    let preference = match (layout.build_hint, layout.allow_update) {
+        (BuildHint::Auto, true) | (BuildHint::PreferFastBuild, _) => F::PREFER_FAST_BUILD,
+        (BuildHint::Auto, false) | (BuildHint::PreferFastTrace, _) => F::PREFER_FAST_TRACE,
+        (BuildHint::LowMemory, _) => F::LOW_MEMORY,
+    };
+    let mut f = preference;
     if layout.allow_update {
-        vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_BUILD | vk::BuildAccelerationStructureFlagsKHR::ALLOW_UPDATE
-    } else {
-        vk::BuildAccelerationStructureFlagsKHR::PREFER_FAST_TRACE | vk::BuildAccelerationStructureFlagsKHR::ALLOW_COMPACTION
+        f |= F::ALLOW_UPDATE;
     }
+    if compacts(layout) {
+        f |= F::ALLOW_COMPACTION;
+    }
+    f
+}
+
+/// Whether a BLAS is compacted once its compacted size is back: static geometry, unless it
+/// asked for fast builds (compaction is one more copy per build).
+pub(crate) fn compacts(layout: &GeometryLayout) -> bool {
+    !layout.allow_update && layout.build_hint != BuildHint::PreferFastBuild
 }
 
 pub(crate) fn triangles(
     copy_address: vk::DeviceAddress,
     layout: &GeometryLayout,
 ) -> vk::AccelerationStructureGeometryKHR<'static> {
-    let mut tri = vk::AccelerationStructureGeometryTrianglesDataKHR::default()
+    let tri = vk::AccelerationStructureGeometryTrianglesDataKHR::default()
         .vertex_format(vk::Format::R32G32B32_SFLOAT)
         .vertex_data(vk::DeviceOrHostAddressConstKHR { device_address: copy_address })
-        .vertex_stride(layout.vertex_stride)
+        .vertex_stride(VERTEX_STRIDE)
         .max_vertex(layout.vertex_count.saturating_sub(1))
-        .index_type(layout.index_type.unwrap_or(vk::IndexType::NONE_KHR));
-    if layout.index_type.is_some() {
-        tri = tri.index_data(vk::DeviceOrHostAddressConstKHR { device_address: copy_address + layout.index_offset });
-    }
+        .index_type(vk::IndexType::UINT32)
+        .index_data(vk::DeviceOrHostAddressConstKHR { device_address: copy_address + layout.index_offset() });
     vk::AccelerationStructureGeometryKHR::default()
         .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
         .geometry(vk::AccelerationStructureGeometryDataKHR { triangles: tri })

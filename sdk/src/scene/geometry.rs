@@ -1,81 +1,189 @@
-//! A registered mesh: the SDK's copy of its vertices/indices and its BLAS.
+//! A registered mesh: the SDK's compact copy of its parts and its BLAS.
 //!
 //! Why copy: the BLAS of a throttled geometry may be built frames after registration, and a
-//! refit reads the vertices again; copying at registration (one vkCmdCopyBuffer) lets the
-//! engine free or reuse its buffers as soon as the registering ticket is back, and gives the
-//! lighting cache a vertex/index source it owns.
+//! refit reads the vertices again; copying at registration lets the engine free or reuse its
+//! buffers as soon as the registering ticket is back, and gives the lighting cache a vertex
+//! and index source it owns. The copy is compact whatever the engine's layout: the parts'
+//! vertex ranges are copied to a transient staging buffer (vkCmdCopyBuffer: the engine's
+//! buffers need only TRANSFER_SRC), then `passes::geometry_pack` keeps 12 bytes of position
+//! per vertex, in geometry space, and 32-bit indices into the geometry's vertices.
 use crate::cache::layout::SurfelLayout;
 use crate::error::{Error, Result};
 use crate::gpu::memory::{Buffer, Memory, MemoryKind};
-use crate::types::{GeometryInput, SurfelType};
+use crate::types::{BuildHint, GeometryInput, SurfelType};
 use ash::vk;
-use glam::Vec3;
+use glam::{Affine3A, Mat4, Vec3};
 use gpu_allocator::MemoryLocation;
 
-/// The layout of the SDK's copy of a geometry: vertices as the engine laid them out (its
-/// stride), then indices.
-#[derive(Debug, Clone, Copy)]
+/// Bytes per vertex in the SDK's copy (a position).
+pub(crate) const VERTEX_STRIDE: u64 = 12;
+/// Bytes per triangle in the SDK's copy (three 32-bit indices).
+const TRIANGLE_BYTES: u64 = 12;
+
+/// The layout of the SDK's copy of a geometry: every part's vertices (12 bytes each), then
+/// every part's triangles (three u32 each), parts in order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct GeometryLayout {
     pub vertex_count: u32,
-    pub vertex_stride: u64,
-    pub vertex_bytes: u64,
-    /// None for non-indexed triangles.
-    pub index_type: Option<vk::IndexType>,
-    pub index_offset: u64,
-    pub index_count: u32,
     pub primitive_count: u32,
+    pub component_count: u32,
     pub allow_update: bool,
+    pub build_hint: BuildHint,
 }
 
 impl GeometryLayout {
-    /// The copy's layout, with every size computed in checked arithmetic: an engine's stride
-    /// or count that overflows is an error here, never a wrapped size that reaches the driver.
+    /// The layout of `input`'s copy, with every size checked (see `CopyPlan::of`).
     pub fn of(input: &GeometryInput) -> Result<GeometryLayout> {
-        let v = &input.vertices;
-        let overflow =
-            || Error::invalid("GeometryInput.vertices", format!("{} vertices of stride {} overflow 64 bits", v.count, v.stride));
-        let position_bytes = if v.format == vk::Format::R32G32B32A32_SFLOAT { 16 } else { 12 };
-        let vertex_bytes = v
-            .stride
-            .checked_mul(u64::from(v.count.max(1)) - 1)
-            .and_then(|b| b.checked_add(position_bytes))
-            .ok_or_else(overflow)?;
-        let indexed = input.indices.buffer != vk::Buffer::null();
-        let index_type = indexed.then(|| {
-            if input.indices.format == vk::Format::R16_UINT {
-                vk::IndexType::UINT16
-            } else {
-                vk::IndexType::UINT32
-            }
-        });
-        let layout = GeometryLayout {
-            vertex_count: v.count,
-            vertex_stride: v.stride,
-            vertex_bytes,
-            index_type,
-            index_offset: vertex_bytes.checked_next_multiple_of(4).ok_or_else(overflow)?,
-            index_count: if indexed { input.indices.count } else { 0 },
-            primitive_count: if indexed { input.indices.count / 3 } else { v.count / 3 },
-            allow_update: input.allow_update,
-        };
-        // The whole copy (rounded up to words) must be addressable too.
-        let end = layout.index_offset.checked_add(layout.index_size() * layout.index_count as u64);
-        end.and_then(|e| e.checked_next_multiple_of(4)).ok_or_else(overflow)?;
-        Ok(layout)
+        Ok(CopyPlan::of(input)?.layout)
     }
 
-    pub fn index_size(&self) -> u64 {
-        match self.index_type {
-            Some(vk::IndexType::UINT16) => 2,
-            Some(_) => 4,
-            None => 0,
-        }
+    /// Byte offset of the first index.
+    pub fn index_offset(&self) -> u64 {
+        self.vertex_count as u64 * VERTEX_STRIDE
     }
 
-    /// Bytes of the copy (checked when the layout was made), rounded up to whole words so the
-    /// index check can read 16-bit indices a word at a time.
+    /// Bytes of the copy (checked when the layout was made).
     pub fn total_bytes(&self) -> u64 {
-        (self.index_offset + self.index_size() * self.index_count as u64).next_multiple_of(4)
+        self.index_offset() + self.primitive_count as u64 * TRIANGLE_BYTES
+    }
+}
+
+/// How one part of a geometry is copied: the engine's regions that go to staging, and where
+/// the part lands in the compact copy.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PartCopy {
+    pub vertex_buffer: vk::Buffer,
+    /// Engine byte offset of the first copied vertex's position.
+    pub vertex_src_offset: u64,
+    /// Bytes from the first copied vertex's position to the end of the last's.
+    pub vertex_bytes: u64,
+    /// Null for non-indexed parts.
+    pub index_buffer: vk::Buffer,
+    pub index_src_offset: u64,
+    pub index_bytes: u64,
+    pub stride: u32,
+    pub vertex_count: u32,
+    /// The first copied vertex's index in the engine's buffer.
+    pub first_vertex: u32,
+    /// 0 (non-indexed), 2 or 4.
+    pub index_size: u32,
+    pub triangle_count: u32,
+    /// The part's first vertex and triangle in the geometry.
+    pub vertex_base: u32,
+    pub triangle_base: u32,
+    pub transform: Affine3A,
+    /// Offsets of the part's vertices and indices in the geometry's staging span.
+    pub staging_vertices: u64,
+    pub staging_indices: u64,
+}
+
+impl PartCopy {
+    /// Part to geometry space as the pack shader's three rows.
+    pub fn rows(&self) -> [[f32; 4]; 3] {
+        let m = Mat4::from(self.transform);
+        [m.row(0).to_array(), m.row(1).to_array(), m.row(2).to_array()]
+    }
+}
+
+/// Everything a geometry's copy needs: its layout, its parts, and its staging bytes.
+#[derive(Debug, Clone)]
+pub(crate) struct CopyPlan {
+    pub layout: GeometryLayout,
+    pub parts: Vec<PartCopy>,
+    pub staging_bytes: u64,
+}
+
+impl CopyPlan {
+    /// The plan of `input`'s copy, in checked arithmetic: counts or strides that overflow are
+    /// an error here, never a wrapped size that reaches the driver. (`validate` has checked
+    /// each field; this checks what they add up to.)
+    pub fn of(input: &GeometryInput) -> Result<CopyPlan> {
+        let overflow = |what: &str| Error::invalid("GeometryInput", format!("{what} overflows"));
+        let (mut vertices, mut triangles, mut staging) = (0u32, 0u32, 0u64);
+        let mut parts = Vec::with_capacity(1 + input.extra_components.len());
+        for c in input.components() {
+            let v = &c.vertices;
+            let indexed = c.indices.buffer != vk::Buffer::null();
+            let (first, count) = match c.vertex_range.filter(|_| indexed) {
+                Some(r) => (r.first, r.last.saturating_sub(r.first) + 1),
+                None => (0, v.count),
+            };
+            let position_bytes = if v.format == vk::Format::R32G32B32A32_SFLOAT { 16 } else { 12 };
+            let vertex_bytes = v
+                .stride
+                .checked_mul(u64::from(count.max(1)) - 1)
+                .and_then(|b| b.checked_add(position_bytes))
+                .ok_or_else(|| overflow("a part's vertex bytes"))?;
+            let vertex_src_offset = v
+                .stride
+                .checked_mul(u64::from(first))
+                .and_then(|b| b.checked_add(v.offset))
+                .ok_or_else(|| overflow("a vertex offset"))?;
+            let index_size = match (indexed, c.indices.format) {
+                (false, _) => 0u32,
+                (true, vk::Format::R16_UINT) => 2,
+                (true, _) => 4,
+            };
+            let triangle_count = if indexed { c.indices.count / 3 } else { v.count / 3 };
+            let index_bytes = u64::from(index_size) * u64::from(if indexed { c.indices.count } else { 0 });
+            let staging_vertices = staging;
+            let staging_indices = staging
+                .checked_add(vertex_bytes)
+                .and_then(|b| b.checked_next_multiple_of(16))
+                .ok_or_else(|| overflow("staging"))?;
+            staging = staging_indices
+                .checked_add(index_bytes)
+                .and_then(|b| b.checked_next_multiple_of(16))
+                .ok_or_else(|| overflow("staging"))?;
+            parts.push(PartCopy {
+                vertex_buffer: v.buffer,
+                vertex_src_offset,
+                vertex_bytes,
+                index_buffer: c.indices.buffer,
+                index_src_offset: c.indices.offset,
+                index_bytes,
+                stride: u32::try_from(v.stride).map_err(|_| overflow("a stride"))?,
+                vertex_count: count,
+                first_vertex: first,
+                index_size,
+                triangle_count,
+                vertex_base: vertices,
+                triangle_base: triangles,
+                transform: c.transform.unwrap_or(Affine3A::IDENTITY),
+                staging_vertices,
+                staging_indices,
+            });
+            vertices = vertices.checked_add(count).ok_or_else(|| overflow("the vertex count"))?;
+            triangles = triangles.checked_add(triangle_count).ok_or_else(|| overflow("the triangle count"))?;
+        }
+        let layout = GeometryLayout {
+            vertex_count: vertices,
+            primitive_count: triangles,
+            component_count: parts.len() as u32,
+            allow_update: input.allow_update,
+            build_hint: input.build_hint,
+        };
+        // The copy's bytes (u32 counts times 12: cannot overflow u64, but say so).
+        (vertices as u64 * VERTEX_STRIDE).checked_add(triangles as u64 * TRIANGLE_BYTES).ok_or_else(|| overflow("the copy"))?;
+        Ok(CopyPlan { layout, parts, staging_bytes: staging })
+    }
+
+    /// Records the copies of the engine's regions into `staging` at `base` (the geometry's span).
+    pub fn record_staging(&self, device: &ash::Device, cmd: vk::CommandBuffer, staging: vk::Buffer, base: u64) {
+        for p in &self.parts {
+            let v =
+                [vk::BufferCopy { src_offset: p.vertex_src_offset, dst_offset: base + p.staging_vertices, size: p.vertex_bytes }];
+            // SAFETY: regions validated against the buffers' sizes at scheduling.
+            unsafe { device.cmd_copy_buffer(cmd, p.vertex_buffer, staging, &v) };
+            if p.index_size > 0 {
+                let i = [vk::BufferCopy {
+                    src_offset: p.index_src_offset,
+                    dst_offset: base + p.staging_indices,
+                    size: p.index_bytes,
+                }];
+                unsafe { device.cmd_copy_buffer(cmd, p.index_buffer, staging, &i) };
+            }
+        }
     }
 }
 
@@ -115,6 +223,9 @@ pub(crate) struct GeometryRecord {
     /// Triangles of the current copy whose indices went past the vertex count (made
     /// degenerate by the index check; known once the copying ticket is back).
     pub invalid_triangles: u32,
+    /// The engine's debug name (`ExecuteContext::set_geometry_name`): in errors, logs and the
+    /// Vulkan names of its BLAS and copy.
+    pub name: Option<String>,
 }
 
 /// A geometry's surfel layout on the GPU. `id` changes with every new layout, so instance
@@ -129,7 +240,7 @@ pub(crate) struct SurfelGpu {
 
 /// Everything of a geometry record but its GPU objects and pending layout: what a failed build
 /// puts back (the GPU objects go back through the build's journal).
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub(crate) struct GeometryMeta {
     layout: Option<GeometryLayout>,
     state: BlasState,
@@ -149,7 +260,7 @@ impl GeometryRecord {
             build_id: self.build_id,
             compacted_size: self.compacted_size,
             instance_refs: self.instance_refs,
-            input: self.input,
+            input: self.input.clone(),
         }
     }
 
@@ -173,44 +284,31 @@ impl GeometryRecord {
             surfel: None,
             pending_layout: None,
             invalid_triangles: 0,
+            name: None,
         }
     }
 
     pub fn registered(&self) -> bool {
         self.layout.is_some()
     }
+
+    /// " \"name\"" for messages, or nothing.
+    pub fn label(&self) -> String {
+        self.name.as_ref().map(|n| format!(" \"{n}\"")).unwrap_or_default()
+    }
 }
 
-/// Creates the copy buffer and records the copy of the engine's vertices and indices into it.
-pub(crate) fn record_copy(
-    device: &ash::Device,
-    memory: &Memory,
-    cmd: vk::CommandBuffer,
-    input: &GeometryInput,
-    layout: &GeometryLayout,
-) -> Result<Buffer> {
-    let copy = memory.create_buffer(
+/// Creates a geometry's copy buffer (filled by `passes::geometry_pack`).
+pub(crate) fn create_copy(memory: &Memory, layout: &GeometryLayout) -> Result<Buffer> {
+    memory.create_buffer(
         "geometry copy",
         layout.total_bytes(),
-        vk::BufferUsageFlags::TRANSFER_DST
-            | vk::BufferUsageFlags::TRANSFER_SRC
+        vk::BufferUsageFlags::TRANSFER_SRC
             | vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR,
         MemoryLocation::GpuOnly,
         MemoryKind::GeometryCopy,
-    )?;
-    let v = [vk::BufferCopy { src_offset: input.vertices.offset, dst_offset: 0, size: layout.vertex_bytes }];
-    // SAFETY: regions validated against the buffers' sizes at scheduling.
-    unsafe { device.cmd_copy_buffer(cmd, input.vertices.buffer, copy.raw, &v) };
-    if layout.index_type.is_some() {
-        let i = [vk::BufferCopy {
-            src_offset: input.indices.offset,
-            dst_offset: layout.index_offset,
-            size: layout.index_size() * layout.index_count as u64,
-        }];
-        unsafe { device.cmd_copy_buffer(cmd, input.indices.buffer, copy.raw, &i) };
-    }
-    Ok(copy)
+    )
 }
 
 /// The bytes a buffer can hold at most (its memory requirement, which is >= its size). Used to
@@ -228,28 +326,14 @@ pub(crate) fn check_region(device: &ash::Device, what: &'static str, buffer: vk:
     Ok(())
 }
 
-/// Positions and triangles from a read-back geometry copy (vertices with their stride, then
-/// indices at `index_offset`).
+/// Positions and triangles from a read-back geometry copy (12-byte vertices, then u32
+/// triangles at `index_offset`).
 pub(crate) fn read_geometry(bytes: &[u8], g: &GeometryLayout) -> (Vec<Vec3>, Vec<[u32; 3]>) {
-    let f = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap_or([0; 4]));
-    let positions: Vec<Vec3> = (0..g.vertex_count as usize)
-        .map(|v| {
-            let o = v * g.vertex_stride as usize;
-            if o + 12 <= bytes.len() {
-                Vec3::new(f(o), f(o + 4), f(o + 8))
-            } else {
-                Vec3::ZERO
-            }
-        })
-        .collect();
-    let io = g.index_offset as usize;
-    let index = |i: usize| -> u32 {
-        match g.index_size() {
-            2 => bytes.get(io + i * 2..io + i * 2 + 2).map_or(0, |b| u16::from_le_bytes([b[0], b[1]]) as u32),
-            4 => bytes.get(io + i * 4..io + i * 4 + 4).map_or(0, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-            _ => i as u32,
-        }
-    };
+    let word = |o: usize| bytes.get(o..o + 4).map_or([0; 4], |b| [b[0], b[1], b[2], b[3]]);
+    let f = |o: usize| f32::from_le_bytes(word(o));
+    let positions = (0..g.vertex_count as usize).map(|v| Vec3::new(f(12 * v), f(12 * v + 4), f(12 * v + 8))).collect();
+    let io = g.index_offset() as usize;
+    let index = |i: usize| u32::from_le_bytes(word(io + 4 * i));
     let triangles = (0..g.primitive_count as usize).map(|t| [index(3 * t), index(3 * t + 1), index(3 * t + 2)]).collect();
     (positions, triangles)
 }

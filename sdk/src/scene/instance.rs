@@ -7,6 +7,8 @@ use glam::Affine3A;
 pub(crate) struct InstanceRecord {
     /// Some once a register task has been built (and until a remove task).
     pub placement: Option<Placement>,
+    /// The engine's debug name (`ExecuteContext::set_instance_name`).
+    pub name: Option<String>,
 }
 
 #[derive(Debug, Clone, Copy)]

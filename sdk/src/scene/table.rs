@@ -47,9 +47,10 @@ pub(crate) fn instance_table(scene: &Scene) -> Vec<InstanceGpu> {
                 [m.x_axis.z, m.y_axis.z, m.z_axis.z, tr.z],
             ],
             vertex_addr: copy,
-            index_addr: g.layout.filter(|l| l.index_type.is_some()).map_or(0, |l| copy + l.index_offset),
-            vertex_stride: g.layout.map_or(12, |l| l.vertex_stride as u32),
-            index_size: g.layout.map_or(0, |l| l.index_size() as u32),
+            // The SDK's copies are compact: 12-byte positions and 32-bit indices.
+            index_addr: g.layout.map_or(0, |l| copy + l.index_offset()),
+            vertex_stride: 12,
+            index_size: 4,
             max_resolution: surfel.map_or(1, |s| s.max_resolution),
             pad: 0,
             layout_addr: surfel.map_or(0, |s| s.buffer.address),

@@ -16,17 +16,21 @@ pub enum TaskOperation {
     Update = 1,
 }
 
-/// A vertex buffer of the engine's. The SDK copies `count` vertices out of it while the ticket
-/// that registers (or updates) the geometry runs, so it must have TRANSFER_SRC usage and stay
-/// alive until that ticket comes back; after that the engine may free it.
+/// A vertex buffer of the engine's, as the engine lays it out: the position may sit anywhere in
+/// a larger interleaved vertex (`offset` + `stride`). The SDK copies the vertices out of it
+/// while the ticket that registers (or updates) the geometry runs — into a transient staging
+/// buffer, from which it keeps only the 12 position bytes of each vertex — so the buffer needs
+/// TRANSFER_SRC usage and must stay alive until that ticket comes back; then the engine may
+/// free or reuse it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[repr(C)]
 pub struct VertexBufferInput {
     /// The engine's buffer (`TRANSFER_SRC` usage).
     pub buffer: vk::Buffer,
-    /// Byte offset of the first vertex's position.
+    /// Byte offset of the first vertex's position (any: a sub-range of a shared buffer, or the
+    /// position's offset inside an interleaved vertex).
     pub offset: u64,
-    /// Bytes between vertices (>= 12, a multiple of 4). Default 12.
+    /// Bytes between vertices (>= the position's 12 or 16 bytes, a multiple of 4). Default 12.
     pub stride: u64,
     /// Number of vertices (>= 1; a multiple of 3 for non-indexed triangles).
     pub count: u32,
@@ -46,7 +50,7 @@ impl Default for VertexBufferInput {
 pub struct IndexBufferInput {
     /// Null for non-indexed triangles (every three vertices make one).
     pub buffer: vk::Buffer,
-    /// Byte offset of the first index.
+    /// Byte offset of the first index (any).
     pub offset: u64,
     /// Number of indices (a multiple of 3).
     pub count: u32,
@@ -90,23 +94,97 @@ impl Default for SurfelSettings {
     }
 }
 
-/// A mesh: where its positions and indices are, and how it is built and cached.
+/// The vertices a component's indices use, `first..=last` (indices stay relative to the vertex
+/// buffer's start, as the engine wrote them). Only these vertices are copied: a mesh part that
+/// uses 200 vertices of a 100,000-vertex shared buffer copies 200. An index outside the range
+/// is a bad index (its triangle is made degenerate and counted, see
+/// `ExecuteContext::geometry_invalid_triangles`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+pub struct VertexRange {
+    /// The first vertex used.
+    pub first: u32,
+    /// The last vertex used (>= `first`, < the vertex count).
+    pub last: u32,
+}
+
+/// One part of a geometry: a vertex/index buffer pair and its placement in the geometry. All
+/// parts of a geometry go into one BLAS (and one direct-lighting cache).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
-#[repr(C)]
-pub struct GeometryInput {
+pub struct GeometryComponent {
     /// The positions.
     pub vertices: VertexBufferInput,
-    /// The triangles' indices (a null buffer: non-indexed).
+    /// The triangles' indices (a null buffer: non-indexed, every three vertices make one).
     pub indices: IndexBufferInput,
-    /// Deforming/skinned meshes: later updates refit the BLAS in place (same triangle count)
-    /// instead of queueing a rebuild. Such BLASes are not compacted. Default false.
+    /// Part space to geometry space (applied once, when the part is copied). Must be finite.
+    /// Default `None`: identity.
+    pub transform: Option<Affine3A>,
+    /// Indexed parts: the vertices the indices use, the only ones copied. Default `None`: all
+    /// `vertices.count`.
+    pub vertex_range: Option<VertexRange>,
+}
+
+/// How a geometry's BLAS is built (Vulkan's build-preference flags).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+#[repr(u32)]
+pub enum BuildHint {
+    /// Static geometry: prefer fast trace, then compact. `allow_update` geometry: prefer fast
+    /// build (it is refitted often). Default.
+    #[default]
+    Auto = 0,
+    /// Prefer fast trace (and compact), whatever `allow_update` says.
+    PreferFastTrace = 1,
+    /// Prefer fast build; no compaction (for geometry rebuilt often, or streamed in a hurry).
+    PreferFastBuild = 2,
+    /// Prefer low memory: the low-memory flag, then compaction.
+    LowMemory = 3,
+}
+
+/// A mesh: where its positions and indices are, and how it is built and cached.
+///
+/// The first part is given inline (`vertices`, `indices`, `transform`, `vertex_range`), as most
+/// meshes have one; further parts go in `extra_components`. The SDK keeps one compact copy of
+/// all parts — 12-byte positions, transformed into geometry space, and 32-bit indices — so
+/// tracing costs the same whatever layout the engine's buffers have.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct GeometryInput {
+    /// The first part's positions.
+    pub vertices: VertexBufferInput,
+    /// The first part's indices (a null buffer: non-indexed).
+    pub indices: IndexBufferInput,
+    /// The first part's transform into geometry space. Default `None`: identity.
+    pub transform: Option<Affine3A>,
+    /// The vertices the first part's indices use. Default `None`: all.
+    pub vertex_range: Option<VertexRange>,
+    /// Further parts of the same geometry (one BLAS for all). Default empty.
+    pub extra_components: Vec<GeometryComponent>,
+    /// Deforming/skinned meshes: later updates refit the BLAS in place (same parts, vertex and
+    /// triangle counts) instead of queueing a rebuild. Default false.
     pub allow_update: bool,
+    /// The BLAS build preference. Default `Auto`.
+    pub build_hint: BuildHint,
     /// The direct-lighting cache's resolution on it.
     pub surfels: SurfelSettings,
 }
 
+impl GeometryInput {
+    /// The first part, as a component.
+    pub fn first_component(&self) -> GeometryComponent {
+        GeometryComponent {
+            vertices: self.vertices,
+            indices: self.indices,
+            transform: self.transform,
+            vertex_range: self.vertex_range,
+        }
+    }
+
+    /// Every part, the first one first.
+    pub fn components(&self) -> impl Iterator<Item = GeometryComponent> + '_ {
+        std::iter::once(self.first_component()).chain(self.extra_components.iter().copied())
+    }
+}
+
 /// Registers or updates a geometry (`TaskContainer::schedule_geometry`).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct GeometryTask {
     /// The geometry (from `create_geometry_handles`).
     pub handle: GeometryHandle,

@@ -1,0 +1,120 @@
+//! The geometry pack (shaders/geometry_pack.comp): turns the staging copy of an engine's mesh
+//! parts — vertices at the engine's stride and offset, 16- or 32-bit indices, or none — into
+//! the SDK's compact copy: 12-byte positions in geometry space, then 32-bit triangle indices.
+//!
+//! Why a compute pass rather than one vkCmdCopyBuffer: an interleaved 32-byte vertex would
+//! otherwise be kept whole for the geometry's life (and read at that stride by every BLAS
+//! build, refit and cache lookup); parts of one mesh need their transforms applied and their
+//! indices offset into one vertex array; and a bad index must never reach a BLAS build. Each
+//! triangle with an index outside its part's vertices is made degenerate and counted; the
+//! count comes back with the ticket (`ExecuteContext::geometry_invalid_triangles`).
+//! Kickstart RT trusts the engine's indices.
+use super::Recording;
+use crate::error::Result;
+use crate::gpu::pipeline::PipelineBuilder;
+use crate::gpu::sync;
+use crate::shaders;
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+struct PackPush {
+    /// First: std430 aligns vec4 to 16 bytes (GLSL's layout must match this one).
+    rows: [[f32; 4]; 3],
+    src_vertices: u64,
+    dst_vertices: u64,
+    src_indices: u64,
+    dst_indices: u64,
+    counter: u64,
+    stride_words: u32,
+    vertex_count: u32,
+    triangle_count: u32,
+    index_size: u32,
+    first_vertex: u32,
+    vertex_base: u32,
+    first_item: u32,
+    pad: u32,
+}
+
+const GROUP: u32 = 256;
+
+pub(crate) struct GeometryPack {
+    layout: vk::PipelineLayout,
+    pipeline: vk::Pipeline,
+}
+
+/// One part to pack (addresses already offset to the part's first vertex, index, triangle).
+pub(crate) struct PackJob {
+    pub src_vertices: vk::DeviceAddress,
+    pub dst_vertices: vk::DeviceAddress,
+    /// Unused when `index_size` is 0.
+    pub src_indices: vk::DeviceAddress,
+    pub dst_indices: vk::DeviceAddress,
+    /// Where bad triangles are counted (a zeroed u32).
+    pub counter: vk::DeviceAddress,
+    /// The engine's stride in bytes (a multiple of 4).
+    pub stride: u32,
+    pub vertex_count: u32,
+    pub triangle_count: u32,
+    /// 0 (non-indexed), 2 or 4.
+    pub index_size: u32,
+    /// Subtracted from the engine's indices (the part's vertex range starts there).
+    pub first_vertex: u32,
+    /// The part's first vertex in the geometry (added to its indices).
+    pub vertex_base: u32,
+    /// Part to geometry space, row-major 3x4.
+    pub rows: [[f32; 4]; 3],
+}
+
+impl GeometryPack {
+    pub fn new(b: &mut PipelineBuilder<'_>) -> Result<GeometryPack> {
+        let layout = b.layout(None, std::mem::size_of::<PackPush>() as u32, vk::ShaderStageFlags::COMPUTE)?;
+        let pipeline = b.compute(layout, shaders::GEOMETRY_PACK_COMP)?;
+        Ok(GeometryPack { layout, pipeline })
+    }
+
+    /// Packs every job (after the staging copies and the counters' fill; before BLAS builds
+    /// and read-backs, which the recorder orders through its hazards).
+    pub fn record(&self, r: &mut Recording<'_>, jobs: &[PackJob]) {
+        if jobs.is_empty() {
+            return;
+        }
+        let stage = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_atomic(stage));
+        let d = &r.device.raw;
+        let max_groups = r.device.limits.max_dispatch_groups[0].max(1);
+        unsafe { d.cmd_bind_pipeline(r.cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline) };
+        for j in jobs {
+            // One invocation per vertex and per triangle; split so no dispatch exceeds the
+            // group-count limit.
+            let items = j.vertex_count.max(j.triangle_count) as u64;
+            let per_dispatch = max_groups as u64 * GROUP as u64;
+            let mut first = 0u64;
+            while first < items {
+                let n = (items - first).min(per_dispatch) as u32;
+                let push = PackPush {
+                    rows: j.rows,
+                    src_vertices: j.src_vertices,
+                    dst_vertices: j.dst_vertices,
+                    src_indices: j.src_indices,
+                    dst_indices: j.dst_indices,
+                    counter: j.counter,
+                    stride_words: j.stride / 4,
+                    vertex_count: j.vertex_count,
+                    triangle_count: j.triangle_count,
+                    index_size: j.index_size,
+                    first_vertex: j.first_vertex,
+                    vertex_base: j.vertex_base,
+                    first_item: first as u32,
+                    pad: 0,
+                };
+                unsafe {
+                    d.cmd_push_constants(r.cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&push));
+                    d.cmd_dispatch(r.cmd, n.div_ceil(GROUP), 1, 1);
+                }
+                first += n as u64;
+            }
+        }
+    }
+}
