@@ -148,6 +148,7 @@ fn deferred_lighting_with_sdk_shadows_matches_the_reference_lit_frame() {
             light,
             output: shadow.input(general),
             rays_per_pixel: 1,
+            ..Default::default()
         })
         .unwrap();
     let common = DenoisingCommon { depth, normals, viewport, camera: sdk_camera, ..Default::default() };

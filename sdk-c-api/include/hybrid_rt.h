@@ -764,6 +764,11 @@ typedef struct HrtTraceShadowTask {
    * 1..=64. Default 1.
    */
   uint32_t rays_per_pixel;
+  /**
+   * Stop at the first occluder found (R is then an occluder's distance, >= the closest).
+   * Default false.
+   */
+  bool first_hit;
 } HrtTraceShadowTask;
 
 /**
@@ -845,6 +850,10 @@ typedef struct HrtTraceMultiShadowTask {
    * 1..=64. Default 1.
    */
   uint32_t rays_per_pixel;
+  /**
+   * First-hit traversal (see HrtTraceShadowTask). Default false.
+   */
+  bool first_hit;
 } HrtTraceMultiShadowTask;
 
 /**

@@ -877,6 +877,7 @@ pub extern "C" fn hrt_trace_multi_shadow_task_default() -> HrtTraceMultiShadowTa
         visibility: out,
         packed: out,
         rays_per_pixel: 1,
+        first_hit: rt::TraceMultiShadowTask::default().first_hit,
     }
 }
 

@@ -470,6 +470,9 @@ pub struct HrtTraceShadowTask {
     pub output: HrtImageInput,
     /// 1..=64. Default 1.
     pub rays_per_pixel: u32,
+    /// Stop at the first occluder found (R is then an occluder's distance, >= the closest).
+    /// Default false.
+    pub first_hit: bool,
 }
 
 /// Diffuse GI shaded from the cache: RGB = mean incoming radiance (E/pi, multiply by albedo),
@@ -530,6 +533,8 @@ pub struct HrtTraceMultiShadowTask {
     pub packed: HrtImageInput,
     /// 1..=64. Default 1.
     pub rays_per_pixel: u32,
+    /// First-hit traversal (see HrtTraceShadowTask). Default false.
+    pub first_hit: bool,
 }
 
 /// Resets an instance's cache to its initial colour.
@@ -1018,6 +1023,7 @@ pub(crate) fn shadow_task(t: &HrtTraceShadowTask) -> Result<rt::TraceShadowTask,
         light: light(&t.light)?,
         output: image(&t.output),
         rays_per_pixel: t.rays_per_pixel,
+        first_hit: t.first_hit,
     })
 }
 
@@ -1031,6 +1037,7 @@ pub(crate) fn multi_shadow_task(
         visibility: image(&t.visibility),
         packed: image(&t.packed),
         rays_per_pixel: t.rays_per_pixel,
+        first_hit: t.first_hit,
     })
 }
 
@@ -1050,5 +1057,6 @@ pub(crate) fn shadow_task_default() -> HrtTraceShadowTask {
         },
         output: image_c(&d.output),
         rays_per_pixel: d.rays_per_pixel,
+        first_hit: d.first_hit,
     }
 }

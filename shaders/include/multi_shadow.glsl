@@ -17,7 +17,7 @@ layout(set = 0, binding = 3) uniform writeonly uimage2D u_visibility;
 layout(set = 0, binding = 4) uniform writeonly image2D u_packed;
 layout(set = 0, binding = 5, std140) uniform MultiShadowConstants {
     TraceCommon common_;
-    uvec4 counts;      // rays per pixel, light count
+    uvec4 counts;      // rays per pixel, light count, first-hit mode
     LightGpu lights[16];
 } u_c;
 
@@ -40,13 +40,14 @@ void hrt_multi_shadow_main() {
     uvec4 words = uvec4(0u);
     float vis_sum = 0.0, width_sum = 0.0, dist_min = 1e30;
     uint occluded = 0u;
+    uint flags = u_c.counts.z != 0u ? gl_RayFlagsTerminateOnFirstHitEXT : 0u;
     for (uint l = 0u; l < count; ++l) {
         uint visible = 0u;
         for (uint i = 0u; i < rays; ++i) {
             vec3 dir;
             float tmax;
             hrt_light_ray(u_c.lights[l], origin, hrt_r2(i, shift), dir, tmax);
-            float t = hrt_trace_record(u_tlas, c.frame.y & 0xffu, origin, dir, tmax).t;
+            float t = hrt_trace_record_flags(u_tlas, flags, c.frame.y & 0xffu, origin, dir, tmax).t;
             if (t < 0.0) {
                 visible += 1u;
             } else {

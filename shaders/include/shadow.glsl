@@ -18,7 +18,7 @@ layout(set = 0, binding = 3) uniform writeonly image2D u_out;
 layout(set = 0, binding = 4, std140) uniform ShadowConstants {
     TraceCommon common_;
     LightGpu light;
-    uvec4 counts;     // rays per pixel
+    uvec4 counts;     // rays per pixel, first-hit mode
 } u_c;
 
 
@@ -39,12 +39,15 @@ void hrt_shadow_main() {
 
     float closest = 1e30;
     uint visible = 0u;
+    // First-hit mode: traversal stops at any occluder; its distance is kept (>= the closest).
+    uint flags = u_c.counts.y != 0u ? gl_RayFlagsTerminateOnFirstHitEXT : 0u;
     for (uint i = 0u; i < rays; ++i) {
         vec3 dir;
         float tmax;
         hrt_light_ray(u_c.light, origin, hrt_r2(i, shift), dir, tmax);
-        // Any occluder will do for visibility, but the guide's output wants the closest one.
-        float t = hrt_trace_record(u_tlas, c.frame.y & 0xffu, origin, dir, tmax).t;
+        // Any occluder will do for visibility; the denoiser's penumbra estimate wants the
+        // closest (unless the task chose first-hit speed).
+        float t = hrt_trace_record_flags(u_tlas, flags, c.frame.y & 0xffu, origin, dir, tmax).t;
         if (t < 0.0) visible += 1u;
         else closest = min(closest, t);
     }

@@ -3,9 +3,10 @@
 #define HRT_TRACE_RQ_GLSL
 #include "hit_record.glsl"
 
-HitRecord hrt_trace_record(accelerationStructureEXT tlas, uint mask, vec3 origin, vec3 dir, float tmax) {
+// `flags` adds ray flags to Opaque (see trace_rt.glsl).
+HitRecord hrt_trace_record_flags(accelerationStructureEXT tlas, uint flags, uint mask, vec3 origin, vec3 dir, float tmax) {
     rayQueryEXT q;
-    rayQueryInitializeEXT(q, tlas, gl_RayFlagsOpaqueEXT, mask, origin, 0.0, dir, tmax);
+    rayQueryInitializeEXT(q, tlas, gl_RayFlagsOpaqueEXT | flags, mask, origin, 0.0, dir, tmax);
     while (rayQueryProceedEXT(q)) {}
     HitRecord h;
     h.t = -1.0;
@@ -19,6 +20,10 @@ HitRecord hrt_trace_record(accelerationStructureEXT tlas, uint mask, vec3 origin
         h.prim = uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, true));
     }
     return h;
+}
+
+HitRecord hrt_trace_record(accelerationStructureEXT tlas, uint mask, vec3 origin, vec3 dir, float tmax) {
+    return hrt_trace_record_flags(tlas, 0u, mask, origin, dir, tmax);
 }
 #define HRT_LAUNCH_ID gl_GlobalInvocationID.xy
 #endif

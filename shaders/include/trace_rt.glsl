@@ -5,10 +5,16 @@
 #include "hit_record.glsl"
 layout(location = 0) rayPayloadEXT HitRecord p_hit;
 
-HitRecord hrt_trace_record(accelerationStructureEXT tlas, uint mask, vec3 origin, vec3 dir, float tmax) {
+// `flags` adds ray flags to Opaque (gl_RayFlagsTerminateOnFirstHitEXT: the record is the first
+// hit traversal found, not the closest).
+HitRecord hrt_trace_record_flags(accelerationStructureEXT tlas, uint flags, uint mask, vec3 origin, vec3 dir, float tmax) {
     p_hit.t = -1.0;
-    traceRayEXT(tlas, gl_RayFlagsOpaqueEXT, mask, 0, 0, 0, origin, 0.0, dir, tmax, 0);
+    traceRayEXT(tlas, gl_RayFlagsOpaqueEXT | flags, mask, 0, 0, 0, origin, 0.0, dir, tmax, 0);
     return p_hit;
+}
+
+HitRecord hrt_trace_record(accelerationStructureEXT tlas, uint mask, vec3 origin, vec3 dir, float tmax) {
+    return hrt_trace_record_flags(tlas, 0u, mask, origin, dir, tmax);
 }
 #define HRT_LAUNCH_ID gl_LaunchIDEXT.xy
 #endif

@@ -195,8 +195,13 @@ fn denoised_shadow(light: LightInfo, frames: u32) -> (Vec<f32>, Vec<f32>, Vec<f3
     let noisy = storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W);
     let denoised = storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W);
     let dn = context(&f.ctx, SignalType::Shadow, W, W);
-    let trace =
-        TraceShadowTask { common: f.images.trace_common(&camera), light, output: noisy.input(GENERAL), rays_per_pixel: 1 };
+    let trace = TraceShadowTask {
+        common: f.images.trace_common(&camera),
+        light,
+        output: noisy.input(GENERAL),
+        rays_per_pixel: 1,
+        first_hit: false,
+    };
     let task = DenoiseShadowTask {
         context: dn,
         common: f.images.denoising_common(&camera),
@@ -634,6 +639,7 @@ fn multi_light_shadows_denoise_to_the_mean_visibility() {
         visibility: visibility.input(GENERAL),
         packed: packed.input(GENERAL),
         rays_per_pixel: 1,
+        first_hit: false,
     };
     let task = DenoiseMultiShadowTask {
         context: dn,

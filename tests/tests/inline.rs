@@ -58,7 +58,9 @@ fn pipeline_and_inline_ray_queries_give_the_same_images() {
         let out = |i: usize| outs[i].input(vk::ImageLayout::GENERAL);
         let light =
             LightInfo { light_type: LightType::Point, position: Vec3::new(0.5, 3.0, 0.2), radius: 0.4, ..Default::default() };
-        frame.schedule_shadow(&TraceShadowTask { common: c, light, output: out(k), rays_per_pixel: 4 }).unwrap();
+        frame
+            .schedule_shadow(&TraceShadowTask { common: c, light, output: out(k), rays_per_pixel: 4, first_hit: false })
+            .unwrap();
         frame
             .schedule_diffuse(&TraceDiffuseTask {
                 common: c,
@@ -85,6 +87,7 @@ fn pipeline_and_inline_ray_queries_give_the_same_images() {
                 visibility: vis[k].input(vk::ImageLayout::GENERAL),
                 packed: out(6 + k),
                 rays_per_pixel: 4,
+                first_hit: false,
             })
             .unwrap();
     }

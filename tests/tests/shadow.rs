@@ -24,6 +24,11 @@ fn scene() -> (Scene, Camera) {
 
 /// Renders `frames` shadow frames; returns (mean visibility G, last R) per pixel.
 fn gpu_shadow(light: LightInfo, rays: u32, frames: u32) -> (Vec<f32>, Vec<f32>, GBuffer, Scene, Camera) {
+    gpu_shadow_mode(light, rays, frames, false)
+}
+
+/// `gpu_shadow` with the task's first-hit mode on or off.
+fn gpu_shadow_mode(light: LightInfo, rays: u32, frames: u32, first_hit: bool) -> (Vec<f32>, Vec<f32>, GBuffer, Scene, Camera) {
     let (host, ctx) = host_and_context(InitSettings::default());
     let (scene, camera) = scene();
     let g = GBuffer::render(&Tracer::new(&scene), &camera, W, H);
@@ -38,6 +43,7 @@ fn gpu_shadow(light: LightInfo, rays: u32, frames: u32) -> (Vec<f32>, Vec<f32>, 
         light,
         output: out.input(vk::ImageLayout::GENERAL),
         rays_per_pixel: rays,
+        first_hit,
     };
     let mut vis = vec![0.0f32; (W * H) as usize];
     let mut dist = Vec::new();
@@ -214,6 +220,7 @@ fn multi_light_visibility_equals_single_light_results() {
                 light: *l,
                 output: out.input(vk::ImageLayout::GENERAL),
                 rays_per_pixel: rays,
+                first_hit: false,
             })
             .unwrap();
     }
@@ -224,6 +231,7 @@ fn multi_light_visibility_equals_single_light_results() {
             visibility: visibility.input(vk::ImageLayout::GENERAL),
             packed: packed.input(vk::ImageLayout::GENERAL),
             rays_per_pixel: rays,
+            first_hit: false,
         })
         .unwrap();
     let done = run_frame(&host, &ctx, &mut frame).unwrap();
@@ -252,6 +260,7 @@ fn multi_light_visibility_equals_single_light_results() {
         visibility: visibility.input(vk::ImageLayout::GENERAL),
         packed: packed.input(vk::ImageLayout::GENERAL),
         rays_per_pixel: 1,
+        first_hit: false,
     };
     assert!(frame.schedule_multi_shadow(&bad).is_err());
     bad.lights.truncate(5);
@@ -266,4 +275,23 @@ fn multi_light_visibility_equals_single_light_results() {
     s.destroy(&host);
     drop(ctx);
     assert_no_validation_errors();
+}
+
+/// First-hit mode changes traversal, not visibility: the same visible fractions as the closest-
+/// hit mode (same rays), and where a pixel is occluded an occluder distance no shorter than the
+/// closest one (here the box is the only occluder, so equal within float rounding).
+#[test]
+fn first_hit_mode_keeps_visibility() {
+    let light = LightInfo { light_type: LightType::Point, position: Vec3::new(0.3, 3.0, 0.2), radius: 0.2, ..Default::default() };
+    let (vis_closest, dist_closest, ..) = gpu_shadow_mode(light, 8, 1, false);
+    let (vis_first, dist_first, ..) = gpu_shadow_mode(light, 8, 1, true);
+    assert_eq!(vis_closest, vis_first, "the same rays reach the light");
+    let occluded = dist_closest.iter().filter(|&&d| d >= 0.0).count();
+    assert!(occluded > 100, "the box shadows the ground ({occluded} pixels)");
+    for (c, f) in dist_closest.iter().zip(&dist_first) {
+        assert_eq!(*c < 0.0, *f < 0.0);
+        if *c >= 0.0 {
+            assert!(*f >= *c - 1e-4 && *f <= *c + 0.25, "an occluder's distance: {f} vs closest {c}");
+        }
+    }
 }

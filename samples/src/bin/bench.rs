@@ -395,9 +395,14 @@ fn run() -> Result<(), String> {
         light: hybrid_rt::LightInfo { direction: glam::Vec3::new(0.5, -1.0, 0.3), angular_extent: 0.02, ..Default::default() },
         output,
         rays_per_pixel: 1,
+        first_hit: false,
     };
     let (shadow_ms, shadow_floor) =
         time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::Shadow, |f| f.schedule_shadow(&shadow).map_err(e))?;
+    // First-hit traversal: the same visibility, an occluder's distance instead of the closest.
+    let shadow_first = hybrid_rt::TraceShadowTask { first_hit: true, ..shadow };
+    let (shadow_first_ms, _) =
+        time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::Shadow, |f| f.schedule_shadow(&shadow_first).map_err(e))?;
     let diffuse = hybrid_rt::TraceDiffuseTask { common, output, ray_length: 100.0, ..Default::default() };
     let (diffuse_ms, diffuse_floor) =
         time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::Diffuse, |f| f.schedule_diffuse(&diffuse).map_err(e))?;
@@ -426,9 +431,14 @@ fn run() -> Result<(), String> {
         visibility: vis.input(ash::vk::ImageLayout::GENERAL),
         packed: output,
         rays_per_pixel: 1,
+        first_hit: false,
     };
     let (multi_ms, multi_floor) =
         time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::MultiShadow, |f| f.schedule_multi_shadow(&multi).map_err(e))?;
+    let multi_first = hybrid_rt::TraceMultiShadowTask { first_hit: true, ..multi.clone() };
+    let (multi_first_ms, _) = time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::MultiShadow, |f| {
+        f.schedule_multi_shadow(&multi_first).map_err(e)
+    })?;
     for (name, ms, fl) in [
         ("Multi-light shadows (4 point lights, 1 ray/pixel each)", multi_ms, multi_floor),
         ("Shadow (sun, 1 ray/pixel)", shadow_ms, shadow_floor),
@@ -437,9 +447,18 @@ fn run() -> Result<(), String> {
     ] {
         rows.push((format!("{name} {width}x{height}"), format!("{ms:.3} ms; floor {fl:.3} ms; ratio {:.2}", ms / fl)));
     }
+    for (name, first, closest) in [
+        ("Shadow (sun), first-hit mode", shadow_first_ms, shadow_ms),
+        ("Multi-light shadows, first-hit mode", multi_first_ms, multi_ms),
+    ] {
+        rows.push((
+            format!("{name} {width}x{height}"),
+            format!("{first:.3} ms; closest-hit {closest:.3} ms; speed-up {:.2}x", closest / first),
+        ));
+    }
     let _ = writeln!(
         json,
-        "  \"traces\": {{\"width\": {width}, \"height\": {height}, \"shadow_gpu_ms\": {shadow_ms:.4}, \"shadow_floor_gpu_ms\": {shadow_floor:.4}, \"diffuse_gpu_ms\": {diffuse_ms:.4}, \"diffuse_floor_gpu_ms\": {diffuse_floor:.4}, \"specular_gpu_ms\": {specular_ms:.4}, \"specular_floor_gpu_ms\": {specular_floor:.4}, \"multi_shadow_4_lights_gpu_ms\": {multi_ms:.4}, \"multi_shadow_floor_gpu_ms\": {multi_floor:.4}}},"
+        "  \"traces\": {{\"width\": {width}, \"height\": {height}, \"shadow_gpu_ms\": {shadow_ms:.4}, \"shadow_floor_gpu_ms\": {shadow_floor:.4}, \"diffuse_gpu_ms\": {diffuse_ms:.4}, \"diffuse_floor_gpu_ms\": {diffuse_floor:.4}, \"specular_gpu_ms\": {specular_ms:.4}, \"specular_floor_gpu_ms\": {specular_floor:.4}, \"multi_shadow_4_lights_gpu_ms\": {multi_ms:.4}, \"multi_shadow_floor_gpu_ms\": {multi_floor:.4}, \"shadow_first_hit_gpu_ms\": {shadow_first_ms:.4}, \"multi_shadow_first_hit_gpu_ms\": {multi_first_ms:.4}}},"
     );
     host.destroy_image(rgba);
 

@@ -368,8 +368,14 @@ impl<'h> Renderer<'h> {
             (sun, &wk.sun_noisy, &wk.sun, self.denoisers.sun, "sun"),
             (point, &wk.point_noisy, &wk.point, self.denoisers.point, "point"),
         ] {
-            c.schedule_shadow(&TraceShadowTask { common, light, output: noisy.input(GENERAL), rays_per_pixel: rays })
-                .map_err(sdk_err)?;
+            c.schedule_shadow(&TraceShadowTask {
+                common,
+                light,
+                output: noisy.input(GENERAL),
+                rays_per_pixel: rays,
+                first_hit: false,
+            })
+            .map_err(sdk_err)?;
             labels.push((TaskKind::Shadow, if label == "sun" { "shadow sun" } else { "shadow point" }));
             c.schedule_denoise_shadow(&DenoiseShadowTask {
                 context: ctx,
@@ -387,6 +393,7 @@ impl<'h> Renderer<'h> {
                 light,
                 output: out.input(GENERAL),
                 rays_per_pixel: 4,
+                first_hit: false,
             })
             .map_err(sdk_err)?;
             labels.push((TaskKind::Shadow, "shadow lidar"));

@@ -67,7 +67,7 @@ impl ShadowPass {
         let constants = ShadowConstantsGpu {
             common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::SHADOWS.bits()),
             light: LightGpu::new(&task.light),
-            counts: [task.rays_per_pixel, 0, 0, 0],
+            counts: [task.rays_per_pixel, task.first_hit as u32, 0, 0],
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
         let slots = super::gbuffer_slots(r.tlas, &task.common, &task.output, ubo);
@@ -121,7 +121,7 @@ impl MultiShadowPass {
         }
         let constants = MultiShadowConstantsGpu {
             common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::SHADOWS.bits()),
-            counts: [task.rays_per_pixel, task.lights.len() as u32, 0, 0],
+            counts: [task.rays_per_pixel, task.lights.len() as u32, task.first_hit as u32, 0],
             lights,
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);

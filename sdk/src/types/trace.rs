@@ -95,6 +95,11 @@ pub struct TraceShadowTask {
     pub output: ImageInput,
     /// Rays per pixel, 1..=64. Default 1 (the guide's one ray per light; denoise it).
     pub rays_per_pixel: u32,
+    /// Stop each ray at the first occluder traversal finds instead of the closest (Kickstart
+    /// RT's `enableFirstHitAndEndSearch`). Visibility is the same; R then holds *an*
+    /// occluder's distance (>= the closest), so `DenoiseShadowTask` may blur penumbrae a little
+    /// wider. Default false (exact distances); the bench measures the difference.
+    pub first_hit: bool,
 }
 
 impl Default for TraceShadowTask {
@@ -104,6 +109,7 @@ impl Default for TraceShadowTask {
             light: LightInfo::default(),
             output: ImageInput { layout: vk::ImageLayout::GENERAL, ..Default::default() },
             rays_per_pixel: 1,
+            first_hit: false,
         }
     }
 }
@@ -128,6 +134,9 @@ pub struct TraceMultiShadowTask {
     pub packed: ImageInput,
     /// Rays per pixel and light, 1..=64. Default 1.
     pub rays_per_pixel: u32,
+    /// First-hit traversal, as `TraceShadowTask::first_hit` (the packed penumbra width and min
+    /// distance then come from the first occluders found). Default false.
+    pub first_hit: bool,
 }
 
 impl Default for TraceMultiShadowTask {
@@ -139,6 +148,7 @@ impl Default for TraceMultiShadowTask {
             visibility: general,
             packed: general,
             rays_per_pixel: 1,
+            first_hit: false,
         }
     }
 }
