@@ -41,14 +41,38 @@ impl SceneOnGpu {
         surfels: SurfelSettings,
         colours: &[[f32; 3]],
     ) -> HostResult<SceneOnGpu> {
+        Self::register_interleaved(host, ctx, container, scene, surfels, colours, 12)
+    }
+
+    /// `register_coloured` with the positions interleaved in `vertex_stride`-byte vertices
+    /// (position first, then zeroed attributes), as an engine's vertex buffer holds them.
+    pub fn register_interleaved(
+        host: &Host,
+        ctx: &ExecuteContext,
+        container: &mut TaskContainer,
+        scene: &Scene,
+        surfels: SurfelSettings,
+        colours: &[[f32; 3]],
+        vertex_stride: u64,
+    ) -> HostResult<SceneOnGpu> {
         let geometries = ctx.create_geometry_handles(scene.meshes.len());
         let mut buffers = Vec::new();
         for (mesh, &handle) in scene.meshes.iter().zip(&geometries) {
             let usage = vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::VERTEX_BUFFER;
-            let vb = host.buffer_with_data(bytemuck::cast_slice(&mesh.positions), usage)?;
+            let words = (vertex_stride / 4).max(3) as usize;
+            let mut vertices = vec![0.0f32; mesh.positions.len() * words];
+            for (v, p) in vertices.chunks_mut(words).zip(&mesh.positions) {
+                v[..3].copy_from_slice(&p.to_array());
+            }
+            let vb = host.buffer_with_data(bytemuck::cast_slice(&vertices), usage)?;
             let ib = host.buffer_with_data(bytemuck::cast_slice(&mesh.indices), usage | vk::BufferUsageFlags::INDEX_BUFFER)?;
             let input = GeometryInput {
-                vertices: VertexBufferInput { buffer: vb.buffer, count: mesh.positions.len() as u32, ..Default::default() },
+                vertices: VertexBufferInput {
+                    buffer: vb.buffer,
+                    count: mesh.positions.len() as u32,
+                    stride: words as u64 * 4,
+                    ..Default::default()
+                },
                 indices: IndexBufferInput { buffer: ib.buffer, count: mesh.indices.len() as u32, ..Default::default() },
                 surfels,
                 ..Default::default()

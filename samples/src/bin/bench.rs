@@ -19,7 +19,7 @@ use std::time::Instant;
 
 const USAGE: &str =
     "bench [--triangles 1048576] [--instances 1024] [--big-mesh-triangles 1048576] [--width 1920] [--height 1080] \
-[--rays 1,4] [--frames 20] [--warmup-ms 1000] [--tile-unit-length 1.0] [--json bench.json]";
+[--rays 1,4] [--frames 20] [--warmup-ms 1000] [--tile-unit-length 1.0] [--vertex-stride 12] [--json bench.json]";
 
 fn main() {
     if let Err(e) = run() {
@@ -139,6 +139,9 @@ fn run() -> Result<(), String> {
     let json_path = args.string("json", "bench.json");
     let warmup_ms = args.get("warmup-ms", 1000u64);
     let tile_unit = args.get("tile-unit-length", 1.0f32);
+    // The engine's vertex layout (positions interleaved in vertices of this many bytes): the
+    // SDK's copy is compact either way, so trace times must not change with it.
+    let vertex_stride = args.get("vertex-stride", 12u64);
     let e = |e: hybrid_rt::Error| e.to_string();
 
     let host = Host::new()?;
@@ -159,6 +162,8 @@ fn run() -> Result<(), String> {
         format!("{cold_ms:.1} ms / {warm_ms:.1} ms ({} KiB of cache)", cache_bytes / 1024),
     ));
     let _ = writeln!(json, "  \"context_creation_cold_ms\": {cold_ms:.3},\n  \"context_creation_warm_ms\": {warm_ms:.3},");
+    rows.push(("Engine vertex layout".into(), format!("positions in {vertex_stride}-byte vertices")));
+    let _ = writeln!(json, "  \"vertex_stride\": {vertex_stride},");
 
     // ---- 1. One big mesh: BLAS build throughput.
     let n = ((big as f64 / 2.0).sqrt().ceil() as u32).max(1);
@@ -212,7 +217,8 @@ fn run() -> Result<(), String> {
     );
     let gbuffer = GBufferImages::upload(&host, &g)?;
     let surfels = hybrid_rt::SurfelSettings { tile_unit_length: tile_unit, ..Default::default() };
-    let gpu_scene = SceneOnGpu::register_with(&host, &ctx, &mut frame, &scene, surfels, [0.0; 3])?;
+    let colours = vec![[0.0; 3]; scene.instances.len()];
+    let gpu_scene = SceneOnGpu::register_interleaved(&host, &ctx, &mut frame, &scene, surfels, &colours, vertex_stride)?;
     frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: u32::MAX }).map_err(e)?;
     let first_ms = run_frame(&host, &ctx, &mut frame)?.gpu_ms(TaskKind::Bvh);
     // Steady state: rebuild every BLAS again (static geometry: an update queues a rebuild).
