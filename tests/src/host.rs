@@ -304,11 +304,13 @@ impl Host {
         let priorities = [1.0f32];
         // A second, compute-capable family where the device has one (an async-compute queue:
         // NVIDIA has; lavapipe has a single family).
+        // HRT_ASYNC_COMPUTE=0 leaves it out (diagnosis).
         let async_family = families
             .iter()
             .enumerate()
             .position(|(i, f)| i as u32 != queue_family && f.queue_flags.contains(vk::QueueFlags::COMPUTE))
-            .map(|i| i as u32);
+            .map(|i| i as u32)
+            .filter(|_| env_flag("HRT_ASYNC_COMPUTE", true));
         let mut queues =
             vec![vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
         if let Some(f) = async_family {
@@ -374,7 +376,8 @@ impl Host {
             API_VERSION,
             self.features.chain(),
         )
-        .with_debug_utils(self.debug.is_some())
+        // HRT_DEBUG_UTILS=0: the SDK names nothing and labels nothing (diagnosis).
+        .with_debug_utils(self.debug.is_some() && env_flag("HRT_DEBUG_UTILS", true))
     }
 
     /// An SDK context on this host's device.

@@ -228,8 +228,15 @@ fn run() -> Result<(), String> {
     for _ in 0..3 {
         for (mesh, &handle) in scene.meshes.iter().zip(&gpu_scene.geometries) {
             let (vb, ib) = &gpu_scene.buffers[gpu_scene.geometries.iter().position(|h| *h == handle).unwrap()];
+            // The same engine layout as the registration (an update re-reads the engine's buffer).
+            let stride = vertex_stride.max(12).next_multiple_of(4);
             let input = GeometryInput {
-                vertices: VertexBufferInput { buffer: vb.buffer, count: mesh.positions.len() as u32, ..Default::default() },
+                vertices: VertexBufferInput {
+                    buffer: vb.buffer,
+                    count: mesh.positions.len() as u32,
+                    stride,
+                    ..Default::default()
+                },
                 indices: IndexBufferInput { buffer: ib.buffer, count: mesh.indices.len() as u32, ..Default::default() },
                 ..Default::default()
             };
