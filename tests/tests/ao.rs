@@ -85,8 +85,9 @@ fn oct_encode(n: Vec3) -> glam::Vec2 {
     }
 }
 
-/// Every depth and normal encoding, and the inline ray-query path, give the same AO as the
-/// baseline (R32 clip depth, world-space RGB normals). All variants run in one container, so
+/// Every depth and normal encoding (the six normal types, world and view space, D32 and R32
+/// depth, world positions), reversed-Z and infinite-far projections, and the inline ray-query
+/// path give the same AO as the baseline (R32 clip depth, world-space RGB normals). All variants run in one container, so
 /// they use the same random numbers: differences come only from decoding round-off, which
 /// can flip a ray that grazes an edge.
 #[test]
@@ -133,6 +134,36 @@ fn encodings_and_inline_rt_give_the_same_image() {
         }),
     );
 
+    let n_ba_oct = img(
+        vk::Format::R32G32B32A32_SFLOAT,
+        &normals_as(&|n| {
+            let e = oct_encode(n);
+            [0.0, 0.0, e.x, e.y]
+        }),
+    );
+    let n_rg_noct_view = img(vk::Format::R16G16_UNORM, &{
+        let v: Vec<[u16; 2]> = g
+            .normal
+            .iter()
+            .map(|n| {
+                let e = oct_encode(world_to_view.transform_vector3(*n)) * 0.5 + 0.5;
+                [(e.x * 65535.0).round() as u16, (e.y * 65535.0).round() as u16]
+            })
+            .collect();
+        bytemuck::cast_slice(&v).to_vec()
+    });
+    let aspect = W as f32 / H as f32;
+    let reversed = glam::camera::rh::proj::vulkan::perspective_infinite_reverse(camera.fov_y_radians, aspect, camera.near);
+    let infinite = glam::camera::rh::proj::vulkan::perspective_infinite(camera.fov_y_radians, aspect, camera.near);
+    let depth_under = |view_to_clip: glam::Mat4, background: f32| -> Vec<u8> {
+        let to_clip = view_to_clip * world_to_view;
+        let d: Vec<f32> =
+            g.position.iter().zip(&g.hit).map(|(p, &hit)| if hit { to_clip.project_point3(*p).z } else { background }).collect();
+        bytemuck::cast_slice(&d).to_vec()
+    };
+    let d_reversed = img(vk::Format::R32_SFLOAT, &depth_under(reversed, 0.0));
+    let d_infinite = img(vk::Format::R32_SFLOAT, &depth_under(infinite, 1.0));
+
     let rays = 4;
     let baseline = base.ao_task(&camera, 1.0, rays);
     let mut variants: Vec<(&str, TraceAmbientOcclusionTask)> = Vec::new();
@@ -153,6 +184,28 @@ fn encodings_and_inline_rt_give_the_same_image() {
         space: NormalSpace::View,
     };
     variants.push(("view-space BA normalized octahedral normals", v));
+    let mut v = baseline;
+    v.common.normals =
+        NormalInput { image: n_ba_oct.input(read), normal_type: NormalType::BaOctahedron, space: NormalSpace::World };
+    variants.push(("BA octahedral normals", v));
+    let mut v = baseline;
+    v.common.normals = NormalInput {
+        image: n_rg_noct_view.input(read),
+        normal_type: NormalType::RgNormalizedOctahedron,
+        space: NormalSpace::View,
+    };
+    variants.push(("view-space RG normalized octahedral normals", v));
+    // Projections engines use: reversed Z with an infinite far plane (background depth 0) and
+    // an infinite far plane (background 1). The depth images are the same surfaces' clip depth
+    // under those projections.
+    for (name, view_to_clip, image) in
+        [("reversed-Z infinite projection", reversed, &d_reversed), ("infinite far plane", infinite, &d_infinite)]
+    {
+        let mut v = baseline;
+        v.common.camera.view_to_clip = view_to_clip;
+        v.common.depth.image = image.input(read);
+        variants.push((name, v));
+    }
     let mut v = baseline;
     v.common.use_inline_rt = true;
     variants.push(("inline ray query", v));
@@ -184,7 +237,17 @@ fn encodings_and_inline_rt_give_the_same_image() {
     if !ctx.supports_inline_rt() {
         eprintln!("(inline ray query not available: that variant ran the pipeline)");
     }
-    for img in outputs.into_iter().chain([d32, positions, n_normalized, n_rg_oct, n_ba_oct_view]) {
+    for img in outputs.into_iter().chain([
+        d32,
+        positions,
+        n_normalized,
+        n_rg_oct,
+        n_ba_oct_view,
+        n_ba_oct,
+        n_rg_noct_view,
+        d_reversed,
+        d_infinite,
+    ]) {
         host.destroy_image(img);
     }
     base.destroy(&host);
