@@ -317,6 +317,7 @@ impl Camera {
 }
 
 /// What a rasterizer would have produced, by casting one primary ray per pixel centre.
+#[derive(Clone, Debug)]
 pub struct GBuffer {
     pub width: u32,
     pub height: u32,
@@ -431,8 +432,22 @@ pub fn offset_origin(p: Vec3, n: Vec3, eye: Vec3, o: &hybrid_rt::RayOffset) -> V
             let d = p.distance(eye);
             p + n * (o.cam_constant + o.cam_linear * d + o.cam_quadratic * d * d).max(0.0)
         }
-        // World-position offsets are a few ULPs: the reference ignores them.
-        _ => p,
+        // Ray Tracing Gems ch. 6, as shaders/include/common.glsl applies it: a few ULPs along
+        // n in each coordinate's own precision, a fixed step near the origin.
+        hybrid_rt::RayOffsetType::WorldPosition => {
+            let step = |p: f32, n: f32| {
+                let of = (o.world_int_scale * n) as i32;
+                let bits = p.to_bits() as i32;
+                let moved = f32::from_bits(bits.wrapping_add(if p < 0.0 { -of } else { of }) as u32);
+                if p.abs() < o.world_threshold {
+                    p + o.world_float_scale * n
+                } else {
+                    moved
+                }
+            };
+            Vec3::new(step(p.x, n.x), step(p.y, n.y), step(p.z, n.z))
+        }
+        hybrid_rt::RayOffsetType::Disabled => p,
     }
 }
 

@@ -75,6 +75,72 @@ fn sphere_on_plane_matches_reference() {
     assert_no_validation_errors();
 }
 
+/// Each ray-offset type against a reference that applies the same offset to the same origin.
+/// `WorldPosition` moves a point by a few ULPs, less than a clip-depth reconstruction's error,
+/// so it is tested on a world-position G-buffer (exact points, as the reference has them);
+/// `Disabled` on world positions an engine has already lifted off the surface (1 mm along the
+/// normal: nothing may move them further); `CameraDistance` on the usual clip depth.
+#[test]
+fn ray_offsets_match_the_reference() {
+    use hybrid_rt::{DepthInput, DepthType, RayOffset, RayOffsetType};
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let (scene, camera) = sphere_on_plane();
+    let tracer = Tracer::new(&scene);
+    let exact = GBuffer::render(&tracer, &camera, W, H);
+    let mut lifted = exact.clone();
+    for (p, n) in lifted.position.iter_mut().zip(&exact.normal) {
+        *p += *n * 1e-3;
+    }
+    let read = ash::vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+    let world = |g: &GBuffer| {
+        host.image_with_data(
+            ash::vk::Format::R32G32B32A32_SFLOAT,
+            W,
+            H,
+            ash::vk::ImageUsageFlags::SAMPLED,
+            &g.position_bytes_rgba32f(),
+            read,
+        )
+        .unwrap()
+    };
+    let (exact_world, lifted_world) = (world(&exact), world(&lifted));
+    let g = exact.clone();
+    let mut frame = ctx.create_task_container();
+    let gpu_scene = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let rays = 16;
+    let strata = 16;
+    let cases = [
+        (RayOffsetType::Disabled, Some(&lifted_world), &lifted),
+        (RayOffsetType::WorldPosition, Some(&exact_world), &exact),
+        (RayOffsetType::CameraDistance, None, &exact),
+    ];
+    for (offset_type, positions, reference_g) in cases {
+        let ray_offset = RayOffset { offset_type, ..Default::default() };
+        let mut task = images.ao_task(&camera, 1.0, rays);
+        task.common.ray_offset = ray_offset;
+        if let Some(p) = positions {
+            task.common.depth = DepthInput { image: p.input(read), depth_type: DepthType::WorldPosition };
+        }
+        frame.schedule_ambient_occlusion(&task).unwrap();
+        run_frame(&host, &ctx, &mut frame).unwrap();
+        let gpu = images.read_output(&host).unwrap();
+        let params = AoParams { ray_length: 1.0, falloff_power: 1.0, ray_offset };
+        let reference = reference_ao(&tracer, reference_g, camera.eye, &params, strata);
+        let sigma = stats::sample_sigma(rays, strata * strata);
+        let report = stats::compare_blocks(&gpu, &reference, W, H, 8, sigma, 0.01);
+        eprintln!("{offset_type:?}: worst block error {:.4} (tolerance {:.4})", report.worst_block_error, report.tolerance);
+        assert!(report.worst_block_error <= report.tolerance, "{offset_type:?}");
+    }
+    host.destroy_image(exact_world);
+    host.destroy_image(lifted_world);
+    images.destroy(&host);
+    gpu_scene.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+}
+
 fn oct_encode(n: Vec3) -> glam::Vec2 {
     let p = n.truncate() / (n.x.abs() + n.y.abs() + n.z.abs());
     if n.z >= 0.0 {
