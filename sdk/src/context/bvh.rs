@@ -60,15 +60,7 @@ impl Recorder<'_> {
             journal.touch_geometry(h, g.meta());
             g.needs_refit = false;
             let (Some(layout), Some(copy), Some(b)) = (g.layout, g.copy.as_ref(), g.blas.as_ref()) else { continue };
-            let geometry = blas::triangles(copy.address, &layout);
-            let flags = blas::flags(&layout);
-            let sizes = blas::build_sizes(
-                device,
-                vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
-                flags,
-                &geometry,
-                layout.primitive_count,
-            );
+            let (geometry, flags, sizes) = blas::describe(device, copy.address, &layout);
             jobs.push(BuildJob {
                 geometry,
                 flags,
@@ -84,15 +76,7 @@ impl Recorder<'_> {
             let Some(h) = st.scene.build_queue.pop_front() else { break };
             let Ok(g) = st.scene.geometries.get_mut(h) else { continue };
             let (Some(layout), Some(copy)) = (g.layout, g.copy.as_ref()) else { continue };
-            let geometry = blas::triangles(copy.address, &layout);
-            let flags = blas::flags(&layout);
-            let sizes = blas::build_sizes(
-                device,
-                vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL,
-                flags,
-                &geometry,
-                layout.primitive_count,
-            );
+            let (geometry, flags, sizes) = blas::describe(device, copy.address, &layout);
             let fresh = blas::create(
                 device,
                 memory,

@@ -53,6 +53,22 @@ pub(crate) fn triangles(
         .flags(vk::GeometryFlagsKHR::OPAQUE)
 }
 
+/// What a build or a refit of a geometry's BLAS needs: its triangles, flags and sizes.
+pub(crate) fn describe(
+    device: &Device,
+    copy_address: vk::DeviceAddress,
+    layout: &GeometryLayout,
+) -> (
+    vk::AccelerationStructureGeometryKHR<'static>,
+    vk::BuildAccelerationStructureFlagsKHR,
+    vk::AccelerationStructureBuildSizesInfoKHR<'static>,
+) {
+    let geometry = triangles(copy_address, layout);
+    let flags = flags(layout);
+    let sizes = build_sizes(device, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, flags, &geometry, layout.primitive_count);
+    (geometry, flags, sizes)
+}
+
 pub(crate) fn build_sizes(
     device: &Device,
     ty: vk::AccelerationStructureTypeKHR,
