@@ -105,7 +105,7 @@ impl CopyPlan {
             let v = &c.vertices;
             let indexed = c.indices.buffer != vk::Buffer::null();
             let (first, count) = match c.vertex_range.filter(|_| indexed) {
-                Some(r) => (r.first, r.last.saturating_sub(r.first) + 1),
+                Some(r) => (r.first, r.last.saturating_sub(r.first).saturating_add(1)),
                 None => (0, v.count),
             };
             let position_bytes = if v.format == vk::Format::R32G32B32A32_SFLOAT { 16 } else { 12 };
