@@ -1,0 +1,124 @@
+//! Geometry inputs: each part's fields, then the parts' totals against the device's limits,
+//! then every engine region against its buffer's size.
+use crate::error::{Error, Result};
+use crate::gpu::device::Device;
+use crate::scene::geometry::{check_region, CopyPlan};
+use crate::types::*;
+use ash::vk;
+
+/// A geometry's parts, then its totals against the device's limits, then every engine region
+/// against its buffer's size. Errors name the field; for a part of `extra_components` the
+/// message starts with its index.
+pub(crate) fn geometry_input(device: &Device, input: &GeometryInput) -> Result<()> {
+    for (k, c) in input.components().enumerate() {
+        let (vertices, indices) = if k == 0 {
+            ("GeometryInput.vertices", "GeometryInput.indices")
+        } else {
+            ("GeometryInput.extra_components.vertices", "GeometryInput.extra_components.indices")
+        };
+        let part = if k == 0 { String::new() } else { format!("part {}: ", k - 1) };
+        geometry_component(&c, vertices, indices, &part)?;
+    }
+    let t = &input.surfels;
+    if !(t.tile_unit_length.is_finite() && t.tile_unit_length > 0.0) {
+        return Err(Error::invalid("SurfelSettings.tile_unit_length", "must be finite and > 0"));
+    }
+    if t.tile_resolution_limit == 0 || t.tile_resolution_limit > crate::cache::layout::MAX_RESOLUTION {
+        return Err(Error::invalid(
+            "SurfelSettings.tile_resolution_limit",
+            format!("{} is not in 1..={}", t.tile_resolution_limit, crate::cache::layout::MAX_RESOLUTION),
+        ));
+    }
+    let plan = CopyPlan::of(input)?;
+    let layout = plan.layout;
+    if layout.primitive_count as u64 > device.limits.max_primitive_count {
+        return Err(Error::invalid(
+            "GeometryInput",
+            format!(
+                "{} triangles exceed the device's maxPrimitiveCount {}",
+                layout.primitive_count, device.limits.max_primitive_count
+            ),
+        ));
+    }
+    for (what, bytes) in [("copy", layout.total_bytes()), ("staging copy", plan.staging_bytes)] {
+        if bytes > device.limits.max_buffer_size {
+            return Err(Error::invalid(
+                "GeometryInput",
+                format!("its {bytes}-byte {what} exceeds the device's maxBufferSize {}", device.limits.max_buffer_size),
+            ));
+        }
+    }
+    for (k, p) in plan.parts.iter().enumerate() {
+        let (vertices, indices) = if k == 0 {
+            ("GeometryInput.vertices", "GeometryInput.indices")
+        } else {
+            ("GeometryInput.extra_components.vertices", "GeometryInput.extra_components.indices")
+        };
+        check_region(&device.raw, vertices, p.vertex_buffer, p.vertex_src_offset, p.vertex_bytes)?;
+        if p.index_size > 0 {
+            check_region(&device.raw, indices, p.index_buffer, p.index_src_offset, p.index_bytes)?;
+        }
+    }
+    Ok(())
+}
+
+/// One part's fields on their own (`part` prefixes messages about `extra_components`).
+fn geometry_component(c: &GeometryComponent, vertices: &'static str, indices: &'static str, part: &str) -> Result<()> {
+    let v = &c.vertices;
+    if v.buffer == vk::Buffer::null() {
+        return Err(Error::invalid(vertices, format!("{part}buffer is null")));
+    }
+    let position_bytes = match v.format {
+        vk::Format::R32G32B32_SFLOAT => 12,
+        vk::Format::R32G32B32A32_SFLOAT => 16,
+        f => {
+            return Err(Error::UnsupportedFormat {
+                what: vertices,
+                format: f,
+                expected: "R32G32B32_SFLOAT or R32G32B32A32_SFLOAT",
+            })
+        }
+    };
+    if v.count == 0 {
+        return Err(Error::invalid(vertices, format!("{part}count is 0")));
+    }
+    if v.stride < position_bytes || v.stride % 4 != 0 || v.stride > u32::MAX as u64 {
+        return Err(Error::invalid(
+            vertices,
+            format!("{part}stride {} must be a multiple of 4, at least {position_bytes} and below 4 GiB", v.stride),
+        ));
+    }
+    let i = &c.indices;
+    let indexed = i.buffer != vk::Buffer::null();
+    if indexed {
+        if !matches!(i.format, vk::Format::R32_UINT | vk::Format::R16_UINT) {
+            return Err(Error::UnsupportedFormat { what: indices, format: i.format, expected: "R32_UINT or R16_UINT" });
+        }
+        if i.count == 0 || i.count % 3 != 0 {
+            return Err(Error::invalid(indices, format!("{part}count {} is not a positive multiple of 3", i.count)));
+        }
+    } else if v.count < 3 || v.count % 3 != 0 {
+        return Err(Error::invalid(
+            vertices,
+            format!("{part}count {} is not a positive multiple of 3 (non-indexed triangles)", v.count),
+        ));
+    }
+    if let Some(r) = c.vertex_range {
+        if !indexed {
+            return Err(Error::invalid(
+                vertices,
+                format!("{part}a vertex range needs indices (a non-indexed part uses all its vertices)"),
+            ));
+        }
+        if r.first > r.last || r.last >= v.count {
+            return Err(Error::invalid(
+                vertices,
+                format!("{part}vertex range {}..={} is not within the {} vertices", r.first, r.last, v.count),
+            ));
+        }
+    }
+    if c.transform.is_some_and(|t| !t.is_finite()) {
+        return Err(Error::InvalidTransform { what: "GeometryComponent.transform" });
+    }
+    Ok(())
+}
