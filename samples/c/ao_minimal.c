@@ -547,6 +547,44 @@ int main(void) {
     EXPECT(centre < 0.6f, "the ceiling occludes the centre (%f)", centre);
     EXPECT(corner > 0.999f, "nothing occludes the corner (%f)", corner);
 
+    /* ---- G-buffer conventions: normals in an engine basis (custom 3x3, here a scaled
+     * identity) trace the same; an input mask covering the image leaves AO 1 (background)
+     * everywhere; a roughness remap with min > max is refused. */
+    {
+        HrtTraceAmbientOcclusionTask custom = ao;
+        custom.common.normals.space = HRT_NORMAL_SPACE_CUSTOM;
+        const float twice[9] = {2, 0, 0, 0, 2, 0, 0, 0, 2};
+        memcpy(custom.common.normals.normal_to_world, twice, sizeof twice);
+        CHECK_HRT(hrt_schedule_ambient_occlusion(frame, &custom));
+        float custom_result[W * H];
+        run_frame(ctx, frame, &out, 4, custom_result);
+        float c = custom_result[(H / 2) * W + W / 2];
+        EXPECT(c < 0.6f, "custom-space normals: the ceiling still occludes the centre (%f)", c);
+
+        Image mask = make_image(VK_FORMAT_R8_UNORM, VK_IMAGE_USAGE_SAMPLED_BIT);
+        VkCommandBuffer mcmd = begin();
+        VkClearColorValue one = {{1, 0, 0, 0}};
+        transition(mcmd, mask.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+        vkCmdClearColorImage(mcmd, mask.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &one, 1, &all);
+        transition(mcmd, mask.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+        submit_and_wait(mcmd);
+        HrtTraceAmbientOcclusionTask masked = ao;
+        masked.common.input_mask = sdk_image(&mask, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+        CHECK_HRT(hrt_schedule_ambient_occlusion(frame, &masked));
+        float masked_result[W * H];
+        run_frame(ctx, frame, &out, 4, masked_result);
+        float m = masked_result[(H / 2) * W + W / 2];
+        EXPECT(m == 1.0f, "a masked pixel is background: AO 1 (%f)", m);
+        free_image(mask);
+
+        HrtTraceSpecularTask remap = hrt_trace_specular_task_default();
+        remap.common = ao.common;
+        remap.common.roughness.min_roughness = 0.6f;
+        remap.common.roughness.max_roughness = 0.4f;
+        remap.output = ao.output;
+        EXPECT(hrt_schedule_specular(frame, &remap) == HRT_ERROR_INVALID_INPUT, "min_roughness > max_roughness is refused");
+    }
+
     /* ---- A named geometry is named in errors: registering the ceiling again is refused when
      * the container is built, and the message quotes its name. */
     {

@@ -67,6 +67,7 @@ fn rasterized_gbuffer_matches_the_reference_and_motion_follows_the_camera() {
             image: targets.normal_roughness.input(raster::READ),
             normal_type: hybrid_rt::NormalType::RgbVector,
             space: hybrid_rt::NormalSpace::World,
+            ..Default::default()
         },
         viewport: hybrid_rt::Viewport::full(W, H),
         camera: camera.sdk_camera(W, H),
@@ -131,6 +132,7 @@ fn deferred_lighting_with_sdk_shadows_matches_the_reference_lit_frame() {
         image: targets.normal_roughness.input(raster::READ),
         normal_type: NormalType::RgbVector,
         space: NormalSpace::World,
+        ..Default::default()
     };
     let (viewport, sdk_camera) = (Viewport::full(W, H), camera.sdk_camera(W, H));
     let dn = ctx

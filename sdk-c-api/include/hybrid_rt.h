@@ -221,6 +221,10 @@ typedef enum HrtNormalType {
 typedef enum HrtNormalSpace {
   HRT_NORMAL_SPACE_WORLD = 0,
   HRT_NORMAL_SPACE_VIEW = 1,
+  /**
+   * HrtNormalInput.normal_to_world takes decoded normals to world space.
+   */
+  HRT_NORMAL_SPACE_CUSTOM = 2,
 } HrtNormalSpace;
 
 typedef enum HrtRayOffsetType {
@@ -532,6 +536,10 @@ typedef struct HrtNormalInput {
    * An HrtNormalSpace. Default HRT_NORMAL_SPACE_WORLD.
    */
   uint32_t space;
+  /**
+   * HRT_NORMAL_SPACE_CUSTOM: column-major 3x3 to world space. Default identity.
+   */
+  float normal_to_world[9];
 } HrtNormalInput;
 
 typedef struct HrtViewport {
@@ -571,8 +579,8 @@ typedef struct HrtRayOffset {
 } HrtRayOffset;
 
 /**
- * Roughness: global_roughness * dot(texel, channel_mask) with an image (image != 0),
- * global_roughness without.
+ * Roughness: clamp(global_roughness * dot(texel, channel_mask), min_roughness, max_roughness)
+ * with an image (image != 0), clamp(global_roughness, min, max) without.
  */
 typedef struct HrtRoughnessInput {
   /**
@@ -584,9 +592,17 @@ typedef struct HrtRoughnessInput {
    */
   float channel_mask[4];
   /**
-   * Default 1.0.
+   * The multiplier. Default 1.0.
    */
   float global_roughness;
+  /**
+   * Default 0.
+   */
+  float min_roughness;
+  /**
+   * Default 1.
+   */
+  float max_roughness;
 } HrtRoughnessInput;
 
 /**
@@ -608,6 +624,11 @@ typedef struct HrtTraceCommon {
   struct HrtRayOffset ray_offset;
   struct HrtRoughnessInput roughness;
   struct HrtSpecularInput specular;
+  /**
+   * Optional (image = VK_NULL_HANDLE for none): pixels with R >= 0.5 are excluded from the
+   * trace (written as background).
+   */
+  struct HrtImageInput input_mask;
   /**
    * Optional lit frame (image = VK_NULL_HANDLE for none): secondary hits on screen take
    * its radiance, others the cache's.
@@ -891,6 +912,10 @@ typedef struct HrtDenoisingCommon {
   struct HrtDepthInput depth;
   struct HrtNormalInput normals;
   struct HrtRoughnessInput roughness;
+  /**
+   * Optional: the traces' input mask (R >= 0.5: left out of filtering and history).
+   */
+  struct HrtImageInput input_mask;
   struct HrtMotionInput motion;
   struct HrtViewport viewport;
   struct HrtCamera camera;

@@ -85,6 +85,8 @@ pub struct HrtDenoisingCommon {
     pub depth: HrtDepthInput,
     pub normals: HrtNormalInput,
     pub roughness: HrtRoughnessInput,
+    /// Optional: the traces' input mask (R >= 0.5: left out of filtering and history).
+    pub input_mask: HrtImageInput,
     pub motion: HrtMotionInput,
     pub viewport: HrtViewport,
     pub camera: HrtCamera,
@@ -153,6 +155,7 @@ fn common(c: &HrtDenoisingCommon) -> Result<rt::DenoisingCommon, Failure> {
         viewport: c.viewport,
         camera: c.camera,
         roughness: c.roughness,
+        input_mask: c.input_mask,
         ..trace_common_default()
     })?;
     let motion_type = match c.motion.motion_type {
@@ -166,6 +169,7 @@ fn common(c: &HrtDenoisingCommon) -> Result<rt::DenoisingCommon, Failure> {
         depth: t.depth,
         normals: t.normals,
         roughness: t.roughness,
+        input_mask: t.input_mask,
         motion: rt::MotionInput { image: image(&c.motion.image), motion_type, scale: c.motion.scale },
         viewport: t.viewport,
         camera: t.camera,
@@ -196,6 +200,7 @@ pub extern "C" fn hrt_denoising_common_default() -> HrtDenoisingCommon {
         depth: t.depth,
         normals: t.normals,
         roughness: t.roughness,
+        input_mask: t.input_mask,
         motion: HrtMotionInput {
             image: image_c(&d.motion.image),
             motion_type: d.motion.motion_type as u32,

@@ -288,6 +288,8 @@ pub enum HrtNormalType {
 pub enum HrtNormalSpace {
     HRT_NORMAL_SPACE_WORLD = 0,
     HRT_NORMAL_SPACE_VIEW = 1,
+    /// HrtNormalInput.normal_to_world takes decoded normals to world space.
+    HRT_NORMAL_SPACE_CUSTOM = 2,
 }
 
 #[repr(C)]
@@ -314,6 +316,8 @@ pub struct HrtNormalInput {
     pub normal_type: u32,
     /// An HrtNormalSpace. Default HRT_NORMAL_SPACE_WORLD.
     pub space: u32,
+    /// HRT_NORMAL_SPACE_CUSTOM: column-major 3x3 to world space. Default identity.
+    pub normal_to_world: [f32; 9],
 }
 
 #[repr(C)]
@@ -361,8 +365,8 @@ pub enum HrtDebugOutput {
     HRT_DEBUG_BARYCENTRICS = 5,
 }
 
-/// Roughness: global_roughness * dot(texel, channel_mask) with an image (image != 0),
-/// global_roughness without.
+/// Roughness: clamp(global_roughness * dot(texel, channel_mask), min_roughness, max_roughness)
+/// with an image (image != 0), clamp(global_roughness, min, max) without.
 #[repr(C)]
 #[derive(Clone, Copy)]
 pub struct HrtRoughnessInput {
@@ -370,8 +374,12 @@ pub struct HrtRoughnessInput {
     pub image: HrtImageInput,
     /// Default {1, 0, 0, 0}.
     pub channel_mask: [f32; 4],
-    /// Default 1.0.
+    /// The multiplier. Default 1.0.
     pub global_roughness: f32,
+    /// Default 0.
+    pub min_roughness: f32,
+    /// Default 1.
+    pub max_roughness: f32,
 }
 
 /// Specular colour: global_metalness * image.rgb (image != 0), global_metalness without.
@@ -393,6 +401,9 @@ pub struct HrtTraceCommon {
     pub ray_offset: HrtRayOffset,
     pub roughness: HrtRoughnessInput,
     pub specular: HrtSpecularInput,
+    /// Optional (image = VK_NULL_HANDLE for none): pixels with R >= 0.5 are excluded from the
+    /// trace (written as background).
+    pub input_mask: HrtImageInput,
     /// Optional lit frame (image = VK_NULL_HANDLE for none): secondary hits on screen take
     /// its radiance, others the cache's.
     pub direct_lighting: HrtImageInput,
@@ -841,7 +852,12 @@ pub(crate) fn trace_common(c: &HrtTraceCommon) -> Result<rt::TraceCommon, Failur
                     N::BaNormalizedOctahedron,
                 ],
             )?,
-            space: pick("HrtNormalInput.space", c.normals.space, &[rt::NormalSpace::World, rt::NormalSpace::View])?,
+            space: pick(
+                "HrtNormalInput.space",
+                c.normals.space,
+                &[rt::NormalSpace::World, rt::NormalSpace::View, rt::NormalSpace::Custom],
+            )?,
+            normal_to_world: glam::Mat3::from_cols_array(&c.normals.normal_to_world),
         },
         viewport: rt::Viewport {
             x: c.viewport.x,
@@ -872,8 +888,11 @@ pub(crate) fn trace_common(c: &HrtTraceCommon) -> Result<rt::TraceCommon, Failur
             image: image(&c.roughness.image),
             channel_mask: c.roughness.channel_mask,
             global_roughness: c.roughness.global_roughness,
+            min_roughness: c.roughness.min_roughness,
+            max_roughness: c.roughness.max_roughness,
         },
         specular: rt::SpecularInput { image: image(&c.specular.image), global_metalness: c.specular.global_metalness },
+        input_mask: image(&c.input_mask),
         direct_lighting: image(&c.direct_lighting),
         use_inline_rt: c.use_inline_rt,
         enable_bilinear_sampling: c.enable_bilinear_sampling,
@@ -902,6 +921,7 @@ pub(crate) fn trace_common_default() -> HrtTraceCommon {
             image: image_c(&d.normals.image),
             normal_type: d.normals.normal_type as u32,
             space: d.normals.space as u32,
+            normal_to_world: d.normals.normal_to_world.to_cols_array(),
         },
         viewport: HrtViewport { x: 0, y: 0, width: 0, height: 0, min_depth: 0.0, max_depth: 0.0 },
         camera: HrtCamera {
@@ -921,8 +941,11 @@ pub(crate) fn trace_common_default() -> HrtTraceCommon {
             image: image_c(&d.roughness.image),
             channel_mask: d.roughness.channel_mask,
             global_roughness: d.roughness.global_roughness,
+            min_roughness: d.roughness.min_roughness,
+            max_roughness: d.roughness.max_roughness,
         },
         specular: HrtSpecularInput { image: image_c(&d.specular.image), global_metalness: d.specular.global_metalness },
+        input_mask: image_c(&d.input_mask),
         direct_lighting: image_c(&d.direct_lighting),
         use_inline_rt: d.use_inline_rt,
         enable_bilinear_sampling: d.enable_bilinear_sampling,

@@ -14,6 +14,7 @@ layout(set = 0, binding = 4, std140) uniform AoConstants {
     vec4 ao_params;   // ray length, falloff power, unused, unused
     uvec4 ao_counts;  // rays per pixel, unused...
 } u_c;
+layout(set = 0, binding = 5) uniform sampler2D u_input_mask;
 
 float hrt_trace_hit_t(vec3 origin, vec3 dir, float tmax);
 
@@ -25,7 +26,7 @@ void hrt_ao_main(uvec2 local) {
     TraceCommon c = u_c.common_;
     uvec2 pixel;
     vec3 p, n;
-    int kind = hrt_gbuffer_pixel(c, local, u_depth, u_normals, pixel, p, n);
+    int kind = hrt_gbuffer_pixel(c, local, u_depth, u_normals, u_input_mask, pixel, p, n);
     if (kind == HRT_PIXEL_SKIP) return;
     if (kind == HRT_PIXEL_BACKGROUND) {
         imageStore(u_out, ivec2(pixel), vec4(1.0));

@@ -22,17 +22,20 @@
 #define HRT_RAY_OFFSET_WORLD_POSITION 1u
 #define HRT_RAY_OFFSET_CAMERA_DISTANCE 2u
 
-// Camera and G-buffer description shared by every trace task (std140, 288 bytes).
+// Camera and G-buffer description shared by every trace task (std140, 384 bytes).
 struct TraceCommon {
     mat4 clip_to_world;   // inverse(view_to_clip * world_to_view)
     mat4 view_to_world;
     vec4 viewport;        // x, y, width, height in pixels
-    vec4 depth_range;     // viewport min depth, max depth, background depth texel, unused
-    uvec4 modes;          // depth type, normal type, normals in view space (0/1), ray offset type
+    vec4 depth_range;     // viewport min depth, max depth, background depth texel, has input mask (0/1)
+    uvec4 modes;          // depth type, normal type, normals need normal_to_world (0/1), ray offset type
     vec4 offset_world;    // threshold, float scale, int scale, unused
     vec4 offset_camera;   // constant, linear, quadratic, unused
     uvec4 frame;          // random seed, TLAS instance mask, half-resolution checkerboard (0/1), has direct-lighting image (0/1)
     mat4 world_to_clip;   // view_to_clip * world_to_view
+    mat4 normal_to_world; // 3x3 (in a mat4) taking decoded normals to world space when modes.z = 1
+    vec4 roughness_mask;  // channel weights of the roughness image
+    vec4 roughness;       // multiplier (global roughness), has image (0/1), min, max
 };
 
 // PCG hash (Jarzynski & Olano 2020): good quality, one multiply-add chain per call.
@@ -117,20 +120,35 @@ bool hrt_world_position(TraceCommon c, uvec2 pixel, vec4 depth_texel, out vec3 p
 
 vec3 hrt_world_normal(TraceCommon c, vec4 normal_texel) {
     vec3 n = hrt_decode_normal(normal_texel, c.modes.y);
-    if (c.modes.z != 0u) n = normalize(mat3(c.view_to_world) * n);
+    if (c.modes.z != 0u) n = normalize(mat3(c.normal_to_world) * n);
     return n;
+}
+
+// Surface roughness (RoughnessInput): clamp(multiplier * dot(texel, mask), min, max), or
+// clamp(multiplier, min, max) without an image. One rule for every pass that reads it.
+float hrt_surface_roughness(TraceCommon c, sampler2D roughness, ivec2 pixel) {
+    float r = c.roughness.x;
+    if (c.roughness.y != 0.0) r *= dot(texelFetch(roughness, pixel, 0), c.roughness_mask);
+    return clamp(r, c.roughness.z, c.roughness.w);
+}
+
+// The input mask (TraceCommon::input_mask): pixels whose R is >= 0.5 are excluded from every
+// trace and denoise task, which treat them as background.
+bool hrt_masked(TraceCommon c, sampler2D mask, uvec2 pixel) {
+    return c.depth_range.w != 0.0 && texelFetch(mask, ivec2(pixel), 0).r >= 0.5;
 }
 
 // What every G-buffer trace starts with: the pixel of this launch, and the surface under it.
 #define HRT_PIXEL_SKIP 0        // outside the viewport, or the other half of the checkerboard
-#define HRT_PIXEL_BACKGROUND 1  // nothing was rasterized here: write the "nothing" value
+#define HRT_PIXEL_BACKGROUND 1  // nothing was rasterized here (or the input mask excludes it): write the "nothing" value
 #define HRT_PIXEL_SURFACE 2     // p and n hold the surface's world position and normal
-int hrt_gbuffer_pixel(TraceCommon c, uvec2 launch, sampler2D depth, sampler2D normals,
+int hrt_gbuffer_pixel(TraceCommon c, uvec2 launch, sampler2D depth, sampler2D normals, sampler2D mask,
                       out uvec2 pixel, out vec3 p, out vec3 n) {
     pixel = launch + uvec2(c.viewport.xy);
     p = vec3(0.0);
     n = vec3(0.0, 0.0, 1.0);
     if (any(greaterThanEqual(launch, uvec2(c.viewport.zw))) || hrt_checkerboard_skip(c, pixel)) return HRT_PIXEL_SKIP;
+    if (hrt_masked(c, mask, pixel)) return HRT_PIXEL_BACKGROUND;
     if (!hrt_world_position(c, pixel, texelFetch(depth, ivec2(pixel), 0), p)) return HRT_PIXEL_BACKGROUND;
     n = hrt_world_normal(c, texelFetch(normals, ivec2(pixel), 0));
     return HRT_PIXEL_SURFACE;

@@ -56,10 +56,9 @@ layout(set = 0, binding = 22, std140) uniform DenoiseConstants {
     vec4 jitter_delta;       // previous - current jitter in pixels
     vec4 history;            // max frames, fast frames, clamp sigma, min radius scale
     vec4 stops;              // luminance sigma, normal power, plane-distance sigma, max shadow radius (px)
-    vec4 roughness_mask;
-    vec4 roughness;          // global roughness, has image (0/1)
     LightGpu light;          // single-light shadows
 } u_d;
+layout(set = 0, binding = 23) uniform sampler2D u_input_mask;
 
 layout(push_constant) uniform Pass {
     uvec4 u_pass;            // à-trous: step in pixels, last iteration (0/1)
@@ -155,11 +154,9 @@ void hrt_history_taps(vec2 prev_pos, vec3 p, vec3 n, float dist, out ivec2 taps[
     }
 }
 
-// Roughness of the specular signal at a pixel (TraceCommon's rule: global x image . mask).
+// Roughness of the specular signal at a pixel (the trace tasks' rule).
 float hrt_denoise_roughness(ivec2 pixel) {
-    float r = u_d.roughness.x;
-    if (u_d.roughness.y != 0.0) r *= dot(texelFetch(u_roughness, pixel, 0), u_d.roughness_mask);
-    return clamp(r, 0.0, 1.0);
+    return hrt_surface_roughness(u_d.c, u_roughness, pixel);
 }
 
 // Checkerboard: was this pixel traced by this ticket? (the trace tasks' rule in common.glsl)
@@ -167,9 +164,12 @@ bool hrt_traced_now(ivec2 pixel) {
     return u_d.c.frame.z == 0u || ((uint(pixel.x + pixel.y) + u_d.c.frame.x) & 1u) == 0u;
 }
 
-// This frame's surface at a pixel from the engine's G-buffer (false: background).
+// This frame's surface at a pixel from the engine's G-buffer (false: background, or excluded
+// by the input mask: neither denoised nor used as a neighbour or as history).
 bool hrt_engine_surface(ivec2 pixel, out vec3 p, out vec3 n) {
     n = vec3(0.0, 0.0, 1.0);
+    p = vec3(0.0);
+    if (hrt_masked(u_d.c, u_input_mask, uvec2(pixel))) return false;
     if (!hrt_world_position(u_d.c, uvec2(pixel), texelFetch(u_depth, pixel, 0), p)) return false;
     n = hrt_world_normal(u_d.c, texelFetch(u_normals, pixel, 0));
     return true;

@@ -18,8 +18,7 @@ layout(set = 0, binding = 4, std140) uniform DiffuseConstants {
     TraceCommon common_;
     vec4 miss;        // miss radiance rgb, ray length
     uvec4 params;     // rays per pixel, bilinear, instance table (uvec2)
-    vec4 roughness_mask;
-    vec4 brdf;        // BRDF type (0 Lambert, 1 normalized Disney), global roughness, has image, unused
+    vec4 brdf;        // BRDF type (0 Lambert, 1 normalized Disney), unused...
 } u_c;
 layout(set = 0, binding = 5) uniform sampler2D u_roughness;
 
@@ -36,13 +35,14 @@ float hrt_disney_factor(float ndotl, float ndotv, float ldoth, float roughness) 
 
 
 layout(set = 0, binding = 6) uniform sampler2D u_direct;
+layout(set = 0, binding = 7) uniform sampler2D u_input_mask;
 #include "screen_lighting.glsl"
 
 void hrt_diffuse_main() {
     TraceCommon c = u_c.common_;
     uvec2 pixel;
     vec3 p, n;
-    int kind = hrt_gbuffer_pixel(c, HRT_LAUNCH_ID, u_depth, u_normals, pixel, p, n);
+    int kind = hrt_gbuffer_pixel(c, HRT_LAUNCH_ID, u_depth, u_normals, u_input_mask, pixel, p, n);
     if (kind == HRT_PIXEL_SKIP) return;
     if (kind == HRT_PIXEL_BACKGROUND) {
         imageStore(u_out, ivec2(pixel), vec4(0.0));
@@ -51,9 +51,7 @@ void hrt_diffuse_main() {
     vec3 origin = hrt_offset_ray(c, p, n);
     mat3 basis = hrt_basis(n);
     bool disney = u_c.brdf.x != 0.0;
-    float roughness = u_c.brdf.y;
-    if (u_c.brdf.z != 0.0) roughness *= dot(texelFetch(u_roughness, ivec2(pixel), 0), u_c.roughness_mask);
-    roughness = clamp(roughness, 0.0, 1.0);
+    float roughness = hrt_surface_roughness(c, u_roughness, ivec2(pixel));
     vec3 v = normalize(c.view_to_world[3].xyz - p);
     float ndotv = clamp(dot(n, v), 1e-4, 1.0);
     uint rays = u_c.params.x;

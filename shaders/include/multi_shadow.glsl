@@ -20,12 +20,13 @@ layout(set = 0, binding = 5, std140) uniform MultiShadowConstants {
     uvec4 counts;      // rays per pixel, light count, first-hit mode
     LightGpu lights[16];
 } u_c;
+layout(set = 0, binding = 6) uniform sampler2D u_input_mask;
 
 void hrt_multi_shadow_main() {
     TraceCommon c = u_c.common_;
     uvec2 pixel;
     vec3 p, n;
-    int kind = hrt_gbuffer_pixel(c, HRT_LAUNCH_ID, u_depth, u_normals, pixel, p, n);
+    int kind = hrt_gbuffer_pixel(c, HRT_LAUNCH_ID, u_depth, u_normals, u_input_mask, pixel, p, n);
     if (kind == HRT_PIXEL_SKIP) return;
     if (kind == HRT_PIXEL_BACKGROUND) {
         imageStore(u_visibility, ivec2(pixel), uvec4(0xffffffffu));

@@ -20,13 +20,14 @@ layout(set = 0, binding = 4, std140) uniform ShadowConstants {
     LightGpu light;
     uvec4 counts;     // rays per pixel, first-hit mode
 } u_c;
+layout(set = 0, binding = 5) uniform sampler2D u_input_mask;
 
 
 void hrt_shadow_main() {
     TraceCommon c = u_c.common_;
     uvec2 pixel;
     vec3 p, n;
-    int kind = hrt_gbuffer_pixel(c, HRT_LAUNCH_ID, u_depth, u_normals, pixel, p, n);
+    int kind = hrt_gbuffer_pixel(c, HRT_LAUNCH_ID, u_depth, u_normals, u_input_mask, pixel, p, n);
     if (kind == HRT_PIXEL_SKIP) return;
     if (kind == HRT_PIXEL_BACKGROUND) {
         imageStore(u_out, ivec2(pixel), vec4(-1.0, 1.0, 0.0, 0.0));

@@ -18,8 +18,7 @@ layout(set = 0, binding = 3) uniform sampler2D u_roughness;
 layout(set = 0, binding = 4) uniform writeonly image2D u_out;
 layout(set = 0, binding = 5, std140) uniform SpecularConstants {
     TraceCommon common_;
-    vec4 roughness_mask;   // channel weights of the roughness image
-    vec4 params;           // global roughness, has image (0/1), ray length, firefly clamp (0 = off)
+    vec4 params;           // ray length, firefly clamp (0 = off), unused, unused
     vec4 miss;             // miss radiance rgb, unused
     uvec4 counts;          // rays per pixel, bilinear, instance table (uvec2)
     vec4 specular;         // global metalness, has specular image, has demodulated output, unused
@@ -49,13 +48,14 @@ float hrt_smith_g1(float ndotx, float alpha) {
 layout(set = 0, binding = 6) uniform sampler2D u_direct;
 layout(set = 0, binding = 7) uniform sampler2D u_specular;
 layout(set = 0, binding = 8) uniform writeonly image2D u_demodulated;
+layout(set = 0, binding = 9) uniform sampler2D u_input_mask;
 #include "screen_lighting.glsl"
 
 void hrt_specular_main() {
     TraceCommon c = u_c.common_;
     uvec2 pixel;
     vec3 p, n;
-    int kind = hrt_gbuffer_pixel(c, HRT_LAUNCH_ID, u_depth, u_normals, pixel, p, n);
+    int kind = hrt_gbuffer_pixel(c, HRT_LAUNCH_ID, u_depth, u_normals, u_input_mask, pixel, p, n);
     if (kind == HRT_PIXEL_SKIP) return;
     if (kind == HRT_PIXEL_BACKGROUND) {
         imageStore(u_out, ivec2(pixel), vec4(0.0));
@@ -65,9 +65,7 @@ void hrt_specular_main() {
     vec3 eye = c.view_to_world[3].xyz;
     vec3 v = normalize(eye - p);
     if (dot(v, n) <= 0.0) n = normalize(n + v * (1e-3 - dot(v, n))); // back-facing normal map
-    float roughness = u_c.params.x;
-    if (u_c.params.y != 0.0) roughness *= dot(texelFetch(u_roughness, ivec2(pixel), 0), u_c.roughness_mask);
-    roughness = clamp(roughness, 0.0, 1.0);
+    float roughness = hrt_surface_roughness(c, u_roughness, ivec2(pixel));
     float alpha = roughness * roughness;
     vec3 origin = hrt_offset_ray(c, p, n);
     mat3 basis = hrt_basis(n);
@@ -75,8 +73,8 @@ void hrt_specular_main() {
     uint rays = alpha < 1e-4 ? 1u : u_c.counts.x;
     bool bilinear = u_c.counts.y != 0u;
     InstanceTable table = InstanceTable(u_c.counts.zw);
-    float ray_length = u_c.params.z;
-    float clamp_lum = u_c.params.w;
+    float ray_length = u_c.params.x;
+    float clamp_lum = u_c.params.y;
     uint seed = hrt_pcg(pixel.x ^ hrt_pcg(pixel.y ^ hrt_pcg(c.frame.x ^ 0x5bec7u)));
     vec2 shift = vec2(hrt_u01(seed), hrt_u01(hrt_pcg(seed)));
 

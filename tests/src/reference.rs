@@ -333,7 +333,19 @@ pub struct GBuffer {
 
 impl GBuffer {
     pub fn render(tracer: &Tracer, camera: &Camera, width: u32, height: u32) -> GBuffer {
-        let view_to_clip = camera.view_to_clip(width as f32 / height as f32);
+        GBuffer::render_with(tracer, camera, camera.view_to_clip(width as f32 / height as f32), width, height)
+    }
+
+    /// The camera's projection shifted so the image content moves by `jitter` pixels (a TAA
+    /// jitter), and that projection (what the engine passes as `Camera::view_to_clip`).
+    pub fn render_jittered(tracer: &Tracer, camera: &Camera, width: u32, height: u32, jitter: [f32; 2]) -> (GBuffer, Mat4) {
+        let shift = Mat4::from_translation(Vec3::new(2.0 * jitter[0] / width as f32, 2.0 * jitter[1] / height as f32, 0.0));
+        let view_to_clip = shift * camera.view_to_clip(width as f32 / height as f32);
+        (GBuffer::render_with(tracer, camera, view_to_clip, width, height), view_to_clip)
+    }
+
+    /// One primary ray per pixel centre through `view_to_clip` from `camera`'s pose.
+    pub fn render_with(tracer: &Tracer, camera: &Camera, view_to_clip: Mat4, width: u32, height: u32) -> GBuffer {
         let world_to_clip = view_to_clip * camera.world_to_view();
         let clip_to_world = world_to_clip.inverse();
         let n = (width * height) as usize;

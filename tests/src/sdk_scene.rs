@@ -139,6 +139,7 @@ impl GBufferImages {
                 image: self.normals.input(READ),
                 normal_type: NormalType::RgbVector,
                 space: NormalSpace::World,
+                ..Default::default()
             },
             viewport: Viewport::full(self.width, self.height),
             camera: camera.sdk_camera(self.width, self.height),

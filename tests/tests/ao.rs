@@ -218,6 +218,17 @@ fn encodings_and_inline_rt_give_the_same_image() {
             .collect();
         bytemuck::cast_slice(&v).to_vec()
     });
+    // An engine's own basis (z-up, scaled by 2): stored = to_engine * world, undone by the
+    // normal_to_world 3x3 (the SDK normalises, so the scale must not matter).
+    let to_world = glam::Mat3::from_rotation_x(-std::f32::consts::FRAC_PI_2) * glam::Mat3::from_rotation_z(0.7) * 2.0;
+    let to_engine = to_world.inverse();
+    let n_custom = img(
+        vk::Format::R32G32B32A32_SFLOAT,
+        &normals_as(&|n| {
+            let v = to_engine * n;
+            [v.x, v.y, v.z, 0.0]
+        }),
+    );
     let aspect = W as f32 / H as f32;
     let reversed = glam::camera::rh::proj::vulkan::perspective_infinite_reverse(camera.fov_y_radians, aspect, camera.near);
     let infinite = glam::camera::rh::proj::vulkan::perspective_infinite(camera.fov_y_radians, aspect, camera.near);
@@ -235,32 +246,54 @@ fn encodings_and_inline_rt_give_the_same_image() {
     let mut variants: Vec<(&str, TraceAmbientOcclusionTask)> = Vec::new();
     let mut v = baseline;
     v.common.depth.image = d32.input(read);
-    v.common.normals =
-        NormalInput { image: n_normalized.input(read), normal_type: NormalType::RgbNormalizedVector, space: NormalSpace::World };
+    v.common.normals = NormalInput {
+        image: n_normalized.input(read),
+        normal_type: NormalType::RgbNormalizedVector,
+        space: NormalSpace::World,
+        ..Default::default()
+    };
     variants.push(("D32 depth, normalized RGB normals", v));
     let mut v = baseline;
     v.common.depth = DepthInput { image: positions.input(read), depth_type: DepthType::WorldPosition };
-    v.common.normals =
-        NormalInput { image: n_rg_oct.input(read), normal_type: NormalType::RgOctahedron, space: NormalSpace::World };
+    v.common.normals = NormalInput {
+        image: n_rg_oct.input(read),
+        normal_type: NormalType::RgOctahedron,
+        space: NormalSpace::World,
+        ..Default::default()
+    };
     variants.push(("world positions, RG octahedral normals", v));
     let mut v = baseline;
     v.common.normals = NormalInput {
         image: n_ba_oct_view.input(read),
         normal_type: NormalType::BaNormalizedOctahedron,
         space: NormalSpace::View,
+        ..Default::default()
     };
     variants.push(("view-space BA normalized octahedral normals", v));
     let mut v = baseline;
-    v.common.normals =
-        NormalInput { image: n_ba_oct.input(read), normal_type: NormalType::BaOctahedron, space: NormalSpace::World };
+    v.common.normals = NormalInput {
+        image: n_ba_oct.input(read),
+        normal_type: NormalType::BaOctahedron,
+        space: NormalSpace::World,
+        ..Default::default()
+    };
     variants.push(("BA octahedral normals", v));
     let mut v = baseline;
     v.common.normals = NormalInput {
         image: n_rg_noct_view.input(read),
         normal_type: NormalType::RgNormalizedOctahedron,
         space: NormalSpace::View,
+        ..Default::default()
     };
     variants.push(("view-space RG normalized octahedral normals", v));
+    let mut v = baseline;
+    v.common.normals = NormalInput {
+        image: n_custom.input(read),
+        normal_type: NormalType::RgbVector,
+        space: NormalSpace::Custom,
+        normal_to_world: to_world,
+    };
+    variants.push(("custom-space normals (normal_to_world)", v));
     // Projections engines use: reversed Z with an infinite far plane (background depth 0) and
     // an infinite far plane (background 1). The depth images are the same surfaces' clip depth
     // under those projections.
@@ -311,6 +344,7 @@ fn encodings_and_inline_rt_give_the_same_image() {
         n_ba_oct_view,
         n_ba_oct,
         n_rg_noct_view,
+        n_custom,
         d_reversed,
         d_infinite,
     ]) {
@@ -395,7 +429,12 @@ fn viewport_offsets_are_honoured() {
     let task = TraceAmbientOcclusionTask {
         common: TraceCommon {
             depth: DepthInput { image: depth_img.input(read), depth_type: DepthType::ClipSpace },
-            normals: NormalInput { image: normal_img.input(read), normal_type: NormalType::RgbVector, space: NormalSpace::World },
+            normals: NormalInput {
+                image: normal_img.input(read),
+                normal_type: NormalType::RgbVector,
+                space: NormalSpace::World,
+                ..Default::default()
+            },
             viewport: Viewport { x: ox, y: oy, width: vw, height: vh, min_depth: 0.0, max_depth: 1.0 },
             camera: camera.sdk_camera(vw, vh),
             ..Default::default()

@@ -251,6 +251,28 @@ fn non_finite_transforms_and_cameras_are_refused() {
     bad = good;
     bad.common.depth.image.view = vk::ImageView::null();
     assert!(matches!(c.schedule_ambient_occlusion(&bad).unwrap_err(), Error::InvalidInput { .. }));
+    // Roughness remap: 0 <= min <= max <= 1, no NaN.
+    for (min, max) in [(0.5, 0.4), (-0.1, 1.0), (0.0, 1.5), (f32::NAN, 1.0), (0.0, f32::NAN)] {
+        bad = good;
+        bad.common.roughness.min_roughness = min;
+        bad.common.roughness.max_roughness = max;
+        assert!(matches!(c.schedule_ambient_occlusion(&bad).unwrap_err(), Error::InvalidInput { .. }), "{min} {max}");
+    }
+    // A custom normal basis must be finite and invertible.
+    for m in [glam::Mat3::ZERO, glam::Mat3::from_cols_array(&[f32::NAN; 9])] {
+        bad = good;
+        bad.common.normals.space = hybrid_rt::NormalSpace::Custom;
+        bad.common.normals.normal_to_world = m;
+        assert!(matches!(c.schedule_ambient_occlusion(&bad).unwrap_err(), Error::InvalidTransform { .. }));
+    }
+    // Input mask: a sampled colour format with R, covering the viewport.
+    bad = good;
+    bad.common.input_mask = good.common.depth.image;
+    bad.common.input_mask.format = vk::Format::R32_UINT;
+    assert!(matches!(c.schedule_ambient_occlusion(&bad).unwrap_err(), Error::UnsupportedFormat { .. }));
+    bad.common.input_mask.format = vk::Format::R32_SFLOAT;
+    bad.common.input_mask.width = 8;
+    assert!(matches!(c.schedule_ambient_occlusion(&bad).unwrap_err(), Error::InvalidInput { .. }));
     for (rays, len, power) in [(0, 1.0, 1.0), (65, 1.0, 1.0), (1, -1.0, 1.0), (1, f32::NAN, 1.0), (1, 1.0, 0.0)] {
         bad = good;
         bad.rays_per_pixel = rays;

@@ -136,7 +136,7 @@ fn glossy_reflections_converge_to_the_reference_and_read_the_roughness_channel()
         .host
         .image_with_data(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::SAMPLED, bytemuck::cast_slice(&texels), READ)
         .unwrap();
-    let input = RoughnessInput { image: rough.input(READ), channel_mask: [0.0, 1.0, 0.0, 0.0], global_roughness: 1.0 };
+    let input = RoughnessInput { image: rough.input(READ), channel_mask: [0.0, 1.0, 0.0, 0.0], ..Default::default() };
     let (rays, frames) = (16u32, 4u32);
     let gpu = f.trace(&f.task(input, rays), frames);
 

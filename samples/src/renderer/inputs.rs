@@ -13,11 +13,15 @@ impl Inputs {
     pub(super) fn of(t: &Targets, camera: &Camera) -> Inputs {
         let read = raster::READ;
         let depth = DepthInput { image: t.depth.input(read), depth_type: DepthType::ClipSpace };
-        let normals =
-            NormalInput { image: t.normal_roughness.input(read), normal_type: NormalType::RgbVector, space: NormalSpace::World };
+        let normals = NormalInput {
+            image: t.normal_roughness.input(read),
+            normal_type: NormalType::RgbVector,
+            space: NormalSpace::World,
+            ..Default::default()
+        };
         // Roughness lives in the normal target's alpha.
         let roughness =
-            RoughnessInput { image: t.normal_roughness.input(read), channel_mask: [0.0, 0.0, 0.0, 1.0], global_roughness: 1.0 };
+            RoughnessInput { image: t.normal_roughness.input(read), channel_mask: [0.0, 0.0, 0.0, 1.0], ..Default::default() };
         let viewport = Viewport::full(t.width, t.height);
         let sdk_camera = camera.sdk_camera(t.width, t.height);
         let common = TraceCommon { depth, normals, roughness, viewport, camera: sdk_camera, ..Default::default() };

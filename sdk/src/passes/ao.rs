@@ -45,7 +45,8 @@ impl AoPass {
             counts: [task.rays_per_pixel, 0, 0, 0],
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
-        let slots = super::gbuffer_slots(r.tlas, &task.common, &task.output, ubo);
+        let mut slots = super::gbuffer_slots(r.tlas, &task.common, &task.output, ubo);
+        slots.push(super::input_mask_slot(&task.common));
         let vp = &task.common.viewport;
         self.program.run(r, &slots, vp.width, vp.height, Writes::Storage);
     }

@@ -16,6 +16,9 @@ pub(crate) struct TraceCommonGpu {
     pub offset_camera: [f32; 4],
     pub frame: [u32; 4],
     pub world_to_clip: [f32; 16],
+    pub normal_to_world: [f32; 16],
+    pub roughness_mask: [f32; 4],
+    pub roughness: [f32; 4],
 }
 
 /// `AoConstants` in shaders/include/ao.glsl.
@@ -35,18 +38,29 @@ impl TraceCommonGpu {
         let vp = &c.viewport;
         let (min_d, max_d) = if vp.min_depth == 0.0 && vp.max_depth == 0.0 { (0.0, 1.0) } else { (vp.min_depth, vp.max_depth) };
         let o = &c.ray_offset;
+        let normal_to_world = match c.normals.space {
+            NormalSpace::World => None,
+            NormalSpace::View => Some(glam::Mat3::from_mat4(view_to_world)),
+            NormalSpace::Custom => Some(c.normals.normal_to_world),
+        };
+        let r = &c.roughness;
         TraceCommonGpu {
             clip_to_world: clip_to_world.to_cols_array(),
             view_to_world: view_to_world.to_cols_array(),
             viewport: [vp.x as f32, vp.y as f32, vp.width as f32, vp.height as f32],
-            depth_range: [min_d, max_d, background_depth(&c.camera.view_to_clip, min_d, max_d), 0.0],
+            depth_range: [
+                min_d,
+                max_d,
+                background_depth(&c.camera.view_to_clip, min_d, max_d),
+                (c.input_mask.image != ash::vk::Image::null()) as u32 as f32,
+            ],
             modes: [
                 match c.depth.depth_type {
                     DepthType::ClipSpace => 0,
                     DepthType::WorldPosition => 1,
                 },
                 c.normals.normal_type as u32,
-                (c.normals.space == NormalSpace::View) as u32,
+                normal_to_world.is_some() as u32,
                 match o.offset_type {
                     RayOffsetType::Disabled => 0,
                     RayOffsetType::WorldPosition => 1,
@@ -57,6 +71,9 @@ impl TraceCommonGpu {
             offset_camera: [o.cam_constant, o.cam_linear, o.cam_quadratic, 0.0],
             frame: [seed, mask as u32, c.half_resolution_mode as u32, (c.direct_lighting.image != ash::vk::Image::null()) as u32],
             world_to_clip: (c.camera.view_to_clip * c.camera.world_to_view).to_cols_array(),
+            normal_to_world: glam::Mat4::from_mat3(normal_to_world.unwrap_or(glam::Mat3::IDENTITY)).to_cols_array(),
+            roughness_mask: r.channel_mask,
+            roughness: [r.global_roughness, r.has_image() as u32 as f32, r.min_roughness, r.max_roughness],
         }
     }
 }
@@ -92,9 +109,12 @@ mod tests {
         assert_eq!(offset_of!(TraceCommonGpu, offset_camera), 192);
         assert_eq!(offset_of!(TraceCommonGpu, frame), 208);
         assert_eq!(offset_of!(TraceCommonGpu, world_to_clip), 224);
-        assert_eq!(size_of::<TraceCommonGpu>(), 288);
-        assert_eq!(offset_of!(AoConstantsGpu, params), 288);
-        assert_eq!(offset_of!(AoConstantsGpu, counts), 304);
-        assert_eq!(size_of::<AoConstantsGpu>(), 320);
+        assert_eq!(offset_of!(TraceCommonGpu, normal_to_world), 288);
+        assert_eq!(offset_of!(TraceCommonGpu, roughness_mask), 352);
+        assert_eq!(offset_of!(TraceCommonGpu, roughness), 368);
+        assert_eq!(size_of::<TraceCommonGpu>(), 384);
+        assert_eq!(offset_of!(AoConstantsGpu, params), 384);
+        assert_eq!(offset_of!(AoConstantsGpu, counts), 400);
+        assert_eq!(size_of::<AoConstantsGpu>(), 416);
     }
 }

@@ -33,8 +33,6 @@ pub(crate) struct DenoiseConstantsGpu {
     jitter_delta: [f32; 4],
     history: [f32; 4],
     stops: [f32; 4],
-    roughness_mask: [f32; 4],
-    roughness: [f32; 4],
     light: LightGpu,
 }
 
@@ -140,7 +138,7 @@ pub(crate) struct DenoisePass {
 }
 
 /// Binding order of shaders/include/denoise.glsl: 6 sampled (depth, normals, roughness,
-/// motion, input 0/1), 16 storage, 1 uniform buffer.
+/// motion, input 0/1), 16 storage, 1 uniform buffer, 1 sampled (the input mask).
 const SAMPLED_BINDINGS: usize = 6;
 const STORAGE_BINDINGS: usize = 16;
 
@@ -151,6 +149,7 @@ impl DenoisePass {
             .collect();
         bindings.extend((0..STORAGE_BINDINGS).map(|_| Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None }));
         bindings.push(Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None });
+        bindings.push(Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) });
         let set_layout = b.set_layout(&bindings, vk::ShaderStageFlags::COMPUTE)?;
         let layout = b.layout(Some(set_layout), 16, vk::ShaderStageFlags::COMPUTE)?;
         Ok(DenoisePass {
@@ -223,6 +222,7 @@ impl DenoisePass {
         let stand_in = temps[0][0];
         let roughness = descriptors::optional_or(&c.roughness.image, &stand_in);
         let motion = descriptors::optional_or(&c.motion.image, &stand_in);
+        let mask = descriptors::optional_or(&c.input_mask, &stand_in);
 
         let dispatch = |r: &mut Recording<'_>, pipeline: vk::Pipeline, src: usize, dst: usize, push: [u32; 4]| {
             r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
@@ -250,6 +250,7 @@ impl DenoisePass {
                 Slot::Storage(&temps[dst][0]),
                 Slot::Storage(&temps[dst][1]),
                 Slot::Uniform(ubo),
+                Slot::Sampled(mask),
             ];
             let bind = vk::PipelineBindPoint::COMPUTE;
             let dev = &r.device.raw;
@@ -290,6 +291,8 @@ fn constants(job: &DenoiseJob, previous: &Camera, previous_jitter: [f32; 2], see
         normals: c.normals,
         viewport: c.viewport,
         camera: c.camera,
+        roughness: c.roughness,
+        input_mask: c.input_mask,
         half_resolution_mode: c.half_resolution_mode,
         ..Default::default()
     };
@@ -320,7 +323,6 @@ fn constants(job: &DenoiseJob, previous: &Camera, previous_jitter: [f32; 2], see
         s => [kind(s), kind(s), crate::gpu::formats::channel_count(job.inputs[0].format).is_some_and(|n| n >= 2) as u32, 0],
     };
     let s = &c.settings;
-    let m = c.roughness.channel_mask;
     DenoiseConstantsGpu {
         common: TraceCommonGpu::new(&trace, seed, 0),
         prev_world_to_clip: prev_world_to_clip.to_cols_array(),
@@ -333,8 +335,6 @@ fn constants(job: &DenoiseJob, previous: &Camera, previous_jitter: [f32; 2], see
         jitter_delta: [previous_jitter[0] - c.camera_jitter[0], previous_jitter[1] - c.camera_jitter[1], 0.0, 0.0],
         history: [s.max_history_frames as f32, s.fast_history_frames as f32, s.history_clamp_sigma, MIN_RADIUS_SCALE],
         stops: [s.luminance_sigma, s.normal_power, s.plane_distance_sigma, s.max_shadow_blur_radius],
-        roughness_mask: m,
-        roughness: [c.roughness.global_roughness, c.roughness.has_image() as u32 as f32, 0.0, 0.0],
         light: LightGpu::new(&job.light),
     }
 }
@@ -386,14 +386,14 @@ mod tests {
     use super::*;
     use std::mem::{offset_of, size_of};
 
-    /// std140 offsets of DenoiseConstants (TraceCommon is 288 bytes, LightGpu 48).
+    /// std140 offsets of DenoiseConstants (TraceCommon is 384 bytes, LightGpu 48).
     #[test]
     fn layout_matches_glsl_std140() {
-        assert_eq!(offset_of!(DenoiseConstantsGpu, prev_world_to_clip), 288);
-        assert_eq!(offset_of!(DenoiseConstantsGpu, eye), 416);
-        assert_eq!(offset_of!(DenoiseConstantsGpu, flags), 448);
-        assert_eq!(offset_of!(DenoiseConstantsGpu, roughness), 560);
-        assert_eq!(offset_of!(DenoiseConstantsGpu, light), 576);
-        assert_eq!(size_of::<DenoiseConstantsGpu>(), 624);
+        assert_eq!(offset_of!(DenoiseConstantsGpu, prev_world_to_clip), 384);
+        assert_eq!(offset_of!(DenoiseConstantsGpu, eye), 512);
+        assert_eq!(offset_of!(DenoiseConstantsGpu, flags), 544);
+        assert_eq!(offset_of!(DenoiseConstantsGpu, stops), 624);
+        assert_eq!(offset_of!(DenoiseConstantsGpu, light), 640);
+        assert_eq!(size_of::<DenoiseConstantsGpu>(), 688);
     }
 }

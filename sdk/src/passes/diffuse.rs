@@ -18,7 +18,6 @@ struct DiffuseConstantsGpu {
     common: TraceCommonGpu,
     miss: [f32; 4],
     params: [u32; 4],
-    roughness_mask: [f32; 4],
     brdf: [f32; 4],
 }
 
@@ -52,19 +51,14 @@ impl DiffusePass {
             common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::DIFFUSE_GI.bits()),
             miss: [m[0], m[1], m[2], task.ray_length],
             params: [task.rays_per_pixel, task.common.enable_bilinear_sampling as u32, table as u32, (table >> 32) as u32],
-            roughness_mask: task.common.roughness.channel_mask,
-            brdf: [
-                task.brdf as u32 as f32,
-                task.common.roughness.global_roughness,
-                task.common.roughness.has_image() as u32 as f32,
-                0.0,
-            ],
+            brdf: [task.brdf as u32 as f32, 0.0, 0.0, 0.0],
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
         let mut slots = super::gbuffer_slots(r.tlas, &task.common, &task.output, ubo);
         // Without a roughness image the normals stand in (not read then).
         slots.push(Slot::Sampled(optional_or(&task.common.roughness.image, &task.common.normals.image)));
         slots.push(Slot::Sampled(optional_or(&task.common.direct_lighting, &task.common.normals.image)));
+        slots.push(super::input_mask_slot(&task.common));
         let vp = &task.common.viewport;
         self.program.run(r, &slots, vp.width, vp.height, Writes::Storage);
     }

@@ -243,7 +243,7 @@ impl Passes {
 }
 
 /// The bindings a G-buffer trace starts with: TLAS, depth, normals, output image, constants;
-/// a pass appends its own after them.
+/// then the pass's own (`extra`), then the input mask (`input_mask_slot`) last.
 pub(crate) fn gbuffer_bindings(sampler: vk::Sampler, extra: &[Binding]) -> Vec<Binding> {
     use vk::DescriptorType as T;
     let mut b = vec![
@@ -254,10 +254,22 @@ pub(crate) fn gbuffer_bindings(sampler: vk::Sampler, extra: &[Binding]) -> Vec<B
         Binding { ty: T::UNIFORM_BUFFER, sampler: None },
     ];
     b.extend(extra.iter().map(|x| Binding { ty: x.ty, sampler: x.sampler }));
+    b.push(input_mask_binding(sampler));
     b
 }
 
-/// The slots matching `gbuffer_bindings`.
+/// The input mask's binding: the last of every trace pass's set.
+pub(crate) fn input_mask_binding(sampler: vk::Sampler) -> Binding {
+    Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) }
+}
+
+/// The input mask's slot: the mask, or the normals standing in when there is none (the shader
+/// is told by `TraceCommonGpu` not to read it then).
+pub(crate) fn input_mask_slot(common: &TraceCommon) -> descriptors::Slot<'_> {
+    descriptors::Slot::Sampled(descriptors::optional_or(&common.input_mask, &common.normals.image))
+}
+
+/// The first slots matching `gbuffer_bindings` (the pass pushes its own and the input mask's).
 pub(crate) fn gbuffer_slots<'a>(
     tlas: vk::AccelerationStructureKHR,
     common: &'a TraceCommon,

@@ -70,7 +70,8 @@ impl ShadowPass {
             counts: [task.rays_per_pixel, task.first_hit as u32, 0, 0],
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
-        let slots = super::gbuffer_slots(r.tlas, &task.common, &task.output, ubo);
+        let mut slots = super::gbuffer_slots(r.tlas, &task.common, &task.output, ubo);
+        slots.push(super::input_mask_slot(&task.common));
         let vp = &task.common.viewport;
         self.program.run(r, &slots, vp.width, vp.height, Writes::Storage);
     }
@@ -101,6 +102,7 @@ impl MultiShadowPass {
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
+                super::input_mask_binding(sampler),
             ],
             Shaders {
                 raygen: shaders::MULTI_SHADOW_RGEN,
@@ -132,6 +134,7 @@ impl MultiShadowPass {
             Slot::Storage(&task.visibility),
             Slot::Storage(&task.packed),
             Slot::Uniform(ubo),
+            super::input_mask_slot(&task.common),
         ];
         let vp = &task.common.viewport;
         self.program.run(r, &slots, vp.width, vp.height, Writes::Storage);

@@ -16,7 +16,6 @@ use bytemuck::{Pod, Zeroable};
 #[repr(C)]
 struct SpecularConstantsGpu {
     common: TraceCommonGpu,
-    roughness_mask: [f32; 4],
     params: [f32; 4],
     miss: [f32; 4],
     counts: [u32; 4],
@@ -42,6 +41,7 @@ impl SpecularPass {
                 sampled(),
                 sampled(),
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
+                super::input_mask_binding(sampler),
             ],
             Shaders {
                 raygen: shaders::SPECULAR_RGEN,
@@ -61,8 +61,7 @@ impl SpecularPass {
         let m = task.miss_radiance;
         let constants = SpecularConstantsGpu {
             common: TraceCommonGpu::new(c, r.seed, InstanceInclusionMask::REFLECTIONS.bits()),
-            roughness_mask: c.roughness.channel_mask,
-            params: [c.roughness.global_roughness, c.roughness.has_image() as u32 as f32, task.ray_length, task.firefly_clamp],
+            params: [task.ray_length, task.firefly_clamp, 0.0, 0.0],
             miss: [m[0], m[1], m[2], 0.0],
             counts: [task.rays_per_pixel, c.enable_bilinear_sampling as u32, table as u32, (table >> 32) as u32],
             specular: [
@@ -87,6 +86,7 @@ impl SpecularPass {
             // Stand-ins where there is no specular image / demodulated output (not accessed).
             Slot::Sampled(optional_or(&c.specular.image, &c.normals.image)),
             Slot::Storage(optional_or(&task.demodulated_output, &task.output)),
+            super::input_mask_slot(c),
         ];
         self.program.run(r, &slots, c.viewport.width, c.viewport.height, Writes::Storage);
     }

@@ -182,6 +182,9 @@ pub struct DenoisingCommon {
     pub normals: NormalInput,
     /// Specular: the roughness the trace used (same rules as `TraceCommon::roughness`).
     pub roughness: RoughnessInput,
+    /// Optional: the trace's input mask (`TraceCommon::input_mask`): pixels with R >= 0.5 are
+    /// left out of filtering, neighbourhoods and history. Give the traces the same mask.
+    pub input_mask: ImageInput,
     /// Motion vectors (optional: leave the image null to reproject with the cameras).
     pub motion: MotionInput,
     /// The pixels denoised (the trace's viewport).
@@ -211,6 +214,7 @@ impl Default for DenoisingCommon {
             depth: DepthInput::default(),
             normals: NormalInput::default(),
             roughness: RoughnessInput::default(),
+            input_mask: ImageInput::default(),
             motion: MotionInput::default(),
             viewport: Viewport::default(),
             camera: Camera::default(),

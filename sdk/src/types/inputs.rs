@@ -6,7 +6,7 @@
 //! space; every image input carries its format and extent so a wrong one is an error at
 //! schedule time, not a garbage image.
 use ash::vk;
-use glam::Mat4;
+use glam::{Mat3, Mat4};
 
 /// An engine image the SDK reads or writes. The SDK binds `view` as given and never changes the
 /// image's layout: `layout` is the layout it is in while the ticket runs.
@@ -116,6 +116,10 @@ pub enum NormalSpace {
     World = 0,
     /// View space of `TraceCommon::camera` (the SDK rotates them to world space).
     View = 1,
+    /// Any other space: `NormalInput::normal_to_world` takes a decoded normal to world space
+    /// (the result is normalised, so a uniform scale does no harm; for a non-uniform one give
+    /// the inverse transpose).
+    Custom = 2,
 }
 
 /// The G-buffer's normals: the surface normal each secondary ray leaves from.
@@ -126,8 +130,12 @@ pub struct NormalInput {
     pub image: ImageInput,
     /// The encoding. Default `RgbNormalizedVector`.
     pub normal_type: NormalType,
-    /// World (default) or view space.
+    /// World (default), view space, or custom (`normal_to_world`).
     pub space: NormalSpace,
+    /// `NormalSpace::Custom`: the 3x3 that takes a decoded normal to world space (e.g. an
+    /// engine whose G-buffer holds normals in a previous frame's view, or in a z-up basis).
+    /// Ignored for the other spaces. Default identity.
+    pub normal_to_world: Mat3,
 }
 
 /// The pixel rectangle of the images that the task reads and writes.
@@ -220,8 +228,16 @@ impl Default for RayOffset {
     }
 }
 
-/// Surface roughness (perceptual, 0 = mirror .. 1), read by specular traces:
-/// `global_roughness * dot(texel, channel_mask)` with an image, `global_roughness` without.
+/// Surface roughness (perceptual, 0 = mirror .. 1), read by specular traces, the normalized
+/// Disney diffuse BRDF and the specular denoiser — one rule for all three:
+/// `clamp(global_roughness * dot(texel, channel_mask), min_roughness, max_roughness)` with an
+/// image, `clamp(global_roughness, min_roughness, max_roughness)` without.
+///
+/// Kickstart RT's remap is the same three numbers: its roughness multiplier is
+/// `global_roughness`; `min_roughness` keeps near-mirrors from aliasing (a 0.05 floor is common
+/// in engines whose normal maps have detail below a pixel), `max_roughness` caps how wide a
+/// lobe the reflection trace spends rays on (above ~0.6 a reflection is barely distinguishable
+/// from the engine's own prefiltered probe).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RoughnessInput {
     /// Optional: leave `image` null to use `global_roughness` everywhere.
@@ -231,11 +247,21 @@ pub struct RoughnessInput {
     /// Multiplier of the image's roughness, or the roughness itself without an image.
     /// Default 1.0 (the guide: set it to 0 to debug mirror reflections first).
     pub global_roughness: f32,
+    /// Lower clamp of the remapped roughness, in [0, `max_roughness`]. Default 0.
+    pub min_roughness: f32,
+    /// Upper clamp, in [`min_roughness`, 1]. Default 1.
+    pub max_roughness: f32,
 }
 
 impl Default for RoughnessInput {
     fn default() -> Self {
-        RoughnessInput { image: ImageInput::default(), channel_mask: [1.0, 0.0, 0.0, 0.0], global_roughness: 1.0 }
+        RoughnessInput {
+            image: ImageInput::default(),
+            channel_mask: [1.0, 0.0, 0.0, 0.0],
+            global_roughness: 1.0,
+            min_roughness: 0.0,
+            max_roughness: 1.0,
+        }
     }
 }
 
@@ -301,6 +327,13 @@ pub struct TraceCommon {
     pub roughness: RoughnessInput,
     /// Specular colour, for specular traces.
     pub specular: SpecularInput,
+    /// Optional (leave `image` null for none): pixels whose R channel is >= 0.5 are excluded —
+    /// treated as background (sky) by the trace, which writes its "nothing here" value there
+    /// (AO 1, shadows lit, radiance 0), and by the denoisers, which neither filter them nor let
+    /// them into a neighbourhood or history. For what the depth buffer shows but rays should not
+    /// start from: UI, first-person hands, a portal. Any sampled format with an R channel
+    /// (R8_UNORM, R8G8B8A8_UNORM, R16_SFLOAT, R32_SFLOAT, ...).
+    pub input_mask: ImageInput,
     /// Optional (leave `image` null for none): the lit frame of this view, as a direct-lighting
     /// source for secondary hits. A diffuse or specular hit that lands in the viewport where the
     /// depth shows that surface takes this image's radiance, any other hit the cache's (the
@@ -331,6 +364,7 @@ impl Default for TraceCommon {
             ray_offset: RayOffset::default(),
             roughness: RoughnessInput::default(),
             specular: SpecularInput::default(),
+            input_mask: ImageInput::default(),
             direct_lighting: ImageInput::default(),
             use_inline_rt: false,
             enable_bilinear_sampling: true,

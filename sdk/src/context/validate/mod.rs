@@ -203,6 +203,26 @@ pub(crate) fn trace_common(c: &TraceCommon, limits: &Limits) -> Result<()> {
     if !(r.global_roughness.is_finite() && r.global_roughness >= 0.0) || r.channel_mask.iter().any(|m| !m.is_finite()) {
         return Err(Error::invalid("TraceCommon.roughness", "global_roughness must be finite and >= 0, the mask finite"));
     }
+    // NaN fails every comparison, so `!(..)` also refuses it.
+    if !(0.0 <= r.min_roughness && r.min_roughness <= r.max_roughness && r.max_roughness <= 1.0) {
+        return Err(Error::invalid("TraceCommon.roughness", "needs 0 <= min_roughness <= max_roughness <= 1"));
+    }
+    if c.normals.space == NormalSpace::Custom {
+        let m = &c.normals.normal_to_world;
+        let det = m.determinant();
+        if !m.is_finite() || !det.is_finite() || det.abs() < 1e-12 {
+            return Err(Error::InvalidTransform { what: "TraceCommon.normals.normal_to_world" });
+        }
+    }
+    if c.input_mask.image != vk::Image::null() {
+        image("TraceCommon.input_mask", &c.input_mask, vp, Use::Sampled)?;
+        format_in(
+            "TraceCommon.input_mask.format",
+            c.input_mask.format,
+            MASK_FORMATS,
+            "a unorm or float format with an R channel",
+        )?;
+    }
     matrix("TraceCommon.camera.world_to_view", &c.camera.world_to_view)?;
     matrix("TraceCommon.camera.view_to_clip", &c.camera.view_to_clip)?;
     matrix("TraceCommon.camera (view_to_clip * world_to_view)", &(c.camera.view_to_clip * c.camera.world_to_view))?;
@@ -247,6 +267,21 @@ pub(crate) fn ambient_occlusion(t: &TraceAmbientOcclusionTask, limits: &Limits) 
     }
     Ok(())
 }
+
+/// Input masks: sampled as float, R read.
+const MASK_FORMATS: &[vk::Format] = &[
+    vk::Format::R8_UNORM,
+    vk::Format::R8G8_UNORM,
+    vk::Format::R8G8B8A8_UNORM,
+    vk::Format::B8G8R8A8_UNORM,
+    vk::Format::R16_UNORM,
+    vk::Format::R16_SFLOAT,
+    vk::Format::R16G16_SFLOAT,
+    vk::Format::R16G16B16A16_SFLOAT,
+    vk::Format::R32_SFLOAT,
+    vk::Format::R32G32_SFLOAT,
+    vk::Format::R32G32B32A32_SFLOAT,
+];
 
 const LIT_FORMATS: &[vk::Format] = &[
     vk::Format::R8G8B8A8_UNORM,
@@ -451,6 +486,7 @@ pub(crate) fn denoise(j: &DenoiseJob, limits: &Limits) -> Result<()> {
         viewport: c.viewport,
         camera: c.camera,
         roughness: c.roughness,
+        input_mask: c.input_mask,
         ..Default::default()
     };
     trace_common(&as_trace, limits)?;
