@@ -723,6 +723,14 @@ int main(void) {
     multi.light_count = 2;
     multi.visibility = sdk_image(&vis, VK_IMAGE_LAYOUT_GENERAL);
     multi.packed = sdk_image(&packed, VK_IMAGE_LAYOUT_GENERAL);
+    /* Light 1 on its own too, in the single-light format (for a DenoiseShadow task). */
+    Image light1 = make_image(VK_FORMAT_R32G32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT);
+    cmd = begin();
+    transition(cmd, light1.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL);
+    submit_and_wait(cmd);
+    multi.light_outputs[0].light = 1;
+    multi.light_outputs[0].output = sdk_image(&light1, VK_IMAGE_LAYOUT_GENERAL);
+    multi.light_output_count = 1;
     CHECK_HRT(hrt_schedule_multi_shadow(frame, &multi));
     uint32_t words[W * H];
     printf("multi-shadow frame:\n");
@@ -730,6 +738,30 @@ int main(void) {
     uint32_t centre_word = words[(H / 2) * W + W / 2];
     printf("visibility at the centre: light 0 %u/255, light 1 %u/255\n", centre_word & 255u, (centre_word >> 8) & 255u);
     EXPECT((centre_word & 255u) == 0u && ((centre_word >> 8) & 255u) == 255u, "light 0 blocked, light 1 visible");
+    float light1_px[W * H * 2];
+    run_frame(ctx, frame, &light1, 8, light1_px);
+    const float *c1 = &light1_px[((H / 2) * W + W / 2) * 2];
+    EXPECT(c1[0] < 0.0f && c1[1] == 1.0f, "light 1's own output: visible at the centre (%f, %f)", c1[0], c1[1]);
+    /* Limits: 33 lights, 5 per-light outputs, a spot with its inner cone wider than its outer. */
+    static HrtLightInfo many[33];
+    for (int i = 0; i < 33; i++) many[i] = two[1];
+    HrtTraceMultiShadowTask bad_multi = multi;
+    bad_multi.lights = many;
+    bad_multi.light_count = 33;
+    EXPECT(hrt_schedule_multi_shadow(frame, &bad_multi) == HRT_ERROR_INVALID_INPUT, "33 lights are refused (HRT_MAX_SHADOW_LIGHTS %u)", HRT_MAX_SHADOW_LIGHTS);
+    bad_multi = multi;
+    bad_multi.light_output_count = HRT_MAX_LIGHT_OUTPUTS + 1;
+    EXPECT(hrt_schedule_multi_shadow(frame, &bad_multi) == HRT_ERROR_INVALID_INPUT, "too many per-light outputs");
+    HrtLightInfo spot = two[1];
+    spot.light_type = HRT_LIGHT_SPOT;
+    spot.inner_cone = 0.7f;
+    spot.outer_cone = 0.6f;
+    bad_multi = multi;
+    bad_multi.lights = &spot;
+    bad_multi.light_count = 1;
+    bad_multi.light_output_count = 0;
+    EXPECT(hrt_schedule_multi_shadow(frame, &bad_multi) == HRT_ERROR_INVALID_INPUT, "a spot's inner cone wider than its outer");
+    free_image(light1);
     free_image(vis);
     free_image(packed);
 

@@ -39,7 +39,12 @@
 /**
  * Most lights one HrtTraceMultiShadowTask traces.
  */
-#define HRT_MAX_SHADOW_LIGHTS 16
+#define HRT_MAX_SHADOW_LIGHTS 32
+
+/**
+ * Most per-light outputs of one HrtTraceMultiShadowTask.
+ */
+#define HRT_MAX_LIGHT_OUTPUTS 4
 
 /**
  * Largest HrtSurfelSettings.tile_resolution_limit.
@@ -766,8 +771,22 @@ typedef struct HrtLightInfo {
    * Point/spot: emitter radius. Default 0 (hard).
    */
   float radius;
+  /**
+   * Spot: full strength inside this half-angle (radians). Default 0.5.
+   */
   float inner_cone;
+  /**
+   * Spot: unlit outside this half-angle (< pi/2). Default 0.6.
+   */
   float outer_cone;
+  /**
+   * Point/spot: influence ends at this distance; 0 = unlimited (default).
+   */
+  float range;
+  /**
+   * Weight in the multi-light mean (>= 0). Default 1.
+   */
+  float intensity;
 } HrtLightInfo;
 
 /**
@@ -852,6 +871,18 @@ typedef struct HrtTraceSpecularTask {
 } HrtTraceSpecularTask;
 
 /**
+ * One light of an HrtTraceMultiShadowTask written on its own, in HrtTraceShadowTask's output
+ * format (for a DenoiseShadow task).
+ */
+typedef struct HrtLightShadowOutput {
+  /**
+   * Index into the task's lights.
+   */
+  uint32_t light;
+  struct HrtImageInput output;
+} HrtLightShadowOutput;
+
+/**
  * Shadows from 1..=16 lights in one pass (see the Rust docs of TraceMultiShadowTask): the
  * lights are copied when the task is scheduled.
  */
@@ -860,13 +891,25 @@ typedef struct HrtTraceMultiShadowTask {
   const struct HrtLightInfo *lights;
   uint32_t light_count;
   /**
-   * R32_UINT (<= 4 lights) or R32G32B32A32_UINT: 8 bits of visible fraction per light.
+   * R32_UINT (<= 4 lights) or R32G32B32A32_UINT: 8 bits of visible fraction per light, lights 0..16.
    */
   struct HrtImageInput visibility;
   /**
-   * RGBA16F/32F for the multi-shadow denoiser.
+   * Lights 16..32, the same way (image = VK_NULL_HANDLE with 16 lights or fewer).
+   */
+  struct HrtImageInput visibility_high;
+  /**
+   * RGBA16F/32F for the multi-shadow denoiser: irradiance-weighted visibility, ...
    */
   struct HrtImageInput packed;
+  /**
+   * The first light_output_count entries: lights written on their own.
+   */
+  struct HrtLightShadowOutput light_outputs[4];
+  /**
+   * 0..=HRT_MAX_LIGHT_OUTPUTS. Default 0.
+   */
+  uint32_t light_output_count;
   /**
    * 1..=64. Default 1.
    */

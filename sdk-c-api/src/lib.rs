@@ -28,7 +28,9 @@ pub use types::*;
 pub const HRT_API_VERSION: u32 = 1 << 12; // (major 0 << 22) | (minor 1 << 12) | patch 0
 
 /// Most lights one HrtTraceMultiShadowTask traces.
-pub const HRT_MAX_SHADOW_LIGHTS: u32 = 16;
+pub const HRT_MAX_SHADOW_LIGHTS: u32 = 32;
+/// Most per-light outputs of one HrtTraceMultiShadowTask.
+pub const HRT_MAX_LIGHT_OUTPUTS: u32 = 4;
 /// Largest HrtSurfelSettings.tile_resolution_limit.
 pub const HRT_MAX_TILE_RESOLUTION: u32 = 256;
 /// Largest HrtDenoisingContextInput.max_width / max_height.
@@ -875,7 +877,10 @@ pub extern "C" fn hrt_trace_multi_shadow_task_default() -> HrtTraceMultiShadowTa
         lights: std::ptr::null(),
         light_count: 0,
         visibility: out,
+        visibility_high: types::image_c(&hybrid_rt::ImageInput::default()),
         packed: out,
+        light_outputs: [types::HrtLightShadowOutput { light: 0, output: out }; 4],
+        light_output_count: 0,
         rays_per_pixel: 1,
         first_hit: rt::TraceMultiShadowTask::default().first_hit,
     }
@@ -900,6 +905,7 @@ mod tests {
     #[test]
     fn limits_match_the_sdk() {
         assert_eq!(super::HRT_MAX_SHADOW_LIGHTS as usize, hybrid_rt::MAX_SHADOW_LIGHTS);
+        assert_eq!(super::HRT_MAX_LIGHT_OUTPUTS as usize, hybrid_rt::MAX_LIGHT_OUTPUTS);
         assert_eq!(super::HRT_MAX_TILE_RESOLUTION, hybrid_rt::MAX_TILE_RESOLUTION);
         assert_eq!(super::HRT_MAX_DENOISING_EXTENT, hybrid_rt::MAX_DENOISING_EXTENT);
     }

@@ -466,8 +466,24 @@ pub struct HrtLightInfo {
     pub angular_extent: f32,
     /// Point/spot: emitter radius. Default 0 (hard).
     pub radius: f32,
+    /// Spot: full strength inside this half-angle (radians). Default 0.5.
     pub inner_cone: f32,
+    /// Spot: unlit outside this half-angle (< pi/2). Default 0.6.
     pub outer_cone: f32,
+    /// Point/spot: influence ends at this distance; 0 = unlimited (default).
+    pub range: f32,
+    /// Weight in the multi-light mean (>= 0). Default 1.
+    pub intensity: f32,
+}
+
+/// One light of an HrtTraceMultiShadowTask written on its own, in HrtTraceShadowTask's output
+/// format (for a DenoiseShadow task).
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtLightShadowOutput {
+    /// Index into the task's lights.
+    pub light: u32,
+    pub output: HrtImageInput,
 }
 
 /// Shadows from one light: R = closest occluder distance, negative where visible; G (if
@@ -538,10 +554,16 @@ pub struct HrtTraceMultiShadowTask {
     pub common: HrtTraceCommon,
     pub lights: *const HrtLightInfo,
     pub light_count: u32,
-    /// R32_UINT (<= 4 lights) or R32G32B32A32_UINT: 8 bits of visible fraction per light.
+    /// R32_UINT (<= 4 lights) or R32G32B32A32_UINT: 8 bits of visible fraction per light, lights 0..16.
     pub visibility: HrtImageInput,
-    /// RGBA16F/32F for the multi-shadow denoiser.
+    /// Lights 16..32, the same way (image = VK_NULL_HANDLE with 16 lights or fewer).
+    pub visibility_high: HrtImageInput,
+    /// RGBA16F/32F for the multi-shadow denoiser: irradiance-weighted visibility, ...
     pub packed: HrtImageInput,
+    /// The first light_output_count entries: lights written on their own.
+    pub light_outputs: [HrtLightShadowOutput; 4],
+    /// 0..=HRT_MAX_LIGHT_OUTPUTS. Default 0.
+    pub light_output_count: u32,
     /// 1..=64. Default 1.
     pub rays_per_pixel: u32,
     /// First-hit traversal (see HrtTraceShadowTask). Default false.
@@ -1037,6 +1059,8 @@ pub(crate) fn light(l: &HrtLightInfo) -> Result<rt::LightInfo, Failure> {
         radius: l.radius,
         inner_cone: l.inner_cone,
         outer_cone: l.outer_cone,
+        range: l.range,
+        intensity: l.intensity,
     })
 }
 
@@ -1058,7 +1082,18 @@ pub(crate) fn multi_shadow_task(
         common: trace_common(&t.common)?,
         lights: lights.iter().map(light).collect::<Result<_, _>>()?,
         visibility: image(&t.visibility),
+        visibility_high: image(&t.visibility_high),
         packed: image(&t.packed),
+        light_outputs: {
+            let n = t.light_output_count as usize;
+            if n > t.light_outputs.len() {
+                return Err(Failure(
+                    crate::HrtStatus::HRT_ERROR_INVALID_INPUT,
+                    format!("light_output_count {n}: at most {}", t.light_outputs.len()),
+                ));
+            }
+            t.light_outputs[..n].iter().map(|o| rt::LightShadowOutput { light: o.light, output: image(&o.output) }).collect()
+        },
         rays_per_pixel: t.rays_per_pixel,
         first_hit: t.first_hit,
     })
@@ -1077,6 +1112,8 @@ pub(crate) fn shadow_task_default() -> HrtTraceShadowTask {
             radius: l.radius,
             inner_cone: l.inner_cone,
             outer_cone: l.outer_cone,
+            range: l.range,
+            intensity: l.intensity,
         },
         output: image_c(&d.output),
         rays_per_pixel: d.rays_per_pixel,

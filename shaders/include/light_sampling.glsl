@@ -5,12 +5,45 @@
 #define HRT_LIGHT_POINT 1u
 #define HRT_LIGHT_SPOT 2u
 
-// A light as shaders see it (std140, 48 bytes).
+// A light as shaders see it (std140, 64 bytes).
 struct LightGpu {
     vec4 position;   // xyz, light type (as float)
     vec4 direction;  // direction the light travels, tan of half the angular extent
-    vec4 shape;      // radius, unused...
+    vec4 shape;      // radius, range (0: unlimited), cos inner cone, cos outer cone
+    vec4 power;      // intensity, unused...
 };
+
+// How much of a point or spot light reaches p, before shadowing: 0 beyond the range or outside
+// the outer cone (no rays are traced there), the spot's smoothstep from the outer to the inner
+// cone, and the windowed range falloff (1 - (d/range)^4)^2 (Karis 2013) that reaches 0 at the
+// range. 1 for a directional light.
+float hrt_light_reach(LightGpu l, vec3 p) {
+    uint kind = uint(l.position.w);
+    if (kind == HRT_LIGHT_DIRECTIONAL) return 1.0;
+    vec3 v = p - l.position.xyz;
+    float d = length(v);
+    float reach = 1.0;
+    if (l.shape.y > 0.0) {
+        float r = d / l.shape.y;
+        reach = clamp(1.0 - r * r * r * r, 0.0, 1.0);
+        reach *= reach;
+    }
+    if (kind == HRT_LIGHT_SPOT) {
+        float cos_angle = dot(v / max(d, 1e-20), normalize(l.direction.xyz));
+        reach *= cos_angle <= l.shape.w ? 0.0 : smoothstep(l.shape.w, max(l.shape.z, l.shape.w + 1e-6), cos_angle);
+    }
+    return reach;
+}
+
+// The weight of a light in the multi-light mean: its unshadowed irradiance at (p, n) up to a
+// constant — intensity x reach x cos(theta), and 1/d^2 for point and spot lights.
+float hrt_light_weight(LightGpu l, vec3 p, vec3 n, float reach) {
+    if (reach <= 0.0) return 0.0;
+    if (uint(l.position.w) == HRT_LIGHT_DIRECTIONAL) return l.power.x * max(dot(n, -normalize(l.direction.xyz)), 0.0);
+    vec3 v = l.position.xyz - p;
+    float d2 = max(dot(v, v), 1e-8);
+    return l.power.x * reach * max(dot(n, v * inversesqrt(d2)), 0.0) / d2;
+}
 
 // A uniform point in the unit disk (concentric map, Shirley & Chiu 1997).
 vec2 hrt_disk(vec2 u) {

@@ -33,6 +33,12 @@ void hrt_shadow_main() {
         imageStore(u_out, ivec2(pixel), vec4(-1.0, 1.0, 0.0, 0.0));
         return;
     }
+    // Beyond the range or outside the cone the light does not reach: unlit, no rays. (R = 0:
+    // an occluder at the surface, so the denoiser keeps the edge hard.)
+    if (hrt_light_reach(u_c.light, p) <= 0.0) {
+        imageStore(u_out, ivec2(pixel), vec4(0.0));
+        return;
+    }
     vec3 origin = hrt_offset_ray(c, p, n);
     uint rays = u_c.counts.x;
     uint seed = hrt_pcg(pixel.x ^ hrt_pcg(pixel.y ^ hrt_pcg(c.frame.x ^ 0x5badu)));

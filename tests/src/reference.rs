@@ -673,3 +673,24 @@ pub fn diffuse_reference(
         })
         .collect()
 }
+
+/// A light's weight in the multi-light mean, as `LightInfo` documents it: its unshadowed
+/// irradiance at (p, n) up to a constant.
+pub fn light_weight(l: &hybrid_rt::LightInfo, p: Vec3, n: Vec3) -> f32 {
+    if l.light_type == hybrid_rt::LightType::Directional {
+        return l.intensity * n.dot(-l.direction.normalize()).max(0.0);
+    }
+    let v = p - l.position;
+    let d = v.length();
+    let mut reach = 1.0;
+    if l.range > 0.0 {
+        reach = (1.0 - (d / l.range).powi(4)).clamp(0.0, 1.0).powi(2);
+    }
+    if l.light_type == hybrid_rt::LightType::Spot {
+        let c = (v / d).dot(l.direction.normalize());
+        let (lo, hi) = (l.outer_cone.cos(), l.inner_cone.cos());
+        let t = ((c - lo) / (hi - lo)).clamp(0.0, 1.0);
+        reach *= if c <= lo { 0.0 } else { t * t * (3.0 - 2.0 * t) };
+    }
+    l.intensity * reach * n.dot(-v / d).max(0.0) / (d * d)
+}

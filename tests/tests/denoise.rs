@@ -223,7 +223,9 @@ fn denoised_shadow(light: LightInfo, frames: u32) -> (Vec<f32>, Vec<f32>, Vec<f3
     (raw, out, reference, g)
 }
 
-/// Mean visible fraction of `lights` per pixel, `strata`² reference samples per light.
+/// Visible fraction of `lights` per pixel, weighted by each light's irradiance as the
+/// multi-light trace weighs them (`reference::light_weight`), `strata`² reference samples per
+/// light.
 fn reference_visibility(f: &Fixture, camera: &Camera, lights: &[LightInfo], strata: u32) -> Vec<f32> {
     let mut rng = Rng::new(9);
     (0..f.g.depth.len())
@@ -232,11 +234,21 @@ fn reference_visibility(f: &Fixture, camera: &Camera, lights: &[LightInfo], stra
                 return 1.0;
             }
             let (p, n) = (f.g.position[i], f.g.normal[i]);
-            let sum: f32 = lights
-                .iter()
-                .map(|l| reference::shadow_visibility(&f.tracer, p, n, camera.eye, l, &RayOffset::default(), strata, &mut rng).0)
-                .sum();
-            sum / lights.len() as f32
+            let (mut sum, mut weights, mut last) = (0.0, 0.0, 1.0);
+            for l in lights {
+                let w = reference::light_weight(l, p, n);
+                last = reference::shadow_visibility(&f.tracer, p, n, camera.eye, l, &RayOffset::default(), strata, &mut rng).0;
+                sum += w * last;
+                weights += w;
+            }
+            if lights.len() == 1 {
+                // One light: its own visibility (the single-light task does not weigh).
+                last
+            } else if weights > 0.0 {
+                sum / weights
+            } else {
+                1.0
+            }
         })
         .collect()
 }
@@ -620,6 +632,8 @@ fn specular_and_diffuse_in_one_task_equal_two_tasks() {
     assert_no_validation_errors();
 }
 
+/// Two lights of unequal brightness (the point light 8x): the denoised result converges to
+/// their irradiance-weighted visibility.
 #[test]
 fn multi_light_shadows_denoise_to_the_mean_visibility() {
     const W: u32 = 64;
@@ -627,7 +641,13 @@ fn multi_light_shadows_denoise_to_the_mean_visibility() {
     let mut f = Fixture::new(&scene, None, &camera, W);
     let lights = vec![
         sun(0.2),
-        LightInfo { light_type: LightType::Point, position: Vec3::new(1.0, 2.0, 1.0), radius: 0.2, ..Default::default() },
+        LightInfo {
+            light_type: LightType::Point,
+            position: Vec3::new(1.0, 2.0, 1.0),
+            radius: 0.2,
+            intensity: 8.0,
+            ..Default::default()
+        },
     ];
     let visibility = f.host.image_cleared(vk::Format::R32_UINT, W, W, vk::ImageUsageFlags::STORAGE, GENERAL).unwrap();
     let packed = storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W);
@@ -640,6 +660,7 @@ fn multi_light_shadows_denoise_to_the_mean_visibility() {
         packed: packed.input(GENERAL),
         rays_per_pixel: 1,
         first_hit: false,
+        ..Default::default()
     };
     let task = DenoiseMultiShadowTask {
         context: dn,
@@ -657,9 +678,10 @@ fn multi_light_shadows_denoise_to_the_mean_visibility() {
     let reference = reference_visibility(&f, &camera, &lights, 24);
     let (raw_e, den_e) = (stats::relative_rmse(&raw, &reference, &f.g.hit), stats::relative_rmse(&den, &reference, &f.g.hit));
     eprintln!("two-light shadows, 1 ray/pixel/light, {FRAMES} frames: relative RMSE raw {raw_e:.4}, denoised {den_e:.4}");
-    // The raw mean of two 1-ray lights is already steps of 0.5; the gain is smaller than
-    // for one light but the same filter removes most of the noise.
-    assert!(den_e < 0.04 && den_e * 2.5 < raw_e, "raw {raw_e} denoised {den_e}");
+    // The raw weighted mean of two 1-ray lights takes few values, and the 8x brighter point
+    // light (small penumbrae) dominates it, so the raw error is already low (0.052; 0.067 for
+    // the unweighted mean) and the gain smaller than for one light: the filter still halves it.
+    assert!(den_e < 0.04 && den_e * 2.0 < raw_e, "raw {raw_e} denoised {den_e}");
     f.ctx.destroy_denoising_context(dn).unwrap();
     f.finish([visibility, packed, out]);
 }

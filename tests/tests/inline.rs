@@ -88,6 +88,7 @@ fn pipeline_and_inline_ray_queries_give_the_same_images() {
                 packed: out(6 + k),
                 rays_per_pixel: 4,
                 first_hit: false,
+                ..Default::default()
             })
             .unwrap();
     }

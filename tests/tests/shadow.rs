@@ -165,6 +165,11 @@ fn bad_lights_are_refused() {
         LightInfo { direction: Vec3::ZERO, ..Default::default() },
         LightInfo { light_type: LightType::Point, radius: -1.0, ..Default::default() },
         LightInfo { angular_extent: 4.0, ..Default::default() },
+        LightInfo { light_type: LightType::Point, range: -1.0, ..Default::default() },
+        LightInfo { intensity: f32::NAN, ..Default::default() },
+        LightInfo { intensity: -2.0, ..Default::default() },
+        LightInfo { light_type: LightType::Spot, inner_cone: 0.7, outer_cone: 0.6, ..Default::default() },
+        LightInfo { light_type: LightType::Spot, inner_cone: 0.1, outer_cone: 1.6, ..Default::default() },
     ] {
         assert!(matches!(
             frame.schedule_shadow(&TraceShadowTask { light: bad, ..good }),
@@ -180,7 +185,10 @@ fn bad_lights_are_refused() {
     assert_no_validation_errors();
 }
 
-/// Multi-light visibility equals the single-light results, light by light.
+/// Multi-light visibility equals the single-light results, light by light (with a spot cone and
+/// a point-light range that leave part of the ground unlit, and unequal intensities); the
+/// packed visibility is their irradiance-weighted mean; per-light outputs are the single-light
+/// images, bit for bit; 20 lights fill `visibility` and `visibility_high`.
 #[test]
 fn multi_light_visibility_equals_single_light_results() {
     use hybrid_rt::TraceMultiShadowTask;
@@ -194,12 +202,22 @@ fn multi_light_visibility_equals_single_light_results() {
     run_frame(&host, &ctx, &mut frame).unwrap();
     let lights = vec![
         LightInfo { light_type: LightType::Directional, direction: Vec3::new(1.2, -1.0, 0.6), ..Default::default() },
-        LightInfo { light_type: LightType::Point, position: Vec3::new(0.3, 3.0, 0.0), radius: 0.5, ..Default::default() },
+        LightInfo {
+            light_type: LightType::Point,
+            position: Vec3::new(0.3, 3.0, 0.0),
+            radius: 0.5,
+            range: 4.0,
+            intensity: 12.0,
+            ..Default::default()
+        },
         LightInfo {
             light_type: LightType::Spot,
             position: Vec3::new(-1.5, 2.5, 0.5),
             direction: Vec3::new(0.5, -1.0, 0.0),
             radius: 0.1,
+            inner_cone: 0.3,
+            outer_cone: 0.5,
+            intensity: 6.0,
             ..Default::default()
         },
     ];
@@ -209,6 +227,7 @@ fn multi_light_visibility_equals_single_light_results() {
     let singles: Vec<_> = lights.iter().map(|_| rg()).collect();
     let visibility =
         host.image_cleared(vk::Format::R32_UINT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
+    let (spot_out, point_out) = (rg(), rg());
     let packed = host
         .image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL)
         .unwrap();
@@ -230,37 +249,109 @@ fn multi_light_visibility_equals_single_light_results() {
             lights: lights.clone(),
             visibility: visibility.input(vk::ImageLayout::GENERAL),
             packed: packed.input(vk::ImageLayout::GENERAL),
+            light_outputs: vec![
+                hybrid_rt::LightShadowOutput { light: 2, output: spot_out.input(vk::ImageLayout::GENERAL) },
+                hybrid_rt::LightShadowOutput { light: 1, output: point_out.input(vk::ImageLayout::GENERAL) },
+            ],
             rays_per_pixel: rays,
             first_hit: false,
+            ..Default::default()
+        })
+        .unwrap();
+    // 20 lights: the three, cycled, in two visibility images.
+    let many: Vec<LightInfo> = (0..20).map(|k| lights[k % 3]).collect();
+    let rgba_u = || {
+        host.image_cleared(vk::Format::R32G32B32A32_UINT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap()
+    };
+    let (low, high) = (rgba_u(), rgba_u());
+    let packed_many = host
+        .image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL)
+        .unwrap();
+    frame
+        .schedule_multi_shadow(&TraceMultiShadowTask {
+            common,
+            lights: many.clone(),
+            visibility: low.input(vk::ImageLayout::GENERAL),
+            visibility_high: high.input(vk::ImageLayout::GENERAL),
+            packed: packed_many.input(vk::ImageLayout::GENERAL),
+            rays_per_pixel: rays,
+            ..Default::default()
         })
         .unwrap();
     let done = run_frame(&host, &ctx, &mut frame).unwrap();
     assert!(done.timings.iter().any(|t| t.kind == hybrid_rt::TaskKind::MultiShadow));
     let words: Vec<u32> = bytemuck::cast_slice(&host.read_image(&visibility, vk::ImageLayout::GENERAL).unwrap()).to_vec();
     let pk: Vec<[f32; 4]> = bytemuck::cast_slice(&host.read_image(&packed, vk::ImageLayout::GENERAL).unwrap()).to_vec();
-    let mut mean = vec![0.0f32; words.len()];
+    let read_rg = |img: &hybrid_rt_testkit::host::HostImage| -> Vec<[f32; 2]> {
+        bytemuck::cast_slice(&host.read_image(img, vk::ImageLayout::GENERAL).unwrap()).to_vec()
+    };
+    let singles_read: Vec<Vec<[f32; 2]>> = singles.iter().map(read_rg).collect();
+    let (mut weighted, mut weights) = (vec![0.0f32; words.len()], vec![0.0f32; words.len()]);
     let mut partial = 0;
-    for (k, out) in singles.iter().enumerate() {
-        let single: Vec<[f32; 2]> = bytemuck::cast_slice(&host.read_image(out, vk::ImageLayout::GENERAL).unwrap()).to_vec();
+    for (k, single) in singles_read.iter().enumerate() {
         for i in 0..words.len() {
             let byte = (words[i] >> (8 * k)) & 255;
             assert_eq!(byte, (single[i][1] * 255.0).round() as u32, "light {k}, pixel {i}");
-            mean[i] += single[i][1] / lights.len() as f32;
+            if g.hit[i] {
+                let w = light_weight(&lights[k], g.position[i], g.normal[i]);
+                weighted[i] += w * single[i][1];
+                weights[i] += w;
+            }
             partial += (single[i][1] > 0.0 && single[i][1] < 1.0) as usize;
         }
     }
-    for i in 0..words.len() {
-        assert!((pk[i][0] - mean[i]).abs() < 1e-5, "packed mean visibility at {i}");
+    let mut worst = 0.0f32;
+    for i in (0..words.len()).filter(|&i| g.hit[i]) {
+        let expected = if weights[i] > 0.0 { weighted[i] / weights[i] } else { 1.0 };
+        worst = worst.max((pk[i][0] - expected).abs());
     }
+    // The GPU's positions come from clip depth (~1e-6 relative): weights agree to ~1e-5.
+    eprintln!("irradiance-weighted packed visibility: worst |GPU - expected| {worst:.2e}");
+    assert!(worst < 1e-3, "packed visibility is the irradiance-weighted mean ({worst})");
     assert!(partial > 20, "soft lights give partial visibility somewhere ({partial} pixels)");
+    // The cone and the range leave surfaces unlit: (0, 0), where the CPU says they are out.
+    for (k, what) in [(1usize, "beyond the point light's range"), (2, "outside the spot's cone")] {
+        let out: Vec<usize> = (0..words.len())
+            .filter(|&i| {
+                g.hit[i]
+                    && light_weight(&lights[k], g.position[i], g.normal[i]) == 0.0
+                    && (g.position[i] - lights[k].position).length() > 0.0
+            })
+            .collect();
+        let reached: Vec<usize> =
+            (0..words.len()).filter(|&i| g.hit[i] && light_weight(&lights[k], g.position[i], g.normal[i]) > 1e-3).collect();
+        let unlit = out.iter().filter(|&&i| singles_read[k][i] == [0.0, 0.0]).count();
+        eprintln!("{what}: {unlit} of {} pixels unlit ({} reached)", out.len(), reached.len());
+        assert!(out.len() > 50 && reached.len() > 50, "{what}: the test covers both sides");
+        assert!(unlit as f32 >= 0.98 * out.len() as f32, "{what}: {unlit} of {} unlit", out.len());
+        assert!(
+            reached.iter().all(|&i| singles_read[k][i][1] > 0.0 || singles_read[k][i][0] > 0.0),
+            "{what}: reached pixels are traced"
+        );
+    }
+    // Per-light outputs are the single-light task's images (the same rays).
+    for (img, k) in [(&spot_out, 2usize), (&point_out, 1)] {
+        assert!(read_rg(img) == singles_read[k], "the per-light output of light {k} is its single-light image");
+    }
+    // 20 lights: light j's byte in the low or high image is light j % 3's.
+    let low_words: Vec<[u32; 4]> = bytemuck::cast_slice(&host.read_image(&low, vk::ImageLayout::GENERAL).unwrap()).to_vec();
+    let high_words: Vec<[u32; 4]> = bytemuck::cast_slice(&host.read_image(&high, vk::ImageLayout::GENERAL).unwrap()).to_vec();
+    for i in 0..words.len() {
+        for j in 0..20usize {
+            let (w, jj) = if j < 16 { (&low_words[i], j) } else { (&high_words[i], j - 16) };
+            let byte = (w[jj / 4] >> (8 * (jj % 4))) & 255;
+            assert_eq!(byte, (words[i] >> (8 * (j % 3))) & 255, "light {j} of 20, pixel {i}");
+        }
+    }
     // Too many lights, or too few channels for them, are refused.
     let mut bad = TraceMultiShadowTask {
         common,
-        lights: vec![lights[0]; 17],
+        lights: vec![lights[0]; 33],
         visibility: visibility.input(vk::ImageLayout::GENERAL),
         packed: packed.input(vk::ImageLayout::GENERAL),
         rays_per_pixel: 1,
         first_hit: false,
+        ..Default::default()
     };
     assert!(frame.schedule_multi_shadow(&bad).is_err());
     bad.lights.truncate(5);
@@ -268,7 +359,16 @@ fn multi_light_visibility_equals_single_light_results() {
         matches!(frame.schedule_multi_shadow(&bad), Err(hybrid_rt::Error::UnsupportedFormat { .. })),
         "5 lights need RGBA32_UINT"
     );
-    for o in singles.into_iter().chain([visibility, packed]) {
+    bad.lights = vec![lights[0]; 17];
+    bad.visibility = low.input(vk::ImageLayout::GENERAL);
+    assert!(frame.schedule_multi_shadow(&bad).is_err(), "17 lights need visibility_high");
+    bad.lights.truncate(3);
+    bad.visibility = visibility.input(vk::ImageLayout::GENERAL);
+    bad.light_outputs = vec![hybrid_rt::LightShadowOutput { light: 3, output: spot_out.input(vk::ImageLayout::GENERAL) }];
+    assert!(frame.schedule_multi_shadow(&bad).is_err(), "a per-light output of a light that is not there");
+    bad.light_outputs = vec![hybrid_rt::LightShadowOutput { light: 0, output: bad.packed }];
+    assert!(frame.schedule_multi_shadow(&bad).is_err(), "a per-light output that is the packed image");
+    for o in singles.into_iter().chain([visibility, packed, spot_out, point_out, low, high, packed_many]) {
         host.destroy_image(o);
     }
     images.destroy(&host);

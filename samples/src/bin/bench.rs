@@ -445,6 +445,7 @@ fn run() -> Result<(), String> {
         packed: output,
         rays_per_pixel: 1,
         first_hit: false,
+        ..Default::default()
     };
     let (multi_ms, multi_floor) =
         time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::MultiShadow, |f| f.schedule_multi_shadow(&multi).map_err(e))?;

@@ -386,7 +386,7 @@ mod tests {
     use super::*;
     use std::mem::{offset_of, size_of};
 
-    /// std140 offsets of DenoiseConstants (TraceCommon is 384 bytes, LightGpu 48).
+    /// std140 offsets of DenoiseConstants (TraceCommon is 384 bytes, LightGpu 64).
     #[test]
     fn layout_matches_glsl_std140() {
         assert_eq!(offset_of!(DenoiseConstantsGpu, prev_world_to_clip), 384);
@@ -394,6 +394,6 @@ mod tests {
         assert_eq!(offset_of!(DenoiseConstantsGpu, flags), 544);
         assert_eq!(offset_of!(DenoiseConstantsGpu, stops), 624);
         assert_eq!(offset_of!(DenoiseConstantsGpu, light), 640);
-        assert_eq!(size_of::<DenoiseConstantsGpu>(), 688);
+        assert_eq!(size_of::<DenoiseConstantsGpu>(), 704);
     }
 }

@@ -1,7 +1,7 @@
 //! Shadows from one light (`TraceShadowTask`): rays from the G-buffer surface towards random
 //! points of the light's extent (shaders/shadow.rgen).
 use super::constants::TraceCommonGpu;
-use super::descriptors::Slot;
+use super::descriptors::{optional_or, Slot};
 use super::program::{Payload, RtProgram, Shaders, Writes};
 use super::{PassTask, Passes, Recording, World};
 use crate::error::Result;
@@ -9,7 +9,7 @@ use crate::gpu::pipeline::{Binding, PipelineBuilder};
 use crate::shaders;
 use crate::types::{
     ImageInput, InstanceInclusionMask, LightInfo, LightType, TaskKind, TraceCommon, TraceMultiShadowTask, TraceShadowTask,
-    MAX_SHADOW_LIGHTS,
+    MAX_LIGHT_OUTPUTS, MAX_SHADOW_LIGHTS,
 };
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
@@ -21,6 +21,7 @@ pub(crate) struct LightGpu {
     position: [f32; 4],
     direction: [f32; 4],
     shape: [f32; 4],
+    power: [f32; 4],
 }
 
 impl LightGpu {
@@ -28,7 +29,13 @@ impl LightGpu {
         LightGpu {
             position: [l.position.x, l.position.y, l.position.z, l.light_type as u32 as f32],
             direction: [l.direction.x, l.direction.y, l.direction.z, (l.angular_extent * 0.5).tan()],
-            shape: [if l.light_type == LightType::Directional { 0.0 } else { l.radius }, 0.0, 0.0, 0.0],
+            shape: [
+                if l.light_type == LightType::Directional { 0.0 } else { l.radius },
+                if l.light_type == LightType::Directional { 0.0 } else { l.range },
+                l.inner_cone.cos(),
+                l.outer_cone.cos(),
+            ],
+            power: [l.intensity, 0.0, 0.0, 0.0],
         }
     }
 }
@@ -83,6 +90,7 @@ impl ShadowPass {
 struct MultiShadowConstantsGpu {
     common: TraceCommonGpu,
     counts: [u32; 4],
+    outputs: [u32; 4],
     lights: [LightGpu; MAX_SHADOW_LIGHTS],
 }
 
@@ -103,6 +111,12 @@ impl MultiShadowPass {
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
                 super::input_mask_binding(sampler),
+                // visibility_high, then the per-light outputs
+                Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
+                Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
+                Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
+                Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
+                Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
             ],
             Shaders {
                 raygen: shaders::MULTI_SHADOW_RGEN,
@@ -121,9 +135,15 @@ impl MultiShadowPass {
         for (g, l) in lights.iter_mut().zip(&task.lights) {
             *g = LightGpu::new(l);
         }
+        let has_high = task.visibility_high.image != vk::Image::null();
+        let mut outputs = [u32::MAX; MAX_LIGHT_OUTPUTS];
+        for (o, l) in outputs.iter_mut().zip(&task.light_outputs) {
+            *o = l.light;
+        }
         let constants = MultiShadowConstantsGpu {
             common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::SHADOWS.bits()),
-            counts: [task.rays_per_pixel, task.lights.len() as u32, task.first_hit as u32, 0],
+            counts: [task.rays_per_pixel, task.lights.len() as u32, task.first_hit as u32, has_high as u32],
+            outputs,
             lights,
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
@@ -135,6 +155,12 @@ impl MultiShadowPass {
             Slot::Storage(&task.packed),
             Slot::Uniform(ubo),
             super::input_mask_slot(&task.common),
+            // Stand-ins where there is no such image (the shader does not write them then).
+            Slot::Storage(optional_or(&task.visibility_high, &task.visibility)),
+            Slot::Storage(task.light_outputs.first().map_or(&task.packed, |o| &o.output)),
+            Slot::Storage(task.light_outputs.get(1).map_or(&task.packed, |o| &o.output)),
+            Slot::Storage(task.light_outputs.get(2).map_or(&task.packed, |o| &o.output)),
+            Slot::Storage(task.light_outputs.get(3).map_or(&task.packed, |o| &o.output)),
         ];
         let vp = &task.common.viewport;
         self.program.run(r, &slots, vp.width, vp.height, Writes::Storage);

@@ -1,7 +1,14 @@
 //! The SDK's fixed limits, in one place (the C header repeats them as `HRT_MAX_*`).
 
-/// Most lights one `TraceMultiShadowTask` traces.
-pub const MAX_SHADOW_LIGHTS: usize = 16;
+/// Most lights one `TraceMultiShadowTask` traces (Kickstart RT's limit).
+pub const MAX_SHADOW_LIGHTS: usize = 32;
+
+/// Lights whose visibility fits one `R32G32B32A32_UINT` image (8 bits each); the rest go to
+/// `TraceMultiShadowTask::visibility_high`.
+pub const LIGHTS_PER_VISIBILITY_IMAGE: usize = 16;
+
+/// Most per-light outputs (`TraceMultiShadowTask::light_outputs`) of one task.
+pub const MAX_LIGHT_OUTPUTS: usize = 4;
 
 /// Largest `SurfelSettings::tile_resolution_limit`: cache samples along one triangle edge.
 pub const MAX_TILE_RESOLUTION: u32 = 256;

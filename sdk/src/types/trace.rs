@@ -42,13 +42,21 @@ pub enum LightType {
     Directional = 0,
     /// An emitting sphere of `radius` at `position`.
     Point = 1,
-    /// A point light with a cone; the cone's falloff is the engine's to apply (it does not
-    /// change visibility).
+    /// A point light with a cone (`inner_cone`, `outer_cone`): surfaces outside the outer cone
+    /// are unlit (visibility 0, no rays traced); the smoothstep from outer to inner weighs the
+    /// light in the multi-light mean.
     Spot = 2,
 }
 
 /// A light, as the engine converts its own to. Size makes soft shadows: the SDK samples the
 /// light's extent.
+///
+/// Where a light does not reach — beyond `range`, outside a spot's outer cone — the SDK
+/// traces no rays and reports the surface unlit (the single-light output R = 0, G = 0; 0 in
+/// the multi-light visibility). The multi-light `packed` visibility weighs each light by its
+/// unshadowed irradiance at the surface: `intensity` x cone and range falloff x cos(theta)
+/// (/ d² for point and spot lights), so a bright light's shadow is not diluted by a dim one's
+/// light (Kickstart RT averages its lights unweighted).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LightInfo {
     /// Directional (default), point or spot.
@@ -61,10 +69,16 @@ pub struct LightInfo {
     pub angular_extent: f32,
     /// Point and spot: radius of the emitting sphere. 0 = hard shadows.
     pub radius: f32,
-    /// Spot: inner and outer cone half-angles in radians (kept for the engine's shading).
+    /// Spot: the inner cone's half-angle in radians (full strength inside), 0..=outer_cone.
+    /// Default 0.5.
     pub inner_cone: f32,
-    /// Spot: the outer cone's half-angle in radians.
+    /// Spot: the outer cone's half-angle in radians (nothing outside), < pi/2. Default 0.6.
     pub outer_cone: f32,
+    /// Point and spot: the distance at which the light's influence ends (a windowed falloff
+    /// (1 - (d/range)^4)^2 weighs it before that); 0 = unlimited (default).
+    pub range: f32,
+    /// Relative brightness (>= 0), the light's weight in the multi-light mean. Default 1.
+    pub intensity: f32,
 }
 
 impl Default for LightInfo {
@@ -77,6 +91,8 @@ impl Default for LightInfo {
             radius: 0.0,
             inner_cone: 0.5,
             outer_cone: 0.6,
+            range: 0.0,
+            intensity: 1.0,
         }
     }
 }
@@ -114,29 +130,50 @@ impl Default for TraceShadowTask {
     }
 }
 
-/// Shadows from several lights in one pass (1..=16; each light gets `rays_per_pixel` rays,
-/// sampled as in `TraceShadowTask`).
-/// - `visibility` (R32_UINT for up to 4 lights, R32G32B32A32_UINT for up to 16): per light, the
-///   visible fraction x 255 in 8 bits; light i is in channel i / 4 at bits 8 * (i % 4).
-/// - `packed` (RGBA16F/32F), the input of `DenoiseMultiShadowTask`: mean visibility over the
-///   lights, mean penumbra width over the occluded rays (world units: occluder distance x the
-///   light's angular size; -1 where no ray was occluded), min occluder distance (0 if none),
-///   and the surface's distance to the camera.
+/// Shadows from several lights in one pass (1..=32, Kickstart RT's limit; each light that
+/// reaches a surface gets `rays_per_pixel` rays there, sampled as in `TraceShadowTask`).
+/// - `visibility` (R32_UINT for up to 4 lights, R32G32B32A32_UINT for more): per light, the
+///   visible fraction x 255 in 8 bits; light i is in channel i / 4 at bits 8 * (i % 4). Lights
+///   16..32 go to `visibility_high` the same way (light 16 + i at channel i / 4).
+/// - `packed` (RGBA16F/32F), the input of `DenoiseMultiShadowTask`: the lights' visibility
+///   weighted by their unshadowed irradiance (see `LightInfo`; 1 where no light reaches), mean
+///   penumbra width over the occluded rays (world units: occluder distance x the light's
+///   angular size; -1 where no ray was occluded), min occluder distance (0 if none), and the
+///   surface's distance to the camera.
+/// - `light_outputs` (optional, up to 4): chosen lights' shadows in `TraceShadowTask`'s
+///   format, for a `DenoiseShadowTask` each — a per-light denoised result for the lights the
+///   engine shades separately (its hero lights), from the same rays.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TraceMultiShadowTask {
     /// The G-buffer the rays start from, the viewport and camera.
     pub common: TraceCommon,
-    /// 1..=16 lights.
+    /// 1..=32 lights.
     pub lights: Vec<LightInfo>,
-    /// Per-light visibility (see above): R32_UINT or R32G32B32A32_UINT, GENERAL, STORAGE usage.
+    /// Per-light visibility of lights 0..16 (see above): R32_UINT or R32G32B32A32_UINT, GENERAL,
+    /// STORAGE usage.
     pub visibility: ImageInput,
+    /// Lights 16..32 (required with more than 16 lights, else leave it null): R32_UINT (up to
+    /// 20 lights) or R32G32B32A32_UINT.
+    pub visibility_high: ImageInput,
     /// The denoiser's input (see above): RGBA16F or RGBA32F, GENERAL, STORAGE usage.
     pub packed: ImageInput,
+    /// Up to `MAX_LIGHT_OUTPUTS` lights written on their own (see above). Default none.
+    pub light_outputs: Vec<LightShadowOutput>,
     /// Rays per pixel and light, 1..=64. Default 1.
     pub rays_per_pixel: u32,
     /// First-hit traversal, as `TraceShadowTask::first_hit` (the packed penumbra width and min
     /// distance then come from the first occluders found). Default false.
     pub first_hit: bool,
+}
+
+/// One light of a `TraceMultiShadowTask` written on its own.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightShadowOutput {
+    /// Index into `TraceMultiShadowTask::lights`.
+    pub light: u32,
+    /// `TraceShadowTask::output`'s formats and layout: R = closest occluder distance (negative
+    /// where visible, 0 where the light does not reach), G = visible fraction.
+    pub output: ImageInput,
 }
 
 impl Default for TraceMultiShadowTask {
@@ -146,7 +183,9 @@ impl Default for TraceMultiShadowTask {
             common: TraceCommon::default(),
             lights: Vec::new(),
             visibility: general,
+            visibility_high: general,
             packed: general,
+            light_outputs: Vec::new(),
             rays_per_pixel: 1,
             first_hit: false,
         }

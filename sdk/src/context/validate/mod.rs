@@ -426,6 +426,17 @@ fn light(what: &'static str, l: &LightInfo) -> Result<()> {
     if !(l.inner_cone.is_finite() && l.outer_cone.is_finite()) {
         return Err(Error::invalid(what, "inner_cone and outer_cone must be finite"));
     }
+    if l.light_type == LightType::Spot
+        && !(0.0 <= l.inner_cone && l.inner_cone <= l.outer_cone && l.outer_cone < std::f32::consts::FRAC_PI_2)
+    {
+        return Err(Error::invalid(what, "a spot needs 0 <= inner_cone <= outer_cone < pi/2"));
+    }
+    if !(l.range.is_finite() && l.range >= 0.0) {
+        return Err(Error::invalid(what, "range must be finite and >= 0 (0: unlimited)"));
+    }
+    if !(l.intensity.is_finite() && l.intensity >= 0.0) {
+        return Err(Error::invalid(what, "intensity must be finite and >= 0"));
+    }
     Ok(())
 }
 
@@ -459,6 +470,59 @@ pub(crate) fn multi_shadow(t: &TraceMultiShadowTask, limits: &Limits) -> Result<
         vis_formats,
         "R32_UINT (up to 4 lights) or R32G32B32A32_UINT",
     )?;
+    let high = t.lights.len().saturating_sub(LIGHTS_PER_VISIBILITY_IMAGE);
+    let has_high = t.visibility_high.image != vk::Image::null();
+    if high > 0 && !has_high {
+        return Err(Error::invalid(
+            "TraceMultiShadowTask.visibility_high",
+            format!("{} lights: lights 16.. need visibility_high", t.lights.len()),
+        ));
+    }
+    if has_high {
+        if high == 0 {
+            return Err(Error::invalid("TraceMultiShadowTask.visibility_high", "given with 16 lights or fewer: leave it null"));
+        }
+        image("TraceMultiShadowTask.visibility_high", &t.visibility_high, vp, Use::Storage)?;
+        let formats: &[vk::Format] =
+            if high <= 4 { &[vk::Format::R32_UINT, vk::Format::R32G32B32A32_UINT] } else { &[vk::Format::R32G32B32A32_UINT] };
+        format_in(
+            "TraceMultiShadowTask.visibility_high",
+            t.visibility_high.format,
+            formats,
+            "R32_UINT (up to 4 lights above 16) or R32G32B32A32_UINT",
+        )?;
+        if t.visibility_high.image == t.visibility.image {
+            return Err(Error::invalid("TraceMultiShadowTask.visibility_high", "is the visibility image"));
+        }
+    }
+    if t.light_outputs.len() > MAX_LIGHT_OUTPUTS {
+        return Err(Error::invalid(
+            "TraceMultiShadowTask.light_outputs",
+            format!("{} outputs: at most {MAX_LIGHT_OUTPUTS}", t.light_outputs.len()),
+        ));
+    }
+    for (k, o) in t.light_outputs.iter().enumerate() {
+        if o.light as usize >= t.lights.len() {
+            return Err(Error::invalid(
+                "TraceMultiShadowTask.light_outputs[].light",
+                format!("light {} of {} lights", o.light, t.lights.len()),
+            ));
+        }
+        image("TraceMultiShadowTask.light_outputs[].output", &o.output, vp, Use::Storage)?;
+        format_in(
+            "TraceMultiShadowTask.light_outputs[].output",
+            o.output.format,
+            SHADOW_OUTPUT_FORMATS,
+            "a signed float format (R16/R32, RG or RGBA)",
+        )?;
+        let others = [t.visibility.image, t.visibility_high.image, t.packed.image];
+        if others.contains(&o.output.image) || t.light_outputs[..k].iter().any(|p| p.output.image == o.output.image) {
+            return Err(Error::invalid(
+                "TraceMultiShadowTask.light_outputs[].output",
+                "each output needs an image of its own (not another output's, the visibility's or packed's)",
+            ));
+        }
+    }
     image("TraceMultiShadowTask.packed", &t.packed, vp, Use::Storage)?;
     format_in(
         "TraceMultiShadowTask.packed",
