@@ -453,6 +453,54 @@ fn run() -> Result<(), String> {
     let (multi_first_ms, _) = time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::MultiShadow, |f| {
         f.schedule_multi_shadow(&multi_first).map_err(e)
     })?;
+    // 32 lights (Kickstart RT's limit): an 8 x 4 grid of point lights 4 m apart, each reaching
+    // 6 m (rays only where a light reaches), and the same lights unlimited.
+    let (vis_low, vis_high) = (
+        host.image_cleared(
+            ash::vk::Format::R32G32B32A32_UINT,
+            width,
+            height,
+            ash::vk::ImageUsageFlags::STORAGE,
+            ash::vk::ImageLayout::GENERAL,
+        )?,
+        host.image_cleared(
+            ash::vk::Format::R32G32B32A32_UINT,
+            width,
+            height,
+            ash::vk::ImageUsageFlags::STORAGE,
+            ash::vk::ImageLayout::GENERAL,
+        )?,
+    );
+    let grid: Vec<hybrid_rt::LightInfo> = (0..32)
+        .map(|k| hybrid_rt::LightInfo {
+            light_type: hybrid_rt::LightType::Point,
+            position: glam::Vec3::new(-14.0 + 4.0 * (k % 8) as f32, 4.0, -6.0 + 4.0 * (k / 8) as f32),
+            radius: 0.3,
+            range: 6.0,
+            ..Default::default()
+        })
+        .collect();
+    let multi32 = hybrid_rt::TraceMultiShadowTask {
+        lights: grid.clone(),
+        visibility: vis_low.input(ash::vk::ImageLayout::GENERAL),
+        visibility_high: vis_high.input(ash::vk::ImageLayout::GENERAL),
+        ..multi.clone()
+    };
+    let (multi32_ms, _) =
+        time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::MultiShadow, |f| f.schedule_multi_shadow(&multi32).map_err(e))?;
+    let unlimited = hybrid_rt::TraceMultiShadowTask {
+        lights: grid.iter().map(|l| hybrid_rt::LightInfo { range: 0.0, ..*l }).collect(),
+        ..multi32.clone()
+    };
+    let (multi32_unlimited_ms, _) = time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::MultiShadow, |f| {
+        f.schedule_multi_shadow(&unlimited).map_err(e)
+    })?;
+    rows.push((
+        format!("Multi-light shadows (32 point lights reaching 6 m, 1 ray/pixel each) {width}x{height}"),
+        format!("{multi32_ms:.3} ms; unlimited range {multi32_unlimited_ms:.3} ms"),
+    ));
+    host.destroy_image(vis_low);
+    host.destroy_image(vis_high);
     for (name, ms, fl) in [
         ("Multi-light shadows (4 point lights, 1 ray/pixel each)", multi_ms, multi_floor),
         ("Shadow (sun, 1 ray/pixel)", shadow_ms, shadow_floor),
@@ -472,7 +520,7 @@ fn run() -> Result<(), String> {
     }
     let _ = writeln!(
         json,
-        "  \"traces\": {{\"width\": {width}, \"height\": {height}, \"shadow_gpu_ms\": {shadow_ms:.4}, \"shadow_floor_gpu_ms\": {shadow_floor:.4}, \"diffuse_gpu_ms\": {diffuse_ms:.4}, \"diffuse_floor_gpu_ms\": {diffuse_floor:.4}, \"specular_gpu_ms\": {specular_ms:.4}, \"specular_floor_gpu_ms\": {specular_floor:.4}, \"multi_shadow_4_lights_gpu_ms\": {multi_ms:.4}, \"multi_shadow_floor_gpu_ms\": {multi_floor:.4}, \"shadow_first_hit_gpu_ms\": {shadow_first_ms:.4}, \"multi_shadow_first_hit_gpu_ms\": {multi_first_ms:.4}}},"
+        "  \"traces\": {{\"width\": {width}, \"height\": {height}, \"shadow_gpu_ms\": {shadow_ms:.4}, \"shadow_floor_gpu_ms\": {shadow_floor:.4}, \"diffuse_gpu_ms\": {diffuse_ms:.4}, \"diffuse_floor_gpu_ms\": {diffuse_floor:.4}, \"specular_gpu_ms\": {specular_ms:.4}, \"specular_floor_gpu_ms\": {specular_floor:.4}, \"multi_shadow_4_lights_gpu_ms\": {multi_ms:.4}, \"multi_shadow_floor_gpu_ms\": {multi_floor:.4}, \"shadow_first_hit_gpu_ms\": {shadow_first_ms:.4}, \"multi_shadow_first_hit_gpu_ms\": {multi_first_ms:.4}, \"multi_shadow_32_lights_ranged_gpu_ms\": {multi32_ms:.4}, \"multi_shadow_32_lights_unlimited_gpu_ms\": {multi32_unlimited_ms:.4}}},"
     );
     host.destroy_image(rgba);
 
