@@ -782,6 +782,27 @@ int main(void) {
     run_frame(ctx, frame, &gi, 16, gi_px);
     printf("diffuse at the corner: %.3f %.3f %.3f\n", gi_px[0], gi_px[1], gi_px[2]);
     EXPECT(fabsf(gi_px[0] - 0.5f) < 1e-4f && fabsf(gi_px[2] - 0.5f) < 1e-4f, "the open corner sees the sky");
+    /* An environment map replaces the constant sky: a 1x1 map is the same radiance everywhere. */
+    {
+        Image sky = make_image(VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_SAMPLED_BIT);
+        VkCommandBuffer scmd = begin();
+        VkClearColorValue blue = {{0.25f, 0.5f, 0.75f, 1.0f}};
+        transition(scmd, sky.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+        vkCmdClearColorImage(scmd, sky.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &blue, 1, &all);
+        transition(scmd, sky.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+        submit_and_wait(scmd);
+        HrtTraceDiffuseTask with_sky = diffuse;
+        with_sky.environment.image = sdk_image(&sky, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+        with_sky.environment.intensity = 2.0f;
+        CHECK_HRT(hrt_schedule_diffuse(frame, &with_sky));
+        run_frame(ctx, frame, &gi, 16, gi_px);
+        printf("diffuse at the corner under the map: %.3f %.3f %.3f\n", gi_px[0], gi_px[1], gi_px[2]);
+        EXPECT(fabsf(gi_px[0] - 0.5f) < 1e-3f && fabsf(gi_px[1] - 1.0f) < 1e-3f && fabsf(gi_px[2] - 1.5f) < 1e-3f,
+               "the open corner sees the map x 2");
+        with_sky.environment.rotation[0] = 2.0f;
+        EXPECT(hrt_schedule_diffuse(frame, &with_sky) == HRT_ERROR_INVALID_TRANSFORM, "a scaled rotation is refused");
+        free_image(sky);
+    }
     free_image(gi);
 
     /* ---- Specular: a mirror ground reflects the ceiling (its cache: magenta) at the centre

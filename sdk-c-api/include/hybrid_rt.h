@@ -812,6 +812,25 @@ typedef struct HrtTraceShadowTask {
 } HrtTraceShadowTask;
 
 /**
+ * A lat-long environment map for rays that miss (see the Rust docs of EnvironmentInput):
+ * u = 0.5 + atan2(d.x, -d.z) / 2pi, v = acos(d.y) / pi, bilinear, u wraps.
+ */
+typedef struct HrtEnvironmentInput {
+  /**
+   * Any size, SAMPLED usage, a read-only layout.
+   */
+  struct HrtImageInput image;
+  /**
+   * Column-major rotation: the map's frame in world space. Default identity.
+   */
+  float rotation[9];
+  /**
+   * Default 1.
+   */
+  float intensity;
+} HrtEnvironmentInput;
+
+/**
  * Diffuse GI shaded from the cache: RGB = mean incoming radiance (E/pi, multiply by albedo),
  * A = mean hit distance.
  */
@@ -837,6 +856,10 @@ typedef struct HrtTraceDiffuseTask {
    * An HrtDiffuseBrdfType. Default HRT_DIFFUSE_LAMBERTIAN.
    */
   uint32_t brdf;
+  /**
+   * Optional (environment.image = VK_NULL_HANDLE: none): what misses see.
+   */
+  struct HrtEnvironmentInput environment;
 } HrtTraceDiffuseTask;
 
 /**
@@ -868,6 +891,10 @@ typedef struct HrtTraceSpecularTask {
    * Optional (image = VK_NULL_HANDLE for none): the output without the specular colour.
    */
   struct HrtImageInput demodulated_output;
+  /**
+   * Optional (environment.image = VK_NULL_HANDLE: none): what misses see.
+   */
+  struct HrtEnvironmentInput environment;
 } HrtTraceSpecularTask;
 
 /**

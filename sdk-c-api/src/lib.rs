@@ -809,6 +809,7 @@ pub extern "C" fn hrt_trace_diffuse_task_default() -> HrtTraceDiffuseTask {
         ray_length: d.ray_length,
         miss_radiance: d.miss_radiance,
         brdf: d.brdf as u32,
+        environment: types::environment_default(),
     }
 }
 
@@ -830,6 +831,7 @@ pub unsafe extern "C" fn hrt_schedule_diffuse(container: *mut HrtTaskContainer, 
                 1 => rt::DiffuseBrdfType::NormalizedDisney,
                 v => return Err(Failure(HrtStatus::HRT_ERROR_INVALID_INPUT, format!("invalid HrtTraceDiffuseTask.brdf: {v}"))),
             },
+            environment: types::environment(&t.environment),
         })?)
     })
 }
@@ -845,6 +847,7 @@ pub extern "C" fn hrt_trace_specular_task_default() -> HrtTraceSpecularTask {
         miss_radiance: d.miss_radiance,
         firefly_clamp: d.firefly_clamp,
         demodulated_output: types::ao_task_default().output,
+        environment: types::environment_default(),
     }
 }
 
@@ -865,6 +868,7 @@ pub unsafe extern "C" fn hrt_schedule_specular(container: *mut HrtTaskContainer,
             miss_radiance: t.miss_radiance,
             firefly_clamp: t.firefly_clamp,
             demodulated_output: demod,
+            environment: types::environment(&t.environment),
         })?)
     })
 }

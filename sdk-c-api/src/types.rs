@@ -518,6 +518,30 @@ pub struct HrtTraceDiffuseTask {
     pub miss_radiance: [f32; 3],
     /// An HrtDiffuseBrdfType. Default HRT_DIFFUSE_LAMBERTIAN.
     pub brdf: u32,
+    /// Optional (environment.image = VK_NULL_HANDLE: none): what misses see.
+    pub environment: HrtEnvironmentInput,
+}
+
+/// A lat-long environment map for rays that miss (see the Rust docs of EnvironmentInput):
+/// u = 0.5 + atan2(d.x, -d.z) / 2pi, v = acos(d.y) / pi, bilinear, u wraps.
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtEnvironmentInput {
+    /// Any size, SAMPLED usage, a read-only layout.
+    pub image: HrtImageInput,
+    /// Column-major rotation: the map's frame in world space. Default identity.
+    pub rotation: [f32; 9],
+    /// Default 1.
+    pub intensity: f32,
+}
+
+pub(crate) fn environment(e: &HrtEnvironmentInput) -> rt::EnvironmentInput {
+    rt::EnvironmentInput { image: image(&e.image), rotation: glam::Mat3::from_cols_array(&e.rotation), intensity: e.intensity }
+}
+
+pub(crate) fn environment_default() -> HrtEnvironmentInput {
+    let d = rt::EnvironmentInput::default();
+    HrtEnvironmentInput { image: image_c(&d.image), rotation: d.rotation.to_cols_array(), intensity: d.intensity }
 }
 
 #[repr(C)]
@@ -544,6 +568,8 @@ pub struct HrtTraceSpecularTask {
     pub firefly_clamp: f32,
     /// Optional (image = VK_NULL_HANDLE for none): the output without the specular colour.
     pub demodulated_output: HrtImageInput,
+    /// Optional (environment.image = VK_NULL_HANDLE: none): what misses see.
+    pub environment: HrtEnvironmentInput,
 }
 
 /// Shadows from 1..=16 lights in one pass (see the Rust docs of TraceMultiShadowTask): the

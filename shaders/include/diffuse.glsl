@@ -9,6 +9,7 @@
 // for the denoiser.
 #include "common.glsl"
 #include "cache.glsl"
+#include "environment.glsl"
 
 layout(set = 0, binding = 0) uniform accelerationStructureEXT u_tlas;
 layout(set = 0, binding = 1) uniform sampler2D u_depth;
@@ -19,6 +20,7 @@ layout(set = 0, binding = 4, std140) uniform DiffuseConstants {
     vec4 miss;        // miss radiance rgb, ray length
     uvec4 params;     // rays per pixel, bilinear, instance table (uvec2)
     vec4 brdf;        // BRDF type (0 Lambert, 1 normalized Disney), unused...
+    EnvironmentGpu environment;
 } u_c;
 layout(set = 0, binding = 5) uniform sampler2D u_roughness;
 
@@ -35,7 +37,8 @@ float hrt_disney_factor(float ndotl, float ndotv, float ldoth, float roughness) 
 
 
 layout(set = 0, binding = 6) uniform sampler2D u_direct;
-layout(set = 0, binding = 7) uniform sampler2D u_input_mask;
+layout(set = 0, binding = 7) uniform sampler2D u_environment;
+layout(set = 0, binding = 8) uniform sampler2D u_input_mask;
 #include "screen_lighting.glsl"
 
 void hrt_diffuse_main() {
@@ -68,7 +71,7 @@ void hrt_diffuse_main() {
         float w = disney ? hrt_disney_factor(max(dot(n, dir), 0.0), ndotv, dot(dir, normalize(dir + v)), roughness) : 1.0;
         HitRecord p_hit = hrt_trace_record(u_tlas, c.frame.y & 0xffu, origin, dir, ray_length);
         if (p_hit.t < 0.0) {
-            sum += u_c.miss.rgb * w;
+            sum += hrt_miss_radiance(u_c.environment, u_environment, dir, u_c.miss.rgb) * w;
             dist += ray_length;
         } else {
             sum += hrt_hit_radiance(c, origin + dir * p_hit.t, table.v[p_hit.instance], p_hit.prim, p_hit.bary, bilinear) * w;

@@ -10,6 +10,7 @@
 // the ray length). An optional firefly clamp limits each sample's luminance (seeds/003).
 #include "common.glsl"
 #include "cache.glsl"
+#include "environment.glsl"
 
 layout(set = 0, binding = 0) uniform accelerationStructureEXT u_tlas;
 layout(set = 0, binding = 1) uniform sampler2D u_depth;
@@ -22,6 +23,7 @@ layout(set = 0, binding = 5, std140) uniform SpecularConstants {
     vec4 miss;             // miss radiance rgb, unused
     uvec4 counts;          // rays per pixel, bilinear, instance table (uvec2)
     vec4 specular;         // global metalness, has specular image, has demodulated output, unused
+    EnvironmentGpu environment;
 } u_c;
 
 
@@ -49,6 +51,7 @@ layout(set = 0, binding = 6) uniform sampler2D u_direct;
 layout(set = 0, binding = 7) uniform sampler2D u_specular;
 layout(set = 0, binding = 8) uniform writeonly image2D u_demodulated;
 layout(set = 0, binding = 9) uniform sampler2D u_input_mask;
+layout(set = 0, binding = 10) uniform sampler2D u_environment;
 #include "screen_lighting.glsl"
 
 void hrt_specular_main() {
@@ -93,7 +96,7 @@ void hrt_specular_main() {
             weight = hrt_smith_g1(ndotl, alpha);
         }
         HitRecord p_hit = hrt_trace_record(u_tlas, c.frame.y & 0xffu, origin, dir, ray_length);
-        vec3 radiance = p_hit.t < 0.0 ? u_c.miss.rgb : hrt_hit_radiance(c, origin + dir * p_hit.t, table.v[p_hit.instance], p_hit.prim, p_hit.bary, bilinear);
+        vec3 radiance = p_hit.t < 0.0 ? hrt_miss_radiance(u_c.environment, u_environment, dir, u_c.miss.rgb) : hrt_hit_radiance(c, origin + dir * p_hit.t, table.v[p_hit.instance], p_hit.prim, p_hit.bary, bilinear);
         if (clamp_lum > 0.0) {
             float lum = dot(radiance, vec3(0.2126, 0.7152, 0.0722));
             if (lum > clamp_lum) radiance *= clamp_lum / lum;

@@ -62,6 +62,7 @@ fn check_room(brdf: hybrid_rt::DiffuseBrdfType, roughness: f32) {
         ray_length: 100.0,
         miss_radiance: SKY,
         brdf,
+        ..Default::default()
     };
     let disney = brdf == hybrid_rt::DiffuseBrdfType::NormalizedDisney;
     let mut gpu = vec![[0.0f32; 4]; (W * H) as usize];

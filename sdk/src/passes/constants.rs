@@ -1,6 +1,6 @@
 //! GPU twins of the std140 blocks in shaders/include/*.glsl. Each struct here has exactly one
 //! GLSL counterpart; the tests at the bottom pin sizes and offsets.
-use crate::types::{DepthType, NormalSpace, RayOffsetType, TraceCommon};
+use crate::types::{DepthType, EnvironmentInput, NormalSpace, RayOffsetType, TraceCommon};
 use bytemuck::{Pod, Zeroable};
 
 /// `TraceCommon` in shaders/include/common.glsl.
@@ -19,6 +19,23 @@ pub(crate) struct TraceCommonGpu {
     pub normal_to_world: [f32; 16],
     pub roughness_mask: [f32; 4],
     pub roughness: [f32; 4],
+}
+
+/// `EnvironmentGpu` in shaders/include/environment.glsl.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+pub(crate) struct EnvironmentGpu {
+    pub world_to_env: [f32; 16],
+    pub params: [f32; 4],
+}
+
+impl EnvironmentGpu {
+    pub fn new(e: &EnvironmentInput) -> EnvironmentGpu {
+        EnvironmentGpu {
+            world_to_env: glam::Mat4::from_mat3(e.rotation.transpose()).to_cols_array(),
+            params: [e.intensity, e.has_image() as u32 as f32, 0.0, 0.0],
+        }
+    }
 }
 
 /// `AoConstants` in shaders/include/ao.glsl.
@@ -116,5 +133,7 @@ mod tests {
         assert_eq!(offset_of!(AoConstantsGpu, params), 384);
         assert_eq!(offset_of!(AoConstantsGpu, counts), 400);
         assert_eq!(size_of::<AoConstantsGpu>(), 416);
+        assert_eq!(offset_of!(EnvironmentGpu, params), 64);
+        assert_eq!(size_of::<EnvironmentGpu>(), 80);
     }
 }

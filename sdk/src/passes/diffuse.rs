@@ -1,6 +1,6 @@
 //! Diffuse GI (`TraceDiffuseTask`): cosine-distributed rays shaded from the direct-lighting
 //! cache (shaders/diffuse.rgen).
-use super::constants::TraceCommonGpu;
+use super::constants::{EnvironmentGpu, TraceCommonGpu};
 use super::descriptors::{optional_or, Slot};
 use super::program::{Payload, RtProgram, Shaders, Writes};
 use super::{PassTask, Passes, Recording, World};
@@ -19,6 +19,7 @@ struct DiffuseConstantsGpu {
     miss: [f32; 4],
     params: [u32; 4],
     brdf: [f32; 4],
+    environment: EnvironmentGpu,
 }
 
 pub(crate) struct DiffusePass {
@@ -30,8 +31,8 @@ impl DiffusePass {
         let sampled = || Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) };
         let program = RtProgram::new(
             b,
-            // + roughness, direct lighting
-            &super::gbuffer_bindings(sampler, &[sampled(), sampled()]),
+            // + roughness, direct lighting, environment
+            &super::gbuffer_bindings(sampler, &[sampled(), sampled(), sampled()]),
             Shaders {
                 raygen: shaders::DIFFUSE_RGEN,
                 misses: &[shaders::HIT_RECORD_RMISS],
@@ -52,12 +53,14 @@ impl DiffusePass {
             miss: [m[0], m[1], m[2], task.ray_length],
             params: [task.rays_per_pixel, task.common.enable_bilinear_sampling as u32, table as u32, (table >> 32) as u32],
             brdf: [task.brdf as u32 as f32, 0.0, 0.0, 0.0],
+            environment: EnvironmentGpu::new(&task.environment),
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
         let mut slots = super::gbuffer_slots(r.tlas, &task.common, &task.output, ubo);
         // Without a roughness image the normals stand in (not read then).
         slots.push(Slot::Sampled(optional_or(&task.common.roughness.image, &task.common.normals.image)));
         slots.push(Slot::Sampled(optional_or(&task.common.direct_lighting, &task.common.normals.image)));
+        slots.push(Slot::Sampled(optional_or(&task.environment.image, &task.common.normals.image)));
         slots.push(super::input_mask_slot(&task.common));
         let vp = &task.common.viewport;
         self.program.run(r, &slots, vp.width, vp.height, Writes::Storage);

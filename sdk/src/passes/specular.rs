@@ -1,6 +1,6 @@
 //! Specular reflections (`TraceSpecularTask`): mirror or GGX-VNDF rays shaded from the cache
 //! (shaders/specular.rgen).
-use super::constants::TraceCommonGpu;
+use super::constants::{EnvironmentGpu, TraceCommonGpu};
 use super::descriptors::{optional_or, Slot};
 use super::program::{Payload, RtProgram, Shaders, Writes};
 use super::{PassTask, Passes, Recording, World};
@@ -20,6 +20,7 @@ struct SpecularConstantsGpu {
     miss: [f32; 4],
     counts: [u32; 4],
     specular: [f32; 4],
+    environment: EnvironmentGpu,
 }
 
 pub(crate) struct SpecularPass {
@@ -42,6 +43,7 @@ impl SpecularPass {
                 sampled(),
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
                 super::input_mask_binding(sampler),
+                sampled(),
             ],
             Shaders {
                 raygen: shaders::SPECULAR_RGEN,
@@ -70,6 +72,7 @@ impl SpecularPass {
                 (task.demodulated_output.image != vk::Image::null()) as u32 as f32,
                 0.0,
             ],
+            environment: EnvironmentGpu::new(&task.environment),
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
         // Without a roughness image the binding still needs a valid view: the normals stand in
@@ -87,6 +90,7 @@ impl SpecularPass {
             Slot::Sampled(optional_or(&c.specular.image, &c.normals.image)),
             Slot::Storage(optional_or(&task.demodulated_output, &task.output)),
             super::input_mask_slot(c),
+            Slot::Sampled(optional_or(&task.environment.image, &c.normals.image)),
         ];
         self.program.run(r, &slots, c.viewport.width, c.viewport.height, Writes::Storage);
     }

@@ -224,6 +224,40 @@ pub struct TraceDiffuseTask {
     pub miss_radiance: [f32; 3],
     /// Default Lambertian.
     pub brdf: DiffuseBrdfType,
+    /// Optional: what rays that hit nothing see, instead of `miss_radiance`.
+    pub environment: EnvironmentInput,
+}
+
+/// An environment map for rays that hit nothing (the sky, a captured probe), replacing the
+/// task's constant `miss_radiance` when `image` is given.
+///
+/// Lat-long (equirectangular) layout, the usual one for HDR skies: a direction `d` in the
+/// map's frame is at `u = 0.5 + atan2(d.x, -d.z) / 2pi` (u = 0.5 looks down -Z, u grows
+/// towards +X), `v = acos(d.y) / pi` (v = 0 straight up). Looked up bilinearly at mip 0 of the
+/// view, wrapping in u and clamped in v; done with texel fetches, so any sampled format works
+/// (RGBA32F has no linear filtering on some devices).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EnvironmentInput {
+    /// The map (SAMPLED usage, a read-only layout); any size. Null: no map (default).
+    pub image: ImageInput,
+    /// The map's frame in world space: a world direction `d` is looked up at
+    /// `rotation.transpose() * d`. Must be a rotation. Default identity (+Y up).
+    pub rotation: glam::Mat3,
+    /// Radiance multiplier (>= 0). Default 1.
+    pub intensity: f32,
+}
+
+impl Default for EnvironmentInput {
+    fn default() -> Self {
+        EnvironmentInput { image: ImageInput::default(), rotation: glam::Mat3::IDENTITY, intensity: 1.0 }
+    }
+}
+
+impl EnvironmentInput {
+    /// Whether a map is given.
+    pub fn has_image(&self) -> bool {
+        self.image.image != vk::Image::null()
+    }
 }
 
 impl Default for TraceDiffuseTask {
@@ -235,6 +269,7 @@ impl Default for TraceDiffuseTask {
             ray_length: 1000.0,
             miss_radiance: [0.0; 3],
             brdf: DiffuseBrdfType::Lambertian,
+            environment: EnvironmentInput::default(),
         }
     }
 }
@@ -265,6 +300,9 @@ pub struct TraceSpecularTask {
     pub firefly_clamp: f32,
     /// Optional (image null = none): same format rules as `output`.
     pub demodulated_output: ImageInput,
+    /// Optional: what rays that hit nothing see, instead of `miss_radiance` (glass reflections
+    /// too: they are a specular task).
+    pub environment: EnvironmentInput,
 }
 
 impl Default for TraceSpecularTask {
@@ -277,6 +315,7 @@ impl Default for TraceSpecularTask {
             miss_radiance: [0.0; 3],
             firefly_clamp: 0.0,
             demodulated_output: ImageInput { layout: vk::ImageLayout::GENERAL, ..Default::default() },
+            environment: EnvironmentInput::default(),
         }
     }
 }

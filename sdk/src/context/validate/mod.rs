@@ -351,8 +351,44 @@ pub(crate) fn shadow(t: &TraceShadowTask, limits: &Limits) -> Result<()> {
     Ok(())
 }
 
+/// Environment maps: formats the shader reads as colour (any size; RGB used).
+const ENVIRONMENT_FORMATS: &[vk::Format] = &[
+    vk::Format::R16G16B16A16_SFLOAT,
+    vk::Format::R32G32B32A32_SFLOAT,
+    vk::Format::B10G11R11_UFLOAT_PACK32,
+    vk::Format::E5B9G9R9_UFLOAT_PACK32,
+    vk::Format::R8G8B8A8_UNORM,
+    vk::Format::R8G8B8A8_SRGB,
+    vk::Format::B8G8R8A8_UNORM,
+    vk::Format::B8G8R8A8_SRGB,
+    vk::Format::A2B10G10R10_UNORM_PACK32,
+];
+
+fn environment(what: &'static str, e: &EnvironmentInput) -> Result<()> {
+    if !e.has_image() {
+        return Ok(());
+    }
+    // Any size: the map is looked up by direction, not by pixel.
+    let whole = Viewport::full(e.image.width, e.image.height);
+    if e.image.width == 0 || e.image.height == 0 {
+        return Err(Error::invalid(what, "has zero width or height"));
+    }
+    image(what, &e.image, &whole, Use::Sampled)?;
+    format_in(what, e.image.format, ENVIRONMENT_FORMATS, "an RGBA float/unorm, B10G11R11 or E5B9G9R9 format")?;
+    let r = &e.rotation;
+    // A rotation: orthonormal columns (to float precision) and no mirroring.
+    if !r.is_finite() || !(*r * r.transpose()).abs_diff_eq(glam::Mat3::IDENTITY, 1e-3) || r.determinant() < 0.0 {
+        return Err(Error::InvalidTransform { what: "EnvironmentInput.rotation (must be a rotation)" });
+    }
+    if !(e.intensity.is_finite() && e.intensity >= 0.0) {
+        return Err(Error::invalid(what, "intensity must be finite and >= 0"));
+    }
+    Ok(())
+}
+
 pub(crate) fn diffuse(t: &TraceDiffuseTask, limits: &Limits) -> Result<()> {
     trace_common(&t.common, limits)?;
+    environment("TraceDiffuseTask.environment", &t.environment)?;
     image("TraceDiffuseTask.output", &t.output, &t.common.viewport, Use::Storage)?;
     format_in(
         "TraceDiffuseTask.output",
@@ -374,6 +410,7 @@ pub(crate) fn diffuse(t: &TraceDiffuseTask, limits: &Limits) -> Result<()> {
 
 pub(crate) fn specular(t: &TraceSpecularTask, limits: &Limits) -> Result<()> {
     trace_common(&t.common, limits)?;
+    environment("TraceSpecularTask.environment", &t.environment)?;
     image("TraceSpecularTask.output", &t.output, &t.common.viewport, Use::Storage)?;
     let formats = [vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT];
     if t.common.debug_output == DebugOutput::Default {
