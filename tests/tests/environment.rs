@@ -128,13 +128,11 @@ fn a_mirror_reflects_the_environment_map() {
         run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
         let gpu = f.read();
         let mut worst = 0.0f32;
-        for i in 0..gpu.len() {
-            let (p, n) = (f.g.position[i], f.g.normal[i]);
-            let v = (f.camera.eye - p).normalize();
-            let r = -v + 2.0 * n.dot(v) * n;
+        for ((texel, p), n) in gpu.iter().zip(&f.g.position).zip(&f.g.normal) {
+            let v = (f.camera.eye - *p).normalize();
+            let r = -v + 2.0 * n.dot(v) * *n;
             let expected = environment(rotation, intensity, r);
-            let e = (Vec3::new(gpu[i][0], gpu[i][1], gpu[i][2]) - expected).abs().max_element();
-            worst = worst.max(e);
+            worst = worst.max((Vec3::new(texel[0], texel[1], texel[2]) - expected).abs().max_element());
         }
         eprintln!("mirror, intensity {intensity}: worst |GPU - reference| {worst:.2e}");
         assert!(worst < 1e-3, "the mirror shows the map ({worst})");
