@@ -329,9 +329,15 @@ fn multi_light_visibility_equals_single_light_results() {
             "{what}: reached pixels are traced"
         );
     }
-    // Per-light outputs are the single-light task's images (the same rays).
+    // Per-light outputs are the single-light task's images (the same rays): the same visible
+    // fractions exactly, the same occluder distances to float rounding (two shaders compile the
+    // ray set-up differently on NVIDIA: the last bits differ; on lavapipe they are equal).
     for (img, k) in [(&spot_out, 2usize), (&point_out, 1)] {
-        assert!(read_rg(img) == singles_read[k], "the per-light output of light {k} is its single-light image");
+        let own = read_rg(img);
+        for (a, b) in own.iter().zip(&singles_read[k]) {
+            assert_eq!(a[1], b[1], "light {k}: the per-light output's visible fraction is the single-light task's");
+            assert!((a[0] - b[0]).abs() <= 1e-4 * b[0].abs().max(1.0), "light {k}: occluder distance {} vs {}", a[0], b[0]);
+        }
     }
     // 20 lights: light j's byte in the low or high image is light j % 3's.
     let low_words: Vec<[u32; 4]> = bytemuck::cast_slice(&host.read_image(&low, vk::ImageLayout::GENERAL).unwrap()).to_vec();
