@@ -5,6 +5,8 @@
 // index outside the part's vertices (undefined behaviour in a BLAS build, a read past the
 // vertices in shading) becomes degenerate — all three corners on the part's first vertex, a
 // zero-area triangle no ray hits — and is counted. One invocation per vertex and per triangle.
+// Modes 1-3 pack an alpha-tested part's texture coordinates instead: two f32 per vertex, from
+// R32G32_SFLOAT, R16G16_SFLOAT or R16G16_UNORM at the engine's stride.
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference_uvec2 : require
 layout(local_size_x = 256) in;
@@ -25,7 +27,7 @@ layout(push_constant) uniform Push {
     uint first_vertex;   // the first copied vertex's index in the engine's buffer
     uint vertex_base;    // the part's first vertex in the geometry
     uint first_item;     // this dispatch's first invocation (large parts take several)
-    uint pad;
+    uint mode;           // 0 positions and indices; texture coordinates: 1 RG32F, 2 RG16F, 3 RG16 unorm
 } pc;
 
 uint engine_index(uint j) {
@@ -38,6 +40,19 @@ uint engine_index(uint j) {
 
 void main() {
     uint i = gl_GlobalInvocationID.x + pc.first_item;
+    if (pc.mode != 0u) {
+        if (i >= pc.vertex_count) return;
+        Words src = Words(pc.src_vertices);
+        uint o = i * pc.stride_words;
+        vec2 uv;
+        if (pc.mode == 1u) uv = vec2(uintBitsToFloat(src.w[o]), uintBitsToFloat(src.w[o + 1u]));
+        else if (pc.mode == 2u) uv = unpackHalf2x16(src.w[o]);
+        else uv = unpackUnorm2x16(src.w[o]);
+        Packed dst = Packed(pc.dst_vertices);
+        dst.w[2u * i] = floatBitsToUint(uv.x);
+        dst.w[2u * i + 1u] = floatBitsToUint(uv.y);
+        return;
+    }
     if (i < pc.vertex_count) {
         Words src = Words(pc.src_vertices);
         uint o = i * pc.stride_words;

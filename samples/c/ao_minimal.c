@@ -827,6 +827,50 @@ int main(void) {
     EXPECT(spec_px[0] == 0.0f && spec_px[1] == 0.25f && spec_px[3] == 10.0f, "the corner mirrors the sky");
     free_image(spec);
 
+    /* ---- Alpha testing: the ceiling updated into a cut-out whose texture is all holes (alpha
+     * 0 < cutoff 0.5; its texture coordinates are the first 8 bytes of its 24-byte vertices):
+     * rays pass through it and the centre opens. */
+    {
+        Image holes = make_image(VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_SAMPLED_BIT);
+        VkCommandBuffer hcmd = begin();
+        VkClearColorValue clear_alpha = {{1, 1, 1, 0}};
+        transition(hcmd, holes.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+        vkCmdClearColorImage(hcmd, holes.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &clear_alpha, 1, &all);
+        transition(hcmd, holes.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+        submit_and_wait(hcmd);
+        HrtGeometryTask cut = hrt_geometry_task_default();
+        cut.handle = geometries[1];
+        cut.operation = HRT_OPERATION_UPDATE;
+        cut.input.vertices.buffer = vb_ceiling.buffer;
+        cut.input.vertices.count = 4;
+        cut.input.vertices.offset = 12;
+        cut.input.vertices.stride = 24;
+        cut.input.indices.buffer = ib16.buffer;
+        cut.input.indices.offset = 2;
+        cut.input.indices.count = 6;
+        cut.input.indices.format = VK_FORMAT_R16_UINT;
+        cut.input.has_transform = true;
+        const float lift[12] = {1, 0, 0, 0, 0, 1, 0, 0.2f, 0, 0, 1, 0};
+        memcpy(cut.input.transform, lift, sizeof lift);
+        cut.input.has_uvs = true;
+        cut.input.uvs.buffer = vb_ceiling.buffer;
+        cut.input.uvs.stride = 24;
+        cut.input.uvs.count = 4;
+        cut.input.has_alpha_test = true;
+        cut.input.alpha_test.texture = sdk_image(&holes, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+        HrtGeometryTask bad_cut = cut;
+        bad_cut.input.alpha_test.cutoff = 2.0f;
+        EXPECT(hrt_schedule_geometry(frame, &bad_cut) == HRT_ERROR_INVALID_INPUT, "an alpha cutoff above 1 is refused");
+        CHECK_HRT(hrt_schedule_geometry(frame, &cut));
+        CHECK_HRT(hrt_schedule_bvh_build(frame, &bvh));
+        CHECK_HRT(hrt_schedule_ambient_occlusion(frame, &ao));
+        printf("cut-out ceiling frame:\n");
+        run_frame(ctx, frame, &out, 4, result);
+        float open = result[(H / 2) * W + W / 2];
+        EXPECT(open > 0.999f, "a ceiling that is all holes no longer occludes (%f)", open);
+        free_image(holes);
+    }
+
     /* ---- Frame 2: the ceiling instance removed: open everywhere. */
     HrtInstanceTask remove = hrt_instance_task_default();
     remove.handle = instances[1];

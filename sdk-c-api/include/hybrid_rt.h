@@ -392,6 +392,43 @@ typedef struct HrtIndexBufferInput {
   VkFormat format;
 } HrtIndexBufferInput;
 
+typedef struct HrtImageInput {
+  VkImage image;
+  VkImageView view;
+  VkFormat format;
+  uint32_t width;
+  uint32_t height;
+  /**
+   * Inputs: VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL (default) or another read-only layout;
+   * outputs: VK_IMAGE_LAYOUT_GENERAL.
+   */
+  VkImageLayout layout;
+  /**
+   * The VkImageUsageFlags the image was created with (required: inputs need
+   * VK_IMAGE_USAGE_SAMPLED_BIT, outputs VK_IMAGE_USAGE_STORAGE_BIT; 0 is refused).
+   */
+  uint32_t usage;
+} HrtImageInput;
+
+/**
+ * Alpha testing of a geometry (see the Rust docs of AlphaTestInput): rays pass where the
+ * texture's `channel` at the hit's texture coordinates is below `cutoff`.
+ */
+typedef struct HrtAlphaTestInput {
+  /**
+   * SAMPLED usage, read-only layout while the registering ticket runs.
+   */
+  struct HrtImageInput texture;
+  /**
+   * 0..=3. Default 3 (A).
+   */
+  uint32_t channel;
+  /**
+   * Default 0.5.
+   */
+  float cutoff;
+} HrtAlphaTestInput;
+
 /**
  * One part of a geometry (GeometryComponent): a vertex/index buffer pair, an optional
  * part-to-geometry transform and an optional vertex range.
@@ -410,6 +447,12 @@ typedef struct HrtGeometryComponent {
   bool has_vertex_range;
   uint32_t vertex_range_first;
   uint32_t vertex_range_last;
+  /**
+   * Texture coordinates (R32G32_SFLOAT, R16G16_SFLOAT or R16G16_UNORM) when has_uvs: needed
+   * on every part of an alpha-tested geometry. Default false.
+   */
+  bool has_uvs;
+  struct HrtVertexBufferInput uvs;
 } HrtGeometryComponent;
 
 typedef struct HrtSurfelSettings {
@@ -447,6 +490,16 @@ typedef struct HrtGeometryInput {
   bool has_vertex_range;
   uint32_t vertex_range_first;
   uint32_t vertex_range_last;
+  /**
+   * The first part's texture coordinates when has_uvs (alpha testing). Default false.
+   */
+  bool has_uvs;
+  struct HrtVertexBufferInput uvs;
+  /**
+   * Alpha-test the geometry when has_alpha_test. Default false (opaque).
+   */
+  bool has_alpha_test;
+  struct HrtAlphaTestInput alpha_test;
   /**
    * Further parts: `extra_component_count` structs at `extra_components` (read during
    * hrt_schedule_geometry only). Default none.
@@ -504,24 +557,6 @@ typedef struct HrtBvhBuildTask {
    */
   uint32_t max_blas_build_count;
 } HrtBvhBuildTask;
-
-typedef struct HrtImageInput {
-  VkImage image;
-  VkImageView view;
-  VkFormat format;
-  uint32_t width;
-  uint32_t height;
-  /**
-   * Inputs: VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL (default) or another read-only layout;
-   * outputs: VK_IMAGE_LAYOUT_GENERAL.
-   */
-  VkImageLayout layout;
-  /**
-   * The VkImageUsageFlags the image was created with (required: inputs need
-   * VK_IMAGE_USAGE_SAMPLED_BIT, outputs VK_IMAGE_USAGE_STORAGE_BIT; 0 is refused).
-   */
-  uint32_t usage;
-} HrtImageInput;
 
 typedef struct HrtDepthInput {
   struct HrtImageInput image;

@@ -167,6 +167,23 @@ pub struct HrtGeometryComponent {
     pub has_vertex_range: bool,
     pub vertex_range_first: u32,
     pub vertex_range_last: u32,
+    /// Texture coordinates (R32G32_SFLOAT, R16G16_SFLOAT or R16G16_UNORM) when has_uvs: needed
+    /// on every part of an alpha-tested geometry. Default false.
+    pub has_uvs: bool,
+    pub uvs: HrtVertexBufferInput,
+}
+
+/// Alpha testing of a geometry (see the Rust docs of AlphaTestInput): rays pass where the
+/// texture's `channel` at the hit's texture coordinates is below `cutoff`.
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtAlphaTestInput {
+    /// SAMPLED usage, read-only layout while the registering ticket runs.
+    pub texture: HrtImageInput,
+    /// 0..=3. Default 3 (A).
+    pub channel: u32,
+    /// Default 0.5.
+    pub cutoff: f32,
 }
 
 #[repr(C)]
@@ -183,6 +200,12 @@ pub struct HrtGeometryInput {
     pub has_vertex_range: bool,
     pub vertex_range_first: u32,
     pub vertex_range_last: u32,
+    /// The first part's texture coordinates when has_uvs (alpha testing). Default false.
+    pub has_uvs: bool,
+    pub uvs: HrtVertexBufferInput,
+    /// Alpha-test the geometry when has_alpha_test. Default false (opaque).
+    pub has_alpha_test: bool,
+    pub alpha_test: HrtAlphaTestInput,
     /// Further parts: `extra_component_count` structs at `extra_components` (read during
     /// hrt_schedule_geometry only). Default none.
     pub extra_components: *const HrtGeometryComponent,
@@ -736,6 +759,7 @@ fn component(c: &HrtGeometryComponent) -> rt::GeometryComponent {
         indices: indices(&c.indices),
         transform: c.has_transform.then(|| affine(&c.transform)),
         vertex_range: c.has_vertex_range.then_some(rt::VertexRange { first: c.vertex_range_first, last: c.vertex_range_last }),
+        uvs: c.has_uvs.then(|| vertices(&c.uvs)),
     }
 }
 
@@ -758,6 +782,8 @@ pub(crate) unsafe fn geometry_task(t: &HrtGeometryTask) -> Result<rt::GeometryTa
         has_vertex_range: i.has_vertex_range,
         vertex_range_first: i.vertex_range_first,
         vertex_range_last: i.vertex_range_last,
+        has_uvs: i.has_uvs,
+        uvs: i.uvs,
     });
     Ok(rt::GeometryTask {
         handle: rt::GeometryHandle(t.handle),
@@ -767,6 +793,12 @@ pub(crate) unsafe fn geometry_task(t: &HrtGeometryTask) -> Result<rt::GeometryTa
             indices: first.indices,
             transform: first.transform,
             vertex_range: first.vertex_range,
+            uvs: first.uvs,
+            alpha_test: i.has_alpha_test.then(|| rt::AlphaTestInput {
+                texture: image(&i.alpha_test.texture),
+                channel: i.alpha_test.channel,
+                cutoff: i.alpha_test.cutoff,
+            }),
             extra_components: extra,
             allow_update: i.allow_update,
             build_hint: pick(
@@ -805,6 +837,8 @@ pub(crate) fn geometry_component_default() -> HrtGeometryComponent {
         has_vertex_range: d.vertex_range.is_some(),
         vertex_range_first: 0,
         vertex_range_last: 0,
+        has_uvs: false,
+        uvs: vertices_c(&rt::VertexBufferInput { stride: 8, format: ash::vk::Format::R32G32_SFLOAT, ..Default::default() }),
     }
 }
 
@@ -823,6 +857,13 @@ pub(crate) fn geometry_task_default() -> HrtGeometryTask {
             has_vertex_range: c.has_vertex_range,
             vertex_range_first: 0,
             vertex_range_last: 0,
+            has_uvs: false,
+            uvs: c.uvs,
+            has_alpha_test: false,
+            alpha_test: {
+                let a = rt::AlphaTestInput::default();
+                HrtAlphaTestInput { texture: image_c(&a.texture), channel: a.channel, cutoff: a.cutoff }
+            },
             extra_components: std::ptr::null(),
             extra_component_count: 0,
             allow_update: i.allow_update,

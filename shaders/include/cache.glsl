@@ -38,6 +38,12 @@ struct InstanceGpu {
     uint index_size;
     uint max_resolution; // largest per-triangle resolution of the layout
     uint pad;
+    uvec2 uv_addr;       // alpha-tested geometry: two f32 per vertex (0: opaque)
+    uvec2 alpha_addr;    // its alpha texture, one byte per texel, rows of alpha_pitch words
+    uint alpha_width;
+    uint alpha_height;
+    uint alpha_pitch;
+    float alpha_cutoff;
 };
 
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer InstanceTable { InstanceGpu v[]; };

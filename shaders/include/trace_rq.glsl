@@ -2,12 +2,21 @@
 #ifndef HRT_TRACE_RQ_GLSL
 #define HRT_TRACE_RQ_GLSL
 #include "hit_record.glsl"
+#include "alpha_test.glsl"
 
-// `flags` adds ray flags to Opaque (see trace_rt.glsl).
+// `flags`: ray flags (see trace_rt.glsl). Candidates are the hits of alpha-tested geometry
+// (opaque geometry commits without one): confirmed where the alpha test passes.
 HitRecord hrt_trace_record_flags(accelerationStructureEXT tlas, uint flags, uint mask, vec3 origin, vec3 dir, float tmax) {
     rayQueryEXT q;
-    rayQueryInitializeEXT(q, tlas, gl_RayFlagsOpaqueEXT | flags, mask, origin, 0.0, dir, tmax);
-    while (rayQueryProceedEXT(q)) {}
+    rayQueryInitializeEXT(q, tlas, flags, mask, origin, 0.0, dir, tmax);
+    while (rayQueryProceedEXT(q)) {
+        if (rayQueryGetIntersectionTypeEXT(q, false) == gl_RayQueryCandidateIntersectionTriangleEXT
+            && hrt_alpha_opaque(uint(rayQueryGetIntersectionInstanceCustomIndexEXT(q, false)),
+                                uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, false)),
+                                rayQueryGetIntersectionBarycentricsEXT(q, false))) {
+            rayQueryConfirmIntersectionEXT(q);
+        }
+    }
     HitRecord h;
     h.t = -1.0;
     h.bary = vec2(0.0);

@@ -5,11 +5,12 @@
 #include "hit_record.glsl"
 layout(location = 0) rayPayloadEXT HitRecord p_hit;
 
-// `flags` adds ray flags to Opaque (gl_RayFlagsTerminateOnFirstHitEXT: the record is the first
-// hit traversal found, not the closest).
+// `flags`: ray flags (gl_RayFlagsTerminateOnFirstHitEXT: the record is the first hit traversal
+// found, not the closest). No Opaque flag: alpha-tested geometry runs its any-hit test
+// (alpha_test.rahit); opaque geometry is built opaque and never does.
 HitRecord hrt_trace_record_flags(accelerationStructureEXT tlas, uint flags, uint mask, vec3 origin, vec3 dir, float tmax) {
     p_hit.t = -1.0;
-    traceRayEXT(tlas, gl_RayFlagsOpaqueEXT | flags, mask, 0, 0, 0, origin, 0.0, dir, tmax, 0);
+    traceRayEXT(tlas, flags, mask, 0, 0, 0, origin, 0.0, dir, tmax, 0);
     return p_hit;
 }
 

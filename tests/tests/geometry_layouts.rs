@@ -108,6 +108,7 @@ fn two_parts(host: &Host, m: &Mesh) -> Layout {
             indices: IndexBufferInput { buffer: ib1.buffer, count: (m.indices.len() - half) as u32, ..Default::default() },
             transform: Some(back),
             vertex_range: None,
+            uvs: None,
         }],
         ..Default::default()
     };

@@ -10,7 +10,7 @@ use crate::gpu::deferred::Garbage;
 use crate::gpu::device::Limits;
 use crate::gpu::memory::{Buffer, MemoryKind};
 use crate::gpu::sync;
-use crate::passes::geometry_pack::PackJob;
+use crate::passes::geometry_pack::{AlphaJob, PackJob, PackMode};
 use crate::passes::{Recording, World};
 use crate::scene::geometry::{self, BlasState, CopyPlan, GeometryLayout};
 use crate::scene::instance::Placement;
@@ -219,7 +219,7 @@ impl Recorder<'_> {
         let st = &mut *self.st;
         let ws = &mut st.working_sets[self.ws];
         let base = ws.index_counters.as_ref().map_or(0, |b| b.address);
-        let mut jobs = Vec::new();
+        let (mut jobs, mut alpha_jobs) = (Vec::new(), Vec::new());
         for (slot, &(h, plan_index)) in packs.iter().enumerate() {
             let g = st.scene.geometries.get(h)?;
             let Some(copy) = g.copy.as_ref() else { continue };
@@ -239,6 +239,35 @@ impl Recorder<'_> {
                     first_vertex: p.first_vertex,
                     vertex_base: p.vertex_base,
                     rows: p.rows(),
+                    mode: PackMode::Positions,
+                });
+                if p.uv_buffer != vk::Buffer::null() {
+                    jobs.push(PackJob {
+                        src_vertices: staging.address + span + p.staging_uvs,
+                        dst_vertices: copy.address + plan.layout.uv_offset() + p.vertex_base as u64 * geometry::UV_STRIDE,
+                        src_indices: 0,
+                        dst_indices: 0,
+                        counter: base + slot as u64 * 4,
+                        stride: p.uv_stride,
+                        vertex_count: p.vertex_count,
+                        triangle_count: 0,
+                        index_size: 0,
+                        first_vertex: 0,
+                        vertex_base: p.vertex_base,
+                        rows: p.rows(),
+                        mode: PackMode::Uvs(p.uv_format),
+                    });
+                }
+            }
+            if let Some(a) = g.input.alpha_test.as_ref() {
+                let l = &plan.layout;
+                alpha_jobs.push(AlphaJob {
+                    texture: a.texture,
+                    channel: a.channel,
+                    dst: copy.address + l.alpha_offset(),
+                    width: l.alpha_width,
+                    height: l.alpha_height,
+                    pitch_words: l.alpha_pitch_words(),
                 });
             }
             ws.index_checks.push((h, copy.raw, slot as u32));
@@ -255,6 +284,7 @@ impl Recorder<'_> {
             floor: false,
         };
         st.passes.geometry_pack.record(&mut r, &jobs);
+        st.passes.geometry_pack.record_alpha(&mut r, &alpha_jobs);
         Ok(())
     }
 

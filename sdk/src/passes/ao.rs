@@ -30,7 +30,7 @@ impl AoPass {
                 raygen: shaders::AO_RGEN,
                 misses: &[shaders::HIT_T_RMISS],
                 closest_hits: &[shaders::HIT_T_RCHIT],
-                any_hit: None,
+                any_hit: Some(shaders::ALPHA_TEST_RAHIT),
                 inline: Some(shaders::AO_COMP),
                 floor: Some(Payload::HitT),
             },

@@ -39,7 +39,7 @@ impl DebugPass {
                 raygen: shaders::DEBUG_RGEN,
                 misses: &[shaders::HIT_RECORD_RMISS],
                 closest_hits: &[shaders::HIT_RECORD_RCHIT],
-                any_hit: None,
+                any_hit: Some(shaders::ALPHA_TEST_RAHIT),
                 inline: None,
                 floor: None,
             },

@@ -37,7 +37,7 @@ impl DiffusePass {
                 raygen: shaders::DIFFUSE_RGEN,
                 misses: &[shaders::HIT_RECORD_RMISS],
                 closest_hits: &[shaders::HIT_RECORD_RCHIT],
-                any_hit: None,
+                any_hit: Some(shaders::ALPHA_TEST_RAHIT),
                 inline: Some(shaders::DIFFUSE_COMP),
                 floor: Some(Payload::HitRecord),
             },

@@ -9,6 +9,11 @@
 //! triangle with an index outside its part's vertices is made degenerate and counted; the
 //! count comes back with the ticket (`ExecuteContext::geometry_invalid_triangles`).
 //! Kickstart RT trusts the engine's indices.
+//!
+//! Alpha-tested geometry also gets its texture coordinates packed (the same shader, a UV mode)
+//! and its alpha texture copied into the copy (shaders/alpha_pack.comp), so traces read them
+//! through the instance table's addresses and bind no texture per geometry.
+use super::descriptors::{self, Slot};
 use super::Recording;
 use crate::error::Result;
 use crate::gpu::pipeline::PipelineBuilder;
@@ -34,7 +39,18 @@ struct PackPush {
     first_vertex: u32,
     vertex_base: u32,
     first_item: u32,
-    pad: u32,
+    mode: u32,
+}
+
+/// `Push` of shaders/alpha_pack.comp.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+struct AlphaPush {
+    dst: u64,
+    width: u32,
+    height: u32,
+    pitch: u32,
+    channel: u32,
 }
 
 const GROUP: u32 = 256;
@@ -42,6 +58,27 @@ const GROUP: u32 = 256;
 pub(crate) struct GeometryPack {
     layout: vk::PipelineLayout,
     pipeline: vk::Pipeline,
+    alpha_layout: vk::PipelineLayout,
+    alpha_pipeline: vk::Pipeline,
+}
+
+/// What a pack job copies.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum PackMode {
+    /// Positions and indices.
+    Positions,
+    /// An alpha-tested part's texture coordinates, from this format.
+    Uvs(vk::Format),
+}
+
+/// One alpha texture to copy into a geometry's copy.
+pub(crate) struct AlphaJob {
+    pub texture: crate::types::ImageInput,
+    pub channel: u32,
+    pub dst: vk::DeviceAddress,
+    pub width: u32,
+    pub height: u32,
+    pub pitch_words: u32,
 }
 
 /// One part to pack (addresses already offset to the part's first vertex, index, triangle).
@@ -65,13 +102,39 @@ pub(crate) struct PackJob {
     pub vertex_base: u32,
     /// Part to geometry space, row-major 3x4.
     pub rows: [[f32; 4]; 3],
+    pub mode: PackMode,
 }
 
 impl GeometryPack {
-    pub fn new(b: &mut PipelineBuilder<'_>) -> Result<GeometryPack> {
+    pub fn new(b: &mut PipelineBuilder<'_>, sampler: vk::Sampler) -> Result<GeometryPack> {
         let layout = b.layout(None, std::mem::size_of::<PackPush>() as u32, vk::ShaderStageFlags::COMPUTE)?;
         let pipeline = b.compute(layout, shaders::GEOMETRY_PACK_COMP)?;
-        Ok(GeometryPack { layout, pipeline })
+        let texture = crate::gpu::pipeline::Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) };
+        let set = b.set_layout(&[texture], vk::ShaderStageFlags::COMPUTE)?;
+        let alpha_layout = b.layout(Some(set), std::mem::size_of::<AlphaPush>() as u32, vk::ShaderStageFlags::COMPUTE)?;
+        let alpha_pipeline = b.compute(alpha_layout, shaders::ALPHA_PACK_COMP)?;
+        Ok(GeometryPack { layout, pipeline, alpha_layout, alpha_pipeline })
+    }
+
+    /// Copies alpha textures into their geometries' copies (with the packs: same hazards).
+    pub fn record_alpha(&self, r: &mut Recording<'_>, jobs: &[AlphaJob]) {
+        if jobs.is_empty() {
+            return;
+        }
+        let stage = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
+        let d = &r.device.raw;
+        let bind = vk::PipelineBindPoint::COMPUTE;
+        unsafe { d.cmd_bind_pipeline(r.cmd, bind, self.alpha_pipeline) };
+        for j in jobs {
+            descriptors::push(r.device, r.cmd, bind, self.alpha_layout, &[Slot::Sampled(&j.texture)]);
+            let push = AlphaPush { dst: j.dst, width: j.width, height: j.height, pitch: j.pitch_words, channel: j.channel };
+            // Validated: width and height within maxImageDimension2D, so the groups fit.
+            unsafe {
+                d.cmd_push_constants(r.cmd, self.alpha_layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&push));
+                d.cmd_dispatch(r.cmd, j.pitch_words.div_ceil(8), j.height.div_ceil(8), 1);
+            }
+        }
     }
 
     /// Packs every job (after the staging copies and the counters' fill; before BLAS builds
@@ -88,7 +151,7 @@ impl GeometryPack {
         for j in jobs {
             // One invocation per vertex and per triangle; split so no dispatch exceeds the
             // group-count limit.
-            let items = j.vertex_count.max(j.triangle_count) as u64;
+            let items = if j.mode == PackMode::Positions { j.vertex_count.max(j.triangle_count) } else { j.vertex_count } as u64;
             let per_dispatch = max_groups as u64 * GROUP as u64;
             let mut first = 0u64;
             while first < items {
@@ -107,7 +170,12 @@ impl GeometryPack {
                     first_vertex: j.first_vertex,
                     vertex_base: j.vertex_base,
                     first_item: first as u32,
-                    pad: 0,
+                    mode: match j.mode {
+                        PackMode::Positions => 0,
+                        PackMode::Uvs(vk::Format::R32G32_SFLOAT) => 1,
+                        PackMode::Uvs(vk::Format::R16G16_SFLOAT) => 2,
+                        PackMode::Uvs(_) => 3,
+                    },
                 };
                 unsafe {
                     d.cmd_push_constants(r.cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&push));

@@ -38,7 +38,7 @@ impl InjectPass {
                 raygen: shaders::INJECT_RGEN,
                 misses: &[shaders::HIT_RECORD_RMISS],
                 closest_hits: &[shaders::HIT_RECORD_RCHIT],
-                any_hit: None,
+                any_hit: Some(shaders::ALPHA_TEST_RAHIT),
                 inline: None,
                 floor: None,
             },

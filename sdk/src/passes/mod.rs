@@ -198,7 +198,7 @@ impl Passes {
         b.label = "denoiser";
         let denoise = denoise::DenoisePass::new(b, sampler)?;
         b.label = "index check";
-        let geometry_pack = geometry_pack::GeometryPack::new(b)?;
+        let geometry_pack = geometry_pack::GeometryPack::new(b, sampler)?;
         Ok(Passes {
             ao,
             shadow,

@@ -45,8 +45,19 @@ pub(crate) enum Writes {
     Atomics,
 }
 
+/// The push constants of every trace program (`HrtTracePush` in shaders/include/alpha_test.glsl):
+/// the instance table, which the alpha test of any-hit shaders and ray-query loops reads.
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+struct TracePush {
+    instance_table: u64,
+    unused: u64,
+}
+
 pub(crate) struct RtProgram {
     pub layout: vk::PipelineLayout,
+    /// The stages the push constants are visible to.
+    push_stages: vk::ShaderStageFlags,
     rt: RtPipeline,
     /// The compute twin, only on devices with ray queries.
     inline: Option<vk::Pipeline>,
@@ -73,7 +84,8 @@ impl RtProgram {
             vk::ShaderStageFlags::RAYGEN_KHR
         };
         let set_layout = b.set_layout(bindings, stages)?;
-        let layout = b.layout(Some(set_layout), 0, stages)?;
+        let push_stages = stages | vk::ShaderStageFlags::ANY_HIT_KHR;
+        let layout = b.layout(Some(set_layout), std::mem::size_of::<TracePush>() as u32, push_stages)?;
         let rt = b.ray_tracing(
             layout,
             &RtShaders {
@@ -87,7 +99,7 @@ impl RtProgram {
             (Some(spirv), true) => Some(b.compute(layout, spirv)?),
             _ => None,
         };
-        Ok(RtProgram { layout, rt, inline, raygen: shaders.raygen, floor_payload: shaders.floor, floor: None })
+        Ok(RtProgram { layout, push_stages, rt, inline, raygen: shaders.raygen, floor_payload: shaders.floor, floor: None })
     }
 
     /// Builds the bench's floor pipeline, if this program has one.
@@ -128,6 +140,9 @@ impl RtProgram {
         };
         r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), write);
         let d = &r.device.raw;
+        let push = TracePush { instance_table: r.instance_table, unused: 0 };
+        // SAFETY: the layout has this push-constant range for these stages.
+        unsafe { d.cmd_push_constants(r.cmd, self.layout, self.push_stages, 0, bytemuck::bytes_of(&push)) };
         match variant {
             Variant::Inline(p) => {
                 let bind = vk::PipelineBindPoint::COMPUTE;

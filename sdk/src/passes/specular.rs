@@ -49,7 +49,7 @@ impl SpecularPass {
                 raygen: shaders::SPECULAR_RGEN,
                 misses: &[shaders::HIT_RECORD_RMISS],
                 closest_hits: &[shaders::HIT_RECORD_RCHIT],
-                any_hit: None,
+                any_hit: Some(shaders::ALPHA_TEST_RAHIT),
                 inline: Some(shaders::SPECULAR_COMP),
                 floor: Some(Payload::HitRecord),
             },

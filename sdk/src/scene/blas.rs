@@ -50,7 +50,13 @@ pub(crate) fn triangles(
     vk::AccelerationStructureGeometryKHR::default()
         .geometry_type(vk::GeometryTypeKHR::TRIANGLES)
         .geometry(vk::AccelerationStructureGeometryDataKHR { triangles: tri })
-        .flags(vk::GeometryFlagsKHR::OPAQUE)
+        // Opaque unless alpha-tested: only alpha-tested geometry ever runs an any-hit shader
+        // (once per triangle and ray: the test has no side effects, but need not repeat).
+        .flags(if layout.alpha_tested() {
+            vk::GeometryFlagsKHR::NO_DUPLICATE_ANY_HIT_INVOCATION
+        } else {
+            vk::GeometryFlagsKHR::OPAQUE
+        })
 }
 
 /// What a build or a refit of a geometry's BLAS needs: its triangles, flags and sizes.

@@ -20,8 +20,13 @@ pub(crate) const VERTEX_STRIDE: u64 = 12;
 /// Bytes per triangle in the SDK's copy (three 32-bit indices).
 const TRIANGLE_BYTES: u64 = 12;
 
+/// Bytes per vertex of the texture coordinates an alpha-tested copy keeps (two f32).
+pub(crate) const UV_STRIDE: u64 = 8;
+
 /// The layout of the SDK's copy of a geometry: every part's vertices (12 bytes each), then
-/// every part's triangles (three u32 each), parts in order.
+/// every part's triangles (three u32 each), parts in order; alpha-tested geometry then has
+/// every vertex's texture coordinates (two f32) and the alpha texture (one byte per texel,
+/// rows of `alpha_pitch_words` u32).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct GeometryLayout {
     pub vertex_count: u32,
@@ -29,6 +34,11 @@ pub(crate) struct GeometryLayout {
     pub component_count: u32,
     pub allow_update: bool,
     pub build_hint: BuildHint,
+    /// The alpha texture's size (0 x 0: opaque geometry).
+    pub alpha_width: u32,
+    pub alpha_height: u32,
+    /// `AlphaTestInput::cutoff`'s bits (the layout stays `Eq`).
+    pub alpha_cutoff_bits: u32,
 }
 
 impl GeometryLayout {
@@ -42,9 +52,33 @@ impl GeometryLayout {
         self.vertex_count as u64 * VERTEX_STRIDE
     }
 
+    /// Whether rays test the geometry's alpha (its BLAS is built non-opaque).
+    pub fn alpha_tested(&self) -> bool {
+        self.alpha_width > 0
+    }
+
+    /// Byte offset of the texture coordinates (alpha-tested geometry).
+    pub fn uv_offset(&self) -> u64 {
+        (self.index_offset() + self.primitive_count as u64 * TRIANGLE_BYTES).next_multiple_of(16)
+    }
+
+    /// u32 words per row of the alpha texture's copy (four texels a word).
+    pub fn alpha_pitch_words(&self) -> u32 {
+        self.alpha_width.div_ceil(4)
+    }
+
+    /// Byte offset of the alpha texture's copy.
+    pub fn alpha_offset(&self) -> u64 {
+        (self.uv_offset() + self.vertex_count as u64 * UV_STRIDE).next_multiple_of(16)
+    }
+
     /// Bytes of the copy (checked when the layout was made).
     pub fn total_bytes(&self) -> u64 {
-        self.index_offset() + self.primitive_count as u64 * TRIANGLE_BYTES
+        if self.alpha_tested() {
+            self.alpha_offset() + self.alpha_pitch_words() as u64 * 4 * self.alpha_height as u64
+        } else {
+            self.index_offset() + self.primitive_count as u64 * TRIANGLE_BYTES
+        }
     }
 }
 
@@ -75,6 +109,14 @@ pub(crate) struct PartCopy {
     /// Offsets of the part's vertices and indices in the geometry's staging span.
     pub staging_vertices: u64,
     pub staging_indices: u64,
+    /// Alpha-tested geometry: the part's texture coordinates (null buffer: none), copied to
+    /// staging at `staging_uvs` like the positions.
+    pub uv_buffer: vk::Buffer,
+    pub uv_src_offset: u64,
+    pub uv_bytes: u64,
+    pub uv_stride: u32,
+    pub uv_format: vk::Format,
+    pub staging_uvs: u64,
 }
 
 impl PartCopy {
@@ -135,6 +177,26 @@ impl CopyPlan {
                 .checked_add(index_bytes)
                 .and_then(|b| b.checked_next_multiple_of(16))
                 .ok_or_else(|| overflow("staging"))?;
+            // Alpha-tested geometry: the texture coordinates of the same vertices.
+            let uv = c.uvs.filter(|_| input.alpha_test.is_some());
+            let (mut uv_src_offset, mut uv_bytes, staging_uvs) = (0u64, 0u64, staging);
+            if let Some(u) = uv {
+                let element = if u.format == vk::Format::R32G32_SFLOAT { 8 } else { 4 };
+                uv_bytes = u
+                    .stride
+                    .checked_mul(u64::from(count.max(1)) - 1)
+                    .and_then(|b| b.checked_add(element))
+                    .ok_or_else(|| overflow("a part's texture-coordinate bytes"))?;
+                uv_src_offset = u
+                    .stride
+                    .checked_mul(u64::from(first))
+                    .and_then(|b| b.checked_add(u.offset))
+                    .ok_or_else(|| overflow("a texture-coordinate offset"))?;
+                staging = staging
+                    .checked_add(uv_bytes)
+                    .and_then(|b| b.checked_next_multiple_of(16))
+                    .ok_or_else(|| overflow("staging"))?;
+            }
             parts.push(PartCopy {
                 vertex_buffer: v.buffer,
                 vertex_src_offset,
@@ -152,19 +214,34 @@ impl CopyPlan {
                 transform: c.transform.unwrap_or(Affine3A::IDENTITY),
                 staging_vertices,
                 staging_indices,
+                uv_buffer: uv.map_or(vk::Buffer::null(), |u| u.buffer),
+                uv_src_offset,
+                uv_bytes,
+                uv_stride: uv.map_or(Ok(0), |u| u32::try_from(u.stride)).map_err(|_| overflow("a stride"))?,
+                uv_format: uv.map_or(vk::Format::UNDEFINED, |u| u.format),
+                staging_uvs,
             });
             vertices = vertices.checked_add(count).ok_or_else(|| overflow("the vertex count"))?;
             triangles = triangles.checked_add(triangle_count).ok_or_else(|| overflow("the triangle count"))?;
         }
+        let alpha = input.alpha_test.as_ref();
         let layout = GeometryLayout {
             vertex_count: vertices,
             primitive_count: triangles,
             component_count: parts.len() as u32,
             allow_update: input.allow_update,
             build_hint: input.build_hint,
+            alpha_width: alpha.map_or(0, |a| a.texture.width),
+            alpha_height: alpha.map_or(0, |a| a.texture.height),
+            alpha_cutoff_bits: alpha.map_or(0, |a| a.cutoff.to_bits()),
         };
-        // The copy's bytes (u32 counts times 12: cannot overflow u64, but say so).
-        (vertices as u64 * VERTEX_STRIDE).checked_add(triangles as u64 * TRIANGLE_BYTES).ok_or_else(|| overflow("the copy"))?;
+        // The copy's bytes (u32 counts times 12, a texture of u32 x u32 bytes: cannot overflow
+        // u64, but say so).
+        (vertices as u64 * VERTEX_STRIDE)
+            .checked_add(triangles as u64 * TRIANGLE_BYTES)
+            .and_then(|b| b.checked_add(vertices as u64 * UV_STRIDE + 64))
+            .and_then(|b| b.checked_add(layout.alpha_pitch_words() as u64 * 4 * layout.alpha_height as u64))
+            .ok_or_else(|| overflow("the copy"))?;
         Ok(CopyPlan { layout, parts, staging_bytes: staging })
     }
 
@@ -182,6 +259,10 @@ impl CopyPlan {
                     size: p.index_bytes,
                 }];
                 unsafe { device.cmd_copy_buffer(cmd, p.index_buffer, staging, &i) };
+            }
+            if p.uv_buffer != vk::Buffer::null() {
+                let u = [vk::BufferCopy { src_offset: p.uv_src_offset, dst_offset: base + p.staging_uvs, size: p.uv_bytes }];
+                unsafe { device.cmd_copy_buffer(cmd, p.uv_buffer, staging, &u) };
             }
         }
     }

@@ -25,6 +25,14 @@ pub(crate) struct InstanceGpu {
     pub index_size: u32,
     pub max_resolution: u32,
     pub pad: u32,
+    /// Alpha-tested geometry: its texture coordinates and alpha texels in the copy (0: opaque).
+    pub uv_addr: u64,
+    pub alpha_addr: u64,
+    /// The alpha texture's width, height and row pitch in u32 words; the cutoff.
+    pub alpha_width: u32,
+    pub alpha_height: u32,
+    pub alpha_pitch: u32,
+    pub alpha_cutoff: f32,
 }
 
 pub(crate) const HAS_CACHE: u32 = 1;
@@ -53,6 +61,12 @@ pub(crate) fn instance_table(scene: &Scene) -> Vec<InstanceGpu> {
             index_size: 4,
             max_resolution: surfel.map_or(1, |s| s.max_resolution),
             pad: 0,
+            uv_addr: g.layout.filter(|l| l.alpha_tested()).map_or(0, |l| copy + l.uv_offset()),
+            alpha_addr: g.layout.filter(|l| l.alpha_tested()).map_or(0, |l| copy + l.alpha_offset()),
+            alpha_width: g.layout.map_or(0, |l| l.alpha_width),
+            alpha_height: g.layout.map_or(0, |l| l.alpha_height),
+            alpha_pitch: g.layout.map_or(0, |l| l.alpha_pitch_words()),
+            alpha_cutoff: g.layout.map_or(0.0, |l| f32::from_bits(l.alpha_cutoff_bits)),
             layout_addr: surfel.map_or(0, |s| s.buffer.address),
             cache_addr: p.cache.map_or(0, |(r, _)| r.address),
             initial_color: [c[0], c[1], c[2], 0.0],
@@ -84,6 +98,8 @@ mod tests {
         assert_eq!(offset_of!(InstanceGpu, object_to_world), 48);
         assert_eq!(offset_of!(InstanceGpu, vertex_addr), 96);
         assert_eq!(offset_of!(InstanceGpu, vertex_stride), 112);
-        assert_eq!(size_of::<InstanceGpu>(), 128);
+        assert_eq!(offset_of!(InstanceGpu, uv_addr), 128);
+        assert_eq!(offset_of!(InstanceGpu, alpha_width), 144);
+        assert_eq!(size_of::<InstanceGpu>(), 160);
     }
 }

@@ -1,6 +1,7 @@
 //! Scene tasks: geometries (a mesh → one BLAS), instances (a geometry + a transform → a TLAS
 //! entry and a direct-lighting cache) and the throttled BVH build.
 use super::handles::{GeometryHandle, InstanceHandle};
+use super::inputs::ImageInput;
 use ash::vk;
 use glam::Affine3A;
 
@@ -121,6 +122,39 @@ pub struct GeometryComponent {
     /// Indexed parts: the vertices the indices use, the only ones copied. Default `None`: all
     /// `vertices.count`.
     pub vertex_range: Option<VertexRange>,
+    /// Alpha-tested geometry (`GeometryInput::alpha_test`): the texture coordinates, one per
+    /// vertex of `vertices` (same indexing, its own stride and offset; `count` >= the
+    /// vertices'): R32G32_SFLOAT, R16G16_SFLOAT or R16G16_UNORM. Copied like the positions.
+    /// Default `None`; required on every part of an alpha-tested geometry.
+    pub uvs: Option<VertexBufferInput>,
+}
+
+/// An alpha-tested geometry (foliage, fences, grates): rays pass through it where the alpha
+/// texture, looked up at the interpolated texture coordinates, is below `cutoff` — in every
+/// trace (AO, shadows, GI, reflections, debug views), through an any-hit shader (ray-tracing
+/// pipeline) or a candidate test (inline ray queries). Geometries without it stay opaque and
+/// never run the test.
+///
+/// The SDK copies the texture's alpha (one byte per texel, the view's mip level) at
+/// registration, with the texture coordinates, into the geometry's compact copy: the engine may
+/// free the texture once the registering ticket is back, and the trace binds no texture per
+/// geometry. Lookups are nearest-texel and wrap (REPEAT), as a cut-out's sampler usually does.
+/// One texture per geometry: split meshes whose parts use different alpha textures.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AlphaTestInput {
+    /// The alpha texture (SAMPLED usage, a read-only layout while the registering ticket
+    /// runs): any unorm, sRGB or float colour format; `channel` holds alpha.
+    pub texture: ImageInput,
+    /// The texture channel holding alpha: 0 (R) ..= 3 (A). Default 3.
+    pub channel: u32,
+    /// Texels with alpha < cutoff are holes, in [0, 1]. Default 0.5.
+    pub cutoff: f32,
+}
+
+impl Default for AlphaTestInput {
+    fn default() -> Self {
+        AlphaTestInput { texture: ImageInput::default(), channel: 3, cutoff: 0.5 }
+    }
 }
 
 /// How a geometry's BLAS is built (Vulkan's build-preference flags).
@@ -155,6 +189,10 @@ pub struct GeometryInput {
     pub transform: Option<Affine3A>,
     /// The vertices the first part's indices use. Default `None`: all.
     pub vertex_range: Option<VertexRange>,
+    /// The first part's texture coordinates, for `alpha_test`. Default `None`.
+    pub uvs: Option<VertexBufferInput>,
+    /// Alpha testing (see `AlphaTestInput`): every part needs `uvs`. Default `None`: opaque.
+    pub alpha_test: Option<AlphaTestInput>,
     /// Further parts of the same geometry (one BLAS for all). Default empty.
     pub extra_components: Vec<GeometryComponent>,
     /// Deforming/skinned meshes: later updates refit the BLAS in place (same parts, vertex and
@@ -174,6 +212,7 @@ impl GeometryInput {
             indices: self.indices,
             transform: self.transform,
             vertex_range: self.vertex_range,
+            uvs: self.uvs,
         }
     }
 

@@ -18,6 +18,10 @@ pub(crate) fn geometry_input(device: &Device, input: &GeometryInput) -> Result<(
         };
         let part = if k == 0 { String::new() } else { format!("part {}: ", k - 1) };
         geometry_component(&c, vertices, indices, &part)?;
+        texture_coordinates(&c, input.alpha_test.is_some(), &part)?;
+    }
+    if let Some(a) = &input.alpha_test {
+        alpha_test(device, a)?;
     }
     let t = &input.surfels;
     if !(t.tile_unit_length.is_finite() && t.tile_unit_length > 0.0) {
@@ -58,6 +62,99 @@ pub(crate) fn geometry_input(device: &Device, input: &GeometryInput) -> Result<(
         if p.index_size > 0 {
             check_region(&device.raw, indices, p.index_buffer, p.index_src_offset, p.index_bytes)?;
         }
+        if p.uv_buffer != vk::Buffer::null() {
+            check_region(&device.raw, "GeometryComponent.uvs", p.uv_buffer, p.uv_src_offset, p.uv_bytes)?;
+        }
+    }
+    Ok(())
+}
+
+/// Alpha textures: formats read as colour by texel fetches, with the channel count.
+fn alpha_channels(f: vk::Format) -> Option<u32> {
+    use vk::Format as F;
+    Some(match f {
+        F::R8_UNORM | F::R16_UNORM | F::R16_SFLOAT | F::R32_SFLOAT => 1,
+        F::R8G8_UNORM | F::R16G16_SFLOAT | F::R32G32_SFLOAT => 2,
+        F::R8G8B8A8_UNORM
+        | F::R8G8B8A8_SRGB
+        | F::B8G8R8A8_UNORM
+        | F::B8G8R8A8_SRGB
+        | F::A2B10G10R10_UNORM_PACK32
+        | F::R16G16B16A16_SFLOAT
+        | F::R32G32B32A32_SFLOAT
+        | F::BC1_RGBA_UNORM_BLOCK
+        | F::BC1_RGBA_SRGB_BLOCK
+        | F::BC2_UNORM_BLOCK
+        | F::BC2_SRGB_BLOCK
+        | F::BC3_UNORM_BLOCK
+        | F::BC3_SRGB_BLOCK
+        | F::BC7_UNORM_BLOCK
+        | F::BC7_SRGB_BLOCK => 4,
+        F::BC4_UNORM_BLOCK => 1,
+        _ => return None,
+    })
+}
+
+fn alpha_test(device: &Device, a: &AlphaTestInput) -> Result<()> {
+    const WHAT: &str = "GeometryInput.alpha_test.texture";
+    let t = &a.texture;
+    let limit = device.limits.max_image_dimension_2d;
+    if t.width == 0 || t.height == 0 || t.width > limit || t.height > limit {
+        return Err(Error::invalid(WHAT, format!("{}x{} is not within 1..={limit} (maxImageDimension2D)", t.width, t.height)));
+    }
+    super::image(WHAT, t, &Viewport::full(t.width, t.height), super::Use::Sampled)?;
+    let Some(channels) = alpha_channels(t.format) else {
+        return Err(Error::UnsupportedFormat {
+            what: WHAT,
+            format: t.format,
+            expected: "an unorm, sRGB, float or BC1/2/3/4/7 colour format",
+        });
+    };
+    if a.channel >= channels {
+        return Err(Error::invalid(
+            "GeometryInput.alpha_test.channel",
+            format!("channel {} of a {channels}-channel format", a.channel),
+        ));
+    }
+    if !(0.0..=1.0).contains(&a.cutoff) {
+        return Err(Error::invalid("GeometryInput.alpha_test.cutoff", "must be in [0, 1]"));
+    }
+    Ok(())
+}
+
+/// A part's texture coordinates: required (and only read) with alpha testing.
+fn texture_coordinates(c: &GeometryComponent, alpha_tested: bool, part: &str) -> Result<()> {
+    const WHAT: &str = "GeometryComponent.uvs";
+    let Some(u) = &c.uvs else {
+        return if alpha_tested {
+            Err(Error::invalid(WHAT, format!("{part}an alpha-tested geometry needs texture coordinates on every part")))
+        } else {
+            Ok(())
+        };
+    };
+    if !alpha_tested {
+        return Err(Error::invalid(WHAT, format!("{part}texture coordinates are only read for alpha testing: set alpha_test")));
+    }
+    if u.buffer == vk::Buffer::null() {
+        return Err(Error::invalid(WHAT, format!("{part}buffer is null")));
+    }
+    let element = match u.format {
+        vk::Format::R32G32_SFLOAT => 8,
+        vk::Format::R16G16_SFLOAT | vk::Format::R16G16_UNORM => 4,
+        f => {
+            return Err(Error::UnsupportedFormat {
+                what: WHAT,
+                format: f,
+                expected: "R32G32_SFLOAT, R16G16_SFLOAT or R16G16_UNORM",
+            })
+        }
+    };
+    if u.stride < element || u.stride % 4 != 0 || u.stride > u32::MAX as u64 {
+        return Err(Error::invalid(WHAT, format!("{part}stride {} must be a multiple of 4, at least {element}", u.stride)));
+    }
+    let needed = c.vertex_range.map_or(c.vertices.count, |r| r.last.saturating_add(1));
+    if u.count < needed {
+        return Err(Error::invalid(WHAT, format!("{part}{} texture coordinates for {needed} vertices", u.count)));
     }
     Ok(())
 }
