@@ -7,6 +7,11 @@
 // history follows the reflected point when that lands on the same plane.
 #include "include/denoise.glsl"
 
+// Anti-firefly threshold in standard deviations of the pixel's history (see below).
+const float FIREFLY_SIGMA = 4.0;
+// Without history: a sample this many times its brightest neighbour is a firefly.
+const float FIREFLY_NEIGHBOUR_FACTOR = 8.0;
+
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
     if (!hrt_in_viewport(pixel)) return;
@@ -32,21 +37,6 @@ void main() {
         uint kind = u_d.kinds[s];
         vec4 cur = hrt_as_signal(kind, hrt_noisy_sample(s, pixel, p, n, dist));
         bool specular = kind == HRT_SIGNAL_SPECULAR;
-        // Anti-firefly: a sample brighter than all 8 neighbours is brought down to the
-        // brightest of them. Mirrors keep their exact (noise-free) reflection.
-        if (u_d.flags.w != 0u && kind != HRT_SIGNAL_SCALAR && !(specular && roughness < 0.05)) {
-            float lmax = -1.0;
-            for (int dy = -1; dy <= 1; ++dy) {
-                for (int dx = -1; dx <= 1; ++dx) {
-                    ivec2 q = pixel + ivec2(dx, dy);
-                    if ((dx == 0 && dy == 0) || !hrt_in_viewport(q) || !hrt_traced_now(q)) continue;
-                    lmax = max(lmax, hrt_luminance(hrt_load_input(s, q).rgb));
-                }
-            }
-            float l = hrt_luminance(cur.rgb);
-            if (lmax >= 0.0 && l > lmax) cur.rgb *= lmax / l;
-        }
-
         ivec2 t[4] = taps;
         vec4 w = weights;
         if (specular && !reset && roughness < 0.5) {
@@ -74,6 +64,36 @@ void main() {
             hist /= wsum;
             fast /= wsum;
             len = fast.a;
+        }
+        // Anti-firefly (not on mirrors: their reflection is exact). With a history of 4
+        // frames or more, a sample is a firefly when its luminance is more than
+        // FIREFLY_SIGMA deviations above this pixel's history mean (from the slow history's
+        // moments): a plain 1-ray distribution almost never gets there, so the mean stays
+        // unbiased, while a 1-in-1000 path to a bright emitter is cut down. With
+        // less history the 8 neighbours stand in, loosely (twice their brightest), as fresh
+        // pixels have no statistics yet. (Clamping every sample to its brightest neighbour, as
+        // the first generation did, darkened GI and glossy reflections by 2-6%.)
+        if (u_d.flags.w != 0u && kind != HRT_SIGNAL_SCALAR && !(specular && roughness < 0.05)) {
+            float limit;
+            if (len >= 4.0) {
+                float m1 = hrt_luminance(hist.rgb);
+                // A few frames' variance is often near 0 for a signal of a few discrete values
+                // (sky or wall): the deviation never counts below the mean itself, so a
+                // sample must also be (1 + FIREFLY_SIGMA) times the mean to be cut.
+                limit = m1 + FIREFLY_SIGMA * max(sqrt(max(hist.a - m1 * m1, 0.0)), m1) + 1e-4;
+            } else {
+                float lmax = -1.0;
+                for (int dy = -1; dy <= 1; ++dy) {
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        ivec2 q = pixel + ivec2(dx, dy);
+                        if ((dx == 0 && dy == 0) || !hrt_in_viewport(q) || !hrt_traced_now(q)) continue;
+                        lmax = max(lmax, hrt_luminance(hrt_load_input(s, q).rgb));
+                    }
+                }
+                limit = lmax >= 0.0 ? FIREFLY_NEIGHBOUR_FACTOR * lmax : 1e30;
+            }
+            float l = hrt_luminance(cur.rgb);
+            if (l > limit) cur.rgb *= limit / l;
         }
         // Smoother specular accumulates fewer frames (its signal changes with the view); a
         // mirror keeps only this frame.
