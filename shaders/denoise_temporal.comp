@@ -9,6 +9,13 @@
 
 // Anti-firefly threshold in standard deviations of the pixel's history (see below).
 const float FIREFLY_SIGMA = 4.0;
+// Anti-lag threshold, in standard deviations of the noise of a 3x3 mean against the fast
+// history (see below).
+const float ANTILAG_SIGMA = 3.0;
+const float ANTILAG_SOFT = 2.0;
+// The anti-lag test's footprint: (2r+1)^2 pixels (25 samples: a change of a quarter of the
+// signal's range stands out of 1-ray noise).
+const int ANTILAG_RADIUS = 2;
 // Without history: a sample this many times its brightest neighbour is a firefly.
 const float FIREFLY_NEIGHBOUR_FACTOR = 8.0;
 
@@ -65,12 +72,59 @@ void main() {
             fast /= wsum;
             len = fast.a;
         }
+        // Anti-lag (history confidence): this frame's samples on the same surface in the 3x3
+        // neighbourhood and the fast history estimate the same thing while the signal holds
+        // still. When their means differ by more than ANTILAG_SIGMA of their combined noise,
+        // the signal changed under a history that the geometry tests kept (a moved object's
+        // contact AO): the pixel starts over from this frame, and the spatial passes, seeing a
+        // short history, filter it wide. Scalar signals (AO) only, for now: radiance (GI,
+        // reflections) is skewed at 1 ray per pixel — rare bright rays to the sky — and
+        // restarts after chance bright neighbourhoods biased it by 1.4% even at 6 sigma;
+        // there the fast-history clamp alone answers changes.
+        if (len >= 2.0 && kind == HRT_SIGNAL_SCALAR) {
+            // The fast history of the same footprint: around the tap that weighs most (motion
+            // is locally rigid over 3x3 pixels).
+            int best = 0;
+            for (int i = 1; i < 4; ++i) if (w[i] > w[best]) best = i;
+            float sum = 0.0, sum2 = 0.0, fsum = 0.0, k = 0.0;
+            for (int dy = -ANTILAG_RADIUS; dy <= ANTILAG_RADIUS; ++dy) {
+                for (int dx = -ANTILAG_RADIUS; dx <= ANTILAG_RADIUS; ++dx) {
+                    ivec2 q = pixel + ivec2(dx, dy), fq = t[best] + ivec2(dx, dy);
+                    vec3 q_p, q_n;
+                    if (!hrt_in_viewport(q) || !hrt_in_viewport(fq) || !hrt_traced_now(q) || !hrt_engine_surface(q, q_p, q_n)) continue;
+                    if (hrt_geometry_weight(p, n, dist, q_p, q_n) < 0.5) continue;
+                    float lq = hrt_luminance(hrt_as_signal(kind, hrt_load_input(s, q)).rgb);
+                    sum += lq;
+                    sum2 += lq * lq;
+                    fsum += hrt_luminance(hrt_load_fast_prev(s, fq).rgb);
+                    k += 1.0;
+                }
+            }
+            if (k >= 3.0) {
+                float m = sum / k, mf = fsum / k;
+                // One sample's variance: this frame's 3x3 spread, or the pixel's own over its
+                // history (slow moments) when larger — nine 1-ray samples of a two-valued
+                // signal (miss or hit) are often all alike, and a spread of 0 would call any
+                // difference a change.
+                float lh = hrt_luminance(hist.rgb);
+                float var = max(max(sum2 / k - m * m, 0.0), max(hist.a - lh * lh, 0.0));
+                // Both means cover the same k pixels: this frame's (k samples) and the fast
+                // history's (k x its frames).
+                float sigma = sqrt(var / k * (1.0 + 1.0 / min(len, u_d.history.y))) + 0.02 * max(m, mf) + 1e-3;
+                // A deviation past ANTILAG_SIGMA restarts the pixel; one past ANTILAG_SOFT keeps
+                // at most the fast window (a chance deviation costs little, a real change is
+                // gone within a frame or two).
+                float z = abs(m - mf) / sigma;
+                if (z > ANTILAG_SIGMA) len = 0.0;
+                else if (z > ANTILAG_SOFT) len = min(len, u_d.history.y);
+            }
+        }
         // Anti-firefly (not on mirrors: their reflection is exact). With a history of 4
         // frames or more, a sample is a firefly when its luminance is more than
         // FIREFLY_SIGMA deviations above this pixel's history mean (from the slow history's
         // moments): a plain 1-ray distribution almost never gets there, so the mean stays
         // unbiased, while a 1-in-1000 path to a bright emitter is cut down. With
-        // less history the 8 neighbours stand in, loosely (twice their brightest), as fresh
+        // less history the 8 neighbours stand in, loosely (8x their brightest), as fresh
         // pixels have no statistics yet. (Clamping every sample to its brightest neighbour, as
         // the first generation did, darkened GI and glossy reflections by 2-6%.)
         if (u_d.flags.w != 0u && kind != HRT_SIGNAL_SCALAR && !(specular && roughness < 0.05)) {
