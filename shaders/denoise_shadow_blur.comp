@@ -8,6 +8,9 @@
 // golden-angle disk, Gaussian in the radius, with plane and normal stops.
 #include "include/denoise.glsl"
 
+// History length (frames) up to which the full penumbra-wide blur is kept.
+const float SHADOW_BLUR_FRAMES = 1.0;
+
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
     if (!hrt_in_viewport(pixel)) return;
@@ -38,6 +41,17 @@ void main() {
         }
     }
     float radius = pen_w > 0.0 ? min(0.5 * (pen / pen_w) / pixel_world, max_radius) : 0.0;
+    // The temporal pass after this one averages up to max-history frames: as the pixel's
+    // history grows, each frame needs less blur (the blur's own error, a flattened penumbra,
+    // then stops dominating). Radius x sqrt(SHADOW_BLUR_FRAMES / length), down to a quarter.
+    if (u_d.flags.z == 0u && radius >= 0.5) {
+        ivec2 taps[4];
+        vec4 w;
+        hrt_history_taps(hrt_previous_position(pixel, p), p, n, dist, taps, w);
+        float wsum = dot(w, vec4(1.0)), len = 0.0;
+        for (int i = 0; i < 4; ++i) if (w[i] > 0.0) len += w[i] * hrt_load_hist_prev(0u, taps[i]).y;
+        if (wsum > 1e-3) radius *= clamp(sqrt(SHADOW_BLUR_FRAMES / max(len / wsum, 1.0)), 0.25, 1.0);
+    }
     if (vis_min >= 1.0 || radius < 0.5) {
         hrt_store_temp(0u, pixel, vec4(c.x, radius, 0.0, 0.0));
         return;

@@ -263,3 +263,109 @@ fn a_moving_object_leaves_no_old_occlusion_behind() {
         assert!(r[3] <= 0.10, "{signal:?}: {:.0}% of the old occlusion kept 4 frames after the move", r[3] * 100.0);
     }
 }
+
+/// Mean absolute error of the raw last frame and of the denoised image against the converged
+/// trace, per region of the converged shadow: (umbra < 0.02, lit > 0.98, penumbra between).
+fn shadow_regions(angular_extent: f32) -> [(f32, f32, usize); 3] {
+    use glam::Vec3;
+    const S: u32 = 64;
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let (scene, camera) = reference::sphere_on_plane();
+    let g = reference::GBuffer::render(&reference::Tracer::new(&scene), &camera, S, S);
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let mut frame = ctx.create_task_container();
+    let s = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    run_frame(&host, &ctx, &mut frame).unwrap();
+    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED;
+    let noisy = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, S, S, usage, GENERAL).unwrap();
+    let den = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, S, S, usage, GENERAL).unwrap();
+    let dn = ctx
+        .create_denoising_context(&DenoisingContextInput {
+            max_width: S,
+            max_height: S,
+            signal: SignalType::Shadow,
+            ..Default::default()
+        })
+        .unwrap();
+    let sun = LightInfo { direction: Vec3::new(-0.5, -1.0, -0.3), angular_extent, ..Default::default() };
+    let common = images.trace_common(&camera);
+    let dc = images.denoising_common(&camera);
+    let read = |img: &hybrid_rt_testkit::host::HostImage, c: usize| -> Vec<f32> {
+        bytemuck::cast_slice::<u8, [f32; 4]>(&host.read_image(img, GENERAL).unwrap()).iter().map(|t| t[c]).collect()
+    };
+    // Converged: 4 frames of 64 rays per pixel.
+    let mut reference = vec![0.0f32; (S * S) as usize];
+    for _ in 0..4 {
+        frame
+            .schedule_shadow(&TraceShadowTask {
+                common,
+                light: sun,
+                output: noisy.input(GENERAL),
+                rays_per_pixel: 64,
+                ..Default::default()
+            })
+            .unwrap();
+        run_frame(&host, &ctx, &mut frame).unwrap();
+        for (r, v) in reference.iter_mut().zip(read(&noisy, 1)) {
+            *r += v / 4.0;
+        }
+    }
+    for _ in 0..32 {
+        frame
+            .schedule_shadow(&TraceShadowTask { common, light: sun, output: noisy.input(GENERAL), ..Default::default() })
+            .unwrap();
+        frame
+            .schedule_denoise_shadow(&DenoiseShadowTask {
+                context: dn,
+                common: dc,
+                light: sun,
+                input: noisy.input(GENERAL),
+                output: den.input(GENERAL),
+            })
+            .unwrap();
+        run_frame(&host, &ctx, &mut frame).unwrap();
+    }
+    let (raw, out) = (read(&noisy, 1), read(&den, 0));
+    let mut regions = [(0.0f32, 0.0f32, 0usize); 3];
+    for i in (0..reference.len()).filter(|&i| g.hit[i]) {
+        let k = if reference[i] < 0.02 {
+            0
+        } else if reference[i] > 0.98 {
+            1
+        } else {
+            2
+        };
+        regions[k].0 += (raw[i] - reference[i]).abs();
+        regions[k].1 += (out[i] - reference[i]).abs();
+        regions[k].2 += 1;
+    }
+    for r in regions.iter_mut() {
+        r.0 /= r.2.max(1) as f32;
+        r.1 /= r.2.max(1) as f32;
+    }
+    ctx.destroy_denoising_context(dn).unwrap();
+    for i in [noisy, den] {
+        host.destroy_image(i);
+    }
+    images.destroy(&host);
+    s.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+    regions
+}
+
+/// The sample's sun (0.03 rad) and a soft one (0.2 rad): after 32 frames the denoised shadow
+/// is no worse than one raw frame in the umbra, in the light and in the penumbra.
+#[test]
+fn denoised_shadows_are_never_worse_than_a_raw_frame() {
+    for extent in [0.03f32, 0.2] {
+        let r = shadow_regions(extent);
+        for (name, (raw, den, n)) in ["umbra", "lit", "penumbra"].iter().zip(r) {
+            eprintln!("sun {extent} rad, {name} ({n} px): mean |error| raw {raw:.4}, denoised {den:.4}");
+            if n > 0 {
+                assert!(den <= raw + 0.005, "sun {extent}: the denoised {name} is worse than a raw frame ({den} vs {raw})");
+            }
+        }
+    }
+}
