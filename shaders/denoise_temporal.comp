@@ -19,7 +19,42 @@ const int ANTILAG_RADIUS = 2;
 // Without history: a sample this many times its brightest neighbour is a firefly.
 const float FIREFLY_NEIGHBOUR_FACTOR = 8.0;
 
+// The anti-lag test's tile: this group's 8x8 pixels and an ANTILAG_RADIUS apron, each with
+// this frame's luminance, its fast history's (at its own reprojected position), and its
+// surface — loaded once per group (144 loads instead of 64 x 25 neighbour reads).
+const int TILE = 8 + 2 * ANTILAG_RADIUS;
+shared float s_cur[TILE * TILE];
+shared float s_fast[TILE * TILE];
+shared vec4 s_pos[TILE * TILE];   // world position, w = 1 on a surface, 0 elsewhere
+shared vec3 s_nrm[TILE * TILE];
+
+void load_antilag_tile() {
+    ivec2 origin = ivec2(gl_WorkGroupID.xy) * 8 - ANTILAG_RADIUS + ivec2(u_d.c.viewport.xy);
+    for (uint e = gl_LocalInvocationIndex; e < uint(TILE * TILE); e += 64u) {
+        ivec2 q = origin + ivec2(int(e) % TILE, int(e) / TILE);
+        vec3 q_p, q_n;
+        bool ok = hrt_in_viewport(q) && hrt_traced_now(q) && hrt_engine_surface(q, q_p, q_n);
+        float fast = 0.0;
+        if (ok) {
+            ivec2 prev = ivec2(floor(hrt_previous_position(q, q_p)));
+            ok = hrt_in_viewport(prev);
+            if (ok) fast = hrt_load_fast_prev(0u, prev).r;
+        }
+        s_cur[e] = ok ? hrt_load_input(0u, q).r : 0.0;
+        s_fast[e] = fast;
+        s_pos[e] = vec4(q_p, ok ? 1.0 : 0.0);
+        s_nrm[e] = q_n;
+    }
+}
+
 void main() {
+    // Scalar signals (AO) only; uniform over the dispatch, so every invocation reaches the
+    // barrier before any returns.
+    bool antilag = u_d.kinds.x == HRT_SIGNAL_SCALAR && u_d.flags.z == 0u;
+    if (antilag) {
+        load_antilag_tile();
+        barrier();
+    }
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
     if (!hrt_in_viewport(pixel)) return;
     uint count = u_d.flags.y;
@@ -81,22 +116,19 @@ void main() {
         // reflections) is skewed at 1 ray per pixel — rare bright rays to the sky — and
         // restarts after chance bright neighbourhoods biased it by 1.4% even at 6 sigma;
         // there the fast-history clamp alone answers changes.
-        if (len >= 2.0 && kind == HRT_SIGNAL_SCALAR) {
-            // The fast history of the same footprint: around the tap that weighs most (motion
-            // is locally rigid over 3x3 pixels).
-            int best = 0;
-            for (int i = 1; i < 4; ++i) if (w[i] > w[best]) best = i;
+        if (len >= 2.0 && antilag) {
+            // The same-surface pixels of the 5x5 footprint, from the group's tile: this
+            // frame's samples and their fast histories (each at its own reprojected position).
+            ivec2 local = ivec2(gl_LocalInvocationID.xy) + ANTILAG_RADIUS;
             float sum = 0.0, sum2 = 0.0, fsum = 0.0, k = 0.0;
             for (int dy = -ANTILAG_RADIUS; dy <= ANTILAG_RADIUS; ++dy) {
                 for (int dx = -ANTILAG_RADIUS; dx <= ANTILAG_RADIUS; ++dx) {
-                    ivec2 q = pixel + ivec2(dx, dy), fq = t[best] + ivec2(dx, dy);
-                    vec3 q_p, q_n;
-                    if (!hrt_in_viewport(q) || !hrt_in_viewport(fq) || !hrt_traced_now(q) || !hrt_engine_surface(q, q_p, q_n)) continue;
-                    if (hrt_geometry_weight(p, n, dist, q_p, q_n) < 0.5) continue;
-                    float lq = hrt_luminance(hrt_as_signal(kind, hrt_load_input(s, q)).rgb);
+                    int e = (local.y + dy) * TILE + local.x + dx;
+                    if (s_pos[e].w == 0.0 || hrt_geometry_weight(p, n, dist, s_pos[e].xyz, s_nrm[e]) < 0.5) continue;
+                    float lq = s_cur[e];
                     sum += lq;
                     sum2 += lq * lq;
-                    fsum += hrt_luminance(hrt_load_fast_prev(s, fq).rgb);
+                    fsum += s_fast[e];
                     k += 1.0;
                 }
             }
