@@ -777,3 +777,26 @@ fn bad_denoise_inputs_are_typed_errors_and_leave_the_context_usable() {
     drop(ctx);
     assert_no_validation_errors();
 }
+
+/// The passes' intermediates are one set shared by every context: a second context of the same
+/// size and signal adds only its own history (six images), and the last one destroyed frees
+/// the shared set too.
+#[test]
+fn contexts_share_their_intermediates() {
+    let (_host, ctx) = host_and_context(InitSettings::default());
+    let count = || ctx.resource_allocations().denoiser.count;
+    let a = context(&ctx, SignalType::DiffuseOcclusion, 64, 64);
+    let first = count();
+    assert_eq!(first, 8, "G-buffer, history and fast pairs (6) + the shared intermediates (2)");
+    let b = context(&ctx, SignalType::DiffuseOcclusion, 64, 64);
+    assert_eq!(count(), first + 6, "the second context keeps only its own history");
+    let bytes_two = ctx.resource_allocations().denoiser.bytes;
+    for h in [a, b] {
+        ctx.destroy_denoising_context(h).unwrap();
+    }
+    ctx.release_device_resources_immediately().unwrap();
+    assert_eq!(count(), 0, "the last context frees the shared set");
+    eprintln!("two 64x64 AO contexts: {bytes_two} bytes of denoiser images (14 images; 16 before sharing)");
+    drop(ctx);
+    assert_no_validation_errors();
+}

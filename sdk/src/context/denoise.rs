@@ -22,13 +22,29 @@ impl ExecuteContext {
             }
         }
         let state = DenoiserState::new(&self.shared.memory, input)?;
-        let h = self.shared.state.lock().denoisers.insert(state);
+        let mut st = self.shared.state.lock();
+        // The shared intermediates grow to this context's size; on failure nothing changes.
+        let replaced = match st.denoise_temps.ensure(&self.shared.memory, input) {
+            Ok(r) => r,
+            Err(e) => {
+                for image in state.into_images() {
+                    self.shared.memory.destroy_image(image);
+                }
+                return Err(e);
+            }
+        };
+        let serial = st.last_issued();
+        for image in replaced {
+            st.deferred.retire(serial, Garbage::Image(image));
+        }
+        let h = st.denoisers.insert(state);
         self.shared.live.write().denoisers.insert(h.0);
         Ok(h)
     }
 
     /// Destroys a denoising context. Tasks still scheduled with it fail at build; its images
-    /// are freed once the tickets issued so far have come back.
+    /// (and, with the last context, the shared intermediates) are freed once the tickets
+    /// issued so far have come back.
     pub fn destroy_denoising_context(&self, handle: DenoisingContextHandle) -> Result<()> {
         let mut st = self.shared.state.lock();
         let state = st.denoisers.remove(handle)?;
@@ -36,6 +52,12 @@ impl ExecuteContext {
         let serial = st.last_issued();
         for image in state.into_images() {
             st.deferred.retire(serial, Garbage::Image(image));
+        }
+        // The last context takes the shared intermediates with it.
+        if st.denoisers.iter().next().is_none() {
+            for image in std::mem::take(&mut st.denoise_temps).into_images() {
+                st.deferred.retire(serial, Garbage::Image(image));
+            }
         }
         Ok(())
     }

@@ -29,7 +29,7 @@ use crate::error::{Error, Result};
 use crate::gpu::deferred::{DeferredFrees, Garbage};
 use crate::gpu::device::{Device, DeviceDesc};
 use crate::gpu::memory::Memory;
-use crate::passes::denoise::DenoiserState;
+use crate::passes::denoise::{DenoiserState, TempPool};
 use crate::passes::Passes;
 use crate::scene::geometry::GeometryRecord;
 use crate::scene::instance::Placement;
@@ -67,6 +67,8 @@ struct State {
     scene: Scene,
     cache_pool: CachePool,
     denoisers: Registry<DenoisingContextHandle, DenoiserState>,
+    /// The intermediates every denoising context shares (as large as the largest).
+    denoise_temps: TempPool,
     working_sets: Vec<WorkingSet>,
     deferred: DeferredFrees,
     next_serial: u64,
@@ -144,6 +146,7 @@ impl ExecuteContext {
                 scene: Scene::new(id),
                 cache_pool: CachePool::default(),
                 denoisers: Registry::new(id),
+                denoise_temps: TempPool::default(),
                 working_sets: Vec::new(),
                 deferred: DeferredFrees::default(),
                 next_serial: 1,
@@ -357,6 +360,9 @@ impl Drop for Shared {
                     st.deferred.retire(0, Garbage::Image(image));
                 }
             }
+        }
+        for image in std::mem::take(&mut st.denoise_temps).into_images() {
+            st.deferred.retire(0, Garbage::Image(image));
         }
         st.deferred.collect(device, memory, None);
         for ws in st.working_sets.drain(..) {

@@ -136,8 +136,13 @@ impl Recorder<'_> {
         let ws = &mut st.working_sets[self.ws];
         let instance_table = ws.ring.push(bytemuck::cast_slice(&table::instance_table(&st.scene)), 16).address;
         let tlas = ws.tlas_handle();
-        let mut world =
-            World { scene: &st.scene, cache_pool: &st.cache_pool, denoisers: &mut st.denoisers, limits: &device.limits };
+        let mut world = World {
+            scene: &st.scene,
+            cache_pool: &st.cache_pool,
+            denoisers: &mut st.denoisers,
+            denoise_temps: &mut st.denoise_temps,
+            limits: &device.limits,
+        };
         for (index, task) in renders {
             let describe = task.describe();
             // Inline ray queries where asked for and available; otherwise the pipeline (once a

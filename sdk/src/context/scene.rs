@@ -103,7 +103,13 @@ pub(super) fn validate_handles(st: &mut State, tasks: &[Task], limits: &Limits) 
             ));
         }
     }
-    let world = World { scene: &st.scene, cache_pool: &st.cache_pool, denoisers: &mut st.denoisers, limits };
+    let world = World {
+        scene: &st.scene,
+        cache_pool: &st.cache_pool,
+        denoisers: &mut st.denoisers,
+        denoise_temps: &mut st.denoise_temps,
+        limits,
+    };
     for task in tasks {
         if let Task::Render(r) = task {
             r.describe().check(&world)?;

@@ -43,8 +43,10 @@ const HISTORY_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 /// Packed normal (two halves) + view distance (f32).
 const GBUFFER_FORMAT: vk::Format = vk::Format::R32G32_UINT;
 
-/// What a denoising context owns: ping-pong pairs of history images (element `newest` holds
-/// the latest), the denoiser's own G-buffer for disocclusion tests, the previous camera.
+/// What a denoising context keeps between frames: ping-pong pairs of history images (element
+/// `newest` holds the latest), the denoiser's own G-buffer for disocclusion tests, the
+/// previous camera. The passes' intermediates are not kept: every context shares one
+/// `TempPool`.
 pub(crate) struct DenoiserState {
     pub input: DenoisingContextInput,
     gbuffer: [Image; 2],
@@ -52,8 +54,6 @@ pub(crate) struct DenoiserState {
     history: Vec<[Image; 2]>,
     /// Per radiance signal: fast history (RGB + history length).
     fast: Vec<[Image; 2]>,
-    /// Per signal: intermediate images of the passes.
-    temp: Vec<[Image; 2]>,
     newest: usize,
     initialized: bool,
     previous_camera: Option<Camera>,
@@ -68,10 +68,10 @@ fn is_shadow(signal: SignalType) -> bool {
 
 impl DenoiserState {
     pub fn new(memory: &Memory, input: &DenoisingContextInput) -> Result<DenoiserState> {
-        let signals = if input.signal == SignalType::SpecularAndDiffuse { 2 } else { 1 };
+        let signals = signal_count(input.signal);
         let fast_pairs = if is_shadow(input.signal) { 0 } else { signals };
-        // G-buffer pair first, then history, fast and temp pairs of HISTORY_FORMAT.
-        let count = 2 * (1 + signals + fast_pairs + signals);
+        // G-buffer pair first, then history and fast pairs of HISTORY_FORMAT.
+        let count = 2 * (1 + signals + fast_pairs);
         let mut made = Vec::with_capacity(count);
         for i in 0..count {
             let format = if i < 2 { GBUFFER_FORMAT } else { HISTORY_FORMAT };
@@ -92,13 +92,11 @@ impl DenoiserState {
         let [gbuffer] = <[[Image; 2]; 1]>::try_from(pairs(1)).ok().expect("one pair");
         let history = pairs(signals);
         let fast = pairs(fast_pairs);
-        let temp = pairs(signals);
         Ok(DenoiserState {
             input: *input,
             gbuffer,
             history,
             fast,
-            temp,
             newest: 0,
             initialized: false,
             previous_camera: None,
@@ -118,12 +116,68 @@ impl DenoiserState {
 
     /// Every image, for (deferred) destruction.
     pub fn into_images(self) -> Vec<Image> {
-        let DenoiserState { gbuffer, history, fast, temp, .. } = self;
-        gbuffer.into_iter().chain(history.into_iter().chain(fast).chain(temp).flatten()).collect()
+        let DenoiserState { gbuffer, history, fast, .. } = self;
+        gbuffer.into_iter().chain(history.into_iter().chain(fast).flatten()).collect()
     }
 
     fn images(&self) -> impl Iterator<Item = &Image> {
-        self.gbuffer.iter().chain(self.history.iter().chain(&self.fast).chain(&self.temp).flatten())
+        self.gbuffer.iter().chain(self.history.iter().chain(&self.fast).flatten())
+    }
+}
+
+fn signal_count(signal: SignalType) -> usize {
+    if signal == SignalType::SpecularAndDiffuse {
+        2
+    } else {
+        1
+    }
+}
+
+/// The passes' intermediate images, shared by every denoising context of an `ExecuteContext`:
+/// a task writes them before it reads them and leaves nothing in them for the next (tasks are
+/// recorded one after another, with barriers between their passes), so one set the size of
+/// the largest context serves all. A 1080p specular + diffuse context kept four of these
+/// (33 MB each); the sample's four contexts kept ten.
+#[derive(Default)]
+pub(crate) struct TempPool {
+    /// Per signal (two for specular + diffuse), a ping-pong pair.
+    pairs: Vec<[Image; 2]>,
+    width: u32,
+    height: u32,
+    initialized: bool,
+}
+
+impl TempPool {
+    /// Grows the pool to serve `input` too. On success returns the images it replaced (still
+    /// possibly in use by issued tickets: the caller retires them); on failure the pool is
+    /// unchanged.
+    pub fn ensure(&mut self, memory: &Memory, input: &DenoisingContextInput) -> Result<Vec<Image>> {
+        let signals = signal_count(input.signal).max(self.pairs.len());
+        let (width, height) = (input.max_width.max(self.width), input.max_height.max(self.height));
+        if signals == self.pairs.len() && width == self.width && height == self.height {
+            return Ok(Vec::new());
+        }
+        let mut made: Vec<Image> = Vec::with_capacity(2 * signals);
+        for _ in 0..2 * signals {
+            match memory.create_image("denoiser intermediate", HISTORY_FORMAT, width, height, MemoryKind::Denoiser) {
+                Ok(i) => made.push(i),
+                Err(e) => {
+                    for i in made {
+                        memory.destroy_image(i);
+                    }
+                    return Err(e);
+                }
+            }
+        }
+        let mut images = made.into_iter();
+        let pairs = (0..signals).map(|_| [images.next().expect("counted"), images.next().expect("counted")]).collect();
+        let old = std::mem::replace(&mut self.pairs, pairs);
+        (self.width, self.height, self.initialized) = (width, height, false);
+        Ok(old.into_iter().flatten().collect())
+    }
+
+    pub fn into_images(self) -> Vec<Image> {
+        self.pairs.into_iter().flatten().collect()
     }
 }
 
@@ -163,15 +217,19 @@ impl DenoisePass {
         })
     }
 
-    /// Records one denoise task against its context's state (and advances that state).
-    pub fn record(&self, r: &mut Recording<'_>, state: &mut DenoiserState, job: &DenoiseJob) {
+    /// Records one denoise task against its context's state (and advances that state), with
+    /// the shared intermediates of `temps`.
+    pub fn record(&self, r: &mut Recording<'_>, state: &mut DenoiserState, temps: &mut TempPool, job: &DenoiseJob) {
         let d = &r.device.raw;
         let stage = vk::PipelineStageFlags2::COMPUTE_SHADER;
-        if !state.initialized {
+        if !state.initialized || !temps.initialized {
             // SDK-owned images start UNDEFINED; they live in GENERAL from now on. The first
-            // task resets history, so their contents are never read before written.
-            let barriers: Vec<_> = state
-                .images()
+            // task resets history, so their contents are never read before written; the
+            // intermediates are written before they are read by every task.
+            let fresh_state = (!state.initialized).then(|| state.images()).into_iter().flatten();
+            let fresh_temps = (!temps.initialized).then(|| temps.pairs.iter().flatten()).into_iter().flatten();
+            let barriers: Vec<_> = fresh_state
+                .chain(fresh_temps)
                 .map(|i| {
                     vk::ImageMemoryBarrier2::default()
                         .src_stage_mask(vk::PipelineStageFlags2::NONE)
@@ -216,10 +274,14 @@ impl DenoisePass {
         // Shadows have no fast history: bind the history images (never read by their passes).
         let (fast_prev, fast_cur) =
             if shadow { (hist_prev, hist_cur) } else { (pair(&state.fast, prev), pair(&state.fast, cur)) };
-        let temps = [pair(&state.temp, 0), pair(&state.temp, 1)];
+        // The pool's first pair, and its second for a two-signal task.
+        let temp_pair = |k: usize| -> [ImageInput; 2] {
+            [temps.pairs[0][k].input(), temps.pairs[job.count.min(temps.pairs.len()) - 1][k].input()]
+        };
+        let temps_in = [temp_pair(0), temp_pair(1)];
         let gb_prev = state.gbuffer[prev].input();
         let gb_cur = state.gbuffer[cur].input();
-        let stand_in = temps[0][0];
+        let stand_in = temps_in[0][0];
         let roughness = descriptors::optional_or(&c.roughness.image, &stand_in);
         let motion = descriptors::optional_or(&c.motion.image, &stand_in);
         let mask = descriptors::optional_or(&c.input_mask, &stand_in);
@@ -245,10 +307,10 @@ impl DenoisePass {
                 Slot::Storage(&fast_prev[1]),
                 Slot::Storage(&fast_cur[0]),
                 Slot::Storage(&fast_cur[1]),
-                Slot::Storage(&temps[src][0]),
-                Slot::Storage(&temps[src][1]),
-                Slot::Storage(&temps[dst][0]),
-                Slot::Storage(&temps[dst][1]),
+                Slot::Storage(&temps_in[src][0]),
+                Slot::Storage(&temps_in[src][1]),
+                Slot::Storage(&temps_in[dst][0]),
+                Slot::Storage(&temps_in[dst][1]),
                 Slot::Uniform(ubo),
                 Slot::Sampled(mask),
             ];
@@ -278,6 +340,7 @@ impl DenoisePass {
         }
         state.newest = cur;
         state.initialized = true;
+        temps.initialized = true;
         state.previous_camera = Some(c.camera);
         state.previous_jitter = c.camera_jitter;
         state.previous_viewport = viewport;
@@ -376,7 +439,7 @@ impl PassTask for DenoiseJob {
     /// Its context was checked at build (`check`).
     fn record(&self, r: &mut Recording<'_>, passes: &Passes, world: &mut World<'_>) {
         if let Ok(state) = world.denoisers.get_mut(self.context) {
-            passes.denoise.record(r, state, self);
+            passes.denoise.record(r, state, world.denoise_temps, self);
         }
     }
 }

@@ -55,6 +55,8 @@ pub(crate) struct World<'a> {
     pub scene: &'a Scene,
     pub cache_pool: &'a CachePool,
     pub denoisers: &'a mut Registry<DenoisingContextHandle, denoise::DenoiserState>,
+    /// The denoisers' shared intermediates.
+    pub denoise_temps: &'a mut denoise::TempPool,
     pub limits: &'a crate::gpu::device::Limits,
 }
 
