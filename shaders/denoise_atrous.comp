@@ -8,6 +8,9 @@
 // and roughness for specular. u_pass.x = step, u_pass.y = 1 on the last iteration.
 #include "include/denoise.glsl"
 
+// History length from which pixels beside a crease skip the wider iterations (see below).
+const float CREASE_HISTORY = 8.0;
+
 const float H[3] = float[3](0.375, 0.25, 0.0625);
 
 void main() {
@@ -50,6 +53,7 @@ void main() {
         float w_c = H[0] * H[0];
         vec3 sum = c.rgb * w_c;
         float wsum = w_c, vsum = w_c * w_c * c.a;
+        float on_surface = 0.0, taps = 0.0;
         for (int yy = -2; yy <= 2; ++yy) {
             for (int xx = -2; xx <= 2; ++xx) {
                 if (xx == 0 && yy == 0) continue;
@@ -58,8 +62,10 @@ void main() {
                 vec3 q_p, q_n;
                 if (!hrt_surface_at(imageLoad(u_gbuf_cur, q).xy, u_d.c.clip_to_world, u_d.eye.xyz, q, q_p, q_n)) continue;
                 vec4 t = hrt_load_temp(s, q);
-                float w = H[abs(xx)] * H[abs(yy)] * hrt_geometry_weight(p, n, dist, q_p, q_n)
-                        * exp(-abs(hrt_luminance(t.rgb) - l_c) / stop);
+                float g = hrt_geometry_weight(p, n, dist, q_p, q_n);
+                taps += 1.0;
+                on_surface += g > 0.5 ? 1.0 : 0.0;
+                float w = H[abs(xx)] * H[abs(yy)] * g * exp(-abs(hrt_luminance(t.rgb) - l_c) / stop);
                 if (specular) w *= exp(-abs(hrt_denoise_roughness(q) - roughness) * 10.0);
                 sum += w * t.rgb;
                 wsum += w;
@@ -67,6 +73,14 @@ void main() {
             }
         }
         vec3 filtered = sum / wsum;
+        // Beside a crease or an edge (a quarter of this iteration's footprint on another
+        // surface) a pixel with history sits at an extreme of its signal — the darkest AO in
+        // a corner — and every neighbour left on its own surface lies to one side: a filter
+        // there only lifts it (+6% in the room's creases). Such pixels keep what the earlier,
+        // smaller iterations made, once their history is long enough to need no more. AO only:
+        // occlusion has its extreme in the crease by nature; GI need not (there the rule cost
+        // 28% more noise for no measured bias).
+        if (kind == HRT_SIGNAL_SCALAR && len >= CREASE_HISTORY && taps > 0.0 && on_surface < 0.75 * taps) filtered = c.rgb;
         if (last) hrt_store_output(s, pixel, vec4(filtered, 1.0));
         else hrt_store_temp(s, pixel, vec4(filtered, vsum / (wsum * wsum)));
     }
