@@ -9,68 +9,110 @@ mod common;
 use ash::vk;
 use common::*;
 use hybrid_rt::*;
-use hybrid_rt_testkit::reference;
+use hybrid_rt_testkit::host::{Host, HostImage};
+use hybrid_rt_testkit::reference::{self, Camera, GBuffer, Scene, Tracer};
 use hybrid_rt_testkit::sdk_scene::*;
 
 const GENERAL: vk::ImageLayout = vk::ImageLayout::GENERAL;
-const W: u32 = 48;
+
+/// A scene registered and built, its G-buffer uploaded, a noisy and a denoised image, a
+/// denoising context: what every test here starts from.
+struct Stage {
+    host: Host,
+    ctx: ExecuteContext,
+    frame: TaskContainer,
+    g: GBuffer,
+    camera: Camera,
+    images: GBufferImages,
+    gpu_scene: SceneOnGpu,
+    noisy: HostImage,
+    den: HostImage,
+    dn: DenoisingContextHandle,
+}
+
+impl Stage {
+    /// `colours`: each instance's cache colour (None: black).
+    fn new(scene: &Scene, colours: Option<&[[f32; 3]]>, camera: Camera, size: u32, signal: SignalType) -> Stage {
+        let (host, ctx) = host_and_context(InitSettings::default());
+        let g = GBuffer::render(&Tracer::new(scene), &camera, size, size);
+        let images = GBufferImages::upload(&host, &g).unwrap();
+        let mut frame = ctx.create_task_container();
+        let black = vec![[0.0; 3]; scene.instances.len()];
+        let gpu_scene =
+            SceneOnGpu::register_coloured(&host, &ctx, &mut frame, scene, Default::default(), colours.unwrap_or(&black)).unwrap();
+        frame.schedule_bvh_build(&Default::default()).unwrap();
+        run_frame(&host, &ctx, &mut frame).unwrap();
+        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED;
+        let rgba = || host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, size, size, usage, GENERAL).unwrap();
+        let (noisy, den) = (rgba(), rgba());
+        let dn = ctx
+            .create_denoising_context(&DenoisingContextInput { max_width: size, max_height: size, signal, ..Default::default() })
+            .unwrap();
+        Stage { host, ctx, frame, g, camera, images, gpu_scene, noisy, den, dn }
+    }
+
+    fn trace_common(&self) -> TraceCommon {
+        self.images.trace_common(&self.camera)
+    }
+
+    fn denoising_common(&self) -> DenoisingCommon {
+        self.images.denoising_common(&self.camera)
+    }
+
+    fn run(&mut self) {
+        run_frame(&self.host, &self.ctx, &mut self.frame).unwrap();
+    }
+
+    fn read(&self, img: &HostImage) -> Vec<[f32; 4]> {
+        bytemuck::cast_slice(&self.host.read_image(img, GENERAL).unwrap()).to_vec()
+    }
+
+    fn channel(&self, img: &HostImage, c: usize) -> Vec<f32> {
+        self.read(img).iter().map(|t| t[c]).collect()
+    }
+
+    fn finish(self) {
+        self.ctx.destroy_denoising_context(self.dn).unwrap();
+        for i in [self.noisy, self.den] {
+            self.host.destroy_image(i);
+        }
+        self.images.destroy(&self.host);
+        self.gpu_scene.destroy(&self.host);
+        drop(self.ctx);
+        assert_no_validation_errors();
+    }
+}
 
 /// Per channel: (denoised / mean of the same raw frames - 1, denoised / converged - 1), over
 /// the surface pixels, after `frames` frames; the converged reference averages `converged`.
 fn bias(signal: SignalType, frames: u32, converged: u32) -> [(f64, f64); 3] {
-    let (host, ctx) = host_and_context(InitSettings::default());
+    const W: u32 = 48;
     let (scene, colours, camera) = reference::coloured_room(true);
-    let g = reference::GBuffer::render(&reference::Tracer::new(&scene), &camera, W, W);
-    let images = GBufferImages::upload(&host, &g).unwrap();
-    let mut frame = ctx.create_task_container();
-    let s = SceneOnGpu::register_coloured(&host, &ctx, &mut frame, &scene, Default::default(), &colours).unwrap();
-    frame.schedule_bvh_build(&Default::default()).unwrap();
-    run_frame(&host, &ctx, &mut frame).unwrap();
-    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED;
-    let noisy = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, W, usage, GENERAL).unwrap();
-    let den = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, W, usage, GENERAL).unwrap();
-    let dn = ctx
-        .create_denoising_context(&DenoisingContextInput { max_width: W, max_height: W, signal, ..Default::default() })
-        .unwrap();
-    let mut common = images.trace_common(&camera);
+    let mut st = Stage::new(&scene, Some(&colours), camera, W, signal);
+    let mut common = st.trace_common();
     common.roughness.global_roughness = 0.5;
-    let mut dc = images.denoising_common(&camera);
+    let mut dc = st.denoising_common();
     dc.roughness = common.roughness;
     let sky = [0.1, 0.2, 0.3];
     let (mut all, mut first) = (vec![[0.0f64; 3]; (W * W) as usize], vec![[0.0f64; 3]; (W * W) as usize]);
     let mut out = Vec::new();
     for f in 0..converged {
-        let (input, output) = (noisy.input(GENERAL), den.input(GENERAL));
+        let (input, output, context) = (st.noisy.input(GENERAL), st.den.input(GENERAL), st.dn);
         if signal == SignalType::Specular {
-            frame
-                .schedule_specular(&TraceSpecularTask {
-                    common,
-                    output: input,
-                    ray_length: 100.0,
-                    miss_radiance: sky,
-                    ..Default::default()
-                })
-                .unwrap();
+            let t = TraceSpecularTask { common, output: input, ray_length: 100.0, miss_radiance: sky, ..Default::default() };
+            st.frame.schedule_specular(&t).unwrap();
             if f < frames {
-                frame.schedule_denoise_specular(&DenoiseSpecularTask { context: dn, common: dc, input, output }).unwrap();
+                st.frame.schedule_denoise_specular(&DenoiseSpecularTask { context, common: dc, input, output }).unwrap();
             }
         } else {
-            frame
-                .schedule_diffuse(&TraceDiffuseTask {
-                    common,
-                    output: input,
-                    ray_length: 100.0,
-                    miss_radiance: sky,
-                    ..Default::default()
-                })
-                .unwrap();
+            let t = TraceDiffuseTask { common, output: input, ray_length: 100.0, miss_radiance: sky, ..Default::default() };
+            st.frame.schedule_diffuse(&t).unwrap();
             if f < frames {
-                frame.schedule_denoise_diffuse(&DenoiseDiffuseTask { context: dn, common: dc, input, output }).unwrap();
+                st.frame.schedule_denoise_diffuse(&DenoiseDiffuseTask { context, common: dc, input, output }).unwrap();
             }
         }
-        run_frame(&host, &ctx, &mut frame).unwrap();
-        let t: Vec<[f32; 4]> = bytemuck::cast_slice(&host.read_image(&noisy, GENERAL).unwrap()).to_vec();
-        for (i, x) in t.iter().enumerate() {
+        st.run();
+        for (i, x) in st.read(&st.noisy).iter().enumerate() {
             for c in 0..3 {
                 all[i][c] += x[c] as f64 / converged as f64;
                 if f < frames {
@@ -79,27 +121,20 @@ fn bias(signal: SignalType, frames: u32, converged: u32) -> [(f64, f64); 3] {
             }
         }
         if f + 1 == frames {
-            out = bytemuck::cast_slice::<u8, [f32; 4]>(&host.read_image(&den, GENERAL).unwrap()).to_vec();
+            out = st.read(&st.den);
         }
     }
     let mut result = [(0.0, 0.0); 3];
     for (c, r) in result.iter_mut().enumerate() {
         let (mut d, mut same, mut conv) = (0.0f64, 0.0f64, 0.0f64);
-        for i in (0..all.len()).filter(|&i| g.hit[i]) {
+        for i in (0..all.len()).filter(|&i| st.g.hit[i]) {
             d += out[i][c] as f64;
             same += first[i][c];
             conv += all[i][c];
         }
         *r = (d / same - 1.0, d / conv - 1.0);
     }
-    ctx.destroy_denoising_context(dn).unwrap();
-    for i in [noisy, den] {
-        host.destroy_image(i);
-    }
-    images.destroy(&host);
-    s.destroy(&host);
-    drop(ctx);
-    assert_no_validation_errors();
+    st.finish();
     result
 }
 
@@ -123,11 +158,71 @@ fn gi_and_glossy_reflections_keep_their_mean() {
     }
 }
 
-/// Which signal `moving_object_residual` denoises.
+/// An occlusion signal: AO, or a sun's shadow.
 #[derive(Clone, Copy, PartialEq, Debug)]
 enum Occlusion {
     Ao,
-    Shadow,
+    Shadow(LightInfo),
+}
+
+impl Occlusion {
+    fn signal(self) -> SignalType {
+        match self {
+            Occlusion::Ao => SignalType::DiffuseOcclusion,
+            Occlusion::Shadow(_) => SignalType::Shadow,
+        }
+    }
+
+    /// Where the trace writes visibility (the shadow's visible fraction is G).
+    fn channel(self) -> usize {
+        if self == Occlusion::Ao {
+            0
+        } else {
+            1
+        }
+    }
+
+    /// One frame traced at `rays` per pixel into the stage's noisy image, denoised or not.
+    fn frame(self, st: &mut Stage, rays: u32, denoise: bool) {
+        let (common, dc) = (st.trace_common(), st.denoising_common());
+        let (input, output, context) = (st.noisy.input(GENERAL), st.den.input(GENERAL), st.dn);
+        match self {
+            Occlusion::Ao => {
+                let t = TraceAmbientOcclusionTask {
+                    common,
+                    output: input,
+                    ray_length: 1.0,
+                    rays_per_pixel: rays,
+                    ..Default::default()
+                };
+                st.frame.schedule_ambient_occlusion(&t).unwrap();
+                if denoise {
+                    let d = DenoiseDiffuseOcclusionTask { context, common: dc, input, output };
+                    st.frame.schedule_denoise_diffuse_occlusion(&d).unwrap();
+                }
+            }
+            Occlusion::Shadow(light) => {
+                let t = TraceShadowTask { common, light, output: input, rays_per_pixel: rays, ..Default::default() };
+                st.frame.schedule_shadow(&t).unwrap();
+                if denoise {
+                    st.frame.schedule_denoise_shadow(&DenoiseShadowTask { context, common: dc, light, input, output }).unwrap();
+                }
+            }
+        }
+        st.run();
+    }
+
+    /// The converged visibility: `frames` frames of 64 rays per pixel.
+    fn converged(self, st: &mut Stage, frames: u32) -> Vec<f32> {
+        let mut r = vec![0.0f32; st.g.depth.len()];
+        for _ in 0..frames {
+            self.frame(st, 64, false);
+            for (r, v) in r.iter_mut().zip(st.channel(&st.noisy, self.channel())) {
+                *r += v / frames as f32;
+            }
+        }
+        r
+    }
 }
 
 /// A sphere on a plane, 24 frames at x = -0.6, then moved to x = +0.9 for 12 frames: per frame
@@ -137,118 +232,42 @@ enum Occlusion {
 fn moving_object_residual(signal: Occlusion) -> Vec<f32> {
     use glam::{Affine3A, Vec3};
     const S: u32 = 64;
-    let (host, ctx) = host_and_context(InitSettings::default());
     let (mut scene, camera) = reference::sphere_on_plane();
     let at = |x: f32| Affine3A::from_translation(Vec3::new(x, 0.5, 0.0));
     scene.instances[1].transform = at(-0.6);
-    let ga = reference::GBuffer::render(&reference::Tracer::new(&scene), &camera, S, S);
     let mut moved = scene.clone();
     moved.instances[1].transform = at(0.9);
-    let gb = reference::GBuffer::render(&reference::Tracer::new(&moved), &camera, S, S);
-    let images = GBufferImages::upload(&host, &ga).unwrap();
-    let mut frame = ctx.create_task_container();
-    let s = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
-    frame.schedule_bvh_build(&Default::default()).unwrap();
-    run_frame(&host, &ctx, &mut frame).unwrap();
-    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED;
-    let noisy = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, S, S, usage, GENERAL).unwrap();
-    let den = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, S, S, usage, GENERAL).unwrap();
-    let kind = if signal == Occlusion::Ao { SignalType::DiffuseOcclusion } else { SignalType::Shadow };
-    let dn = ctx
-        .create_denoising_context(&DenoisingContextInput { max_width: S, max_height: S, signal: kind, ..Default::default() })
-        .unwrap();
-    let sun = LightInfo { direction: Vec3::new(0.4, -1.0, -0.3), angular_extent: 0.1, ..Default::default() };
-    let common = images.trace_common(&camera);
-    let dc = images.denoising_common(&camera);
-    // Visibility (AO, or the shadow's visible fraction in G) of one frame at `rays` per pixel.
-    let trace = |frame: &mut TaskContainer, rays: u32, denoise: bool| {
-        if signal == Occlusion::Ao {
-            let t = TraceAmbientOcclusionTask {
-                common,
-                output: noisy.input(GENERAL),
-                ray_length: 1.0,
-                rays_per_pixel: rays,
-                ..Default::default()
-            };
-            frame.schedule_ambient_occlusion(&t).unwrap();
-            if denoise {
-                frame
-                    .schedule_denoise_diffuse_occlusion(&DenoiseDiffuseOcclusionTask {
-                        context: dn,
-                        common: dc,
-                        input: noisy.input(GENERAL),
-                        output: den.input(GENERAL),
-                    })
-                    .unwrap();
-            }
-        } else {
-            frame
-                .schedule_shadow(&TraceShadowTask {
-                    common,
-                    light: sun,
-                    output: noisy.input(GENERAL),
-                    rays_per_pixel: rays,
-                    ..Default::default()
-                })
-                .unwrap();
-            if denoise {
-                frame
-                    .schedule_denoise_shadow(&DenoiseShadowTask {
-                        context: dn,
-                        common: dc,
-                        light: sun,
-                        input: noisy.input(GENERAL),
-                        output: den.input(GENERAL),
-                    })
-                    .unwrap();
-            }
-        }
-        run_frame(&host, &ctx, frame).unwrap();
-    };
-    let channel = if signal == Occlusion::Ao { 0 } else { 1 };
-    let read = |img: &hybrid_rt_testkit::host::HostImage, c: usize| -> Vec<f32> {
-        bytemuck::cast_slice::<u8, [f32; 4]>(&host.read_image(img, GENERAL).unwrap()).iter().map(|t| t[c]).collect()
-    };
-    trace(&mut frame, 64, false);
-    let old = read(&noisy, channel);
+    let gb = GBuffer::render(&Tracer::new(&moved), &camera, S, S);
+    let mut st = Stage::new(&scene, None, camera, S, signal.signal());
+    let old = signal.converged(&mut st, 1);
     for _ in 0..24 {
-        trace(&mut frame, 1, true);
+        signal.frame(&mut st, 1, true);
     }
     // The move: the instance, the TLAS, the G-buffer.
-    frame
-        .schedule_instance(&InstanceTask {
-            handle: s.instances[1],
-            operation: InstanceOperation::Update,
-            input: InstanceInput { geometry: s.geometries[1], transform: at(0.9), ..Default::default() },
-        })
-        .unwrap();
-    frame.schedule_bvh_build(&Default::default()).unwrap();
-    run_frame(&host, &ctx, &mut frame).unwrap();
-    host.write_image(&images.depth, &gb.depth_bytes(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL).unwrap();
-    host.write_image(&images.normals, &gb.normal_bytes_rgba32f(), vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL).unwrap();
-    trace(&mut frame, 64, false);
-    let new = read(&noisy, channel);
+    let (handle, geometry) = (st.gpu_scene.instances[1], st.gpu_scene.geometries[1]);
+    let input = InstanceInput { geometry, transform: at(0.9), ..Default::default() };
+    st.frame.schedule_instance(&InstanceTask { handle, operation: InstanceOperation::Update, input }).unwrap();
+    st.frame.schedule_bvh_build(&Default::default()).unwrap();
+    st.run();
+    let read_only = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+    st.host.write_image(&st.images.depth, &gb.depth_bytes(), read_only).unwrap();
+    st.host.write_image(&st.images.normals, &gb.normal_bytes_rgba32f(), read_only).unwrap();
+    let new = signal.converged(&mut st, 1);
+    let ga = &st.g;
     let region: Vec<usize> = (0..old.len())
         .filter(|&i| ga.hit[i] && gb.hit[i] && ga.instance[i] == 0 && gb.instance[i] == 0 && new[i] - old[i] > 0.25)
         .collect();
     assert!(region.len() > 30, "the move uncovers floor that was occluded ({} px)", region.len());
     let mut residual = Vec::new();
     for _ in 0..12 {
-        trace(&mut frame, 1, true);
+        signal.frame(&mut st, 1, true);
         // The shadow denoiser writes visibility in every channel; AO too.
-        let d = read(&den, 0);
-        let (num, den_sum): (f32, f32) =
+        let d = st.channel(&st.den, 0);
+        let (num, den): (f32, f32) =
             region.iter().map(|&i| (d[i] - new[i], old[i] - new[i])).fold((0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
-        residual.push(num / den_sum);
+        residual.push(num / den);
     }
-    ctx.destroy_denoising_context(dn).unwrap();
-    for i in [noisy, den] {
-        host.destroy_image(i);
-    }
-    images.destroy(&host);
-    s.destroy(&host);
-    drop(ctx);
-    assert_no_validation_errors();
+    st.finish();
     residual
 }
 
@@ -256,79 +275,30 @@ fn moving_object_residual(signal: Occlusion) -> Vec<f32> {
 /// 10% of the old occlusion remains 4 frames later (the first generation kept 62%).
 #[test]
 fn a_moving_object_leaves_no_old_occlusion_behind() {
-    for signal in [Occlusion::Ao, Occlusion::Shadow] {
+    let sun = LightInfo { direction: glam::Vec3::new(0.4, -1.0, -0.3), angular_extent: 0.1, ..Default::default() };
+    for signal in [Occlusion::Ao, Occlusion::Shadow(sun)] {
         let r = moving_object_residual(signal);
         let shown: Vec<String> = r.iter().map(|v| format!("{:.0}%", v * 100.0)).collect();
-        eprintln!("{signal:?}: old occlusion kept, frames 1-12 after the move: {}", shown.join(" "));
-        assert!(r[3] <= 0.10, "{signal:?}: {:.0}% of the old occlusion kept 4 frames after the move", r[3] * 100.0);
+        let name = if signal == Occlusion::Ao { "AO" } else { "shadow" };
+        eprintln!("{name}: old occlusion kept, frames 1-12 after the move: {}", shown.join(" "));
+        assert!(r[3] <= 0.10, "{name}: {:.0}% of the old occlusion kept 4 frames after the move", r[3] * 100.0);
     }
 }
 
 /// Mean absolute error of the raw last frame and of the denoised image against the converged
 /// trace, per region of the converged shadow: (umbra < 0.02, lit > 0.98, penumbra between).
 fn shadow_regions(angular_extent: f32) -> [(f32, f32, usize); 3] {
-    use glam::Vec3;
     const S: u32 = 64;
-    let (host, ctx) = host_and_context(InitSettings::default());
     let (scene, camera) = reference::sphere_on_plane();
-    let g = reference::GBuffer::render(&reference::Tracer::new(&scene), &camera, S, S);
-    let images = GBufferImages::upload(&host, &g).unwrap();
-    let mut frame = ctx.create_task_container();
-    let s = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
-    frame.schedule_bvh_build(&Default::default()).unwrap();
-    run_frame(&host, &ctx, &mut frame).unwrap();
-    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED;
-    let noisy = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, S, S, usage, GENERAL).unwrap();
-    let den = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, S, S, usage, GENERAL).unwrap();
-    let dn = ctx
-        .create_denoising_context(&DenoisingContextInput {
-            max_width: S,
-            max_height: S,
-            signal: SignalType::Shadow,
-            ..Default::default()
-        })
-        .unwrap();
-    let sun = LightInfo { direction: Vec3::new(-0.5, -1.0, -0.3), angular_extent, ..Default::default() };
-    let common = images.trace_common(&camera);
-    let dc = images.denoising_common(&camera);
-    let read = |img: &hybrid_rt_testkit::host::HostImage, c: usize| -> Vec<f32> {
-        bytemuck::cast_slice::<u8, [f32; 4]>(&host.read_image(img, GENERAL).unwrap()).iter().map(|t| t[c]).collect()
-    };
-    // Converged: 4 frames of 64 rays per pixel.
-    let mut reference = vec![0.0f32; (S * S) as usize];
-    for _ in 0..4 {
-        frame
-            .schedule_shadow(&TraceShadowTask {
-                common,
-                light: sun,
-                output: noisy.input(GENERAL),
-                rays_per_pixel: 64,
-                ..Default::default()
-            })
-            .unwrap();
-        run_frame(&host, &ctx, &mut frame).unwrap();
-        for (r, v) in reference.iter_mut().zip(read(&noisy, 1)) {
-            *r += v / 4.0;
-        }
-    }
+    let sun = Occlusion::Shadow(LightInfo { direction: glam::Vec3::new(-0.5, -1.0, -0.3), angular_extent, ..Default::default() });
+    let mut st = Stage::new(&scene, None, camera, S, SignalType::Shadow);
+    let reference = sun.converged(&mut st, 4);
     for _ in 0..32 {
-        frame
-            .schedule_shadow(&TraceShadowTask { common, light: sun, output: noisy.input(GENERAL), ..Default::default() })
-            .unwrap();
-        frame
-            .schedule_denoise_shadow(&DenoiseShadowTask {
-                context: dn,
-                common: dc,
-                light: sun,
-                input: noisy.input(GENERAL),
-                output: den.input(GENERAL),
-            })
-            .unwrap();
-        run_frame(&host, &ctx, &mut frame).unwrap();
+        sun.frame(&mut st, 1, true);
     }
-    let (raw, out) = (read(&noisy, 1), read(&den, 0));
+    let (raw, out) = (st.channel(&st.noisy, 1), st.channel(&st.den, 0));
     let mut regions = [(0.0f32, 0.0f32, 0usize); 3];
-    for i in (0..reference.len()).filter(|&i| g.hit[i]) {
+    for i in (0..reference.len()).filter(|&i| st.g.hit[i]) {
         let k = if reference[i] < 0.02 {
             0
         } else if reference[i] > 0.98 {
@@ -344,14 +314,7 @@ fn shadow_regions(angular_extent: f32) -> [(f32, f32, usize); 3] {
         r.0 /= r.2.max(1) as f32;
         r.1 /= r.2.max(1) as f32;
     }
-    ctx.destroy_denoising_context(dn).unwrap();
-    for i in [noisy, den] {
-        host.destroy_image(i);
-    }
-    images.destroy(&host);
-    s.destroy(&host);
-    drop(ctx);
-    assert_no_validation_errors();
+    st.finish();
     regions
 }
 
@@ -376,88 +339,33 @@ fn denoised_shadows_are_never_worse_than_a_raw_frame() {
 #[test]
 fn creases_keep_their_occlusion() {
     const S: u32 = 64;
-    let (host, ctx) = host_and_context(InitSettings::default());
     let (scene, _, camera) = reference::coloured_room(true);
-    let g = reference::GBuffer::render(&reference::Tracer::new(&scene), &camera, S, S);
-    let images = GBufferImages::upload(&host, &g).unwrap();
-    let mut frame = ctx.create_task_container();
-    let s = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
-    frame.schedule_bvh_build(&Default::default()).unwrap();
-    run_frame(&host, &ctx, &mut frame).unwrap();
-    let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED;
-    let noisy = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, S, S, usage, GENERAL).unwrap();
-    let den = host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, S, S, usage, GENERAL).unwrap();
-    let dn = ctx
-        .create_denoising_context(&DenoisingContextInput {
-            max_width: S,
-            max_height: S,
-            signal: SignalType::DiffuseOcclusion,
-            ..Default::default()
-        })
-        .unwrap();
-    let common = images.trace_common(&camera);
-    let read = |img: &hybrid_rt_testkit::host::HostImage| -> Vec<f32> {
-        bytemuck::cast_slice::<u8, [f32; 4]>(&host.read_image(img, GENERAL).unwrap()).iter().map(|t| t[0]).collect()
-    };
-    let ao = |rays| TraceAmbientOcclusionTask {
-        common,
-        output: noisy.input(GENERAL),
-        ray_length: 1.0,
-        rays_per_pixel: rays,
-        ..Default::default()
-    };
+    let mut st = Stage::new(&scene, None, camera, S, SignalType::DiffuseOcclusion);
     // Two independent converged traces: one picks the crease pixels, the other is the
     // reference there (picking by the reference itself would favour pixels where its own noise
     // is low, and make any estimate look bright).
-    let mut converged = || {
-        let mut r = vec![0.0f32; (S * S) as usize];
-        for _ in 0..4 {
-            frame.schedule_ambient_occlusion(&ao(64)).unwrap();
-            run_frame(&host, &ctx, &mut frame).unwrap();
-            for (r, v) in r.iter_mut().zip(read(&noisy)) {
-                *r += v / 4.0;
-            }
-        }
-        r
-    };
-    let (selector, reference) = (converged(), converged());
-    let task = DenoiseDiffuseOcclusionTask {
-        context: dn,
-        common: images.denoising_common(&camera),
-        input: noisy.input(GENERAL),
-        output: den.input(GENERAL),
-    };
+    let (selector, reference) = (Occlusion::Ao.converged(&mut st, 4), Occlusion::Ao.converged(&mut st, 4));
     let mut raw_mean = vec![0.0f32; reference.len()];
     for _ in 0..32 {
-        frame.schedule_ambient_occlusion(&ao(1)).unwrap();
-        frame.schedule_denoise_diffuse_occlusion(&task).unwrap();
-        run_frame(&host, &ctx, &mut frame).unwrap();
-        for (r, v) in raw_mean.iter_mut().zip(read(&noisy)) {
+        Occlusion::Ao.frame(&mut st, 1, true);
+        for (r, v) in raw_mean.iter_mut().zip(st.channel(&st.noisy, 0)) {
             *r += v / 32.0;
         }
     }
-    let out = read(&den);
-    let crease: Vec<usize> = (0..reference.len()).filter(|&i| g.hit[i] && selector[i] < 0.75).collect();
-    let (sum_d, sum_r) = crease.iter().fold((0.0f64, 0.0f64), |a, &i| (a.0 + out[i] as f64, a.1 + reference[i] as f64));
-    let bias = sum_d / sum_r - 1.0;
-    let sum_raw: f64 = crease.iter().map(|&i| raw_mean[i] as f64).sum();
-    let vs_raw = sum_d / sum_raw - 1.0;
-    eprintln!("creases: denoised vs the same 32 raw frames {:+.2}%", vs_raw * 100.0);
+    let out = st.channel(&st.den, 0);
+    let crease: Vec<usize> = (0..reference.len()).filter(|&i| st.g.hit[i] && selector[i] < 0.75).collect();
+    let sum = |v: &[f32]| crease.iter().map(|&i| v[i] as f64).sum::<f64>();
+    let (sum_d, sum_r, sum_raw) = (sum(&out), sum(&reference), sum(&raw_mean));
+    let (bias, vs_raw) = (sum_d / sum_r - 1.0, sum_d / sum_raw - 1.0);
     eprintln!(
-        "creases ({} px, converged AO < 0.75): denoised is {:+.2}% against the converged trace",
+        "creases ({} px, converged AO < 0.75): denoised {:+.2}% against the converged trace, {:+.2}% against its 32 raw frames",
         crease.len(),
-        bias * 100.0
+        bias * 100.0,
+        vs_raw * 100.0
     );
     assert!(crease.len() > 100, "the room has creases ({} px)", crease.len());
     assert!(bias <= 0.01, "creases come out {:.2}% brighter than converged", bias * 100.0);
     // Against its own frames (the raw 32-frame mean is itself ~1.4% dark here by chance).
     assert!(vs_raw <= 0.02, "creases come out {:.2}% brighter than their frames", vs_raw * 100.0);
-    ctx.destroy_denoising_context(dn).unwrap();
-    for i in [noisy, den] {
-        host.destroy_image(i);
-    }
-    images.destroy(&host);
-    s.destroy(&host);
-    drop(ctx);
-    assert_no_validation_errors();
+    st.finish();
 }

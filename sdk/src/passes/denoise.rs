@@ -71,21 +71,9 @@ impl DenoiserState {
         let signals = signal_count(input.signal);
         let fast_pairs = if is_shadow(input.signal) { 0 } else { signals };
         // G-buffer pair first, then history and fast pairs of HISTORY_FORMAT.
-        let count = 2 * (1 + signals + fast_pairs);
-        let mut made = Vec::with_capacity(count);
-        for i in 0..count {
-            let format = if i < 2 { GBUFFER_FORMAT } else { HISTORY_FORMAT };
-            match memory.create_image("denoiser", format, input.max_width, input.max_height, MemoryKind::Denoiser) {
-                Ok(image) => made.push(image),
-                Err(e) => {
-                    for image in made {
-                        memory.destroy_image(image);
-                    }
-                    return Err(e);
-                }
-            }
-        }
-        let mut images = made.into_iter();
+        let formats =
+            std::iter::repeat_n(GBUFFER_FORMAT, 2).chain(std::iter::repeat_n(HISTORY_FORMAT, 2 * (signals + fast_pairs)));
+        let mut images = create_all(memory, "denoiser", formats, input.max_width, input.max_height)?.into_iter();
         let mut pairs = |n: usize| -> Vec<[Image; 2]> {
             (0..n).map(|_| [images.next().expect("counted"), images.next().expect("counted")]).collect()
         };
@@ -125,6 +113,29 @@ impl DenoiserState {
     }
 }
 
+/// One image per format, all or none (a failure frees the ones already made).
+fn create_all(
+    memory: &Memory,
+    name: &'static str,
+    formats: impl Iterator<Item = vk::Format>,
+    width: u32,
+    height: u32,
+) -> Result<Vec<Image>> {
+    let mut made = Vec::new();
+    for format in formats {
+        match memory.create_image(name, format, width, height, MemoryKind::Denoiser) {
+            Ok(image) => made.push(image),
+            Err(e) => {
+                for image in made {
+                    memory.destroy_image(image);
+                }
+                return Err(e);
+            }
+        }
+    }
+    Ok(made)
+}
+
 fn signal_count(signal: SignalType) -> usize {
     if signal == SignalType::SpecularAndDiffuse {
         2
@@ -157,19 +168,8 @@ impl TempPool {
         if signals == self.pairs.len() && width == self.width && height == self.height {
             return Ok(Vec::new());
         }
-        let mut made: Vec<Image> = Vec::with_capacity(2 * signals);
-        for _ in 0..2 * signals {
-            match memory.create_image("denoiser intermediate", HISTORY_FORMAT, width, height, MemoryKind::Denoiser) {
-                Ok(i) => made.push(i),
-                Err(e) => {
-                    for i in made {
-                        memory.destroy_image(i);
-                    }
-                    return Err(e);
-                }
-            }
-        }
-        let mut images = made.into_iter();
+        let formats = std::iter::repeat_n(HISTORY_FORMAT, 2 * signals);
+        let mut images = create_all(memory, "denoiser intermediate", formats, width, height)?.into_iter();
         let pairs = (0..signals).map(|_| [images.next().expect("counted"), images.next().expect("counted")]).collect();
         let old = std::mem::replace(&mut self.pairs, pairs);
         (self.width, self.height, self.initialized) = (width, height, false);
