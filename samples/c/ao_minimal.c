@@ -249,6 +249,19 @@ static void submit_and_wait(VkCommandBuffer cmd) {
     vkFreeCommandBuffers(device, pool, 1, &cmd);
 }
 
+/* A sampled image filled with one colour, left in SHADER_READ_ONLY_OPTIMAL. */
+static Image filled_image(VkFormat format, float r, float g, float b, float a) {
+    Image img = make_image(format, VK_IMAGE_USAGE_SAMPLED_BIT);
+    VkCommandBuffer cmd = begin();
+    VkClearColorValue value = {{r, g, b, a}};
+    VkImageSubresourceRange all = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+    transition(cmd, img.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
+    vkCmdClearColorImage(cmd, img.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &value, 1, &all);
+    transition(cmd, img.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    submit_and_wait(cmd);
+    return img;
+}
+
 /* Records the container between two full barriers (the engine's own work around it), submits,
  * waits, hands the ticket back and returns the number of timed tasks. */
 static uint32_t run_frame(HrtContext *ctx, HrtTaskContainer *frame, Image *out, uint32_t texel_bytes, float *result) {
@@ -561,13 +574,7 @@ int main(void) {
         float c = custom_result[(H / 2) * W + W / 2];
         EXPECT(c < 0.6f, "custom-space normals: the ceiling still occludes the centre (%f)", c);
 
-        Image mask = make_image(VK_FORMAT_R8_UNORM, VK_IMAGE_USAGE_SAMPLED_BIT);
-        VkCommandBuffer mcmd = begin();
-        VkClearColorValue one = {{1, 0, 0, 0}};
-        transition(mcmd, mask.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
-        vkCmdClearColorImage(mcmd, mask.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &one, 1, &all);
-        transition(mcmd, mask.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
-        submit_and_wait(mcmd);
+        Image mask = filled_image(VK_FORMAT_R8_UNORM, 1, 0, 0, 0);
         HrtTraceAmbientOcclusionTask masked = ao;
         masked.common.input_mask = sdk_image(&mask, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
         CHECK_HRT(hrt_schedule_ambient_occlusion(frame, &masked));
@@ -784,13 +791,7 @@ int main(void) {
     EXPECT(fabsf(gi_px[0] - 0.5f) < 1e-4f && fabsf(gi_px[2] - 0.5f) < 1e-4f, "the open corner sees the sky");
     /* An environment map replaces the constant sky: a 1x1 map is the same radiance everywhere. */
     {
-        Image sky = make_image(VK_FORMAT_R16G16B16A16_SFLOAT, VK_IMAGE_USAGE_SAMPLED_BIT);
-        VkCommandBuffer scmd = begin();
-        VkClearColorValue blue = {{0.25f, 0.5f, 0.75f, 1.0f}};
-        transition(scmd, sky.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
-        vkCmdClearColorImage(scmd, sky.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &blue, 1, &all);
-        transition(scmd, sky.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
-        submit_and_wait(scmd);
+        Image sky = filled_image(VK_FORMAT_R16G16B16A16_SFLOAT, 0.25f, 0.5f, 0.75f, 1.0f);
         HrtTraceDiffuseTask with_sky = diffuse;
         with_sky.environment.image = sdk_image(&sky, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
         with_sky.environment.intensity = 2.0f;
@@ -831,13 +832,7 @@ int main(void) {
      * 0 < cutoff 0.5; its texture coordinates are the first 8 bytes of its 24-byte vertices):
      * rays pass through it and the centre opens. */
     {
-        Image holes = make_image(VK_FORMAT_R8G8B8A8_UNORM, VK_IMAGE_USAGE_SAMPLED_BIT);
-        VkCommandBuffer hcmd = begin();
-        VkClearColorValue clear_alpha = {{1, 1, 1, 0}};
-        transition(hcmd, holes.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL);
-        vkCmdClearColorImage(hcmd, holes.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &clear_alpha, 1, &all);
-        transition(hcmd, holes.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
-        submit_and_wait(hcmd);
+        Image holes = filled_image(VK_FORMAT_R8G8B8A8_UNORM, 1, 1, 1, 0);
         HrtGeometryTask cut = hrt_geometry_task_default();
         cut.handle = geometries[1];
         cut.operation = HRT_OPERATION_UPDATE;
