@@ -800,3 +800,135 @@ fn contexts_share_their_intermediates() {
     drop(ctx);
     assert_no_validation_errors();
 }
+
+/// A floor, a wall behind it, a low box (its top parallel to the floor, a step) and a sphere:
+/// surfaces that share a normal but not a plane, and shadows that cross from one to another.
+fn steps() -> (Scene, Camera) {
+    let mut scene = Scene::default();
+    let floor = scene.add_mesh(Mesh::grid(8.0, 4));
+    let wall = scene.add_mesh(Mesh::grid(8.0, 4));
+    let step = scene.add_mesh(Mesh::cuboid(Vec3::new(0.6, 0.15, 0.4)));
+    let sphere = scene.add_mesh(Mesh::sphere(0.35, 16, 8));
+    scene.add_instance(floor, Affine3A::IDENTITY);
+    scene.add_instance(
+        wall,
+        Affine3A::from_rotation_translation(glam::Quat::from_rotation_x(std::f32::consts::FRAC_PI_2), Vec3::new(0.0, 0.0, -1.2)),
+    );
+    scene.add_instance(step, Affine3A::from_translation(Vec3::new(0.3, 0.15, -0.2)));
+    scene.add_instance(sphere, Affine3A::from_translation(Vec3::new(-0.5, 0.35, 0.1)));
+    (scene, Camera::look_at(Vec3::new(0.0, 1.4, 2.0), Vec3::new(0.0, 0.2, -0.4)))
+}
+
+/// Every `DenoiserSettings` field changes the image of every denoiser its documentation says
+/// reads it: each variant denoises the same noisy frames (one trace, several contexts) and is
+/// compared with the defaults after 6 frames. The scene: `steps` (shared normals on different
+/// planes, shadows across surfaces), and for GI's firefly cut the closed room, where the rare
+/// rays out of its open front see a bright sky.
+#[test]
+fn every_setting_affects_the_denoisers_that_read_it() {
+    type Change = (&'static str, fn(&mut DenoiserSettings));
+    let all: [Change; 9] = [
+        ("max_history_frames", |s| s.max_history_frames = 4),
+        ("fast_history_frames", |s| s.fast_history_frames = 1),
+        ("history_clamp_sigma", |s| s.history_clamp_sigma = 0.3),
+        ("spatial_passes", |s| s.spatial_passes = 1),
+        ("luminance_sigma", |s| s.luminance_sigma = 0.3),
+        ("normal_power", |s| s.normal_power = 0.5),
+        ("plane_distance_sigma", |s| s.plane_distance_sigma = 1.0),
+        ("anti_firefly", |s| s.anti_firefly = false),
+        ("max_shadow_blur_radius", |s| s.max_shadow_blur_radius = 1.0),
+    ];
+    // Which denoisers read each field (DenoiserSettings' documentation).
+    let reads = |signal: SignalType, field: &str| match field {
+        "max_history_frames" | "normal_power" | "plane_distance_sigma" => true,
+        "fast_history_frames" | "history_clamp_sigma" | "spatial_passes" | "luminance_sigma" => signal != SignalType::Shadow,
+        "anti_firefly" => signal == SignalType::Diffuse,
+        _ => signal == SignalType::Shadow,
+    };
+    const W: u32 = 48;
+    for (signal, in_room) in [
+        (SignalType::Diffuse, false),
+        (SignalType::Diffuse, true),
+        (SignalType::DiffuseOcclusion, false),
+        (SignalType::Shadow, false),
+    ] {
+        let (scene, colours, camera) = if in_room {
+            let (s, c, cam) = reference::coloured_room(true);
+            (s, Some(c), cam)
+        } else {
+            let (s, cam) = steps();
+            (s, None, cam)
+        };
+        let mut f = Fixture::new(&scene, colours.as_deref(), &camera, W);
+        let noisy = storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W);
+        let changes: Vec<&Change> =
+            all.iter().filter(|(name, _)| reads(signal, name) && (in_room == (*name == "anti_firefly"))).collect();
+        let outs: Vec<HostImage> =
+            (0..=changes.len()).map(|_| storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W)).collect();
+        let contexts: Vec<DenoisingContextHandle> = (0..=changes.len()).map(|_| context(&f.ctx, signal, W, W)).collect();
+        let sun = LightInfo {
+            light_type: LightType::Directional,
+            direction: Vec3::new(0.6, -0.6, -0.5),
+            angular_extent: 0.2,
+            ..Default::default()
+        };
+        let common = f.images.trace_common(&camera);
+        for _ in 0..6 {
+            let output = noisy.input(GENERAL);
+            match signal {
+                SignalType::Diffuse => f
+                    .frame
+                    .schedule_diffuse(&TraceDiffuseTask {
+                        common,
+                        output,
+                        ray_length: 100.0,
+                        miss_radiance: [40.0; 3],
+                        ..Default::default()
+                    })
+                    .unwrap(),
+                SignalType::DiffuseOcclusion => f
+                    .frame
+                    .schedule_ambient_occlusion(&TraceAmbientOcclusionTask {
+                        common,
+                        output,
+                        ray_length: 1.0,
+                        ..Default::default()
+                    })
+                    .unwrap(),
+                _ => f.frame.schedule_shadow(&TraceShadowTask { common, light: sun, output, ..Default::default() }).unwrap(),
+            }
+            for (k, (&context, out)) in contexts.iter().zip(&outs).enumerate() {
+                let mut common = f.images.denoising_common(&camera);
+                if k > 0 {
+                    (changes[k - 1].1)(&mut common.settings);
+                }
+                let (input, output) = (noisy.input(GENERAL), out.input(GENERAL));
+                match signal {
+                    SignalType::Diffuse => {
+                        f.frame.schedule_denoise_diffuse(&DenoiseDiffuseTask { context, common, input, output }).unwrap()
+                    }
+                    SignalType::DiffuseOcclusion => f
+                        .frame
+                        .schedule_denoise_diffuse_occlusion(&DenoiseDiffuseOcclusionTask { context, common, input, output })
+                        .unwrap(),
+                    _ => f
+                        .frame
+                        .schedule_denoise_shadow(&DenoiseShadowTask { context, common, light: sun, input, output })
+                        .unwrap(),
+                }
+            }
+            run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
+        }
+        let base = read_channel(&f.host, &outs[0], 0);
+        for (k, (name, _)) in changes.iter().enumerate() {
+            let other = read_channel(&f.host, &outs[k + 1], 0);
+            let diff = base.iter().zip(&other).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+            eprintln!("{signal:?}{}, {name}: max |change| {diff:.4}", if in_room { " (room)" } else { "" });
+            assert!(diff > 1e-3, "{signal:?}: {name} has no effect ({diff})");
+        }
+        for dn in contexts {
+            f.ctx.destroy_denoising_context(dn).unwrap();
+        }
+        f.finish(outs.into_iter().chain([noisy]));
+    }
+}

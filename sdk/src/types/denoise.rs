@@ -128,35 +128,42 @@ impl MotionInput {
 }
 
 /// Tuning shared by the denoisers. The defaults suit 1 ray per pixel at 30-120 frames per
-/// second.
+/// second. Each field says which denoisers read it ("radiance": specular, diffuse, specular +
+/// diffuse; "AO"; "shadows": single- and multi-light); the others ignore it, and
+/// tests/tests/denoise.rs checks that every field changes the image of every denoiser said to
+/// read it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[repr(C)]
 pub struct DenoiserSettings {
     /// Longest history, in frames (1..=255): the slow history's running average window.
-    /// Default 32. Specular surfaces use fewer as they get smoother (a mirror: 1).
+    /// Default 32. Specular surfaces use fewer as they get smoother (a mirror: 1). All.
     pub max_history_frames: u32,
     /// Window of the fast history whose neighbourhood clamps the slow one (1..=max). Default 4.
+    /// Radiance, AO.
     pub fast_history_frames: u32,
     /// Width of the clamping box in standard deviations of the fast history's 3x3
     /// neighbourhood (> 0). Larger: steadier, more lag. Default 2.5 (2.0 darkened glossy
     /// reflections by ~0.5%: at 1 ray per pixel the fast history is skewed, and a narrow box
-    /// clips the slow mean from above).
+    /// clips the slow mean from above). Radiance, AO.
     pub history_clamp_sigma: f32,
-    /// À-trous iterations (0..=6; the footprint is 2^(n+1) + 1 pixels). Default 5.
+    /// À-trous iterations (0..=6; the footprint is 2^(n+1) + 1 pixels). Default 5. Radiance,
+    /// AO.
     pub spatial_passes: u32,
     /// Luminance stop in standard deviations of the local variance (> 0). Default 4.0.
+    /// Radiance, AO.
     pub luminance_sigma: f32,
-    /// Normal stop: weights go as dot(n, n')^power (>= 0). Default 64.
+    /// Normal stop: weights go as dot(n, n')^power (>= 0). Default 64. All.
     pub normal_power: f32,
     /// Plane-distance stop, relative to the view distance (> 0): also the disocclusion
-    /// threshold. Default 0.02.
+    /// threshold. Default 0.02. All.
     pub plane_distance_sigma: f32,
     /// Cut fireflies: a new radiance sample more than 4 deviations (and 5x the mean) above its
     /// pixel's history is brought down to that bound; without 4 frames of history, one more
     /// than 8x its brightest neighbour. A plain 1-ray distribution stays unbiased (measured:
     /// the same image means with and without it). Not applied to mirrors. Default true.
+    /// Radiance (AO and shadows are bounded signals: no fireflies).
     pub anti_firefly: bool,
-    /// Shadows: widest penumbra blur radius in pixels (0..=64). Default 24.
+    /// Widest penumbra blur radius in pixels (0..=64). Default 24. Shadows.
     pub max_shadow_blur_radius: f32,
 }
 
