@@ -28,7 +28,12 @@ shared float s_fast[TILE * TILE];
 shared vec4 s_pos[TILE * TILE];   // world position, w = 1 on a surface, 0 elsewhere
 shared vec3 s_nrm[TILE * TILE];
 
+// The signal the anti-lag test runs on: the first that is not specular (in a specular +
+// diffuse task, the diffuse one).
+uint antilag_signal() { return u_d.kinds.x != HRT_SIGNAL_SPECULAR ? 0u : 1u; }
+
 void load_antilag_tile() {
+    uint ts = antilag_signal();
     ivec2 origin = ivec2(gl_WorkGroupID.xy) * 8 - ANTILAG_RADIUS + ivec2(u_d.c.viewport.xy);
     for (uint e = gl_LocalInvocationIndex; e < uint(TILE * TILE); e += 64u) {
         ivec2 q = origin + ivec2(int(e) % TILE, int(e) / TILE);
@@ -38,9 +43,9 @@ void load_antilag_tile() {
         if (ok) {
             ivec2 prev = ivec2(floor(hrt_previous_position(q, q_p)));
             ok = hrt_in_viewport(prev);
-            if (ok) fast = hrt_load_fast_prev(0u, prev).r;
+            if (ok) fast = hrt_luminance(hrt_load_fast_prev(ts, prev).rgb);
         }
-        s_cur[e] = ok ? hrt_load_input(0u, q).r : 0.0;
+        s_cur[e] = ok ? hrt_luminance(hrt_as_signal(u_d.kinds[ts], hrt_load_input(ts, q)).rgb) : 0.0;
         s_fast[e] = fast;
         s_pos[e] = vec4(q_p, ok ? 1.0 : 0.0);
         s_nrm[e] = q_n;
@@ -50,7 +55,10 @@ void load_antilag_tile() {
 void main() {
     // Scalar signals (AO) only; uniform over the dispatch, so every invocation reaches the
     // barrier before any returns.
-    bool antilag = u_d.kinds.x == HRT_SIGNAL_SCALAR && u_d.flags.z == 0u;
+    // DenoiserSettings::anti_lag (kinds.w); the history is reset anyway when flags.z is set;
+    // a specular-only task has nothing to test (see below).
+    bool antilag = u_d.kinds.w != 0u && u_d.flags.z == 0u
+                   && (u_d.kinds.x != HRT_SIGNAL_SPECULAR || u_d.flags.y == 2u);
     if (antilag) {
         load_antilag_tile();
         barrier();
@@ -111,12 +119,13 @@ void main() {
         // neighbourhood and the fast history estimate the same thing while the signal holds
         // still. When their means differ by more than ANTILAG_SIGMA of their combined noise,
         // the signal changed under a history that the geometry tests kept (a moved object's
-        // contact AO): the pixel starts over from this frame, and the spatial passes, seeing a
-        // short history, filter it wide. Scalar signals (AO) only, for now: radiance (GI,
-        // reflections) is skewed at 1 ray per pixel — rare bright rays to the sky — and
-        // restarts after chance bright neighbourhoods biased it by 1.4% even at 6 sigma;
-        // there the fast-history clamp alone answers changes.
-        if (len >= 2.0 && antilag) {
+        // contact AO, a light switched on): the pixel starts over from this frame, and the
+        // spatial passes, seeing a short history, filter it wide. AO and diffuse GI (one-signal
+        // tasks); not reflections, whose history follows the reflected point rather than the
+        // surface this tile reprojects. (A 3x3 test with this frame's spread alone biased 1-ray
+        // GI by 1.4% — chance dark neighbourhoods restarted pixels dark; 25 samples and the
+        // history's own variance keep it unbiased: +0.1..-0.3%.)
+        if (len >= 2.0 && antilag && s == antilag_signal()) {
             // The same-surface pixels of the 5x5 footprint, from the group's tile: this
             // frame's samples and their fast histories (each at its own reprojected position).
             ivec2 local = ivec2(gl_LocalInvocationID.xy) + ANTILAG_RADIUS;

@@ -1011,6 +1011,10 @@ typedef struct HrtDenoiserSettings {
   float plane_distance_sigma;
   bool anti_firefly;
   float max_shadow_blur_radius;
+  /**
+   * Default true (see DenoiserSettings::anti_lag).
+   */
+  bool anti_lag;
 } HrtDenoiserSettings;
 
 typedef struct HrtDenoisingCommon {

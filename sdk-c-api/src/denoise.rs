@@ -77,6 +77,8 @@ pub struct HrtDenoiserSettings {
     pub plane_distance_sigma: f32,
     pub anti_firefly: bool,
     pub max_shadow_blur_radius: f32,
+    /// Default true (see DenoiserSettings::anti_lag).
+    pub anti_lag: bool,
 }
 
 #[repr(C)]
@@ -187,6 +189,7 @@ fn common(c: &HrtDenoisingCommon) -> Result<rt::DenoisingCommon, Failure> {
             plane_distance_sigma: s.plane_distance_sigma,
             anti_firefly: s.anti_firefly,
             max_shadow_blur_radius: s.max_shadow_blur_radius,
+            anti_lag: s.anti_lag,
         },
     })
 }
@@ -223,6 +226,7 @@ pub extern "C" fn hrt_denoising_common_default() -> HrtDenoisingCommon {
             plane_distance_sigma: s.plane_distance_sigma,
             anti_firefly: s.anti_firefly,
             max_shadow_blur_radius: s.max_shadow_blur_radius,
+            anti_lag: s.anti_lag,
         },
     }
 }

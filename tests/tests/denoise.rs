@@ -533,6 +533,40 @@ fn mirror_reflections_stay_sharp_and_glossy_ones_are_filtered() {
     assert_no_validation_errors();
 }
 
+/// Anti-lag (diffuse): the signal jumps from red to green on a still plane; with anti-lag the
+/// next frame shows no red, without it the 8-frame history does.
+#[test]
+fn anti_lag_restarts_a_changed_signal() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let (g, camera) = facing_plane();
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let noisy = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, S, S);
+    let mut left = Vec::new();
+    for anti_lag in [true, false] {
+        let out = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, S, S);
+        let dn = context(&ctx, SignalType::Diffuse, S, S);
+        let mut frame = ctx.create_task_container();
+        let mut common = images.denoising_common(&camera);
+        common.settings.anti_lag = anti_lag;
+        for f in 0..9 {
+            let colour = if f < 8 { [1.0f32, 0.0, 0.0, 1.0] } else { [0.0, 1.0, 0.0, 1.0] };
+            host.write_image(&noisy, &rgba_bytes(&vec![colour; (S * S) as usize]), GENERAL).unwrap();
+            let task = DenoiseDiffuseTask { context: dn, common, input: noisy.input(GENERAL), output: out.input(GENERAL) };
+            frame.schedule_denoise_diffuse(&task).unwrap();
+            run_frame(&host, &ctx, &mut frame).unwrap();
+        }
+        left.push(stats::mean(&read_channel(&host, &out, 0)));
+        ctx.destroy_denoising_context(dn).unwrap();
+        host.destroy_image(out);
+    }
+    eprintln!("mean red one frame after red -> green: anti-lag {:.4}, without {:.4}", left[0], left[1]);
+    assert!(left[0] < 0.01 && left[1] > 0.1, "anti-lag restarts the changed pixels: {left:?}");
+    host.destroy_image(noisy);
+    images.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+}
+
 #[test]
 fn reset_history_drops_the_past_at_once() {
     let (host, ctx) = host_and_context(InitSettings::default());
@@ -547,6 +581,9 @@ fn reset_history_drops_the_past_at_once() {
         let dn = context(&ctx, SignalType::Diffuse, S, S);
         let mut frame = ctx.create_task_container();
         let mut common = images.denoising_common(&camera);
+        // The control keeps its history only without anti-lag, which restarts pixels whose
+        // signal jumped (red to green) on its own; with it, the same test shows anti-lag.
+        common.settings.anti_lag = false;
         host.write_image(&noisy, &rgba_bytes(&red), GENERAL).unwrap();
         for f in 0..9 {
             if f == 8 {
@@ -572,7 +609,7 @@ fn reset_history_drops_the_past_at_once() {
         remaining_red[0], remaining_red[1]
     );
     assert!(remaining_red[0] < 1e-4, "reset: no red at all");
-    assert!(remaining_red[1] > 0.1, "without reset the history shows (the test is not vacuous)");
+    assert!(remaining_red[1] > 0.1, "without reset (nor anti-lag) the history shows (the test is not vacuous)");
     host.destroy_image(noisy);
     images.destroy(&host);
     drop(ctx);
@@ -838,7 +875,9 @@ fn every_setting_affects_the_denoisers_that_read_it() {
         ("anti_firefly", |s| s.anti_firefly = false),
         ("max_shadow_blur_radius", |s| s.max_shadow_blur_radius = 1.0),
     ];
-    // Which denoisers read each field (DenoiserSettings' documentation).
+    // Which denoisers read each field (DenoiserSettings' documentation). `anti_lag` acts only
+    // when the signal changes: a_moving_object_leaves_no_old_occlusion_behind (AO) and
+    // anti_lag_restarts_a_changed_signal (diffuse) show it.
     let reads = |signal: SignalType, field: &str| match field {
         "max_history_frames" | "normal_power" | "plane_distance_sigma" => true,
         "fast_history_frames" | "history_clamp_sigma" | "spatial_passes" | "luminance_sigma" => signal != SignalType::Shadow,

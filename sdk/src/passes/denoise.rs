@@ -381,11 +381,14 @@ fn constants(job: &DenoiseJob, previous: &Camera, previous_jitter: [f32; 2], see
         SignalType::MultiShadow => 4,
         SignalType::SpecularAndDiffuse => unreachable!("split into its two signals"),
     };
-    let kinds = match job.signal {
-        SignalType::SpecularAndDiffuse => [1, 0, 0, 0],
-        s => [kind(s), kind(s), crate::gpu::formats::channel_count(job.inputs[0].format).is_some_and(|n| n >= 2) as u32, 0],
-    };
     let s = &c.settings;
+    let anti_lag = s.anti_lag as u32;
+    let kinds = match job.signal {
+        SignalType::SpecularAndDiffuse => [1, 0, 0, anti_lag],
+        k => {
+            [kind(k), kind(k), crate::gpu::formats::channel_count(job.inputs[0].format).is_some_and(|n| n >= 2) as u32, anti_lag]
+        }
+    };
     DenoiseConstantsGpu {
         common: TraceCommonGpu::new(&trace, seed, 0),
         prev_world_to_clip: prev_world_to_clip.to_cols_array(),

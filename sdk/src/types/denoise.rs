@@ -165,6 +165,11 @@ pub struct DenoiserSettings {
     pub anti_firefly: bool,
     /// Widest penumbra blur radius in pixels (0..=64). Default 24. Shadows.
     pub max_shadow_blur_radius: f32,
+    /// Restart a pixel's history where this frame's 5x5 same-surface samples and its fast
+    /// history disagree by more than 3 deviations (and keep at most the fast window past 2):
+    /// a moved object's contact AO, a light switched on. Costs ~0.35 ms at 1080p on an H200.
+    /// Default true. AO, diffuse (and the diffuse half of specular + diffuse).
+    pub anti_lag: bool,
 }
 
 impl Default for DenoiserSettings {
@@ -179,6 +184,7 @@ impl Default for DenoiserSettings {
             plane_distance_sigma: 0.02,
             anti_firefly: true,
             max_shadow_blur_radius: 24.0,
+            anti_lag: true,
         }
     }
 }
