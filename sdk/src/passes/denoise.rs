@@ -220,6 +220,13 @@ impl DenoisePass {
     /// Records one denoise task against its context's state (and advances that state), with
     /// the shared intermediates of `temps`.
     pub fn record(&self, r: &mut Recording<'_>, state: &mut DenoiserState, temps: &mut TempPool, job: &DenoiseJob) {
+        // The pool grows with every context made (`ExecuteContext::create_denoising_context`),
+        // so it always serves a live context's task; recording nothing beats an out-of-bounds
+        // index should that ever not hold.
+        if temps.pairs.len() < job.count {
+            log::error!("the denoisers' shared intermediates do not serve this task: skipped");
+            return;
+        }
         let d = &r.device.raw;
         let stage = vk::PipelineStageFlags2::COMPUTE_SHADER;
         if !state.initialized || !temps.initialized {
