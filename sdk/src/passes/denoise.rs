@@ -13,7 +13,7 @@ use crate::gpu::memory::{Image, Memory, MemoryKind, COLOR_RANGE};
 use crate::gpu::pipeline::{Binding, PipelineBuilder};
 use crate::gpu::sync;
 use crate::shaders;
-use crate::types::{Camera, ImageInput, TraceCommon};
+use crate::types::{Camera, ImageInput};
 use crate::types::{DenoiseJob, DenoisingContextInput, DenoisingMethod, MotionType, SignalType, TaskKind};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
@@ -356,16 +356,7 @@ impl DenoisePass {
 
 fn constants(job: &DenoiseJob, previous: &Camera, previous_jitter: [f32; 2], seed: u32, reset: bool) -> DenoiseConstantsGpu {
     let c = &job.common;
-    let trace = TraceCommon {
-        depth: c.depth,
-        normals: c.normals,
-        viewport: c.viewport,
-        camera: c.camera,
-        roughness: c.roughness,
-        input_mask: c.input_mask,
-        half_resolution_mode: c.half_resolution_mode,
-        ..Default::default()
-    };
+    let trace = c.as_trace_common();
     let eye = c.camera.world_to_view.inverse().w_axis;
     let prev_eye = previous.world_to_view.inverse().w_axis;
     let prev_world_to_clip = previous.view_to_clip * previous.world_to_view;

@@ -28,7 +28,7 @@
 //! `DenoisingMethod::SpatialOnly` filters each frame alone (no history), to tell a temporal
 //! problem from a spatial one.
 use super::handles::DenoisingContextHandle;
-use super::inputs::{Camera, DepthInput, ImageInput, NormalInput, RoughnessInput, Viewport};
+use super::inputs::{Camera, DepthInput, ImageInput, NormalInput, RoughnessInput, TraceCommon, Viewport};
 use super::trace::LightInfo;
 use ash::vk;
 
@@ -223,6 +223,24 @@ pub struct DenoisingCommon {
     pub reset_history: bool,
     /// Filter settings (documented defaults).
     pub settings: DenoiserSettings,
+}
+
+impl DenoisingCommon {
+    /// The G-buffer inputs as a trace task has them (the rest default): one conversion for
+    /// the validation and the recording of every denoise task, so a G-buffer input added to
+    /// both structs is carried in one place.
+    pub(crate) fn as_trace_common(&self) -> TraceCommon {
+        TraceCommon {
+            depth: self.depth,
+            normals: self.normals,
+            viewport: self.viewport,
+            camera: self.camera,
+            roughness: self.roughness,
+            input_mask: self.input_mask,
+            half_resolution_mode: self.half_resolution_mode,
+            ..Default::default()
+        }
+    }
 }
 
 impl Default for DenoisingCommon {

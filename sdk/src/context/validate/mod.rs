@@ -429,16 +429,7 @@ const MOTION_FORMATS_2: &[vk::Format] =
 /// formats its signal reads and writes.
 pub(crate) fn denoise(j: &DenoiseJob, limits: &Limits) -> Result<()> {
     let c = &j.common;
-    let as_trace = TraceCommon {
-        depth: c.depth,
-        normals: c.normals,
-        viewport: c.viewport,
-        camera: c.camera,
-        roughness: c.roughness,
-        input_mask: c.input_mask,
-        ..Default::default()
-    };
-    trace_common(&as_trace, limits)?;
+    trace_common(&c.as_trace_common(), limits)?;
     if let Some(p) = &c.previous_camera {
         matrix("DenoisingCommon.previous_camera.world_to_view", &p.world_to_view)?;
         matrix("DenoisingCommon.previous_camera (view_to_clip * world_to_view)", &(p.view_to_clip * p.world_to_view))?;
