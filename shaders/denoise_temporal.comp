@@ -11,7 +11,7 @@
 const float FIREFLY_SIGMA = 4.0;
 // Anti-lag threshold, in standard deviations of the noise of a 3x3 mean against the fast
 // history (see below).
-const float ANTILAG_SIGMA = 3.0;
+const float ANTILAG_SIGMA = 2.5;
 const float ANTILAG_SOFT = 2.0;
 // The anti-lag test's footprint: (2r+1)^2 pixels (25 samples: a change of a quarter of the
 // signal's range stands out of 1-ray noise).

@@ -38,12 +38,12 @@ void hrt_ao_main(uvec2 local) {
     float ray_length = u_c.ao_params.x;
     float power = u_c.ao_params.y;
     uint rays = u_c.ao_counts.x;
-    uint seed = hrt_pcg(pixel.x ^ hrt_pcg(pixel.y ^ hrt_pcg(c.frame.x)));
-    vec2 shift = vec2(hrt_u01(seed), hrt_u01(hrt_pcg(seed)));
+    // A new rotation every frame (see hrt_independent_frames).
+    HrtSequence seq = hrt_sequence(0u, false, pixel, hrt_independent_frames(c.frame.x, 0xa0u), rays);
 
     float visibility = 0.0;
     for (uint i = 0u; i < rays; ++i) {
-        vec3 dir = basis * hrt_cosine_hemisphere(hrt_r2(i, shift));
+        vec3 dir = basis * hrt_cosine_hemisphere(hrt_sample(seq, i));
         float t = hrt_trace_hit_t(origin, dir, ray_length);
         visibility += t < 0.0 ? 1.0 : pow(clamp(t / ray_length, 0.0, 1.0), power);
     }

@@ -61,13 +61,13 @@ void hrt_diffuse_main() {
     bool bilinear = u_c.params.y != 0u;
     InstanceTable table = InstanceTable(u_c.params.zw);
     float ray_length = u_c.miss.w;
-    uint seed = hrt_pcg(pixel.x ^ hrt_pcg(pixel.y ^ hrt_pcg(c.frame.x ^ 0xd1ffu)));
-    vec2 shift = vec2(hrt_u01(seed), hrt_u01(hrt_pcg(seed)));
+    // A new rotation every frame (see hrt_independent_frames).
+    HrtSequence seq = hrt_sequence(0u, false, pixel, hrt_independent_frames(c.frame.x, 0xd1ffu), rays);
 
     vec3 sum = vec3(0.0);
     float dist = 0.0;
     for (uint i = 0u; i < rays; ++i) {
-        vec3 dir = basis * hrt_cosine_hemisphere(hrt_r2(i, shift));
+        vec3 dir = basis * hrt_cosine_hemisphere(hrt_sample(seq, i));
         float w = disney ? hrt_disney_factor(max(dot(n, dir), 0.0), ndotv, dot(dir, normalize(dir + v)), roughness) : 1.0;
         HitRecord p_hit = hrt_trace_record(u_tlas, c.frame.y & 0xffu, origin, dir, ray_length);
         if (p_hit.t < 0.0) {

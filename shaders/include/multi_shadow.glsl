@@ -71,8 +71,7 @@ void hrt_multi_shadow_main() {
     vec3 origin = hrt_offset_ray(c, p, n);
     uint rays = u_c.counts.x;
     // The same per-pixel sequence as the single-light task, so one light gives its image.
-    uint seed = hrt_pcg(pixel.x ^ hrt_pcg(pixel.y ^ hrt_pcg(c.frame.x ^ 0x5badu)));
-    vec2 shift = vec2(hrt_u01(seed), hrt_u01(hrt_pcg(seed)));
+    HrtSequence seq = hrt_sequence(c.frame.x, c.frame.z != 0u, pixel, 0x5badu, rays);
     uvec4 words[2] = uvec4[2](uvec4(0u), uvec4(0u));
     float vis_sum = 0.0, weight_sum = 0.0, width_sum = 0.0, dist_min = 1e30;
     uint occluded = 0u;
@@ -86,7 +85,7 @@ void hrt_multi_shadow_main() {
             for (uint i = 0u; i < rays; ++i) {
                 vec3 dir;
                 float tmax;
-                hrt_light_ray(light, origin, hrt_r2(i, shift), dir, tmax);
+                hrt_light_ray(light, origin, hrt_sample(seq, i), dir, tmax);
                 float t = hrt_trace_record_flags(u_tlas, flags, c.frame.y & 0xffu, origin, dir, tmax).t;
                 if (t < 0.0) {
                     visible += 1u;

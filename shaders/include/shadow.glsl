@@ -41,8 +41,7 @@ void hrt_shadow_main() {
     }
     vec3 origin = hrt_offset_ray(c, p, n);
     uint rays = u_c.counts.x;
-    uint seed = hrt_pcg(pixel.x ^ hrt_pcg(pixel.y ^ hrt_pcg(c.frame.x ^ 0x5badu)));
-    vec2 shift = vec2(hrt_u01(seed), hrt_u01(hrt_pcg(seed)));
+    HrtSequence seq = hrt_sequence(c.frame.x, c.frame.z != 0u, pixel, 0x5badu, rays);
 
     float closest = 1e30;
     uint visible = 0u;
@@ -51,7 +50,7 @@ void hrt_shadow_main() {
     for (uint i = 0u; i < rays; ++i) {
         vec3 dir;
         float tmax;
-        hrt_light_ray(u_c.light, origin, hrt_r2(i, shift), dir, tmax);
+        hrt_light_ray(u_c.light, origin, hrt_sample(seq, i), dir, tmax);
         // Any occluder will do for visibility; the denoiser's penumbra estimate wants the
         // closest (unless the task chose first-hit speed).
         float t = hrt_trace_record_flags(u_tlas, flags, c.frame.y & 0xffu, origin, dir, tmax).t;

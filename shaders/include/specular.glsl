@@ -78,8 +78,8 @@ void hrt_specular_main() {
     InstanceTable table = InstanceTable(u_c.counts.zw);
     float ray_length = u_c.params.x;
     float clamp_lum = u_c.params.y;
-    uint seed = hrt_pcg(pixel.x ^ hrt_pcg(pixel.y ^ hrt_pcg(c.frame.x ^ 0x5bec7u)));
-    vec2 shift = vec2(hrt_u01(seed), hrt_u01(hrt_pcg(seed)));
+    // A new rotation every frame (see hrt_independent_frames).
+    HrtSequence seq = hrt_sequence(0u, false, pixel, hrt_independent_frames(c.frame.x, 0x5bec7u), rays);
 
     vec3 sum = vec3(0.0);
     float first_t = ray_length;
@@ -89,7 +89,7 @@ void hrt_specular_main() {
         if (alpha < 1e-4) {
             dir = reflect(-v, n);
         } else {
-            vec3 h = basis * hrt_ggx_vndf(v_local, alpha, hrt_r2(i, shift));
+            vec3 h = basis * hrt_ggx_vndf(v_local, alpha, hrt_sample(seq, i));
             dir = reflect(-v, h);
             float ndotl = dot(n, dir);
             if (ndotl <= 0.0) continue; // reflected below the surface: no light

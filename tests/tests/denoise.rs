@@ -187,8 +187,9 @@ fn diffuse_gi_denoised_over_32_frames_approaches_the_reference() {
 }
 
 /// Shadows of a sphere on a plane under `light`, traced at 1 ray/pixel and denoised for
-/// `frames` frames: (raw, denoised, reference visibility, G-buffer).
-fn denoised_shadow(light: LightInfo, frames: u32) -> (Vec<f32>, Vec<f32>, Vec<f32>, GBuffer) {
+/// `frames` frames whose indices start at `seed`: (raw, denoised, reference visibility,
+/// G-buffer).
+fn denoised_shadow(light: LightInfo, frames: u32, seed: u64) -> (Vec<f32>, Vec<f32>, Vec<f32>, GBuffer) {
     const W: u32 = 64;
     let (scene, camera) = sphere_on_plane();
     let mut f = Fixture::new(&scene, None, &camera, W);
@@ -209,7 +210,8 @@ fn denoised_shadow(light: LightInfo, frames: u32) -> (Vec<f32>, Vec<f32>, Vec<f3
         input: noisy.input(GENERAL),
         output: denoised.input(GENERAL),
     };
-    for _ in 0..frames {
+    for k in 0..frames as u64 {
+        f.frame.set_frame_index(seed + k);
         f.frame.schedule_shadow(&trace).unwrap();
         f.frame.schedule_denoise_shadow(&task).unwrap();
         let done = run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
@@ -257,26 +259,37 @@ fn sun(angular_extent: f32) -> LightInfo {
     LightInfo { light_type: LightType::Directional, direction: Vec3::new(-0.5, -1.0, -0.3), angular_extent, ..Default::default() }
 }
 
+/// Issue 12's penumbra goal: after 32 frames of one ray per pixel, the denoised penumbra (0.02
+/// < reference < 0.98) of a 0.2 rad sun within 8% relative RMSE of the CPU reference, the mean
+/// over four seeds. Why that is reachable: a 1-ray pixel is one Bernoulli sample (~0.72
+/// relative there); 32 independent ones leave 0.72 / sqrt(32) = 13%, and a blur cannot make
+/// up the rest in a penumbra 2-4 px wide without flattening it. The shadow trace's per-pixel
+/// sequence runs on across frames (include/common.glsl, hrt_sequence), so 32 frames are a
+/// stratified set of the light's disk: their raw mean is 7.3% off, the denoised image ~7.5%.
+/// The reference (576 stratified samples) adds ~1%.
 #[test]
 fn soft_shadow_denoised_over_32_frames_approaches_the_reference() {
-    let (raw, out, reference, g) = denoised_shadow(sun(0.2), FRAMES);
-    let raw_e = stats::relative_rmse(&raw, &reference, &g.hit);
-    let den_e = stats::relative_rmse(&out, &reference, &g.hit);
-    let penumbra: Vec<bool> = g.hit.iter().zip(&reference).map(|(h, r)| *h && *r > 0.02 && *r < 0.98).collect();
-    let (raw_p, den_p) = (stats::relative_rmse(&raw, &reference, &penumbra), stats::relative_rmse(&out, &reference, &penumbra));
-    eprintln!("soft sun shadow (0.2 rad), 1 ray/pixel, {FRAMES} frames: relative RMSE raw {raw_e:.4}, denoised {den_e:.4}; penumbra ({} px) raw {raw_p:.4}, denoised {den_p:.4}", penumbra.iter().filter(|m| **m).count());
-    // Most of the image is lit (exact at 1 ray); the penumbra is where the noise is. There a
-    // 1-ray pixel is one Bernoulli sample (~0.76 relative); the blur is only as wide as the
-    // penumbra (2-4 px here) and the reference has ~0.04 relative noise of its own.
+    let (mut raw_e, mut den_e, mut raw_p, mut den_p) = (0.0, 0.0, 0.0, 0.0);
+    let seeds = [0u64, 1 << 20, 2 << 20, 3 << 20];
+    for seed in seeds {
+        let (raw, out, reference, g) = denoised_shadow(sun(0.2), FRAMES, seed);
+        let n = seeds.len() as f32;
+        raw_e += stats::relative_rmse(&raw, &reference, &g.hit) / n;
+        den_e += stats::relative_rmse(&out, &reference, &g.hit) / n;
+        let penumbra: Vec<bool> = g.hit.iter().zip(&reference).map(|(h, r)| *h && *r > 0.02 && *r < 0.98).collect();
+        raw_p += stats::relative_rmse(&raw, &reference, &penumbra) / n;
+        den_p += stats::relative_rmse(&out, &reference, &penumbra) / n;
+    }
+    eprintln!("soft sun shadow (0.2 rad), 1 ray/pixel, {FRAMES} frames, mean of 4 seeds: relative RMSE raw {raw_e:.4}, denoised {den_e:.4}; penumbra raw {raw_p:.4}, denoised {den_p:.4}");
+    assert!(den_p <= 0.08, "denoised penumbra relative RMSE {den_p}");
     assert!(den_e < 0.03, "denoised relative RMSE {den_e}");
     assert!(den_e * 3.0 < raw_e);
-    assert!(den_p * 3.0 < raw_p);
 }
 
 #[test]
 fn hard_shadow_edges_stay_within_one_pixel() {
     const W: usize = 64;
-    let (raw, out, _, g) = denoised_shadow(sun(0.0), 8);
+    let (raw, out, _, g) = denoised_shadow(sun(0.0), 8, 0);
     // A hard light: the raw image is exact (binary). The denoised edge may move at most one
     // pixel: every pixel that changed has a neighbour of the other raw value.
     let mut changed = 0;

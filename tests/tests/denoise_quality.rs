@@ -28,11 +28,19 @@ struct Stage {
     noisy: HostImage,
     den: HostImage,
     dn: DenoisingContextHandle,
+    /// The frame index of the next build: it seeds every ray (`set_frame_index`).
+    next_frame: u64,
 }
+
+/// Seeds (first frame indices) a measurement is repeated with. One realisation of 1-ray noise
+/// moves these small-image figures by about a percent (the crease bias read -0.3% with one
+/// seed and +1.9% with another), as much as the thresholds they are held to: each figure is
+/// the mean over these.
+const SEEDS: [u64; 4] = [0, 1 << 20, 2 << 20, 3 << 20];
 
 impl Stage {
     /// `colours`: each instance's cache colour (None: black).
-    fn new(scene: &Scene, colours: Option<&[[f32; 3]]>, camera: Camera, size: u32, signal: SignalType) -> Stage {
+    fn new(scene: &Scene, colours: Option<&[[f32; 3]]>, camera: Camera, size: u32, signal: SignalType, seed: u64) -> Stage {
         let (host, ctx) = host_and_context(InitSettings::default());
         let g = GBuffer::render(&Tracer::new(scene), &camera, size, size);
         let images = GBufferImages::upload(&host, &g).unwrap();
@@ -48,7 +56,7 @@ impl Stage {
         let dn = ctx
             .create_denoising_context(&DenoisingContextInput { max_width: size, max_height: size, signal, ..Default::default() })
             .unwrap();
-        Stage { host, ctx, frame, g, camera, images, gpu_scene, noisy, den, dn }
+        Stage { host, ctx, frame, g, camera, images, gpu_scene, noisy, den, dn, next_frame: seed }
     }
 
     fn trace_common(&self) -> TraceCommon {
@@ -60,6 +68,8 @@ impl Stage {
     }
 
     fn run(&mut self) {
+        self.frame.set_frame_index(self.next_frame);
+        self.next_frame += 1;
         run_frame(&self.host, &self.ctx, &mut self.frame).unwrap();
     }
 
@@ -88,7 +98,7 @@ impl Stage {
 fn bias(signal: SignalType, frames: u32, converged: u32) -> [(f64, f64); 3] {
     const W: u32 = 48;
     let (scene, colours, camera) = reference::coloured_room(true);
-    let mut st = Stage::new(&scene, Some(&colours), camera, W, signal);
+    let mut st = Stage::new(&scene, Some(&colours), camera, W, signal, SEEDS[0]);
     let mut common = st.trace_common();
     common.roughness.global_roughness = 0.5;
     let mut dc = st.denoising_common();
@@ -229,7 +239,7 @@ impl Occlusion {
 /// after the move, how much of the old contact AO (or shadow) the denoised image keeps where
 /// the floor was occluded and now is open — (denoised - new) / (old - new), averaged over
 /// that region; references: the SDK's own trace at 64 rays per pixel.
-fn moving_object_residual(signal: Occlusion) -> Vec<f32> {
+fn moving_object_residual(signal: Occlusion, seed: u64) -> Vec<f32> {
     use glam::{Affine3A, Vec3};
     const S: u32 = 64;
     let (mut scene, camera) = reference::sphere_on_plane();
@@ -238,7 +248,7 @@ fn moving_object_residual(signal: Occlusion) -> Vec<f32> {
     let mut moved = scene.clone();
     moved.instances[1].transform = at(0.9);
     let gb = GBuffer::render(&Tracer::new(&moved), &camera, S, S);
-    let mut st = Stage::new(&scene, None, camera, S, signal.signal());
+    let mut st = Stage::new(&scene, None, camera, S, signal.signal(), seed);
     let old = signal.converged(&mut st, 1);
     for _ in 0..24 {
         signal.frame(&mut st, 1, true);
@@ -277,7 +287,7 @@ fn moving_object_residual(signal: Occlusion) -> Vec<f32> {
 fn a_moving_object_leaves_no_old_occlusion_behind() {
     let sun = LightInfo { direction: glam::Vec3::new(0.4, -1.0, -0.3), angular_extent: 0.1, ..Default::default() };
     for signal in [Occlusion::Ao, Occlusion::Shadow(sun)] {
-        let r = moving_object_residual(signal);
+        let r = mean_over_seeds(|k| moving_object_residual(signal, SEEDS[k as usize]));
         let shown: Vec<String> = r.iter().map(|v| format!("{:.0}%", v * 100.0)).collect();
         let name = if signal == Occlusion::Ao { "AO" } else { "shadow" };
         eprintln!("{name}: old occlusion kept, frames 1-12 after the move: {}", shown.join(" "));
@@ -287,11 +297,11 @@ fn a_moving_object_leaves_no_old_occlusion_behind() {
 
 /// Mean absolute error of the raw last frame and of the denoised image against the converged
 /// trace, per region of the converged shadow: (umbra < 0.02, lit > 0.98, penumbra between).
-fn shadow_regions(angular_extent: f32) -> [(f32, f32, usize); 3] {
+fn shadow_regions(angular_extent: f32, seed: u64) -> [(f32, f32, usize); 3] {
     const S: u32 = 64;
     let (scene, camera) = reference::sphere_on_plane();
     let sun = Occlusion::Shadow(LightInfo { direction: glam::Vec3::new(-0.5, -1.0, -0.3), angular_extent, ..Default::default() });
-    let mut st = Stage::new(&scene, None, camera, S, SignalType::Shadow);
+    let mut st = Stage::new(&scene, None, camera, S, SignalType::Shadow, seed);
     let reference = sun.converged(&mut st, 4);
     for _ in 0..32 {
         sun.frame(&mut st, 1, true);
@@ -323,8 +333,10 @@ fn shadow_regions(angular_extent: f32) -> [(f32, f32, usize); 3] {
 #[test]
 fn denoised_shadows_are_never_worse_than_a_raw_frame() {
     for extent in [0.03f32, 0.2] {
-        let r = shadow_regions(extent);
-        for (name, (raw, den, n)) in ["umbra", "lit", "penumbra"].iter().zip(r) {
+        let per_seed: Vec<_> = SEEDS.iter().map(|&s| shadow_regions(extent, s)).collect();
+        for (k, name) in ["umbra", "lit", "penumbra"].iter().enumerate() {
+            let mean = |f: fn(&(f32, f32, usize)) -> f32| per_seed.iter().map(|r| f(&r[k])).sum::<f32>() / SEEDS.len() as f32;
+            let (raw, den, n) = (mean(|r| r.0), mean(|r| r.1), per_seed[0][k].2);
             eprintln!("sun {extent} rad, {name} ({n} px): mean |error| raw {raw:.4}, denoised {den:.4}");
             if n > 0 {
                 assert!(den <= raw + 0.005, "sun {extent}: the denoised {name} is worse than a raw frame ({den} vs {raw})");
@@ -338,9 +350,31 @@ fn denoised_shadows_are_never_worse_than_a_raw_frame() {
 /// rule of denoise_atrous.comp the spatial filter lifted them by 6%).
 #[test]
 fn creases_keep_their_occlusion() {
+    let per_seed: Vec<[f64; 3]> = SEEDS.iter().map(|&s| crease_bias(s)).collect();
+    let [bias, vs_raw, pixels] = mean_over_seeds(|k| per_seed[k as usize].to_vec()).try_into().unwrap();
+    eprintln!(
+        "creases ({pixels:.0} px, converged AO < 0.75): denoised {:+.2}% against the converged trace, {:+.2}% against its 32 raw frames",
+        bias * 100.0,
+        vs_raw * 100.0
+    );
+    assert!(pixels > 100.0, "the room has creases ({pixels} px)");
+    assert!(bias <= 0.01, "creases come out {:.2}% brighter than converged", bias * 100.0);
+    assert!(vs_raw <= 0.01, "creases come out {:.2}% brighter than their frames", vs_raw * 100.0);
+}
+
+/// The mean, element by element, of `f(k)` for k = 0..SEEDS.len() (f(k) uses SEEDS[k] or
+/// results made with it).
+fn mean_over_seeds<T: Into<f64> + Copy>(mut f: impl FnMut(u64) -> Vec<T>) -> Vec<f64> {
+    let runs: Vec<Vec<T>> = (0..SEEDS.len() as u64).map(&mut f).collect();
+    (0..runs[0].len()).map(|i| runs.iter().map(|r| r[i].into()).sum::<f64>() / runs.len() as f64).collect()
+}
+
+/// The crease AO of the coloured room after 32 denoised 1-ray frames: (denoised / converged -
+/// 1, denoised / the mean of its raw frames - 1, crease pixels), summed over the creases.
+fn crease_bias(seed: u64) -> [f64; 3] {
     const S: u32 = 64;
     let (scene, _, camera) = reference::coloured_room(true);
-    let mut st = Stage::new(&scene, None, camera, S, SignalType::DiffuseOcclusion);
+    let mut st = Stage::new(&scene, None, camera, S, SignalType::DiffuseOcclusion, seed);
     // Two independent converged traces: one picks the crease pixels, the other is the
     // reference there (picking by the reference itself would favour pixels where its own noise
     // is low, and make any estimate look bright).
@@ -356,27 +390,18 @@ fn creases_keep_their_occlusion() {
     let crease: Vec<usize> = (0..reference.len()).filter(|&i| st.g.hit[i] && selector[i] < 0.75).collect();
     let sum = |v: &[f32]| crease.iter().map(|&i| v[i] as f64).sum::<f64>();
     let (sum_d, sum_r, sum_raw) = (sum(&out), sum(&reference), sum(&raw_mean));
-    let (bias, vs_raw) = (sum_d / sum_r - 1.0, sum_d / sum_raw - 1.0);
-    eprintln!(
-        "creases ({} px, converged AO < 0.75): denoised {:+.2}% against the converged trace, {:+.2}% against its 32 raw frames",
-        crease.len(),
-        bias * 100.0,
-        vs_raw * 100.0
-    );
-    assert!(crease.len() > 100, "the room has creases ({} px)", crease.len());
-    assert!(bias <= 0.01, "creases come out {:.2}% brighter than converged", bias * 100.0);
-    // Against its own frames (the raw 32-frame mean is itself ~1.4% dark here by chance).
-    assert!(vs_raw <= 0.02, "creases come out {:.2}% brighter than their frames", vs_raw * 100.0);
+    let n = crease.len() as f64;
     st.finish();
+    [sum_d / sum_r - 1.0, sum_d / sum_raw - 1.0, n]
 }
 
 /// The sky brightens 5x after 24 frames (a light switched on): per frame after the change, how
 /// much of the old GI the denoised image keeps — (denoised - new) / (old - new) over the
 /// surfaces, references at 64 rays per pixel.
-fn gi_switch_residual() -> Vec<f32> {
+fn gi_switch_residual(seed: u64) -> Vec<f32> {
     const S: u32 = 48;
     let (scene, colours, camera) = reference::coloured_room(true);
-    let mut st = Stage::new(&scene, Some(&colours), camera, S, SignalType::Diffuse);
+    let mut st = Stage::new(&scene, Some(&colours), camera, S, SignalType::Diffuse, seed);
     let trace = |st: &mut Stage, sky: [f32; 3], rays: u32, denoise: bool| {
         let (common, dc) = (st.trace_common(), st.denoising_common());
         let (input, output, context) = (st.noisy.input(GENERAL), st.den.input(GENERAL), st.dn);
@@ -422,7 +447,7 @@ fn gi_switch_residual() -> Vec<f32> {
 /// by few rays. (No threshold in the issue; bounded here against regressions.)
 #[test]
 fn gi_follows_a_light_switched_on() {
-    let r = gi_switch_residual();
+    let r = mean_over_seeds(|k| gi_switch_residual(SEEDS[k as usize]));
     let shown: Vec<String> = r.iter().map(|v| format!("{:.0}%", v * 100.0)).collect();
     eprintln!("GI: old lighting kept, frames 1-12 after the sky brightened: {}", shown.join(" "));
     assert!(r[3] <= 0.65 && r[11] <= 0.35, "the old lighting lingers: {shown:?}");
