@@ -19,7 +19,7 @@ use std::time::Instant;
 
 const USAGE: &str =
     "bench [--triangles 1048576] [--instances 1024] [--big-mesh-triangles 1048576] [--width 1920] [--height 1080] \
-[--rays 1,4] [--frames 20] [--warmup-ms 1000] [--tile-unit-length 1.0] [--vertex-stride 12] [--json bench.json]";
+[--rays 1,4] [--frames 20] [--warmup-ms 1000] [--tile-unit-length 1.0] [--vertex-stride 12] [--denoise-passes 5] [--anti-lag 1] [--json bench.json]";
 
 fn main() {
     if let Err(e) = run() {
@@ -142,6 +142,11 @@ fn run() -> Result<(), String> {
     // The engine's vertex layout (positions interleaved in vertices of this many bytes): the
     // SDK's copy is compact either way, so trace times must not change with it.
     let vertex_stride = args.get("vertex-stride", 12u64);
+    // Denoiser settings of the denoise rows (what each pass costs: rerun with fewer à-trous
+    // iterations or without the anti-lag test). Defaults: DenoiserSettings's.
+    let defaults = hybrid_rt::DenoiserSettings::default();
+    let denoise_passes = args.get("denoise-passes", defaults.spatial_passes);
+    let anti_lag = args.get("anti-lag", defaults.anti_lag as u32) != 0;
     let e = |e: hybrid_rt::Error| e.to_string();
 
     let host = Host::new()?;
@@ -538,7 +543,8 @@ fn run() -> Result<(), String> {
     let (in_a, in_b, out_a, out_b) = (sampled(f16)?, sampled(f16)?, sampled(f16)?, sampled(f16)?);
     let general = ash::vk::ImageLayout::GENERAL;
     let (ia, ib, oa, ob) = (in_a.input(general), in_b.input(general), out_a.input(general), out_b.input(general));
-    let dcommon = hybrid_rt::DenoisingCommon { roughness: glossy.roughness, ..gbuffer.denoising_common(&camera) };
+    let settings = hybrid_rt::DenoiserSettings { spatial_passes: denoise_passes, anti_lag, ..Default::default() };
+    let dcommon = hybrid_rt::DenoisingCommon { roughness: glossy.roughness, settings, ..gbuffer.denoising_common(&camera) };
     let mut denoise_rows = Vec::new();
     let mut denoise_json = Vec::new();
     let mut measure = |name: &str,
