@@ -19,7 +19,8 @@ void main() {
     uint count = u_d.flags.y;
     bool last = u_pass.y != 0u;
     vec3 p, n;
-    bool surface = hrt_surface_at(imageLoad(u_gbuf_cur, pixel).xy, u_d.c.clip_to_world, u_d.eye.xyz, pixel, p, n);
+    HrtPixelRays rays = hrt_pixel_rays(u_d.c.clip_to_world);
+    bool surface = hrt_surface_on(rays, imageLoad(u_gbuf_cur, pixel).xy, u_d.eye.xyz, pixel, p, n);
     float dist = distance(p, u_d.eye.xyz);
     float roughness = hrt_denoise_roughness(pixel);
     for (uint s = 0u; s < count; ++s) {
@@ -60,12 +61,13 @@ void main() {
                 ivec2 q = pixel + ivec2(xx, yy) * spacing;
                 if (!hrt_in_viewport(q)) continue;
                 vec3 q_p, q_n;
-                if (!hrt_surface_at(imageLoad(u_gbuf_cur, q).xy, u_d.c.clip_to_world, u_d.eye.xyz, q, q_p, q_n)) continue;
+                if (!hrt_surface_on(rays, imageLoad(u_gbuf_cur, q).xy, u_d.eye.xyz, q, q_p, q_n)) continue;
                 vec4 t = hrt_load_temp(s, q);
-                float g = hrt_geometry_weight(p, n, dist, q_p, q_n);
+                float lg = hrt_geometry_log2_weight(p, n, dist, q_p, q_n);
                 taps += 1.0;
-                on_surface += g > 0.5 ? 1.0 : 0.0;
-                float w = H[abs(xx)] * H[abs(yy)] * g * exp(-abs(hrt_luminance(t.rgb) - l_c) / stop);
+                on_surface += lg > -1.0 ? 1.0 : 0.0; // geometry weight > 0.5
+                float lum_stop = abs(hrt_luminance(t.rgb) - l_c) / stop;
+                float w = H[abs(xx)] * H[abs(yy)] * exp2(lg - lum_stop * 1.4426950409);
                 if (specular) w *= exp(-abs(hrt_denoise_roughness(q) - roughness) * 10.0);
                 sum += w * t.rgb;
                 wsum += w;

@@ -124,6 +124,36 @@ bool hrt_surface_at(uvec2 packed_surface, mat4 clip_to_world, vec3 eye, ivec2 q,
     return dist >= 0.0;
 }
 
+// The current camera's pixel rays as an affine function of the pixel: clip_to_world x (ndc,
+// 0.5, 1) is linear in ndc, and ndc in the pixel, so h(q) = h0 + q.x hx + q.y hy. A position
+// then costs two vec4 multiply-adds and a divide instead of a matrix product — the à-trous
+// passes reconstruct 24 neighbours per pixel per iteration.
+struct HrtPixelRays {
+    vec4 h0, hx, hy;
+};
+
+HrtPixelRays hrt_pixel_rays(mat4 clip_to_world) {
+    vec2 s = 2.0 / u_d.c.viewport.zw;
+    vec2 o = (0.5 - u_d.c.viewport.xy) * s - 1.0; // ndc of pixel (0, 0)'s centre
+    return HrtPixelRays(clip_to_world * vec4(o, 0.5, 1.0), clip_to_world[0] * s.x, clip_to_world[1] * s.y);
+}
+
+// hrt_surface_at with the rays above (the same result up to rounding).
+bool hrt_surface_on(HrtPixelRays r, uvec2 packed_surface, vec3 eye, ivec2 q, out vec3 p, out vec3 n) {
+    float dist;
+    hrt_unpack_surface(packed_surface, n, dist);
+    vec4 h = r.h0 + float(q.x) * r.hx + float(q.y) * r.hy;
+    p = eye + normalize(h.xyz / h.w - eye) * dist;
+    return dist >= 0.0;
+}
+
+// log2 of hrt_geometry_weight: a filter with further stops (the à-trous luminance stop) adds
+// their logarithms and takes one exp2, two transcendental operations per tap instead of four.
+float hrt_geometry_log2_weight(vec3 p, vec3 n, float dist, vec3 q_p, vec3 q_n) {
+    float plane = abs(dot(n, q_p - p)) / (u_d.stops.z * dist);
+    return u_d.stops.y * log2(max(dot(n, q_n), 1e-8)) - plane * plane * 1.4426950409;
+}
+
 // Edge-stopping weight of a neighbour surface (q_p, q_n) seen from (p, n) at distance `dist`:
 // plane distance relative to the view distance, and the normal similarity.
 float hrt_geometry_weight(vec3 p, vec3 n, float dist, vec3 q_p, vec3 q_n) {
