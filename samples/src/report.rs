@@ -2,6 +2,7 @@
 //! SDK's timestamp queries, handed back with each ticket) and per pass of the sample's own
 //! (its timestamp queries), means over the frames after the first; and the SDK's memory.
 use crate::renderer::{Renderer, Stats};
+use serde::Serialize;
 
 pub struct Report {
     pub device: String,
@@ -79,25 +80,54 @@ impl Report {
         format!("frame {:.2} ms (SDK {:.2} ms)", self.frame_ms(), sdk)
     }
 
+    /// The report as JSON (serde_json: names are escaped whatever the device calls itself).
+    /// `frames` counts every frame rendered; the times are means over `measured_frames`, the
+    /// frames after the first (which builds the BVH).
     pub fn json(&self) -> String {
-        let list = |v: &mut dyn Iterator<Item = &(String, f64)>| {
-            v.map(|(l, ms)| format!("{{\"label\": \"{l}\", \"gpu_ms\": {ms:.4}}}")).collect::<Vec<_>>().join(", ")
+        #[derive(Serialize)]
+        struct Json<'a> {
+            device: &'a str,
+            width: u32,
+            height: u32,
+            frames: u64,
+            measured_frames: u64,
+            first_frame_bvh_ms: f64,
+            frame_gpu_ms: f64,
+            passes: Vec<Timing<'a>>,
+            sdk_tasks: Vec<Timing<'a>>,
+            sdk_bytes: u64,
+            cache_bytes: u64,
+            denoiser_bytes: u64,
+            blas_bytes: u64,
+            triangles: usize,
+        }
+        let j = Json {
+            device: &self.device,
+            width: self.width,
+            height: self.height,
+            frames: self.frames + 1,
+            measured_frames: self.frames,
+            first_frame_bvh_ms: self.first_frame_bvh_ms,
+            frame_gpu_ms: self.frame_ms(),
+            passes: timings(self.passes.iter()),
+            sdk_tasks: timings(self.sdk_tasks()),
+            sdk_bytes: self.sdk_bytes,
+            cache_bytes: self.cache_bytes,
+            denoiser_bytes: self.denoiser_bytes,
+            blas_bytes: self.blas_bytes,
+            triangles: self.triangles,
         };
-        format!(
-            "{{\"device\": \"{}\", \"width\": {}, \"height\": {}, \"frames\": {}, \"first_frame_bvh_ms\": {:.4}, \"frame_gpu_ms\": {:.4}, \"passes\": [{}], \"sdk_tasks\": [{}], \"sdk_bytes\": {}, \"cache_bytes\": {}, \"denoiser_bytes\": {}, \"blas_bytes\": {}, \"triangles\": {}}}\n",
-            self.device,
-            self.width,
-            self.height,
-            self.frames,
-            self.first_frame_bvh_ms,
-            self.frame_ms(),
-            list(&mut self.passes.iter()),
-            list(&mut self.sdk_tasks()),
-            self.sdk_bytes,
-            self.cache_bytes,
-            self.denoiser_bytes,
-            self.blas_bytes,
-            self.triangles
-        )
+        // Serialising plain numbers and strings cannot fail.
+        serde_json::to_string_pretty(&j).unwrap_or_default() + "\n"
     }
+}
+
+#[derive(Serialize)]
+struct Timing<'a> {
+    label: &'a str,
+    gpu_ms: f64,
+}
+
+fn timings<'a>(v: impl Iterator<Item = &'a (String, f64)>) -> Vec<Timing<'a>> {
+    v.map(|(l, ms)| Timing { label: l, gpu_ms: *ms }).collect()
 }

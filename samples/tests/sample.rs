@@ -75,7 +75,15 @@ fn pixel_ray(camera: &Camera, x: u32, y: u32) -> (Vec3, Vec3) {
 fn the_sample_renders_the_room_and_every_mode_is_sane() {
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("sample-room");
     let (w, h, f) = (W.to_string(), H.to_string(), FRAMES.to_string());
-    let text = run_sample(&["--headless", "--width", &w, "--height", &h, "--frames", &f], &out);
+    let json = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("sample-room.json");
+    let text = run_sample(&["--headless", "--width", &w, "--height", &h, "--frames", &f, "--json", json.to_str().unwrap()], &out);
+    assert!(text.contains(&format!("the frame: {}", out.join("composite.png").display())), "{text}");
+    // The JSON report: valid, every frame counted, the times over the frames after the first.
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["frames"], FRAMES, "{report}");
+    assert_eq!(report["measured_frames"], FRAMES - 1, "{report}");
+    assert!(report["frame_gpu_ms"].as_f64().is_some_and(|ms| ms > 0.0), "{report}");
+    assert!(report["sdk_tasks"].as_array().is_some_and(|t| t.iter().any(|t| t["label"] == "denoise AO")), "{report}");
     for label in [
         "raster G-buffers",
         "SDK (all tasks)",
@@ -248,8 +256,10 @@ fn the_sample_renders_a_gltf_file() {
     let (w, h) = (W.to_string(), H.to_string());
     run_sample(
         &[
-            file.to_str().unwrap(),
+            // The file after a flag: the hand-written parser took it for the flag's value and
+            // rendered the built-in room.
             "--headless",
+            file.to_str().unwrap(),
             "--width",
             &w,
             "--height",

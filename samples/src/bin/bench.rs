@@ -6,20 +6,63 @@
 //! - `build_gpu_task` CPU time (recording only; no submission or wait is inside)
 //! - AO GPU time per rays-per-pixel setting, beside the bare-ray floor: the same raygen
 //!   tracing the same rays through empty hit/miss shaders. The ratio is our overhead.
+use clap::Parser;
 use hybrid_rt::{
     BvhBuildTask, ExecuteContext, GeometryInput, GeometryTask, IndexBufferInput, InitSettings, InstanceInput, InstanceOperation,
     InstanceTask, TaskKind, TaskOperation, VertexBufferInput,
 };
-use hybrid_rt_samples::{args::Args, scenes};
+use hybrid_rt_samples::scenes;
 use hybrid_rt_testkit::host::Host;
 use hybrid_rt_testkit::reference::{GBuffer, Mesh, Tracer};
 use hybrid_rt_testkit::sdk_scene::{run_frame, GBufferImages, SceneOnGpu};
-use std::fmt::Write as _;
+use serde_json::json;
 use std::time::Instant;
 
-const USAGE: &str =
-    "bench [--triangles 1048576] [--instances 1024] [--big-mesh-triangles 1048576] [--width 1920] [--height 1080] \
-[--rays 1,4] [--frames 20] [--warmup-ms 1000] [--tile-unit-length 1.0] [--vertex-stride 12] [--denoise-passes 5] [--anti-lag 1] [--json bench.json]";
+/// GPU times of the SDK's tasks on a synthetic field (spheres on a ground plane), from its
+/// timestamp queries: BLAS/TLAS builds, recording, every trace beside its bare-ray floor, the
+/// denoisers, memory. Prints a table and writes JSON.
+#[derive(Parser, Debug)]
+#[command(name = "bench", version)]
+struct Cli {
+    /// Triangles of the field, spread over the instances.
+    #[arg(long, default_value_t = 1 << 20, value_parser = clap::value_parser!(u64).range(12..=(1 << 28)))]
+    triangles: u64,
+    /// Instances of the field (each its own geometry).
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u64).range(1..=(1 << 20)))]
+    instances: u64,
+    /// Triangles of the one big mesh whose BLAS build is timed alone.
+    #[arg(long, default_value_t = 1 << 20, value_parser = clap::value_parser!(u64).range(12..=(1 << 28)))]
+    big_mesh_triangles: u64,
+    #[arg(long, default_value_t = 1920, value_parser = clap::value_parser!(u32).range(8..=16384))]
+    width: u32,
+    #[arg(long, default_value_t = 1080, value_parser = clap::value_parser!(u32).range(8..=16384))]
+    height: u32,
+    /// Rays per pixel of the AO rows, comma-separated.
+    #[arg(long, value_delimiter = ',', default_value = "1,4", value_parser = clap::value_parser!(u32).range(1..=64))]
+    rays: Vec<u32>,
+    /// Frames per measurement (medians).
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u64).range(1..=10_000))]
+    frames: u64,
+    /// Keep the GPU busy this long before the AO rows (clocks settle).
+    #[arg(long, default_value_t = 1000)]
+    warmup_ms: u64,
+    /// Cache tile edge length (world units) for the injection rows.
+    #[arg(long, default_value_t = 1.0)]
+    tile_unit_length: f32,
+    /// Bytes per vertex of the field's vertex buffers (positions first): the SDK's copy is
+    /// compact either way.
+    #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u64).range(12..=256))]
+    vertex_stride: u64,
+    /// À-trous iterations of the denoise rows (default: DenoiserSettings's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=6))]
+    denoise_passes: Option<u32>,
+    /// Anti-lag in the denoise rows (1 on, 0 off; default: DenoiserSettings's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=1))]
+    anti_lag: Option<u32>,
+    /// Where the JSON goes.
+    #[arg(long, default_value = "bench.json")]
+    json: String,
+}
 
 fn main() {
     if let Err(e) = run() {
@@ -129,24 +172,25 @@ fn context_creation(host: &Host) -> Result<(f64, f64, usize), String> {
 }
 
 fn run() -> Result<(), String> {
-    let args = Args::parse(USAGE);
-    let triangles = args.get("triangles", 1usize << 20);
-    let instances = args.get("instances", 1024usize);
-    let big = args.get("big-mesh-triangles", 1usize << 20);
-    let (width, height) = (args.get("width", 1920u32), args.get("height", 1080u32));
-    let rays_list = args.list("rays", &[1, 4]);
-    let frames = args.get("frames", 20usize).max(1);
-    let json_path = args.string("json", "bench.json");
-    let warmup_ms = args.get("warmup-ms", 1000u64);
-    let tile_unit = args.get("tile-unit-length", 1.0f32);
+    let cli = Cli::parse();
+    if !(cli.tile_unit_length.is_finite() && cli.tile_unit_length > 0.0) {
+        return Err(format!("--tile-unit-length {}: a positive number", cli.tile_unit_length));
+    }
+    let (triangles, instances, big) = (cli.triangles as usize, cli.instances as usize, cli.big_mesh_triangles as usize);
+    let (width, height) = (cli.width, cli.height);
+    let rays_list = cli.rays.clone();
+    let frames = cli.frames as usize;
+    let json_path = cli.json.clone();
+    let warmup_ms = cli.warmup_ms;
+    let tile_unit = cli.tile_unit_length;
     // The engine's vertex layout (positions interleaved in vertices of this many bytes): the
     // SDK's copy is compact either way, so trace times must not change with it.
-    let vertex_stride = args.get("vertex-stride", 12u64);
+    let vertex_stride = cli.vertex_stride;
     // Denoiser settings of the denoise rows (what each pass costs: rerun with fewer à-trous
     // iterations or without the anti-lag test). Defaults: DenoiserSettings's.
     let defaults = hybrid_rt::DenoiserSettings::default();
-    let denoise_passes = args.get("denoise-passes", defaults.spatial_passes);
-    let anti_lag = args.get("anti-lag", defaults.anti_lag as u32) != 0;
+    let denoise_passes = cli.denoise_passes.unwrap_or(defaults.spatial_passes);
+    let anti_lag = cli.anti_lag.map_or(defaults.anti_lag, |v| v != 0);
     let e = |e: hybrid_rt::Error| e.to_string();
 
     let host = Host::new()?;
@@ -159,16 +203,18 @@ fn run() -> Result<(), String> {
         host.device_name,
         if host.validation_enabled { " (validation layer ON: timings are not representative)" } else { "" }
     );
-    let mut json = String::from("{\n");
-    let _ = writeln!(json, "  \"device\": \"{}\",", host.device_name);
+    // The JSON report, key by key (serde_json: escaped, and valid whatever a row prints).
+    let mut json = serde_json::Map::new();
+    json.insert("device".into(), json!(host.device_name));
     let mut rows: Vec<(String, String)> = Vec::new();
     rows.push((
         "Context creation (every pipeline), cold / warm pipeline cache".into(),
         format!("{cold_ms:.1} ms / {warm_ms:.1} ms ({} KiB of cache)", cache_bytes / 1024),
     ));
-    let _ = writeln!(json, "  \"context_creation_cold_ms\": {cold_ms:.3},\n  \"context_creation_warm_ms\": {warm_ms:.3},");
+    json.insert("context_creation_cold_ms".into(), json!(cold_ms));
+    json.insert("context_creation_warm_ms".into(), json!(warm_ms));
     rows.push(("Engine vertex layout".into(), format!("positions in {vertex_stride}-byte vertices")));
-    let _ = writeln!(json, "  \"vertex_stride\": {vertex_stride},");
+    json.insert("vertex_stride".into(), json!(vertex_stride));
 
     // ---- 1. One big mesh: BLAS build throughput.
     let n = ((big as f64 / 2.0).sqrt().ceil() as u32).max(1);
@@ -200,10 +246,9 @@ fn run() -> Result<(), String> {
         format!("BLAS build, 1 mesh of {} triangles", mesh.triangle_count()),
         format!("{big_ms:.3} ms ({:.1} M tri/s)", big_rate / 1e6),
     ));
-    let _ = writeln!(
-        json,
-        "  \"blas_big_mesh\": {{\"triangles\": {}, \"gpu_ms\": {big_ms:.4}, \"triangles_per_s\": {big_rate:.0}}},",
-        mesh.triangle_count()
+    json.insert(
+        "blas_big_mesh".into(),
+        json!({"triangles": mesh.triangle_count(), "gpu_ms": big_ms, "triangles_per_s": big_rate}),
     );
     ctx.destroy_geometry_handles(&[geo]).map_err(e)?;
     host.destroy_buffer(vb);
@@ -262,11 +307,16 @@ fn run() -> Result<(), String> {
             field_rate / 1e6
         ),
     ));
-    let _ = writeln!(
-        json,
-        "  \"blas_field\": {{\"meshes\": {}, \"triangles\": {}, \"gpu_ms\": {field_ms:.4}, \"first_frame_gpu_ms\": {first_ms:.4}, \"blas_builds_gpu_ms\": {field_blas_ms:.4}, \"triangles_per_s\": {field_rate:.0}}},",
-        scene.instances.len(),
-        scene.triangle_count()
+    json.insert(
+        "blas_field".into(),
+        json!({
+            "meshes": scene.instances.len(),
+            "triangles": scene.triangle_count(),
+            "gpu_ms": field_ms,
+            "first_frame_gpu_ms": first_ms,
+            "blas_builds_gpu_ms": field_blas_ms,
+            "triangles_per_s": field_rate,
+        }),
     );
 
     // TLAS rebuild: move one instance back and forth, no BLAS work.
@@ -300,15 +350,14 @@ fn run() -> Result<(), String> {
     let tlas_record_us = median(record_us);
     rows.push((format!("TLAS build, {} instances", scene.instances.len()), format!("{tlas_ms:.3} ms")));
     rows.push(("build_gpu_task CPU, instance update + TLAS".into(), format!("{tlas_record_us:.1} us")));
-    let _ = writeln!(
-        json,
-        "  \"tlas\": {{\"instances\": {}, \"gpu_ms\": {tlas_ms:.4}, \"build_gpu_task_cpu_us\": {tlas_record_us:.2}}},",
-        scene.instances.len()
+    json.insert(
+        "tlas".into(),
+        json!({"instances": scene.instances.len(), "gpu_ms": tlas_ms, "build_gpu_task_cpu_us": tlas_record_us}),
     );
 
     // ---- 3. AO beside the bare-ray floor.
-    let _ = writeln!(json, "  \"ao\": [");
-    for (k, &rays) in rays_list.iter().enumerate() {
+    let mut ao_json = Vec::new();
+    for &rays in &rays_list {
         let mut times = [Vec::new(), Vec::new()];
         let mut record = Vec::new();
         // Warm-up first: GPU clocks ramp up over hundreds of milliseconds of load, and single
@@ -345,16 +394,18 @@ fn run() -> Result<(), String> {
             format!("AO {width}x{height}, {rays} ray(s)/pixel"),
             format!("{ao:.3} ms ({:.0} M rays/s); floor {fl:.3} ms; ratio {:.2}", rays_total / (ao * 1e-3) / 1e6, ao / fl),
         ));
-        let _ = writeln!(
-            json,
-            "    {{\"width\": {width}, \"height\": {height}, \"rays_per_pixel\": {rays}, \"gpu_ms\": {ao:.4}, \"floor_gpu_ms\": {fl:.4}, \"ratio_to_floor\": {:.4}, \"rays_per_s\": {:.0}, \"build_gpu_task_cpu_us\": {:.2}}}{}",
-            ao / fl,
-            rays_total / (ao * 1e-3),
-            median(record),
-            if k + 1 < rays_list.len() { "," } else { "" }
-        );
+        ao_json.push(json!({
+            "width": width,
+            "height": height,
+            "rays_per_pixel": rays,
+            "gpu_ms": ao,
+            "floor_gpu_ms": fl,
+            "ratio_to_floor": ao / fl,
+            "rays_per_s": rays_total / (ao * 1e-3),
+            "build_gpu_task_cpu_us": median(record),
+        }));
     }
-    let _ = writeln!(json, "  ],");
+    json.insert("ao".into(), json!(ao_json));
 
     // ---- 4. Direct-lighting injection of a full-resolution lit frame, with its resolve.
     let lit_texels = vec![[0.5f32, 0.4, 0.3, 1.0]; (width * height) as usize];
@@ -392,9 +443,16 @@ fn run() -> Result<(), String> {
             cache_bytes.len()
         ),
     ));
-    let _ = writeln!(
-        json,
-        "  \"injection\": {{\"width\": {width}, \"height\": {height}, \"gpu_ms\": {inject_ms:.4}, \"tile_unit_length\": {tile_unit}, \"cache_bytes_total\": {cache_total}, \"cache_bytes_mean_per_instance\": {cache_mean:.0}}},"
+    json.insert(
+        "injection".into(),
+        json!({
+            "width": width,
+            "height": height,
+            "gpu_ms": inject_ms,
+            "tile_unit_length": tile_unit,
+            "cache_bytes_total": cache_total,
+            "cache_bytes_mean_per_instance": cache_mean,
+        }),
     );
     host.destroy_image(lit);
 
@@ -523,9 +581,24 @@ fn run() -> Result<(), String> {
             format!("{first:.3} ms; closest-hit {closest:.3} ms; speed-up {:.2}x", closest / first),
         ));
     }
-    let _ = writeln!(
-        json,
-        "  \"traces\": {{\"width\": {width}, \"height\": {height}, \"shadow_gpu_ms\": {shadow_ms:.4}, \"shadow_floor_gpu_ms\": {shadow_floor:.4}, \"diffuse_gpu_ms\": {diffuse_ms:.4}, \"diffuse_floor_gpu_ms\": {diffuse_floor:.4}, \"specular_gpu_ms\": {specular_ms:.4}, \"specular_floor_gpu_ms\": {specular_floor:.4}, \"multi_shadow_4_lights_gpu_ms\": {multi_ms:.4}, \"multi_shadow_floor_gpu_ms\": {multi_floor:.4}, \"shadow_first_hit_gpu_ms\": {shadow_first_ms:.4}, \"multi_shadow_first_hit_gpu_ms\": {multi_first_ms:.4}, \"multi_shadow_32_lights_ranged_gpu_ms\": {multi32_ms:.4}, \"multi_shadow_32_lights_unlimited_gpu_ms\": {multi32_unlimited_ms:.4}}},"
+    json.insert(
+        "traces".into(),
+        json!({
+            "width": width,
+            "height": height,
+            "shadow_gpu_ms": shadow_ms,
+            "shadow_floor_gpu_ms": shadow_floor,
+            "diffuse_gpu_ms": diffuse_ms,
+            "diffuse_floor_gpu_ms": diffuse_floor,
+            "specular_gpu_ms": specular_ms,
+            "specular_floor_gpu_ms": specular_floor,
+            "multi_shadow_4_lights_gpu_ms": multi_ms,
+            "multi_shadow_floor_gpu_ms": multi_floor,
+            "shadow_first_hit_gpu_ms": shadow_first_ms,
+            "multi_shadow_first_hit_gpu_ms": multi_first_ms,
+            "multi_shadow_32_lights_ranged_gpu_ms": multi32_ms,
+            "multi_shadow_32_lights_unlimited_gpu_ms": multi32_unlimited_ms,
+        }),
     );
     host.destroy_image(rgba);
 
@@ -546,31 +619,28 @@ fn run() -> Result<(), String> {
     let settings = hybrid_rt::DenoiserSettings { spatial_passes: denoise_passes, anti_lag, ..Default::default() };
     let dcommon = hybrid_rt::DenoisingCommon { roughness: glossy.roughness, settings, ..gbuffer.denoising_common(&camera) };
     let mut denoise_rows = Vec::new();
-    let mut denoise_json = Vec::new();
-    let mut measure = |name: &str,
-                       signal: hybrid_rt::SignalType,
-                       kinds: [TaskKind; 2],
-                       schedule: &mut dyn FnMut(
-        &mut hybrid_rt::TaskContainer,
-        hybrid_rt::DenoisingContextHandle,
-    ) -> Result<(), String>|
-     -> Result<(), String> {
-        let dn = ctx
-            .create_denoising_context(&hybrid_rt::DenoisingContextInput {
-                max_width: width,
-                max_height: height,
-                signal,
-                ..Default::default()
-            })
-            .map_err(e)?;
-        let [trace, denoise] = time_pair(&host, &ctx, &mut frame, frames, kinds, |f| schedule(f, dn))?;
-        ctx.destroy_denoising_context(dn).map_err(e)?;
-        denoise_rows
-            .push((format!("Denoise {name} {width}x{height}"), format!("{denoise:.3} ms (its 1-ray trace: {trace:.3} ms)")));
-        denoise_json
-            .push(format!("\"{}\": {{\"denoise_gpu_ms\": {denoise:.4}, \"trace_gpu_ms\": {trace:.4}}}", name.replace(' ', "_")));
-        Ok(())
-    };
+    let mut denoise_json = serde_json::Map::new();
+    let mut measure =
+        |name: &str,
+         signal: hybrid_rt::SignalType,
+         kinds: [TaskKind; 2],
+         schedule: &mut dyn FnMut(&mut hybrid_rt::TaskContainer, hybrid_rt::DenoisingContextHandle) -> Result<(), String>|
+         -> Result<(), String> {
+            let dn = ctx
+                .create_denoising_context(&hybrid_rt::DenoisingContextInput {
+                    max_width: width,
+                    max_height: height,
+                    signal,
+                    ..Default::default()
+                })
+                .map_err(e)?;
+            let [trace, denoise] = time_pair(&host, &ctx, &mut frame, frames, kinds, |f| schedule(f, dn))?;
+            ctx.destroy_denoising_context(dn).map_err(e)?;
+            denoise_rows
+                .push((format!("Denoise {name} {width}x{height}"), format!("{denoise:.3} ms (its 1-ray trace: {trace:.3} ms)")));
+            denoise_json.insert(name.replace(' ', "_"), json!({"denoise_gpu_ms": denoise, "trace_gpu_ms": trace}));
+            Ok(())
+        };
     use hybrid_rt::SignalType as S;
     let ao1 = hybrid_rt::TraceAmbientOcclusionTask { output: ia, ..gbuffer.ao_task(&camera, 1.0, 1) };
     measure("AO", S::DiffuseOcclusion, [TaskKind::AmbientOcclusion, TaskKind::DenoiseDiffuseOcclusion], &mut |f, dn| {
@@ -658,25 +728,25 @@ fn run() -> Result<(), String> {
         format!("Denoiser history, specular + diffuse context {width}x{height}"),
         format!("{:.1} MiB", dn_bytes as f64 / 1048576.0),
     ));
-    let _ =
-        writeln!(json, "  \"denoisers\": {{{}, \"specular_and_diffuse_context_bytes\": {dn_bytes}}},", denoise_json.join(", "));
+    denoise_json.insert("specular_and_diffuse_context_bytes".into(), json!(dn_bytes));
+    json.insert("denoisers".into(), serde_json::Value::Object(denoise_json));
     for i in [in_a, in_b, out_a, out_b, vis] {
         host.destroy_image(i);
     }
 
     let mem = ctx.resource_allocations();
-    let _ = writeln!(
-        json,
-        "  \"memory_bytes\": {{\"total\": {}, \"blas\": {}, \"geometry_copies\": {}, \"tlas\": {}, \"build_scratch\": {}, \"upload_rings\": {}, \"cache\": {}}}",
-        mem.total_bytes(),
-        mem.blas.bytes,
-        mem.geometry_copies.bytes,
-        mem.tlas.bytes,
-        mem.build_scratch.bytes,
-        mem.upload_rings.bytes,
-        mem.cache.bytes
+    json.insert(
+        "memory_bytes".into(),
+        json!({
+            "total": mem.total_bytes(),
+            "blas": mem.blas.bytes,
+            "geometry_copies": mem.geometry_copies.bytes,
+            "tlas": mem.tlas.bytes,
+            "build_scratch": mem.build_scratch.bytes,
+            "upload_rings": mem.upload_rings.bytes,
+            "cache": mem.cache.bytes,
+        }),
     );
-    json.push_str("}\n");
     rows.push((
         "SDK device memory".into(),
         format!("{:.1} MiB (BLAS {:.1} MiB)", mem.total_bytes() as f64 / 1048576.0, mem.blas.bytes as f64 / 1048576.0),
@@ -688,7 +758,8 @@ fn run() -> Result<(), String> {
     for (k, v) in &rows {
         println!("{k:wide$}  {v}");
     }
-    std::fs::write(&json_path, &json).map_err(|err| format!("{json_path}: {err}"))?;
+    let text = serde_json::to_string_pretty(&serde_json::Value::Object(json)).map_err(|err| err.to_string())? + "\n";
+    std::fs::write(&json_path, text).map_err(|err| format!("{json_path}: {err}"))?;
     println!("\nwrote {json_path}");
     gbuffer.destroy(&host);
     gpu_scene.destroy(&host);

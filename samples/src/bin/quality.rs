@@ -2,7 +2,7 @@
 //! references (the SDK's own trace at 256 rays per pixel), printed as docs/benchmarks.md's
 //! quality table, with noisy | denoised | reference strips as PNGs.
 //!
-//! Usage: `quality [--out DIR]` (default target/quality). Runs anywhere the tests run (lavapipe
+//! Usage: `quality [--out DIR]` (default target/quality; `--help`). Runs anywhere the tests run (lavapipe
 //! included: about two minutes on two cores). Measures, per signal: relative RMSE of one raw
 //! frame and of the denoised image after 1, 8 and 32 frames, bias (mean ratio - 1), flicker
 //! (mean frame-to-frame change after 32 frames), penumbra-only error; a camera pan; thin
@@ -19,18 +19,18 @@ const CHECKPOINTS: [u32; 3] = [1, 8, 32];
 /// Converged references: this many frames of 64 rays per pixel.
 const CONVERGED_FRAMES: u32 = 4;
 
+/// The denoisers' image quality on small scenes against converged references (tables as
+/// markdown on stdout, noisy | denoised | reference pictures as PNG).
+#[derive(clap::Parser, Debug)]
+#[command(name = "quality", version)]
+struct Cli {
+    /// Directory for the pictures.
+    #[arg(long, default_value = "target/quality")]
+    out: PathBuf,
+}
+
 fn main() {
-    let mut args = std::env::args().skip(1);
-    let mut out = PathBuf::from("target/quality");
-    while let Some(a) = args.next() {
-        match (a.as_str(), args.next()) {
-            ("--out", Some(dir)) => out = PathBuf::from(dir),
-            _ => {
-                eprintln!("usage: quality [--out DIR]  (unknown or incomplete argument: {a})");
-                std::process::exit(2);
-            }
-        }
-    }
+    let out = <Cli as clap::Parser>::parse().out;
     if let Err(e) = std::fs::create_dir_all(&out) {
         eprintln!("{}: {e}", out.display());
         std::process::exit(1);

@@ -6,21 +6,70 @@
 //! PNG (tone-mapped), then prints per-task GPU times (means over the frames after the first)
 //! and the SDK's memory. With a display (or `--window`): a window; keys switch modes and move
 //! the camera, the title shows the GPU times.
-use hybrid_rt_samples::args::Args;
+use clap::Parser;
 use hybrid_rt_samples::modes::{self, Mode};
+use hybrid_rt_samples::progress::Progress;
 use hybrid_rt_samples::renderer::{Renderer, Settings};
 use hybrid_rt_samples::{gltf_scene, images, report, scenes, window};
 use hybrid_rt_testkit::host::Host;
 use std::path::PathBuf;
 
-const USAGE: &str = "sample [scene.gltf|scene.glb] [--headless | --window] [--width 640] [--height 360] [--frames 16]
-       [--modes all|composite,ao,...] [--out out] [--rays 1] [--checkerboard] [--blas-per-frame 4]
-       [--lidar-size 256] [--exposure 1.0] [--magenta-unlit] [--json timings.json]
-modes: composite direct albedo normals roughness metalness motion sun_shadow_noisy sun_shadow
+const AFTER_HELP: &str = "modes: composite direct albedo normals roughness metalness motion sun_shadow_noisy sun_shadow
        point_shadow_noisy point_shadow ao_noisy ao diffuse_noisy diffuse specular_noisy specular
        lidar debug_cache debug_random_tile debug_random_mesh debug_hit_t debug_barycentrics
 window keys: Tab / Shift+Tab next / previous mode, 1-9 first modes, W A S D Q E move, arrows look,
        Space pause the animation, P write the current mode to --out, Esc quit";
+
+/// The hybrid-rt sample: a rasterizing renderer with the SDK's ray-traced shadows, AO,
+/// diffuse GI and reflections, on a built-in room or a glTF file.
+#[derive(Parser, Debug)]
+#[command(name = "sample", version, after_help = AFTER_HELP)]
+struct Cli {
+    /// A glTF file (.gltf or .glb) to render instead of the built-in room.
+    scene: Option<PathBuf>,
+    /// Render without a window (the default when no display is set), write the last frame's
+    /// modes to --out.
+    #[arg(long, conflicts_with = "window")]
+    headless: bool,
+    /// Open a window (the default when a display is set).
+    #[arg(long)]
+    window: bool,
+    #[arg(long, default_value_t = 640, value_parser = clap::value_parser!(u32).range(8..=16384))]
+    width: u32,
+    #[arg(long, default_value_t = 360, value_parser = clap::value_parser!(u32).range(8..=16384))]
+    height: u32,
+    /// Frames along the scene's camera path (headless: at least 2; a window: run until closed
+    /// when not given).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(2..=100_000))]
+    frames: Option<u32>,
+    /// Comma-separated modes to write (see below), or "all".
+    #[arg(long, default_value = "all")]
+    modes: String,
+    /// Directory for the EXR and PNG files.
+    #[arg(long, default_value = "out")]
+    out: PathBuf,
+    /// Rays per pixel of every trace.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
+    rays: u32,
+    /// Trace half the pixels each frame (checkerboard).
+    #[arg(long)]
+    checkerboard: bool,
+    /// BLAS builds per frame (the SDK's max_blas_build_count; 0: no limit).
+    #[arg(long, default_value_t = 4)]
+    blas_per_frame: u32,
+    /// Size of the lidar view that fills the cache around the camera (pixels).
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(8..=4096))]
+    lidar_size: u32,
+    /// Exposure of the tone-mapped PNGs (the EXRs are linear).
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f32,
+    /// Show surfaces the cache has not lit in magenta instead of black.
+    #[arg(long)]
+    magenta_unlit: bool,
+    /// Write the GPU times and memory as JSON to this file.
+    #[arg(long)]
+    json: Option<PathBuf>,
+}
 
 fn main() {
     if let Err(e) = run() {
@@ -30,37 +79,38 @@ fn main() {
 }
 
 fn run() -> Result<(), String> {
-    let args = Args::parse(USAGE);
+    let cli = Cli::parse();
+    if !(cli.exposure.is_finite() && cli.exposure > 0.0) {
+        return Err(format!("--exposure {}: a positive number", cli.exposure));
+    }
     let settings = Settings {
-        width: args.get("width", 640u32).max(8),
-        height: args.get("height", 360u32).max(8),
-        lidar_size: args.get("lidar-size", 256u32).max(8),
-        unlit_color: if args.flag("magenta-unlit") { [1.0, 0.0, 1.0] } else { [0.0; 3] },
-        max_blas_build_count: args.get("blas-per-frame", 4u32),
-        rays_per_pixel: args.get("rays", 1u32).clamp(1, 64),
-        checkerboard: args.flag("checkerboard"),
-        exposure: args.get("exposure", 1.0f32),
+        width: cli.width,
+        height: cli.height,
+        lidar_size: cli.lidar_size,
+        unlit_color: if cli.magenta_unlit { [1.0, 0.0, 1.0] } else { [0.0; 3] },
+        max_blas_build_count: cli.blas_per_frame,
+        rays_per_pixel: cli.rays,
+        checkerboard: cli.checkerboard,
+        exposure: cli.exposure,
         ..Default::default()
     };
-    let scene = match args.positional.first() {
-        Some(path) => gltf_scene::load(std::path::Path::new(path))?,
-        None => scenes::cornell_room(),
-    };
-    let out = PathBuf::from(args.string("out", "out"));
-    let windowed = if args.flag("headless") { false } else { args.flag("window") || std::env::var_os("DISPLAY").is_some() };
-    if windowed {
-        let frames = args.named("frames").and_then(|v| v.parse().ok());
-        return window::run(scene, settings, frames, out);
-    }
-
-    let chosen: Vec<Mode> = match args.string("modes", "all").as_str() {
+    let chosen: Vec<Mode> = match cli.modes.as_str() {
         "all" => modes::ALL.to_vec(),
         list => list
             .split(',')
             .map(|n| Mode::parse(n.trim()).ok_or(format!("unknown mode {n:?} (see --help)")))
             .collect::<Result<_, _>>()?,
     };
-    let frames = args.get("frames", 16u32).max(2);
+    let scene = match &cli.scene {
+        Some(path) => gltf_scene::load(path)?,
+        None => scenes::cornell_room(),
+    };
+    let out = cli.out;
+    let windowed = !cli.headless && (cli.window || std::env::var_os("DISPLAY").is_some());
+    if windowed {
+        return window::run(scene, settings, cli.frames.map(u64::from), out);
+    }
+    let frames = cli.frames.unwrap_or(16);
 
     let host = Host::new()?;
     println!("device: {}{}", host.device_name, if host.validation_enabled { " (validation on)" } else { "" });
@@ -75,13 +125,16 @@ fn run() -> Result<(), String> {
     let debug: Vec<hybrid_rt::DebugOutput> =
         chosen.iter().filter_map(|m| if let Mode::Debug(d) = m { Some(*d) } else { None }).collect();
     let mut r = Renderer::new(&host, scene, settings)?;
+    let mut progress = Progress::new("rendering", frames as u64);
     for f in 0..frames {
         let u = f as f32 / (frames - 1) as f32;
         let camera = r.scene.camera_path.at(u);
         // Animation at 30 frames per second of scene time, whatever the real frame rate.
         let last = f + 1 == frames;
         r.render(camera, f as f32 / 30.0, if last { &debug } else { &[] }, None)?;
+        progress.set(f as u64 + 1);
     }
+    progress.finish();
     r.finish()?;
     let mut written = Vec::new();
     for mode in &chosen {
@@ -91,10 +144,13 @@ fn run() -> Result<(), String> {
     }
     let report = report::Report::new(&r);
     print!("{}", report.text());
-    if let Some(path) = args.named("json") {
-        std::fs::write(&path, report.json()).map_err(|e| format!("{path}: {e}"))?;
+    if let Some(path) = &cli.json {
+        std::fs::write(path, report.json()).map_err(|e| format!("{}: {e}", path.display()))?;
     }
     println!("wrote {} modes as EXR + PNG to {}: {}", written.len(), out.display(), written.join(", "));
+    if written.contains(&"composite") {
+        println!("the frame: {}", out.join("composite.png").display());
+    }
     r.destroy()?;
     let errors = Host::validation_errors();
     if errors > 0 {
