@@ -1,8 +1,14 @@
 //! glTF 2.0 scenes (`.gltf` with `.bin` or data-URI buffers, or `.glb`), parsed by the `gltf`
-//! crate: every triangle primitive of every node of the default scene becomes an instance
-//! with the node's world transform and its material's metallic-roughness factors. Textures are
-//! not read (the G-buffer takes one colour per draw). The camera path, lights, surfel size
-//! and AO length are fitted to the scene's bounds.
+//! crate: every triangle primitive (lists, strips and fans) of every node of the default scene
+//! becomes an instance with the node's world transform and its material's metallic-roughness
+//! factors. Textures are not read (the G-buffer takes one colour per draw). The camera path,
+//! lights, surfel size and AO length are fitted to the scene's bounds.
+//!
+//! Any file gives a scene or an error that names the file and what is wrong in it — the node,
+//! the primitive, the extension — and never hangs or panics: a node that is its own ancestor
+//! (or has two parents) is refused, extensions the file requires and this loader lacks (Draco,
+//! meshopt, quantized meshes) are named before validation buries them under its own errors,
+//! and validation errors are summed up to the first three.
 use crate::lighting::Lights;
 use crate::raster::Material;
 use crate::scene::{CameraPath, Motion, SampleScene};
@@ -43,54 +49,117 @@ fn material(m: &gltf::Material) -> Material {
     Material { albedo: [c[0], c[1], c[2]], roughness: pbr.roughness_factor(), metalness: pbr.metallic_factor() }
 }
 
+/// Extensions a file may require that this loader reads: none (it reads positions and indices
+/// as glTF 2.0 defines them, and material factors).
+const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &[];
+
+/// Validation errors shown in full; the rest are counted.
+const SHOWN_ERRORS: usize = 3;
+
+/// Parses and validates the file, naming required extensions this loader lacks first (the
+/// crate's validation of, say, a Draco file lists every compressed buffer view as missing
+/// data and never says why).
+fn open(path: &Path) -> Result<gltf::Gltf, String> {
+    let name = path.display();
+    let bytes = std::fs::read(path).map_err(|e| format!("{name}: {e}"))?;
+    let unvalidated = gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| format!("{name}: {e}"))?;
+    let missing: Vec<&str> = unvalidated.extensions_required().filter(|x| !SUPPORTED_REQUIRED_EXTENSIONS.contains(x)).collect();
+    if !missing.is_empty() {
+        return Err(format!("{name}: requires the glTF extension(s) {}, which this loader does not support", missing.join(", ")));
+    }
+    gltf::Gltf::from_slice(&bytes).map_err(|e| match e {
+        gltf::Error::Validation(errors) => {
+            let shown: Vec<String> = errors.iter().take(SHOWN_ERRORS).map(|(at, what)| format!("{at}: {what}")).collect();
+            let more = errors.len().saturating_sub(SHOWN_ERRORS);
+            let tail = if more > 0 { format!(" (and {more} more)") } else { String::new() };
+            format!("{name}: invalid glTF: {}{tail}", shown.join("; "))
+        }
+        e => format!("{name}: {e}"),
+    })
+}
+
+/// A primitive's triangles as a list: strips and fans unrolled (a strip's odd triangles
+/// flipped back to the strip's winding); points and lines give none.
+fn triangle_list(mode: gltf::mesh::Mode, indices: &[u32]) -> Vec<u32> {
+    use gltf::mesh::Mode;
+    let n = indices.len();
+    match mode {
+        Mode::Triangles => indices[..n - n % 3].to_vec(),
+        Mode::TriangleStrip => (0..n.saturating_sub(2))
+            .flat_map(|i| {
+                let (a, b, c) = (indices[i], indices[i + 1], indices[i + 2]);
+                if i & 1 == 0 {
+                    [a, b, c]
+                } else {
+                    [b, a, c]
+                }
+            })
+            .collect(),
+        Mode::TriangleFan => (1..n.saturating_sub(1)).flat_map(|i| [indices[0], indices[i], indices[i + 1]]).collect(),
+        _ => Vec::new(),
+    }
+}
+
 /// Loads `path` into a `SampleScene`.
 pub fn load(path: &Path) -> Result<SampleScene, String> {
-    let gltf::Gltf { document, blob } = gltf::Gltf::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let data = buffers(&document, blob, path.parent().unwrap_or(Path::new(".")))?;
+    let name = path.display();
+    let gltf::Gltf { document, blob } = open(path)?;
+    let data = buffers(&document, blob, path.parent().unwrap_or(Path::new("."))).map_err(|e| format!("{name}: {e}"))?;
     let mut scene = Scene::default();
     let mut materials = Vec::new();
     // (glTF mesh, primitive) -> our mesh, so instanced glTF meshes share one BLAS.
     let mut meshes: HashMap<(usize, usize), usize> = HashMap::new();
-    let root = document.default_scene().or_else(|| document.scenes().next()).ok_or("the file has no scene")?;
+    let root = document.default_scene().or_else(|| document.scenes().next()).ok_or(format!("{name}: the file has no scene"))?;
     let mut stack: Vec<(gltf::Node, Mat4)> = root.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+    // Each node once: a node met again is its own ancestor (a cycle, which would never end)
+    // or has two parents (which glTF forbids).
+    let mut seen = vec![false; document.nodes().len()];
+    let mut skipped = 0usize;
     while let Some((node, parent)) = stack.pop() {
+        if std::mem::replace(&mut seen[node.index()], true) {
+            return Err(format!("{name}: node {} is its own ancestor or has two parents", node.index()));
+        }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         for child in node.children() {
             stack.push((child, world));
         }
         let Some(mesh) = node.mesh() else { continue };
         for prim in mesh.primitives() {
-            if prim.mode() != gltf::mesh::Mode::Triangles {
-                continue;
-            }
             let key = (mesh.index(), prim.index());
+            let at = || format!("{name}: mesh {} primitive {}", mesh.index(), prim.index());
             let ours = match meshes.get(&key) {
-                Some(&m) => m,
+                Some(&m) => Some(m),
                 None => {
                     let reader = prim.reader(|b| data.get(b.index()).map(|d| d.as_slice()));
-                    let positions: Vec<Vec3> = reader
-                        .read_positions()
-                        .ok_or(format!("mesh {} has no positions", mesh.index()))?
-                        .map(Vec3::from)
-                        .collect();
-                    let indices: Vec<u32> = match reader.read_indices() {
+                    let positions: Vec<Vec3> =
+                        reader.read_positions().ok_or_else(|| format!("{}: no positions", at()))?.map(Vec3::from).collect();
+                    let listed: Vec<u32> = match reader.read_indices() {
                         Some(i) => i.into_u32().collect(),
                         None => (0..positions.len() as u32).collect(),
                     };
-                    if indices.len() < 3 || indices.iter().any(|&i| i as usize >= positions.len()) {
-                        return Err(format!("mesh {} primitive {}: bad indices", mesh.index(), prim.index()));
+                    if let Some(&bad) = listed.iter().find(|&&i| i as usize >= positions.len()) {
+                        return Err(format!("{}: index {bad} past its {} vertices", at(), positions.len()));
                     }
-                    let m = scene.add_mesh(Mesh { positions, indices });
-                    meshes.insert(key, m);
-                    m
+                    let indices = triangle_list(prim.mode(), &listed);
+                    if indices.is_empty() {
+                        None
+                    } else {
+                        let m = scene.add_mesh(Mesh { positions, indices });
+                        meshes.insert(key, m);
+                        Some(m)
+                    }
                 }
+            };
+            let Some(ours) = ours else {
+                skipped += 1;
+                continue;
             };
             scene.add_instance(ours, Affine3A::from_mat4(world));
             materials.push(material(&prim.material()));
         }
     }
     if scene.instances.is_empty() {
-        return Err(format!("{}: no triangle meshes", path.display()));
+        return Err(format!("{name}: no triangles ({skipped} primitives of points or lines skipped)"));
     }
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     Ok(fitted(name, scene, materials))

@@ -1,0 +1,107 @@
+//! The glTF loader on hand-made files: strips and fans load; broken files (a node cycle, an
+//! index past the vertices, a missing buffer, a required extension it lacks, nothing but
+//! points) give one short error that names the file and what is wrong, never a hang or panic.
+use base64::Engine;
+use hybrid_rt_samples::gltf_scene;
+use std::path::PathBuf;
+
+/// One quad's four corners, and a primitive over them.
+struct File {
+    mode: u32,
+    indices: Vec<u16>,
+    nodes: &'static str,
+    buffer_uri: Option<&'static str>,
+    required: &'static [&'static str],
+}
+
+impl Default for File {
+    fn default() -> File {
+        File { mode: 4, indices: vec![0, 1, 2, 2, 1, 3], nodes: r#"[{"mesh": 0}]"#, buffer_uri: None, required: &[] }
+    }
+}
+
+impl File {
+    /// Writes `name` in the test directory; returns its path.
+    fn write(&self, name: &str) -> PathBuf {
+        let positions: [[f32; 3]; 4] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
+        let mut bytes: Vec<u8> = positions.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+        bytes.extend(self.indices.iter().flat_map(|i| i.to_le_bytes()));
+        while bytes.len() & 3 != 0 {
+            bytes.push(0);
+        }
+        let uri = match self.buffer_uri {
+            Some(u) => u.to_string(),
+            None => format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bytes)),
+        };
+        let ext: Vec<String> = self.required.iter().map(|e| format!("\"{e}\"")).collect();
+        let json = format!(
+            r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}], "nodes": {nodes},
+  "extensionsUsed": [{ext}], "extensionsRequired": [{ext}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1, "mode": {mode}}}]}}],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}},
+    {{"bufferView": 1, "componentType": 5123, "count": {count}, "type": "SCALAR"}}],
+  "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 48}}, {{"buffer": 0, "byteOffset": 48, "byteLength": {ilen}}}],
+  "buffers": [{{"byteLength": {blen}, "uri": "{uri}"}}]}}"#,
+            nodes = self.nodes,
+            ext = ext.join(", "),
+            mode = self.mode,
+            count = self.indices.len(),
+            ilen = 2 * self.indices.len(),
+            blen = bytes.len(),
+        );
+        let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+        std::fs::write(&path, json).unwrap();
+        path
+    }
+}
+
+fn triangles(file: &File, name: &str) -> Vec<u32> {
+    let scene = gltf_scene::load(&file.write(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+    assert_eq!(scene.scene.meshes.len(), 1);
+    scene.scene.meshes[0].indices.clone()
+}
+
+#[test]
+fn strips_and_fans_load_as_triangle_lists() {
+    // The quad as a list, a strip (0 1 2 3) and a fan (0 1 3 2): two triangles of the same
+    // winding each (a strip's second triangle is flipped back).
+    assert_eq!(triangles(&File::default(), "list.gltf"), [0, 1, 2, 2, 1, 3]);
+    assert_eq!(triangles(&File { mode: 5, indices: vec![0, 1, 2, 3], ..Default::default() }, "strip.gltf"), [0, 1, 2, 2, 1, 3]);
+    assert_eq!(triangles(&File { mode: 6, indices: vec![0, 1, 3, 2], ..Default::default() }, "fan.gltf"), [0, 1, 3, 0, 3, 2]);
+}
+
+/// The error for `file`: it names the file and holds every one of `needles`, in a line or two.
+fn refused(file: &File, name: &str, needles: &[&str]) {
+    let path = file.write(name);
+    let err = match gltf_scene::load(&path) {
+        Ok(_) => panic!("{name} loaded"),
+        Err(e) => e,
+    };
+    assert!(err.contains(name), "{name}: the error does not name the file: {err}");
+    for n in needles {
+        assert!(err.contains(n), "{name}: {n:?} missing from: {err}");
+    }
+    assert!(err.len() < 400, "{name}: a {}-byte error: {err}", err.len());
+}
+
+#[test]
+fn broken_files_are_refused_with_errors_that_say_why() {
+    refused(
+        &File { nodes: r#"[{"mesh": 0, "children": [1]}, {"children": [0]}]"#, ..Default::default() },
+        "cycle.gltf",
+        &["node"],
+    );
+    refused(
+        &File { indices: vec![0, 1, 7], ..Default::default() },
+        "index.gltf",
+        &["mesh 0 primitive 0", "index 7", "4 vertices"],
+    );
+    refused(&File { buffer_uri: Some("missing.bin"), ..Default::default() }, "buffer.gltf", &["missing.bin"]);
+    refused(
+        &File { required: &["KHR_draco_mesh_compression"], ..Default::default() },
+        "draco.gltf",
+        &["KHR_draco_mesh_compression", "does not support"],
+    );
+    refused(&File { mode: 0, ..Default::default() }, "points.gltf", &["no triangles", "1 primitives of points or lines"]);
+}
