@@ -1,7 +1,7 @@
 //! glTF 2.0 scenes (`.gltf` with `.bin` or data-URI buffers, or `.glb`), parsed by the `gltf`
 //! crate: every triangle primitive (lists, strips and fans) of every node of the default scene
-//! becomes an instance with the node's world transform and its material's metallic-roughness
-//! factors. Textures are not read (the G-buffer takes one colour per draw). The camera path,
+//! becomes an instance with the node's world transform, its normals (computed from the
+//! triangles where the file has none) and its material's metallic-roughness factors. Textures are not read (the G-buffer takes one colour per draw). The camera path,
 //! lights, surfel size and AO length are fitted to the scene's bounds.
 //!
 //! Any file gives a scene or an error that names the file and what is wrong in it — the node,
@@ -11,7 +11,7 @@
 //! and validation errors are summed up to the first three.
 use crate::lighting::Lights;
 use crate::raster::Material;
-use crate::scene::{CameraPath, Motion, SampleScene};
+use crate::scene::{vertex_normals, CameraPath, Motion, SampleScene};
 use base64::Engine;
 use glam::{Affine3A, Mat4, Vec3};
 use hybrid_rt_testkit::reference::{Mesh, Scene};
@@ -106,6 +106,7 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
     let gltf::Gltf { document, blob } = open(path)?;
     let data = buffers(&document, blob, path.parent().unwrap_or(Path::new("."))).map_err(|e| format!("{name}: {e}"))?;
     let mut scene = Scene::default();
+    let mut normals = Vec::new();
     let mut materials = Vec::new();
     // (glTF mesh, primitive) -> our mesh, so instanced glTF meshes share one BLAS.
     let mut meshes: HashMap<(usize, usize), usize> = HashMap::new();
@@ -144,6 +145,14 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
                     if indices.is_empty() {
                         None
                     } else {
+                        // The file's normals where it has them (one per vertex, finite).
+                        let file_normals: Option<Vec<Vec3>> = reader.read_normals().map(|n| n.map(Vec3::from).collect());
+                        normals.push(match file_normals {
+                            Some(n) if n.len() == positions.len() && n.iter().all(|v| v.is_finite()) => {
+                                n.into_iter().map(|v| v.try_normalize().unwrap_or(Vec3::Y)).collect()
+                            }
+                            _ => vertex_normals(&positions, &indices),
+                        });
                         let m = scene.add_mesh(Mesh { positions, indices });
                         meshes.insert(key, m);
                         Some(m)
@@ -162,15 +171,16 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
         return Err(format!("{name}: no triangles ({skipped} primitives of points or lines skipped)"));
     }
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    Ok(fitted(name, scene, materials))
+    Ok(fitted(name, scene, normals, materials))
 }
 
 /// Wraps a static scene with a camera path, lights and sizes scaled to its bounds.
-fn fitted(name: String, scene: Scene, materials: Vec<Material>) -> SampleScene {
+fn fitted(name: String, scene: Scene, normals: Vec<Vec<Vec3>>, materials: Vec<Material>) -> SampleScene {
     let motions = vec![Motion::Static; scene.instances.len()];
     let mut s = SampleScene {
         name,
         scene,
+        normals,
         materials,
         motions,
         deformer: None,

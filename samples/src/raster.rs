@@ -4,7 +4,7 @@
 //! its `DepthInput`, `NormalInput`, `RoughnessInput` and `MotionInput`.
 use crate::gpu::{self, spirv, UploadSlots};
 use ash::vk;
-use glam::{Affine3A, Mat4};
+use glam::{Affine3A, Mat4, Vec3};
 use hybrid_rt_testkit::host::{Host, HostBuffer, HostImage, HostResult};
 use hybrid_rt_testkit::reference::{Camera, Scene};
 
@@ -84,16 +84,33 @@ pub struct MeshBuffers {
     meshes: Vec<(HostBuffer, HostBuffer, u32, u32)>,
 }
 
+/// Bytes per vertex: a position and a shading normal, interleaved (RGB32F each). The SDK reads
+/// the positions out of the same buffer (`VertexBufferInput::stride`), as an engine's.
+pub const VERTEX_STRIDE: u32 = 24;
+
+/// Interleaves positions and normals (one each per vertex) into vertices. Vertices past the
+/// normals' end get a zero normal, which the G-buffer pass shades flat (the triangle's plane,
+/// as the CPU reference does).
+pub fn interleave(positions: &[Vec3], normals: &[Vec3]) -> Vec<[f32; 6]> {
+    positions
+        .iter()
+        .zip(normals.iter().chain(std::iter::repeat(&Vec3::ZERO)))
+        .map(|(p, n)| [p.x, p.y, p.z, n.x, n.y, n.z])
+        .collect()
+}
+
 impl MeshBuffers {
     /// Vertex buffers are drawn and copied by the SDK into its BLAS inputs.
     pub const VERTEX_USAGE: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
         vk::BufferUsageFlags::VERTEX_BUFFER.as_raw() | vk::BufferUsageFlags::TRANSFER_SRC.as_raw(),
     );
 
-    pub fn upload(host: &Host, scene: &Scene) -> HostResult<MeshBuffers> {
+    /// `normals`: one list per mesh, one normal per vertex (none: flat shading).
+    pub fn upload(host: &Host, scene: &Scene, normals: &[Vec<Vec3>]) -> HostResult<MeshBuffers> {
         let mut meshes = Vec::new();
-        for m in &scene.meshes {
-            let vb = host.buffer_with_data(bytemuck::cast_slice(&m.positions), Self::VERTEX_USAGE)?;
+        for (k, m) in scene.meshes.iter().enumerate() {
+            let vertices = interleave(&m.positions, normals.get(k).map_or(&[][..], |n| n.as_slice()));
+            let vb = host.buffer_with_data(bytemuck::cast_slice(&vertices), Self::VERTEX_USAGE)?;
             let ib_usage = vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
             let ib = host.buffer_with_data(bytemuck::cast_slice(&m.indices), ib_usage)?;
             meshes.push((vb, ib, m.indices.len() as u32, m.positions.len() as u32));
@@ -101,12 +118,17 @@ impl MeshBuffers {
         Ok(MeshBuffers { meshes })
     }
 
-    /// The SDK's view of mesh `i`: the same buffers the rasterizer draws (tightly packed
-    /// RGB32F positions, u32 indices).
+    /// The SDK's view of mesh `i`: the same buffers the rasterizer draws (RGB32F positions
+    /// interleaved with normals, u32 indices).
     pub fn geometry_input(&self, i: usize) -> hybrid_rt::GeometryInput {
         let (vb, ib, index_count, vertex_count) = &self.meshes[i];
         hybrid_rt::GeometryInput {
-            vertices: hybrid_rt::VertexBufferInput { buffer: vb.buffer, count: *vertex_count, ..Default::default() },
+            vertices: hybrid_rt::VertexBufferInput {
+                buffer: vb.buffer,
+                count: *vertex_count,
+                stride: VERTEX_STRIDE as u64,
+                ..Default::default()
+            },
             indices: hybrid_rt::IndexBufferInput { buffer: ib.buffer, count: *index_count, ..Default::default() },
             ..Default::default()
         }
@@ -164,14 +186,18 @@ impl GBufferPass {
                 vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vs).name(c"main"),
                 vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fs).name(c"main"),
             ];
-            let vertex_bindings =
-                [vk::VertexInputBindingDescription { binding: 0, stride: 12, input_rate: vk::VertexInputRate::VERTEX }];
-            let vertex_attributes = [vk::VertexInputAttributeDescription {
-                location: 0,
+            let vertex_bindings = [vk::VertexInputBindingDescription {
+                binding: 0,
+                stride: VERTEX_STRIDE,
+                input_rate: vk::VertexInputRate::VERTEX,
+            }];
+            let attribute = |location: u32, offset: u32| vk::VertexInputAttributeDescription {
+                location,
                 binding: 0,
                 format: vk::Format::R32G32B32_SFLOAT,
-                offset: 0,
-            }];
+                offset,
+            };
+            let vertex_attributes = [attribute(0, 0), attribute(1, 12)];
             let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
                 .vertex_binding_descriptions(&vertex_bindings)
                 .vertex_attribute_descriptions(&vertex_attributes);

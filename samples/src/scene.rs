@@ -69,6 +69,9 @@ impl CameraPath {
 pub struct SampleScene {
     pub name: String,
     pub scene: Scene,
+    /// Shading normals, one list per mesh of `scene` (one per vertex): the file's where it has
+    /// them, else [`vertex_normals`]. (The deforming mesh's are recomputed every frame.)
+    pub normals: Vec<Vec<Vec3>>,
     /// One per instance of `scene`.
     pub materials: Vec<Material>,
     /// One per instance of `scene`.
@@ -135,4 +138,45 @@ impl SampleScene {
         }
         (lo, hi)
     }
+}
+
+/// Smooth shading normals of a mesh: per vertex, the area-weighted mean of the normals of the
+/// triangles that share it — and of those of other vertices at the same position whose own
+/// normals are within 60 degrees of its own. So a UV sphere's seam and its poles (one vertex
+/// per segment there, each touching one thin triangle: 7 degrees off on a 12-ring sphere)
+/// shade as the rest of it, while a cuboid's corners (three vertices, 90 degrees apart) keep
+/// their faces flat. A vertex no triangle uses, or one where they cancel, gets +Y.
+pub fn vertex_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
+    let own = area_weighted_normals(positions, indices);
+    let mut at: std::collections::HashMap<[u32; 3], Vec<usize>> = std::collections::HashMap::new();
+    for (v, p) in positions.iter().enumerate() {
+        at.entry(p.to_array().map(f32::to_bits)).or_default().push(v);
+    }
+    let crease = 60f32.to_radians().cos();
+    (0..positions.len())
+        .map(|v| {
+            let unit = own[v].try_normalize().unwrap_or(Vec3::Y);
+            let same = &at[&positions[v].to_array().map(f32::to_bits)];
+            let sum: Vec3 =
+                same.iter().map(|&u| own[u]).filter(|n| n.try_normalize().is_some_and(|n| n.dot(unit) >= crease)).sum();
+            sum.try_normalize().unwrap_or(unit)
+        })
+        .collect()
+}
+
+/// Per vertex, the sum of its triangles' normals, each as long as twice its area.
+fn area_weighted_normals(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
+    let mut sum = vec![Vec3::ZERO; positions.len()];
+    for t in indices.chunks_exact(3) {
+        let [a, b, c] = [t[0] as usize, t[1] as usize, t[2] as usize];
+        if a >= positions.len() || b >= positions.len() || c >= positions.len() {
+            continue;
+        }
+        // The cross product's length is twice the area: the weighting.
+        let n = (positions[b] - positions[a]).cross(positions[c] - positions[a]);
+        for v in [a, b, c] {
+            sum[v] += n;
+        }
+    }
+    sum
 }

@@ -1,7 +1,7 @@
 //! Built-in scenes.
 use crate::lighting::Lights;
 use crate::raster::Material;
-use crate::scene::{CameraPath, Deformer, Motion, SampleScene};
+use crate::scene::{vertex_normals, CameraPath, Deformer, Motion, SampleScene};
 use glam::{Affine3A, Quat, Vec3};
 use hybrid_rt_testkit::reference::{Camera, Mesh, Rng, Scene};
 
@@ -102,6 +102,7 @@ pub fn cornell_room() -> SampleScene {
     );
     SampleScene {
         name: "cornell room".into(),
+        normals: scene.meshes.iter().map(|m| vertex_normals(&m.positions, &m.indices)).collect(),
         scene,
         materials,
         motions,

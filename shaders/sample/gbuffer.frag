@@ -7,15 +7,21 @@
 layout(location = 0) in vec3 v_world;
 layout(location = 1) in vec4 v_clip;
 layout(location = 2) in vec4 v_prev_clip;
+layout(location = 3) in vec3 v_normal;
 layout(location = 0) out vec4 o_normal_roughness;
 layout(location = 1) out vec4 o_albedo_metalness;
 layout(location = 2) out vec2 o_motion;
 
 void main() {
     Instance i = u_instances.items[u_push.instance];
-    // Flat shading: the triangle's plane, oriented towards the camera (as the reference's).
-    vec3 n = normalize(cross(dFdx(v_world), dFdy(v_world)));
-    if (dot(n, u_camera.eye.xyz - v_world) < 0.0) n = -n;
+    // The triangle's plane, oriented towards the camera (as the reference's), orients the
+    // interpolated vertex normal: meshes of either winding shade from the side they are seen.
+    // A zero vertex normal (a mesh uploaded without normals) shades flat: the plane itself.
+    vec3 g = normalize(cross(dFdx(v_world), dFdy(v_world)));
+    if (dot(g, u_camera.eye.xyz - v_world) < 0.0) g = -g;
+    float len = length(v_normal);
+    vec3 n = len > 1e-12 ? v_normal / len : g;
+    if (dot(n, g) < 0.0) n = -n;
     o_normal_roughness = vec4(n, i.material.w);
     o_albedo_metalness = vec4(i.material.rgb, i.extra.x);
     vec2 cur = v_clip.xy / v_clip.w;

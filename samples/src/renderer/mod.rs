@@ -120,7 +120,7 @@ impl<'h> Renderer<'h> {
         let ctx =
             host.create_context(&InitSettings { supported_working_sets: SLOTS as u32, ..Default::default() }).map_err(sdk_err)?;
         let mut container = ctx.create_task_container();
-        let meshes = MeshBuffers::upload(host, &scene.scene)?;
+        let meshes = MeshBuffers::upload(host, &scene.scene, &scene.normals)?;
         // Register every mesh and instance (one BLAS per mesh; the flag's may be refit).
         let geometries = ctx.create_geometry_handles(scene.scene.meshes.len());
         let deformed_mesh = scene.deformer.as_ref().map(|d| scene.scene.instances[d.instance].mesh);
@@ -147,8 +147,8 @@ impl<'h> Renderer<'h> {
         }
         let mut slots = Vec::new();
         for _ in 0..SLOTS {
-            let rest = scene.deformer.as_ref().map(|d| d.rest.as_slice());
-            slots.push(Slot::new(host, w, h, settings.lidar_size, rest, scene.camera_path.at(0.0))?);
+            let rest = scene.deformer.as_ref().map(|d| deformed_vertices(&scene, d, 0.0));
+            slots.push(Slot::new(host, w, h, settings.lidar_size, rest.as_deref(), scene.camera_path.at(0.0))?);
         }
         let work = Work::new(host, w, h, settings.lidar_size)?;
         let context = |signal| {
@@ -287,7 +287,7 @@ impl<'h> Renderer<'h> {
         let transforms: Vec<_> = (0..self.scene.scene.instances.len()).map(|i| self.scene.transform(i, time)).collect();
         let mut deformed_buffer = None;
         if let (Some(d), Some(buffer)) = (&self.scene.deformer, &self.slots[slot].deformed) {
-            host.write_buffer(buffer, bytemuck::cast_slice(&d.positions(time)))?;
+            host.write_buffer(buffer, bytemuck::cast_slice(&deformed_vertices(&self.scene, d, time)))?;
             deformed_buffer = Some((self.scene.scene.instances[d.instance].mesh, buffer.buffer));
         }
         let draws: Vec<Draw> = (0..transforms.len())
@@ -668,4 +668,12 @@ impl<'h> Renderer<'h> {
         self.view.destroy(host);
         Ok(())
     }
+}
+
+/// The deforming mesh's vertices at `time`: its positions and their normals, recomputed (the
+/// cloth's shading follows its waves).
+fn deformed_vertices(scene: &SampleScene, d: &crate::scene::Deformer, time: f32) -> Vec<[f32; 6]> {
+    let positions = d.positions(time);
+    let indices = &scene.scene.meshes[scene.scene.instances[d.instance].mesh].indices;
+    raster::interleave(&positions, &crate::scene::vertex_normals(&positions, indices))
 }
