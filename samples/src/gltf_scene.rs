@@ -174,6 +174,9 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
     Ok(fitted(name, scene, normals, materials))
 }
 
+/// How much larger than the scene's bounding sphere the fitted camera's view is.
+const FRAME_MARGIN: f32 = 1.1;
+
 /// Wraps a static scene with a camera path, lights and sizes scaled to its bounds.
 fn fitted(name: String, scene: Scene, normals: Vec<Vec<Vec3>>, materials: Vec<Material>) -> SampleScene {
     let motions = vec![Motion::Static; scene.instances.len()];
@@ -201,11 +204,15 @@ fn fitted(name: String, scene: Scene, normals: Vec<Vec<Vec3>>, materials: Vec<Ma
     };
     let (lo, hi) = s.bounds();
     let (center, radius) = ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-3));
+    // The bounding sphere fits the view with a 10% margin from anywhere on the path (an image
+    // at least as wide as it is high): distance = 1.1 r / sin(fov / 2).
+    let fov_y = 60f32.to_radians();
+    let distance = FRAME_MARGIN * radius / (0.5 * fov_y).sin();
     s.camera_path = CameraPath {
-        from: center + radius * Vec3::new(-0.45, 0.3, 1.1),
-        to: center + radius * Vec3::new(0.45, 0.3, 1.1),
+        from: center + distance * Vec3::new(-0.45, 0.3, 1.1).normalize(),
+        to: center + distance * Vec3::new(0.45, 0.3, 1.1).normalize(),
         target: center,
-        fov_y_radians: 60f32.to_radians(),
+        fov_y_radians: fov_y,
     };
     // A point light a little above the middle, as bright at a radius as the sun.
     s.lights.point_position = center + Vec3::Y * 0.3 * radius;

@@ -105,3 +105,20 @@ fn broken_files_are_refused_with_errors_that_say_why() {
     );
     refused(&File { mode: 0, ..Default::default() }, "points.gltf", &["no triangles", "1 primitives of points or lines"]);
 }
+
+/// The fitted camera frames the model with a margin from anywhere on its path: every corner of
+/// the quad projects inside the image, none closer than 5% of the half-width to its edge
+/// (the old path, 1.2 bounding radii away, filled the frame with a compact model's face).
+#[test]
+fn the_fitted_camera_frames_the_model() {
+    let scene = gltf_scene::load(&File::default().write("framed.gltf")).unwrap();
+    for u in [0.0, 0.5, 1.0] {
+        let camera = scene.camera_path.at(u);
+        let clip = camera.view_to_clip(16.0 / 9.0) * camera.world_to_view();
+        for p in &scene.scene.meshes[0].positions {
+            let c = clip * p.extend(1.0);
+            let ndc = c.truncate() / c.w;
+            assert!(ndc.x.abs() < 0.95 && ndc.y.abs() < 0.95, "u = {u}: corner {p} at {ndc}");
+        }
+    }
+}
