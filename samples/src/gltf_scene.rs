@@ -116,6 +116,8 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
     // or has two parents (which glTF forbids).
     let mut seen = vec![false; document.nodes().len()];
     let mut skipped = 0usize;
+    // Perspective cameras: (eye, forward, vertical field of view).
+    let mut cameras: Vec<(Vec3, Vec3, f32)> = Vec::new();
     while let Some((node, parent)) = stack.pop() {
         if std::mem::replace(&mut seen[node.index()], true) {
             return Err(format!("{name}: node {} is its own ancestor or has two parents", node.index()));
@@ -123,6 +125,16 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         for child in node.children() {
             stack.push((child, world));
+        }
+        let yfov = node.camera().and_then(|c| match c.projection() {
+            gltf::camera::Projection::Perspective(p) => Some(p.yfov()),
+            gltf::camera::Projection::Orthographic(_) => None,
+        });
+        if let Some(yfov) = yfov {
+            let (eye, forward) = (world.transform_point3(Vec3::ZERO), world.transform_vector3(Vec3::NEG_Z));
+            if let (true, Some(forward)) = (eye.is_finite() && yfov > 0.0 && yfov < 3.1, forward.try_normalize()) {
+                cameras.push((eye, forward, yfov));
+            }
         }
         let Some(mesh) = node.mesh() else { continue };
         for prim in mesh.primitives() {
@@ -171,7 +183,16 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
         return Err(format!("{name}: no triangles ({skipped} primitives of points or lines skipped)"));
     }
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    Ok(fitted(name, scene, normals, materials))
+    let mut s = fitted(name, scene, normals, materials);
+    // A glTF camera looks down its node's -Z; the path's target sits a bounding radius ahead
+    // (the near and far planes follow from that distance). Its roll is not kept (Y is up).
+    let (lo, hi) = s.bounds();
+    let reach = ((hi - lo).length() * 0.5).max(1e-3);
+    s.file_cameras = cameras
+        .into_iter()
+        .map(|(eye, forward, fov_y_radians)| CameraPath { from: eye, to: eye, target: eye + forward * reach, fov_y_radians })
+        .collect();
+    Ok(s)
 }
 
 /// How much larger than the scene's bounding sphere the fitted camera's view is.
@@ -198,6 +219,7 @@ fn fitted(name: String, scene: Scene, normals: Vec<Vec<Vec3>>, materials: Vec<Ma
         point_radius: 0.0,
         sky: [0.35, 0.45, 0.6],
         camera_path: CameraPath { from: Vec3::ZERO, to: Vec3::ZERO, target: Vec3::ZERO, fov_y_radians: 60f32.to_radians() },
+        file_cameras: Vec::new(),
         lidar_eye: Vec3::ZERO,
         tile_unit_length: 0.1,
         ao_ray_length: 0.5,

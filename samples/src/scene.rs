@@ -85,6 +85,9 @@ pub struct SampleScene {
     /// Radiance of GI and reflection rays that leave the scene.
     pub sky: [f32; 3],
     pub camera_path: CameraPath,
+    /// The file's own cameras (glTF perspective cameras), as still paths: `--camera N` picks
+    /// one instead of `camera_path`.
+    pub file_cameras: Vec<CameraPath>,
     /// Where the low-resolution "lidar" camera sits while it sweeps the scene.
     pub lidar_eye: Vec3,
     /// Surfel tile size (world units) for every geometry.

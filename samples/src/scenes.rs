@@ -102,6 +102,7 @@ pub fn cornell_room() -> SampleScene {
     );
     SampleScene {
         name: "cornell room".into(),
+        file_cameras: Vec::new(),
         normals: scene.meshes.iter().map(|m| vertex_normals(&m.positions, &m.indices)).collect(),
         scene,
         materials,

@@ -36,6 +36,7 @@ fn mistakes_are_errors_that_name_the_flag() {
     refused(BENCH, &["--rays", "1,100"], "--rays");
     refused(BENCH, &["--frames", "0"], "--frames");
     refused(QUALITY, &["--bogus"], "'--bogus'");
+    refused(SAMPLE, &["--camera", "x"], "--camera");
 }
 
 #[test]
@@ -54,10 +55,14 @@ fn help_and_version_answer_without_rendering() {
     }
 }
 
-/// A file that does not load is an error that names it (exit status 1), not a panic.
+/// A file that does not load is an error that names it (exit status 1), not a panic; so is
+/// a camera the scene does not have.
 #[test]
 fn a_missing_scene_file_is_named() {
     let (out, text) = run(SAMPLE, &["--headless", "no-such-scene.glb", "--frames", "2"]);
     assert_eq!(out.status.code(), Some(1), "{text}");
     assert!(text.contains("no-such-scene.glb") && !text.contains("panicked"), "{text}");
+    let (out, text) = run(SAMPLE, &["--headless", "--camera", "3", "--frames", "2"]);
+    assert_eq!(out.status.code(), Some(1), "{text}");
+    assert!(text.contains("--camera 3: cornell room has 0 camera(s)"), "{text}");
 }

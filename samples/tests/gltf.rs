@@ -12,11 +12,22 @@ struct File {
     nodes: &'static str,
     buffer_uri: Option<&'static str>,
     required: &'static [&'static str],
+    /// The default scene's root nodes, and more top-level properties (cameras).
+    roots: &'static str,
+    extra: &'static str,
 }
 
 impl Default for File {
     fn default() -> File {
-        File { mode: 4, indices: vec![0, 1, 2, 2, 1, 3], nodes: r#"[{"mesh": 0}]"#, buffer_uri: None, required: &[] }
+        File {
+            mode: 4,
+            indices: vec![0, 1, 2, 2, 1, 3],
+            nodes: r#"[{"mesh": 0}]"#,
+            buffer_uri: None,
+            required: &[],
+            roots: "[0]",
+            extra: "",
+        }
     }
 }
 
@@ -35,7 +46,7 @@ impl File {
         };
         let ext: Vec<String> = self.required.iter().map(|e| format!("\"{e}\"")).collect();
         let json = format!(
-            r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}], "nodes": {nodes},
+            r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": {roots}}}], "nodes": {nodes}, {extra}
   "extensionsUsed": [{ext}], "extensionsRequired": [{ext}],
   "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1, "mode": {mode}}}]}}],
   "accessors": [
@@ -44,6 +55,8 @@ impl File {
   "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 48}}, {{"buffer": 0, "byteOffset": 48, "byteLength": {ilen}}}],
   "buffers": [{{"byteLength": {blen}, "uri": "{uri}"}}]}}"#,
             nodes = self.nodes,
+            roots = self.roots,
+            extra = self.extra,
             ext = ext.join(", "),
             mode = self.mode,
             count = self.indices.len(),
@@ -121,4 +134,21 @@ fn the_fitted_camera_frames_the_model() {
             assert!(ndc.x.abs() < 0.95 && ndc.y.abs() < 0.95, "u = {u}: corner {p} at {ndc}");
         }
     }
+}
+
+/// A file's perspective camera becomes a still camera path that `--camera 0` picks: at the
+/// node's translation, looking down its -Z, with its vertical field of view.
+#[test]
+fn file_cameras_are_read() {
+    let file = File {
+        nodes: r#"[{"mesh": 0}, {"camera": 0, "translation": [0.5, 0.5, 3.0]}]"#,
+        roots: "[0, 1]",
+        extra: r#""cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}],"#,
+        ..Default::default()
+    };
+    let scene = gltf_scene::load(&file.write("camera.gltf")).unwrap();
+    assert_eq!(scene.file_cameras.len(), 1);
+    let c = scene.file_cameras[0];
+    assert!((c.from - glam::Vec3::new(0.5, 0.5, 3.0)).length() < 1e-5 && c.from == c.to, "{c:?}");
+    assert!((c.target - c.from).normalize().dot(glam::Vec3::NEG_Z) > 0.9999 && (c.fov_y_radians - 0.8).abs() < 1e-6, "{c:?}");
 }

@@ -66,6 +66,10 @@ struct Cli {
     /// Show surfaces the cache has not lit in magenta instead of black.
     #[arg(long)]
     magenta_unlit: bool,
+    /// Look through the file's camera N (glTF perspective cameras, in node order) instead of
+    /// the fitted camera path.
+    #[arg(long)]
+    camera: Option<usize>,
     /// Write the GPU times and memory as JSON to this file.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -101,10 +105,14 @@ fn run() -> Result<(), String> {
             .map(|n| Mode::parse(n.trim()).ok_or(format!("unknown mode {n:?} (see --help)")))
             .collect::<Result<_, _>>()?,
     };
-    let scene = match &cli.scene {
+    let mut scene = match &cli.scene {
         Some(path) => gltf_scene::load(path)?,
         None => scenes::cornell_room(),
     };
+    if let Some(k) = cli.camera {
+        let n = scene.file_cameras.len();
+        scene.camera_path = *scene.file_cameras.get(k).ok_or(format!("--camera {k}: {} has {n} camera(s)", scene.name))?;
+    }
     let out = cli.out;
     let windowed = !cli.headless && (cli.window || std::env::var_os("DISPLAY").is_some());
     if windowed {
