@@ -78,6 +78,10 @@ fn the_sample_renders_the_room_and_every_mode_is_sane() {
     let json = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("sample-room.json");
     let text = run_sample(&["--headless", "--width", &w, "--height", &h, "--frames", &f, "--json", json.to_str().unwrap()], &out);
     assert!(text.contains(&format!("the frame: {}", out.join("composite.png").display())), "{text}");
+    // Automatic exposure: the sun-lit room is brighter than mid-grey, so below 1 (whites no
+    // longer clip), and not absurdly (the log-average is within 0.1..1 here).
+    let exposure: f32 = text.split("exposure: ").nth(1).and_then(|t| t.split(' ').next()).and_then(|v| v.parse().ok()).unwrap();
+    assert!((0.18..1.0).contains(&exposure), "automatic exposure {exposure}");
     // The JSON report: valid, every frame counted, the times over the frames after the first.
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(report["frames"], FRAMES, "{report}");

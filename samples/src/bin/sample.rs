@@ -60,9 +60,10 @@ struct Cli {
     /// Size of the lidar view that fills the cache around the camera (pixels).
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(8..=4096))]
     lidar_size: u32,
-    /// Exposure of the tone-mapped PNGs (the EXRs are linear).
-    #[arg(long, default_value_t = 1.0)]
-    exposure: f32,
+    /// Exposure of the tone-mapped PNGs (the EXRs are linear). Default: automatic in headless
+    /// runs (the last frame's log-average luminance to mid-grey), 1 in a window.
+    #[arg(long)]
+    exposure: Option<f32>,
     /// Show surfaces the cache has not lit in magenta instead of black.
     #[arg(long)]
     magenta_unlit: bool,
@@ -84,8 +85,8 @@ fn main() {
 
 fn run() -> Result<(), String> {
     let cli = Cli::parse();
-    if !(cli.exposure.is_finite() && cli.exposure > 0.0) {
-        return Err(format!("--exposure {}: a positive number", cli.exposure));
+    if let Some(e) = cli.exposure.filter(|e| !(e.is_finite() && *e > 0.0)) {
+        return Err(format!("--exposure {e}: a positive number"));
     }
     let settings = Settings {
         width: cli.width,
@@ -95,7 +96,7 @@ fn run() -> Result<(), String> {
         max_blas_build_count: cli.blas_per_frame,
         rays_per_pixel: cli.rays,
         checkerboard: cli.checkerboard,
-        exposure: cli.exposure,
+        exposure: cli.exposure.unwrap_or(1.0),
         ..Default::default()
     };
     let chosen: Vec<Mode> = match cli.modes.as_str() {
@@ -144,6 +145,9 @@ fn run() -> Result<(), String> {
     }
     progress.finish();
     r.finish()?;
+    if cli.exposure.is_none() {
+        println!("exposure: {:.3} (automatic; --exposure sets it)", r.auto_expose()?);
+    }
     let mut written = Vec::new();
     for mode in &chosen {
         let (linear, display) = r.capture(*mode)?;

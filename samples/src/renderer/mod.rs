@@ -43,6 +43,9 @@ pub use stats::Stats;
 const SLOTS: usize = 2;
 const GENERAL: vk::ImageLayout = vk::ImageLayout::GENERAL;
 
+/// Log-average luminance the automatic exposure maps the composite to (`Renderer::auto_expose`).
+const AUTO_EXPOSURE_KEY: f64 = 0.18;
+
 /// What the renderer does per frame. Defaults in `Default`.
 #[derive(Clone, Copy, Debug)]
 pub struct Settings {
@@ -637,6 +640,28 @@ impl<'h> Renderer<'h> {
         let linear = bytemuck::cast_slice(&host.read_image(&self.work.linear, GENERAL)?).to_vec();
         let display = host.read_image(&self.work.display, GENERAL)?;
         Ok((linear, display))
+    }
+
+    /// Sets `settings.exposure` from the last frame's composite so its log-average luminance
+    /// maps to AUTO_EXPOSURE_KEY (Reinhard's key value, 0.18: mid-grey) before the tone curve:
+    /// a scene lit 10x brighter gets a tenth of the exposure instead of clipping its whites.
+    /// Returns the exposure (clamped to 1/32..32; 1 for a black frame).
+    pub fn auto_expose(&mut self) -> HostResult<f32> {
+        let (linear, _) = self.capture(Mode::Composite)?;
+        let logs: Vec<f64> = linear
+            .iter()
+            .map(|t| 0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2])
+            .filter(|l| l.is_finite() && *l > 0.0)
+            .map(|l| (l as f64 + 1e-4).ln())
+            .collect();
+        let exposure = if logs.is_empty() {
+            1.0
+        } else {
+            let mean = (logs.iter().sum::<f64>() / logs.len() as f64).exp();
+            (AUTO_EXPOSURE_KEY / mean).clamp(1.0 / 32.0, 32.0) as f32
+        };
+        self.settings.exposure = exposure;
+        Ok(exposure)
     }
 
     /// The display image (RGBA8, GENERAL) the view pass writes: a window blits it.
