@@ -184,3 +184,82 @@ pub fn field(triangles: usize, instances: usize) -> (Scene, Camera) {
     let camera = Camera::look_at(Vec3::new(0.0, extent * 0.35, extent * 0.55), Vec3::new(0.0, 0.0, -extent * 0.05));
     (s, camera)
 }
+
+/// What a game scene has, for scale: a rolling terrain of 1,002,528 triangles (one mesh, one
+/// BLAS), 1,000 trees of thin 8 cm trunks and round canopies (2,000 instances of two shared
+/// meshes; 20 canopies drift in slow circles, so the TLAS changes every frame), and a flag
+/// whose waves refit its BLAS every frame (the deformation a skinned mesh brings). The sun is
+/// low, so trunks cast long thin shadows; the camera flies along the forest's edge.
+pub fn forest() -> SampleScene {
+    const SIZE: f32 = 60.0;
+    const TREES: usize = 1000;
+    let height = |x: f32, z: f32| 0.6 * (x / 7.0).sin() * (z / 9.0).cos() + 0.25 * (x / 2.3 + z / 3.1).sin();
+    let mut scene = Scene::default();
+    let (mut materials, mut motions) = (Vec::new(), Vec::new());
+    let mut add = |scene: &mut Scene, mesh: usize, t: Affine3A, m: Material, motion: Motion| {
+        materials.push(m);
+        motions.push(motion);
+        scene.add_instance(mesh, t)
+    };
+    let mut terrain = Mesh::grid(SIZE, 708);
+    for p in &mut terrain.positions {
+        p.y = height(p.x, p.z);
+    }
+    let terrain = scene.add_mesh(terrain);
+    add(
+        &mut scene,
+        terrain,
+        Affine3A::IDENTITY,
+        Material { albedo: [0.35, 0.42, 0.22], roughness: 0.95, metalness: 0.0 },
+        Motion::Static,
+    );
+    let trunk = scene.add_mesh(Mesh::cuboid(Vec3::new(0.04, 1.0, 0.04)));
+    let canopy = scene.add_mesh(Mesh::sphere(0.6, 12, 6));
+    let bark = Material { albedo: [0.35, 0.25, 0.15], roughness: 0.9, metalness: 0.0 };
+    let mut rng = Rng::new(11);
+    for k in 0..TREES {
+        let (x, z) = ((rng.next_f32() - 0.5) * (SIZE - 4.0), (rng.next_f32() - 0.5) * (SIZE - 4.0));
+        let ground = height(x, z);
+        add(&mut scene, trunk, Affine3A::from_translation(Vec3::new(x, ground + 1.0, z)), bark, Motion::Static);
+        let leaves =
+            Material { albedo: [0.12 + 0.1 * rng.next_f32(), 0.35 + 0.2 * rng.next_f32(), 0.1], roughness: 0.8, metalness: 0.0 };
+        let top = Vec3::new(x, ground + 2.3, z);
+        let motion = if k % 50 == 0 { Motion::Orbit { center: top, radius: 0.3, period: 4.0 } } else { Motion::Static };
+        add(&mut scene, canopy, Affine3A::from_translation(top), leaves, motion);
+    }
+    // The flag: a 1.6 x 1.0 cloth on a pole at the forest's edge.
+    let cloth = Mesh::grid(1.0, 16);
+    let rest: Vec<Vec3> = cloth.positions.iter().map(|p| Vec3::new((p.x + 0.5) * 1.6, -p.z, 0.0)).collect();
+    let flag = scene.add_mesh(Mesh { positions: rest.clone(), indices: cloth.indices });
+    let flag_at = Vec3::new(2.0, height(2.0, 26.0) + 2.5, 26.0);
+    let red = Material { albedo: [0.8, 0.15, 0.3], roughness: 0.7, metalness: 0.0 };
+    let flag_instance = add(&mut scene, flag, Affine3A::from_translation(flag_at), red, Motion::Static);
+    SampleScene {
+        name: "forest".into(),
+        file_cameras: Vec::new(),
+        normals: scene.meshes.iter().map(|m| vertex_normals(&m.positions, &m.indices)).collect(),
+        scene,
+        materials,
+        motions,
+        deformer: Some(Deformer { instance: flag_instance, rest, amplitude: 0.15 }),
+        lights: Lights {
+            sun_direction: Vec3::new(0.5, 0.45, 0.3),
+            sun_intensity: 2.5,
+            point_position: flag_at + Vec3::new(0.0, 1.5, 1.0),
+            point_intensity: 4.0,
+            ambient: 0.0,
+        },
+        sun_angular_extent: 0.03,
+        point_radius: 0.1,
+        sky: [0.35, 0.45, 0.6],
+        camera_path: CameraPath {
+            from: Vec3::new(-8.0, 3.0, 31.0),
+            to: Vec3::new(8.0, 2.5, 31.0),
+            target: Vec3::new(0.0, 1.0, 18.0),
+            fov_y_radians: 60f32.to_radians(),
+        },
+        lidar_eye: Vec3::new(0.0, 4.0, 24.0),
+        tile_unit_length: 0.3,
+        ao_ray_length: 1.0,
+    }
+}

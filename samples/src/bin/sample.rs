@@ -20,13 +20,24 @@ const AFTER_HELP: &str = "modes: composite direct albedo normals roughness metal
 window keys: Tab / Shift+Tab next / previous mode, 1-9 first modes, W A S D Q E move, arrows look,
        Space pause the animation, P write the current mode to --out, Esc quit";
 
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq)]
+enum Builtin {
+    Room,
+    Forest,
+}
+
 /// The hybrid-rt sample: a rasterizing renderer with the SDK's ray-traced shadows, AO,
 /// diffuse GI and reflections, on a built-in room or a glTF file.
 #[derive(Parser, Debug)]
 #[command(name = "sample", version, after_help = AFTER_HELP)]
 struct Cli {
-    /// A glTF file (.gltf or .glb) to render instead of the built-in room.
+    /// A glTF file (.gltf or .glb) to render instead of a built-in scene.
+    #[arg(conflicts_with = "builtin")]
     scene: Option<PathBuf>,
+    /// The built-in scene: the cornell room, or a forest of 2,000 instances on a 1M-triangle
+    /// terrain.
+    #[arg(long = "scene", value_enum, default_value_t = Builtin::Room)]
+    builtin: Builtin,
     /// Render without a window (the default when no display is set), write the last frame's
     /// modes to --out.
     #[arg(long, conflicts_with = "window")]
@@ -108,7 +119,10 @@ fn run() -> Result<(), String> {
     };
     let mut scene = match &cli.scene {
         Some(path) => gltf_scene::load(path)?,
-        None => scenes::cornell_room(),
+        None => match cli.builtin {
+            Builtin::Room => scenes::cornell_room(),
+            Builtin::Forest => scenes::forest(),
+        },
     };
     if let Some(k) = cli.camera {
         let n = scene.file_cameras.len();
