@@ -319,16 +319,30 @@ pub fn moving_object_residual(signal: Signal, seed: u64) -> Vec<f32> {
         .filter(|&i| ga.hit[i] && gb.hit[i] && ga.instance[i] == 0 && gb.instance[i] == 0 && new[i][0] - old[i][0] > 0.25)
         .collect();
     assert!(region.len() > 30, "the move uncovers floor that was occluded ({} px)", region.len());
-    let mut residual = Vec::new();
-    for _ in 0..12 {
-        signal.frame(&mut st, 1, true);
-        let d = signal.denoised(&st);
-        let (num, den): (f32, f32) =
-            region.iter().map(|&i| (d[i][0] - new[i][0], old[i][0] - new[i][0])).fold((0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
-        residual.push(num / den);
-    }
+    let residual = old_share_kept(&mut st, signal, &region, (&old, &new), 0);
     st.finish();
     residual
+}
+
+/// Per frame of 12 denoised 1-ray frames of `signal`, how much of the change from `old` to
+/// `new` (converged images) is still missing over `region`, channel `c`: (new - denoised) /
+/// (new - old), summed over the region — 1 while the old image lingers, 0 once it is gone.
+fn old_share_kept(
+    st: &mut Stage,
+    signal: Signal,
+    region: &[usize],
+    (old, new): (&[[f32; 3]], &[[f32; 3]]),
+    c: usize,
+) -> Vec<f32> {
+    (0..12)
+        .map(|_| {
+            signal.frame(st, 1, true);
+            let d = signal.denoised(st);
+            let (num, den) =
+                region.iter().fold((0.0f32, 0.0f32), |a, &i| (a.0 + new[i][c] - d[i][c], a.1 + new[i][c] - old[i][c]));
+            num / den
+        })
+        .collect()
 }
 
 /// The penumbra regions of a shadow: umbra (converged < 0.02), lit (> 0.98), penumbra between.
@@ -413,14 +427,7 @@ pub fn gi_switch_residual(seed: u64) -> Vec<f32> {
     }
     let region: Vec<usize> = (0..old.len()).filter(|&i| st.g.hit[i] && new[i][1] - old[i][1] > 0.05).collect();
     assert!(region.len() > 100, "the sky lights the room ({} px)", region.len());
-    let mut residual = Vec::new();
-    for _ in 0..12 {
-        bright.frame(&mut st, 1, true);
-        let d = bright.denoised(&st);
-        let (num, den): (f32, f32) =
-            region.iter().map(|&i| (new[i][1] - d[i][1], new[i][1] - old[i][1])).fold((0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
-        residual.push(num / den);
-    }
+    let residual = old_share_kept(&mut st, bright, &region, (&old, &new), 1);
     st.finish();
     residual
 }
