@@ -1,8 +1,11 @@
 //! glTF 2.0 scenes (`.gltf` with `.bin` or data-URI buffers, or `.glb`), parsed by the `gltf`
 //! crate: every triangle primitive (lists, strips and fans) of every node of the default scene
 //! becomes an instance with the node's world transform, its normals (computed from the
-//! triangles where the file has none) and its material's metallic-roughness factors. Textures are not read (the G-buffer takes one colour per draw). The camera path,
-//! lights, surfel size and AO length are fitted to the scene's bounds.
+//! triangles where the file has none), its first texture coordinates and its material's
+//! base colour (factor x PNG texture), metallic and roughness factors; metallic-roughness,
+//! normal and emissive textures are not read yet, nor JPEG images (drawn untextured, with a
+//! warning). Perspective cameras are kept for `--camera`. The camera path, lights, surfel
+//! size and AO length are fitted to the scene's bounds.
 //!
 //! Any file gives a scene or an error that names the file and what is wrong in it — the node,
 //! the primitive, the extension — and never hangs or panics: a node that is its own ancestor
@@ -10,7 +13,7 @@
 //! meshopt, quantized meshes) are named before validation buries them under its own errors,
 //! and validation errors are summed up to the first three.
 use crate::lighting::Lights;
-use crate::raster::Material;
+use crate::raster::{Material, Texture};
 use crate::scene::{vertex_normals, CameraPath, Motion, SampleScene};
 use base64::Engine;
 use glam::{Affine3A, Mat4, Vec3};
@@ -41,6 +44,45 @@ fn buffers(doc: &gltf::Document, blob: Option<Vec<u8>>, dir: &Path) -> Result<Ve
             Ok(data)
         })
         .collect()
+}
+
+/// A glTF image as a texture: PNG (in a buffer view, a data URI or a file) decoded to RGBA8;
+/// None for other formats (JPEG, KTX2: not read).
+fn image_texture(image: &gltf::Image, data: &[Vec<u8>], dir: &Path) -> Result<Option<Texture>, String> {
+    let bytes: Vec<u8> = match image.source() {
+        gltf::image::Source::View { view, .. } => {
+            let buffer = data.get(view.buffer().index()).ok_or("its buffer is missing")?;
+            let end =
+                view.offset().checked_add(view.length()).filter(|&e| e <= buffer.len()).ok_or("its view is past its buffer")?;
+            buffer[view.offset()..end].to_vec()
+        }
+        gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
+            let (_, payload) = uri.split_once(";base64,").ok_or("an unsupported data URI")?;
+            base64::engine::general_purpose::STANDARD.decode(payload).map_err(|e| format!("data URI: {e}"))?
+        }
+        gltf::image::Source::Uri { uri, .. } => {
+            let path = dir.join(uri.replace("%20", " "));
+            std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?
+        }
+    };
+    if !bytes.starts_with(b"\x89PNG") {
+        return Ok(None);
+    }
+    let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+    // Palettes and low bit depths expanded, 16-bit channels cut to 8: RGB(A) or grey(+alpha).
+    decoder.set_transformations(png::Transformations::normalize_to_color8());
+    let mut reader = decoder.read_info().map_err(|e| format!("PNG: {e}"))?;
+    let mut texels = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut texels).map_err(|e| format!("PNG: {e}"))?;
+    let texels = &texels[..info.buffer_size()];
+    let rgba: Vec<u8> = match info.color_type {
+        png::ColorType::Rgba => texels.to_vec(),
+        png::ColorType::Rgb => texels.chunks_exact(3).flat_map(|c| [c[0], c[1], c[2], 255]).collect(),
+        png::ColorType::GrayscaleAlpha => texels.chunks_exact(2).flat_map(|c| [c[0], c[0], c[0], c[1]]).collect(),
+        png::ColorType::Grayscale => texels.iter().flat_map(|&g| [g, g, g, 255]).collect(),
+        png::ColorType::Indexed => return Err("PNG: a palette left unexpanded".into()),
+    };
+    Ok(Some(Texture { width: info.width, height: info.height, rgba }))
 }
 
 fn material(m: &gltf::Material) -> Material {
@@ -107,7 +149,11 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
     let data = buffers(&document, blob, path.parent().unwrap_or(Path::new("."))).map_err(|e| format!("{name}: {e}"))?;
     let mut scene = Scene::default();
     let mut normals = Vec::new();
+    let mut uvs = Vec::new();
     let mut materials = Vec::new();
+    // glTF image -> our texture (None: not PNG, drawn untextured), and each instance's.
+    let mut images: HashMap<usize, Option<usize>> = HashMap::new();
+    let (mut textures, mut albedo_textures) = (Vec::new(), Vec::new());
     // (glTF mesh, primitive) -> our mesh, so instanced glTF meshes share one BLAS.
     let mut meshes: HashMap<(usize, usize), usize> = HashMap::new();
     let root = document.default_scene().or_else(|| document.scenes().next()).ok_or(format!("{name}: the file has no scene"))?;
@@ -165,6 +211,8 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
                             }
                             _ => vertex_normals(&positions, &indices),
                         });
+                        let coords: Option<Vec<[f32; 2]>> = reader.read_tex_coords(0).map(|t| t.into_f32().collect());
+                        uvs.push(coords.filter(|t| t.len() == positions.len()).unwrap_or_default());
                         let m = scene.add_mesh(Mesh { positions, indices });
                         meshes.insert(key, m);
                         Some(m)
@@ -177,6 +225,30 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
             };
             scene.add_instance(ours, Affine3A::from_mat4(world));
             materials.push(material(&prim.material()));
+            let source = prim.material().pbr_metallic_roughness().base_color_texture().map(|t| t.texture().source());
+            let texture = match source {
+                None => None,
+                Some(image) => match images.get(&image.index()) {
+                    Some(&t) => t,
+                    None => {
+                        let decoded = image_texture(&image, &data, path.parent().unwrap_or(Path::new(".")))
+                            .map_err(|e| format!("{name}: image {}: {e}", image.index()))?;
+                        let t = decoded.map(|tex| {
+                            textures.push(tex);
+                            textures.len() - 1
+                        });
+                        if t.is_none() {
+                            eprintln!(
+                                "{name}: image {} is not a PNG: drawn untextured (only PNG textures are read)",
+                                image.index()
+                            );
+                        }
+                        images.insert(image.index(), t);
+                        t
+                    }
+                },
+            };
+            albedo_textures.push(texture);
         }
     }
     if scene.instances.is_empty() {
@@ -184,6 +256,7 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
     }
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let mut s = fitted(name, scene, normals, materials);
+    (s.uvs, s.textures, s.albedo_textures) = (uvs, textures, albedo_textures);
     // A glTF camera looks down its node's -Z; the path's target sits a bounding radius ahead
     // (the near and far planes follow from that distance). Its roll is not kept (Y is up).
     let (lo, hi) = s.bounds();
@@ -205,6 +278,9 @@ fn fitted(name: String, scene: Scene, normals: Vec<Vec<Vec3>>, materials: Vec<Ma
         name,
         scene,
         normals,
+        uvs: Vec::new(),
+        textures: Vec::new(),
+        albedo_textures: Vec::new(),
         materials,
         motions,
         deformer: None,

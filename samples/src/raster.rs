@@ -82,21 +82,32 @@ impl Targets {
 pub struct MeshBuffers {
     /// Vertex buffer, index buffer, index count, vertex count.
     meshes: Vec<(HostBuffer, HostBuffer, u32, u32)>,
+    /// Base-colour textures: a white texel first (what untextured draws sample), then the
+    /// scene's (`Draw::albedo_texture` k is image k + 1).
+    textures: Vec<HostImage>,
+    sampler: vk::Sampler,
 }
 
-/// Bytes per vertex: a position and a shading normal, interleaved (RGB32F each). The SDK reads
-/// the positions out of the same buffer (`VertexBufferInput::stride`), as an engine's.
-pub const VERTEX_STRIDE: u32 = 24;
+/// Bytes per vertex: a position, a shading normal (RGB32F each) and a texture coordinate
+/// (RG32F), interleaved. The SDK reads the positions out of the same buffer
+/// (`VertexBufferInput::stride`), as an engine's.
+pub const VERTEX_STRIDE: u32 = 32;
 
-/// Interleaves positions and normals (one each per vertex) into vertices. Vertices past the
-/// normals' end get a zero normal, which the G-buffer pass shades flat (the triangle's plane,
-/// as the CPU reference does).
-pub fn interleave(positions: &[Vec3], normals: &[Vec3]) -> Vec<[f32; 6]> {
-    positions
-        .iter()
-        .zip(normals.iter().chain(std::iter::repeat(&Vec3::ZERO)))
-        .map(|(p, n)| [p.x, p.y, p.z, n.x, n.y, n.z])
-        .collect()
+/// Interleaves positions, normals and texture coordinates (one each per vertex) into
+/// vertices. Vertices past the normals' end get a zero normal, which the G-buffer pass shades
+/// flat (the triangle's plane, as the CPU reference does); past the coordinates' end, (0, 0).
+pub fn interleave(positions: &[Vec3], normals: &[Vec3], uvs: &[[f32; 2]]) -> Vec<[f32; 8]> {
+    let normals = normals.iter().chain(std::iter::repeat(&Vec3::ZERO));
+    let uvs = uvs.iter().chain(std::iter::repeat(&[0.0; 2]));
+    positions.iter().zip(normals).zip(uvs).map(|((p, n), t)| [p.x, p.y, p.z, n.x, n.y, n.z, t[0], t[1]]).collect()
+}
+
+/// A base-colour texture: sRGB-encoded RGBA8 texels, row by row.
+#[derive(Clone, Debug, Default)]
+pub struct Texture {
+    pub width: u32,
+    pub height: u32,
+    pub rgba: Vec<u8>,
 }
 
 impl MeshBuffers {
@@ -105,17 +116,50 @@ impl MeshBuffers {
         vk::BufferUsageFlags::VERTEX_BUFFER.as_raw() | vk::BufferUsageFlags::TRANSFER_SRC.as_raw(),
     );
 
-    /// `normals`: one list per mesh, one normal per vertex (none: flat shading).
-    pub fn upload(host: &Host, scene: &Scene, normals: &[Vec<Vec3>]) -> HostResult<MeshBuffers> {
+    /// `normals` and `uvs`: one list per mesh, one entry per vertex (no normals: flat shading;
+    /// no coordinates: (0, 0)); `textures`: the scene's base-colour textures.
+    pub fn upload(
+        host: &Host,
+        scene: &Scene,
+        normals: &[Vec<Vec3>],
+        uvs: &[Vec<[f32; 2]>],
+        textures: &[Texture],
+    ) -> HostResult<MeshBuffers> {
         let mut meshes = Vec::new();
         for (k, m) in scene.meshes.iter().enumerate() {
-            let vertices = interleave(&m.positions, normals.get(k).map_or(&[][..], |n| n.as_slice()));
+            let vertices = interleave(
+                &m.positions,
+                normals.get(k).map_or(&[][..], |n| n.as_slice()),
+                uvs.get(k).map_or(&[][..], |t| t.as_slice()),
+            );
             let vb = host.buffer_with_data(bytemuck::cast_slice(&vertices), Self::VERTEX_USAGE)?;
             let ib_usage = vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
             let ib = host.buffer_with_data(bytemuck::cast_slice(&m.indices), ib_usage)?;
             meshes.push((vb, ib, m.indices.len() as u32, m.positions.len() as u32));
         }
-        Ok(MeshBuffers { meshes })
+        let white = Texture { width: 1, height: 1, rgba: vec![255; 4] };
+        let mut images = Vec::new();
+        for t in std::iter::once(&white).chain(textures) {
+            if t.width == 0 || t.height == 0 || t.rgba.len() as u64 != t.width as u64 * t.height as u64 * 4 {
+                return Err(format!("a {}x{} texture with {} bytes", t.width, t.height, t.rgba.len()));
+            }
+            let usage = vk::ImageUsageFlags::SAMPLED;
+            images.push(host.image_with_data(vk::Format::R8G8B8A8_SRGB, t.width, t.height, usage, &t.rgba, READ)?);
+        }
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::LINEAR)
+            .min_filter(vk::Filter::LINEAR)
+            .address_mode_u(vk::SamplerAddressMode::REPEAT)
+            .address_mode_v(vk::SamplerAddressMode::REPEAT)
+            .address_mode_w(vk::SamplerAddressMode::REPEAT);
+        // SAFETY: plain object creation; destroyed in `destroy`.
+        let sampler = unsafe { host.device.create_sampler(&info, None) }.map_err(|e| format!("sampler: {e:?}"))?;
+        Ok(MeshBuffers { meshes, textures: images, sampler })
+    }
+
+    /// The texture a draw samples (white without one, or with an index past the scene's).
+    fn albedo(&self, texture: Option<usize>) -> &HostImage {
+        texture.and_then(|k| self.textures.get(k + 1)).unwrap_or(&self.textures[0])
     }
 
     /// The SDK's view of mesh `i`: the same buffers the rasterizer draws (RGB32F positions
@@ -139,6 +183,11 @@ impl MeshBuffers {
             host.destroy_buffer(v);
             host.destroy_buffer(i);
         }
+        for t in self.textures {
+            host.destroy_image(t);
+        }
+        // SAFETY: the frames that sampled with it are finished (the caller's rule).
+        unsafe { host.device.destroy_sampler(self.sampler, None) };
     }
 }
 
@@ -151,6 +200,8 @@ pub struct Draw {
     pub material: Material,
     /// Vertices to draw instead of the mesh's own (a deforming mesh's of this frame).
     pub vertex_buffer: Option<vk::Buffer>,
+    /// Base-colour texture (an index into the scene's), multiplied into the albedo.
+    pub albedo_texture: Option<usize>,
 }
 
 /// The G-buffer pass: one pipeline, push descriptors for the camera and the instance table.
@@ -178,6 +229,11 @@ impl GBufferPass {
                 .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
                 .descriptor_count(1)
                 .stage_flags(stages),
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(2)
+                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                .descriptor_count(1)
+                .stage_flags(stages),
         ];
         let (set_layout, layout) = gpu::push_layout(host, &bindings, 4, stages)?;
         unsafe {
@@ -197,7 +253,9 @@ impl GBufferPass {
                 format: vk::Format::R32G32B32_SFLOAT,
                 offset,
             };
-            let vertex_attributes = [attribute(0, 0), attribute(1, 12)];
+            let uv =
+                vk::VertexInputAttributeDescription { location: 2, binding: 0, format: vk::Format::R32G32_SFLOAT, offset: 24 };
+            let vertex_attributes = [attribute(0, 0), attribute(1, 12), uv];
             let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
                 .vertex_binding_descriptions(&vertex_bindings)
                 .vertex_attribute_descriptions(&vertex_attributes);
@@ -359,6 +417,16 @@ impl GBufferPass {
                     0,
                     &(i as u32).to_ne_bytes(),
                 );
+                let texture = [vk::DescriptorImageInfo {
+                    sampler: meshes.sampler,
+                    image_view: meshes.albedo(dr.albedo_texture).view,
+                    image_layout: READ,
+                }];
+                let write = vk::WriteDescriptorSet::default()
+                    .dst_binding(2)
+                    .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                    .image_info(&texture);
+                self.push.cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::GRAPHICS, self.layout, 0, &[write]);
                 d.cmd_bind_vertex_buffers(cmd, 0, &[dr.vertex_buffer.unwrap_or(vb.buffer)], &[0]);
                 d.cmd_bind_index_buffer(cmd, ib.buffer, 0, vk::IndexType::UINT32);
                 d.cmd_draw_indexed(cmd, *count, 1, 0, 0, 0);
@@ -399,6 +467,7 @@ pub fn static_draws(scene: &Scene, material: impl Fn(usize) -> Material) -> Vec<
             prev_transform: inst.transform,
             material: material(i),
             vertex_buffer: None,
+            albedo_texture: None,
         })
         .collect()
 }

@@ -2,7 +2,7 @@
 //! material per instance, what moves, the lights, and the camera path of a headless run.
 //! Built by `scenes::cornell_room` or loaded from glTF (`gltf_scene`).
 use crate::lighting::Lights;
-use crate::raster::Material;
+use crate::raster::{Material, Texture};
 use glam::{Affine3A, Quat, Vec3};
 use hybrid_rt_testkit::reference::{Camera, Scene};
 
@@ -72,6 +72,12 @@ pub struct SampleScene {
     /// Shading normals, one list per mesh of `scene` (one per vertex): the file's where it has
     /// them, else [`vertex_normals`]. (The deforming mesh's are recomputed every frame.)
     pub normals: Vec<Vec<Vec3>>,
+    /// Texture coordinates, one list per mesh (empty: none), for `textures`.
+    pub uvs: Vec<Vec<[f32; 2]>>,
+    /// Base-colour textures, and which one each instance's material multiplies its albedo by
+    /// (one per instance, or empty: none).
+    pub textures: Vec<Texture>,
+    pub albedo_textures: Vec<Option<usize>>,
     /// One per instance of `scene`.
     pub materials: Vec<Material>,
     /// One per instance of `scene`.

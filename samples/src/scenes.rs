@@ -103,6 +103,9 @@ pub fn cornell_room() -> SampleScene {
     SampleScene {
         name: "cornell room".into(),
         file_cameras: Vec::new(),
+        uvs: Vec::new(),
+        textures: Vec::new(),
+        albedo_textures: Vec::new(),
         normals: scene.meshes.iter().map(|m| vertex_normals(&m.positions, &m.indices)).collect(),
         scene,
         materials,
@@ -237,6 +240,9 @@ pub fn forest() -> SampleScene {
     SampleScene {
         name: "forest".into(),
         file_cameras: Vec::new(),
+        uvs: Vec::new(),
+        textures: Vec::new(),
+        albedo_textures: Vec::new(),
         normals: scene.meshes.iter().map(|m| vertex_normals(&m.positions, &m.indices)).collect(),
         scene,
         materials,

@@ -152,3 +152,88 @@ fn file_cameras_are_read() {
     assert!((c.from - glam::Vec3::new(0.5, 0.5, 3.0)).length() < 1e-5 && c.from == c.to, "{c:?}");
     assert!((c.target - c.from).normalize().dot(glam::Vec3::NEG_Z) > 0.9999 && (c.fov_y_radians - 0.8).abs() < 1e-6, "{c:?}");
 }
+
+/// A quad with texture coordinates and a 2x2 PNG base-colour texture (red, green / blue,
+/// white), embedded as data URIs.
+fn write_textured_quad(name: &str) -> PathBuf {
+    let b64 = |b: &[u8]| base64::engine::general_purpose::STANDARD.encode(b);
+    let mut png_bytes = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut png_bytes, 2, 2);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut w = enc.write_header().unwrap();
+        w.write_image_data(&[255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255]).unwrap();
+    }
+    let positions: [[f32; 3]; 4] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
+    let uvs: [[f32; 2]; 4] = [[0.0, 1.0], [1.0, 1.0], [0.0, 0.0], [1.0, 0.0]];
+    let indices: [u16; 6] = [0, 1, 2, 2, 1, 3];
+    let mut bytes: Vec<u8> = positions.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    bytes.extend(uvs.iter().flatten().flat_map(|v| v.to_le_bytes()));
+    bytes.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "TEXCOORD_0": 1}}, "indices": 2, "material": 0}}]}}],
+  "materials": [{{"pbrMetallicRoughness": {{"baseColorTexture": {{"index": 0}}, "roughnessFactor": 0.8, "metallicFactor": 0.0}}}}],
+  "textures": [{{"source": 0}}], "images": [{{"uri": "data:image/png;base64,{png}"}}],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}},
+    {{"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"}},
+    {{"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}}],
+  "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 48}}, {{"buffer": 0, "byteOffset": 48, "byteLength": 32}},
+    {{"buffer": 0, "byteOffset": 80, "byteLength": 12}}],
+  "buffers": [{{"byteLength": {len}, "uri": "data:application/octet-stream;base64,{data}"}}]}}"#,
+        png = b64(&png_bytes),
+        len = bytes.len(),
+        data = b64(&bytes),
+    );
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    std::fs::write(&path, json).unwrap();
+    path
+}
+
+/// The loader reads texture coordinates and the PNG base-colour texture, texel for texel.
+#[test]
+fn base_colour_textures_are_read() {
+    let scene = gltf_scene::load(&write_textured_quad("textured.gltf")).unwrap();
+    assert_eq!(scene.uvs[0], [[0.0, 1.0], [1.0, 1.0], [0.0, 0.0], [1.0, 0.0]]);
+    assert_eq!(scene.albedo_textures, [Some(0)]);
+    let t = &scene.textures[0];
+    assert_eq!((t.width, t.height), (2, 2));
+    assert_eq!(t.rgba, [255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 255]);
+}
+
+/// Rendered, the texture is in the G-buffer's albedo: red, green and blue corners.
+#[test]
+fn a_textured_gltf_renders_its_texture() {
+    let file = write_textured_quad("textured-render.gltf");
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("sample-textured");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_sample"))
+        .args([
+            "--headless",
+            file.to_str().unwrap(),
+            "--width",
+            "48",
+            "--height",
+            "32",
+            "--frames",
+            "2",
+            "--modes",
+            "albedo",
+            "--out",
+        ])
+        .arg(&out)
+        .env_remove("DISPLAY")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&run.stdout).to_string() + &String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{text}");
+    let (_, _, albedo) = hybrid_rt_samples::images::read_exr_rgba(&out.join("albedo.exr")).unwrap();
+    let count = |f: &dyn Fn(&[f32; 4]) -> bool| albedo.iter().filter(|t| f(t)).count();
+    let (red, green, blue) = (
+        count(&|t| t[0] > 0.6 && t[1] < 0.25 && t[2] < 0.25),
+        count(&|t| t[1] > 0.6 && t[0] < 0.25 && t[2] < 0.25),
+        count(&|t| t[2] > 0.6 && t[0] < 0.25 && t[1] < 0.25),
+    );
+    assert!(red > 5 && green > 5 && blue > 5, "texture colours in the albedo: red {red}, green {green}, blue {blue}");
+}

@@ -20,7 +20,7 @@ fn rasterized_gbuffer_matches_the_reference_and_motion_follows_the_camera() {
     let host = Host::new().expect("device");
     let (scene, camera) = scenes::room();
     let g = GBuffer::render(&Tracer::new(&scene), &camera, W, H);
-    let meshes = MeshBuffers::upload(&host, &scene, &[]).unwrap();
+    let meshes = MeshBuffers::upload(&host, &scene, &[], &[], &[]).unwrap();
     let targets = Targets::new(&host, W, H).unwrap();
     let mut pass = GBufferPass::new(&host).unwrap();
     let material = |i: usize| Material { albedo: [0.1 * i as f32 % 1.0, 0.5, 0.25], roughness: 0.5, metalness: 0.0 };
@@ -109,7 +109,7 @@ fn deferred_lighting_with_sdk_shadows_matches_the_reference_lit_frame() {
     let tracer = Tracer::new(&scene);
     let g = GBuffer::render(&tracer, &camera, W, H);
     let albedo = |i: u32| [0.2 + 0.05 * (i % 8) as f32, 0.6, 0.4];
-    let meshes = MeshBuffers::upload(&host, &scene, &[]).unwrap();
+    let meshes = MeshBuffers::upload(&host, &scene, &[], &[], &[]).unwrap();
     let targets = Targets::new(&host, W, H).unwrap();
     let mut pass = GBufferPass::new(&host).unwrap();
     let mut lighting = LightingPass::new(&host).unwrap();

@@ -123,7 +123,7 @@ impl<'h> Renderer<'h> {
         let ctx =
             host.create_context(&InitSettings { supported_working_sets: SLOTS as u32, ..Default::default() }).map_err(sdk_err)?;
         let mut container = ctx.create_task_container();
-        let meshes = MeshBuffers::upload(host, &scene.scene, &scene.normals)?;
+        let meshes = MeshBuffers::upload(host, &scene.scene, &scene.normals, &scene.uvs, &scene.textures)?;
         // Register every mesh and instance (one BLAS per mesh; the flag's may be refit).
         let geometries = ctx.create_geometry_handles(scene.scene.meshes.len());
         let deformed_mesh = scene.deformer.as_ref().map(|d| scene.scene.instances[d.instance].mesh);
@@ -300,6 +300,7 @@ impl<'h> Renderer<'h> {
                 prev_transform: self.prev_transforms[i],
                 material: self.scene.materials[i],
                 vertex_buffer: deformed_buffer.filter(|(m, _)| *m == self.scene.scene.instances[i].mesh).map(|(_, b)| b),
+                albedo_texture: self.scene.albedo_textures.get(i).copied().flatten(),
             })
             .collect();
         {
@@ -697,8 +698,10 @@ impl<'h> Renderer<'h> {
 
 /// The deforming mesh's vertices at `time`: its positions and their normals, recomputed (the
 /// cloth's shading follows its waves).
-fn deformed_vertices(scene: &SampleScene, d: &crate::scene::Deformer, time: f32) -> Vec<[f32; 6]> {
+fn deformed_vertices(scene: &SampleScene, d: &crate::scene::Deformer, time: f32) -> Vec<[f32; 8]> {
     let positions = d.positions(time);
-    let indices = &scene.scene.meshes[scene.scene.instances[d.instance].mesh].indices;
-    raster::interleave(&positions, &crate::scene::vertex_normals(&positions, indices))
+    let mesh = scene.scene.instances[d.instance].mesh;
+    let indices = &scene.scene.meshes[mesh].indices;
+    let uvs = scene.uvs.get(mesh).map_or(&[][..], |t| t.as_slice());
+    raster::interleave(&positions, &crate::scene::vertex_normals(&positions, indices), uvs)
 }

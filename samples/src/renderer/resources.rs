@@ -78,7 +78,7 @@ impl Slot {
         width: u32,
         height: u32,
         lidar_size: u32,
-        deformer_rest: Option<&[[f32; 6]]>,
+        deformer_rest: Option<&[[f32; 8]]>,
         camera: Camera,
     ) -> HostResult<Slot> {
         let deformed = match deformer_rest {
