@@ -281,6 +281,7 @@ fn fitted(name: String, scene: Scene, normals: Vec<Vec<Vec3>>, materials: Vec<Ma
         uvs: Vec::new(),
         textures: Vec::new(),
         albedo_textures: Vec::new(),
+        alpha_textures: Vec::new(),
         materials,
         motions,
         deformer: None,

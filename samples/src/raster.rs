@@ -157,6 +157,23 @@ impl MeshBuffers {
         Ok(MeshBuffers { meshes, textures: images, sampler })
     }
 
+    /// Scene texture `k` as an SDK input (an alpha-tested geometry's cut-out), if it exists.
+    pub fn texture_input(&self, k: usize) -> Option<hybrid_rt::ImageInput> {
+        self.textures.get(k + 1).map(|t| t.input(READ))
+    }
+
+    /// Mesh `i`'s texture coordinates inside its vertices, for an alpha-tested geometry.
+    pub fn uv_input(&self, i: usize) -> hybrid_rt::VertexBufferInput {
+        let (vb, _, _, vertex_count) = &self.meshes[i];
+        hybrid_rt::VertexBufferInput {
+            buffer: vb.buffer,
+            offset: 24,
+            stride: VERTEX_STRIDE as u64,
+            count: *vertex_count,
+            format: vk::Format::R32G32_SFLOAT,
+        }
+    }
+
     /// The texture a draw samples (white without one, or with an index past the scene's).
     fn albedo(&self, texture: Option<usize>) -> &HostImage {
         texture.and_then(|k| self.textures.get(k + 1)).unwrap_or(&self.textures[0])
@@ -202,6 +219,8 @@ pub struct Draw {
     pub vertex_buffer: Option<vk::Buffer>,
     /// Base-colour texture (an index into the scene's), multiplied into the albedo.
     pub albedo_texture: Option<usize>,
+    /// Alpha-tested: fragments whose texture alpha is below this are holes (0: opaque).
+    pub alpha_cutoff: f32,
 }
 
 /// The G-buffer pass: one pipeline, push descriptors for the camera and the instance table.
@@ -338,7 +357,7 @@ impl GBufferPass {
                 model: Mat4::from(dr.transform).to_cols_array(),
                 prev_model: Mat4::from(dr.prev_transform).to_cols_array(),
                 material: [dr.material.albedo[0], dr.material.albedo[1], dr.material.albedo[2], dr.material.roughness],
-                extra: [dr.material.metalness, 0.0, 0.0, 0.0],
+                extra: [dr.material.metalness, dr.alpha_cutoff, 0.0, 0.0],
             })
             .collect();
         let ubo = self.cameras.write(host, slot, bytemuck::bytes_of(&cam))?;
@@ -468,6 +487,7 @@ pub fn static_draws(scene: &Scene, material: impl Fn(usize) -> Material) -> Vec<
             material: material(i),
             vertex_buffer: None,
             albedo_texture: None,
+            alpha_cutoff: 0.0,
         })
         .collect()
 }

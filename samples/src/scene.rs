@@ -78,6 +78,9 @@ pub struct SampleScene {
     /// (one per instance, or empty: none).
     pub textures: Vec<Texture>,
     pub albedo_textures: Vec<Option<usize>>,
+    /// Alpha-tested meshes (foliage): per mesh, the texture whose alpha (< 0.5: a hole) cuts
+    /// it, in the raster pass and in every ray the SDK traces (one list per mesh, or empty).
+    pub alpha_textures: Vec<Option<usize>>,
     /// One per instance of `scene`.
     pub materials: Vec<Material>,
     /// One per instance of `scene`.

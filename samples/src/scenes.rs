@@ -1,6 +1,6 @@
 //! Built-in scenes.
 use crate::lighting::Lights;
-use crate::raster::Material;
+use crate::raster::{Material, Texture};
 use crate::scene::{vertex_normals, CameraPath, Deformer, Motion, SampleScene};
 use glam::{Affine3A, Quat, Vec3};
 use hybrid_rt_testkit::reference::{Camera, Mesh, Rng, Scene};
@@ -106,6 +106,7 @@ pub fn cornell_room() -> SampleScene {
         uvs: Vec::new(),
         textures: Vec::new(),
         albedo_textures: Vec::new(),
+        alpha_textures: Vec::new(),
         normals: scene.meshes.iter().map(|m| vertex_normals(&m.positions, &m.indices)).collect(),
         scene,
         materials,
@@ -190,12 +191,15 @@ pub fn field(triangles: usize, instances: usize) -> (Scene, Camera) {
 
 /// What a game scene has, for scale: a rolling terrain of 1,002,528 triangles (one mesh, one
 /// BLAS), 1,000 trees of thin 8 cm trunks and round canopies (2,000 instances of two shared
-/// meshes; 20 canopies drift in slow circles, so the TLAS changes every frame), and a flag
-/// whose waves refit its BLAS every frame (the deformation a skinned mesh brings). The sun is
+/// meshes; 20 canopies drift in slow circles, so the TLAS changes every frame), 500 ferns of
+/// alpha-tested leaf cards (the SDK's alpha test cuts them in every ray, the raster pass in
+/// the G-buffer), and a flag whose waves refit its BLAS every frame (the deformation a skinned
+/// mesh brings). The sun is
 /// low, so trunks cast long thin shadows; the camera flies along the forest's edge.
 pub fn forest() -> SampleScene {
     const SIZE: f32 = 60.0;
     const TREES: usize = 1000;
+    const FERNS: usize = 500;
     let height = |x: f32, z: f32| 0.6 * (x / 7.0).sin() * (z / 9.0).cos() + 0.25 * (x / 2.3 + z / 3.1).sin();
     let mut scene = Scene::default();
     let (mut materials, mut motions) = (Vec::new(), Vec::new());
@@ -230,6 +234,28 @@ pub fn forest() -> SampleScene {
         let motion = if k % 50 == 0 { Motion::Orbit { center: top, radius: 0.3, period: 4.0 } } else { Motion::Static };
         add(&mut scene, canopy, Affine3A::from_translation(top), leaves, motion);
     }
+    // Undergrowth: ferns of two crossed 1.2 m cards, cut out by a leaf texture's alpha — in
+    // the raster pass and in every ray (the SDK's alpha test).
+    let mut fern = Mesh::default();
+    let mut fern_uvs = Vec::new();
+    for (dx, dz) in [(0.6f32, 0.0f32), (0.0, 0.6)] {
+        let base = fern.positions.len() as u32;
+        for (u, v) in [(0.0f32, 1.0f32), (1.0, 1.0), (0.0, 0.0), (1.0, 0.0)] {
+            fern.positions.push(Vec3::new((2.0 * u - 1.0) * dx, (1.0 - v) * 1.2, (2.0 * u - 1.0) * dz));
+            fern_uvs.push([u, v]);
+        }
+        fern.indices.extend_from_slice(&[base, base + 1, base + 2, base + 2, base + 1, base + 3]);
+    }
+    let fern = scene.add_mesh(fern);
+    let mut albedo_textures = vec![None; scene.instances.len()];
+    // In the stretch the camera flies past, where they are seen up close.
+    for _ in 0..FERNS {
+        let (x, z) = ((rng.next_f32() - 0.5) * 28.0, 14.0 + rng.next_f32() * 14.0);
+        let turn = Quat::from_rotation_y(rng.next_f32() * std::f32::consts::TAU);
+        let leaf = Material { albedo: [0.6, 0.8, 0.5], roughness: 0.8, metalness: 0.0 };
+        add(&mut scene, fern, Affine3A::from_rotation_translation(turn, Vec3::new(x, height(x, z), z)), leaf, Motion::Static);
+        albedo_textures.push(Some(0));
+    }
     // The flag: a 1.6 x 1.0 cloth on a pole at the forest's edge.
     let cloth = Mesh::grid(1.0, 16);
     let rest: Vec<Vec3> = cloth.positions.iter().map(|p| Vec3::new((p.x + 0.5) * 1.6, -p.z, 0.0)).collect();
@@ -237,12 +263,18 @@ pub fn forest() -> SampleScene {
     let flag_at = Vec3::new(2.0, height(2.0, 26.0) + 2.5, 26.0);
     let red = Material { albedo: [0.8, 0.15, 0.3], roughness: 0.7, metalness: 0.0 };
     let flag_instance = add(&mut scene, flag, Affine3A::from_translation(flag_at), red, Motion::Static);
+    albedo_textures.push(None);
+    let mut uvs = vec![Vec::new(); scene.meshes.len()];
+    uvs[fern] = fern_uvs;
+    let mut alpha_textures = vec![None; scene.meshes.len()];
+    alpha_textures[fern] = Some(0);
     SampleScene {
         name: "forest".into(),
         file_cameras: Vec::new(),
-        uvs: Vec::new(),
-        textures: Vec::new(),
-        albedo_textures: Vec::new(),
+        uvs,
+        textures: vec![leaf_texture()],
+        albedo_textures,
+        alpha_textures,
         normals: scene.meshes.iter().map(|m| vertex_normals(&m.positions, &m.indices)).collect(),
         scene,
         materials,
@@ -268,4 +300,25 @@ pub fn forest() -> SampleScene {
         tile_unit_length: 0.3,
         ao_ray_length: 1.0,
     }
+}
+
+/// A 64x64 fern frond: a stem up the middle and leaflets either side, opaque green where the
+/// leaf is and alpha 0 around it (the cut-out), lighter towards the tips.
+fn leaf_texture() -> Texture {
+    const N: u32 = 64;
+    let mut rgba = Vec::with_capacity((N * N * 4) as usize);
+    for y in 0..N {
+        for x in 0..N {
+            // v = 0 at the top (the frond's tip), 1 at its foot; u across, 0 at the stem.
+            let (u, v) = ((x as f32 + 0.5) / N as f32 * 2.0 - 1.0, (y as f32 + 0.5) / N as f32);
+            let width = 0.9 * (v * std::f32::consts::PI).sin();
+            // Leaflets: bands slanting up from the stem, eight a side.
+            let band = ((v * 8.0 + u.abs() * 1.5).fract() - 0.5).abs() < 0.32;
+            let leaf = u.abs() < 0.06 || (u.abs() < width && band);
+            let shade = 0.6 + 0.4 * (1.0 - v);
+            let g = (200.0 * shade) as u8;
+            rgba.extend_from_slice(&[(70.0 * shade) as u8, g, (60.0 * shade) as u8, if leaf { 255 } else { 0 }]);
+        }
+    }
+    Texture { width: N, height: N, rgba }
 }

@@ -296,8 +296,9 @@ fn check_smooth_spheres(out: &Path) {
     assert!(mean < 0.5 && worst < 3.0, "facets: mean {mean:.2}, worst {worst:.2} degrees");
 }
 
-/// The game-scale scene renders end to end (2,002 instances, a 1M-triangle terrain, a refit
-/// flag): the report counts them, the composite is lit, nothing fails validation.
+/// The game-scale scene renders end to end (2,502 instances, a 1M-triangle terrain, alpha-
+/// tested ferns, a refit flag): the report counts them, the composite is lit, nothing fails
+/// validation.
 #[test]
 fn the_forest_renders() {
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("sample-forest");
@@ -305,7 +306,7 @@ fn the_forest_renders() {
         &["--headless", "--scene", "forest", "--width", "64", "--height", "36", "--frames", "2", "--modes", "composite"],
         &out,
     );
-    assert!(text.contains("scene: forest, 1159040 triangles in 2002 instances"), "{text}");
+    assert!(text.contains("scene: forest, 1161040 triangles in 2502 instances"), "{text}");
     let (w, h, composite) = read_exr_rgba(&out.join("composite.exr")).unwrap();
     assert_eq!((w, h), (64, 36));
     let lum: Vec<f32> = composite.iter().map(|t| 0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2]).collect();

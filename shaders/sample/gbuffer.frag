@@ -27,7 +27,10 @@ void main() {
     vec3 n = len > 1e-12 ? v_normal / len : g;
     if (dot(n, g) < 0.0) n = -n;
     o_normal_roughness = vec4(n, i.material.w);
-    o_albedo_metalness = vec4(i.material.rgb * texture(u_albedo, v_uv).rgb, i.extra.x);
+    vec4 base = texture(u_albedo, v_uv);
+    // Alpha-tested draws (foliage): the holes the SDK's rays pass through too.
+    if (base.a < i.extra.y) discard;
+    o_albedo_metalness = vec4(i.material.rgb * base.rgb, i.extra.x);
     vec2 cur = v_clip.xy / v_clip.w;
     vec2 prev = v_prev_clip.xy / v_prev_clip.w;
     o_motion = (prev - cur) * 0.5 * u_camera.viewport.xy;

@@ -3,7 +3,7 @@ struct Instance {
     mat4 model;
     mat4 prev_model;
     vec4 material;   // albedo rgb, roughness
-    vec4 extra;      // metalness, unused
+    vec4 extra;      // metalness, alpha cutoff (0: opaque), unused
 };
 layout(set = 0, binding = 0, std140) uniform Camera {
     mat4 view_proj;

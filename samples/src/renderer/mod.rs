@@ -128,9 +128,12 @@ impl<'h> Renderer<'h> {
         let geometries = ctx.create_geometry_handles(scene.scene.meshes.len());
         let deformed_mesh = scene.deformer.as_ref().map(|d| scene.scene.instances[d.instance].mesh);
         for (i, &handle) in geometries.iter().enumerate() {
+            let cutout = scene.alpha_textures.get(i).copied().flatten().and_then(|k| meshes.texture_input(k));
             let input = GeometryInput {
                 allow_update: Some(i) == deformed_mesh,
                 surfels: SurfelSettings { tile_unit_length: scene.tile_unit_length, ..Default::default() },
+                uvs: cutout.map(|_| meshes.uv_input(i)),
+                alpha_test: cutout.map(|texture| AlphaTestInput { texture, ..Default::default() }),
                 ..meshes.geometry_input(i)
             };
             container.schedule_geometry(&GeometryTask { handle, operation: TaskOperation::Register, input }).map_err(sdk_err)?;
@@ -301,6 +304,10 @@ impl<'h> Renderer<'h> {
                 material: self.scene.materials[i],
                 vertex_buffer: deformed_buffer.filter(|(m, _)| *m == self.scene.scene.instances[i].mesh).map(|(_, b)| b),
                 albedo_texture: self.scene.albedo_textures.get(i).copied().flatten(),
+                alpha_cutoff: match self.scene.alpha_textures.get(self.scene.scene.instances[i].mesh) {
+                    Some(Some(_)) => AlphaTestInput::default().cutoff,
+                    _ => 0.0,
+                },
             })
             .collect();
         {
