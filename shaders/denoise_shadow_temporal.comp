@@ -78,7 +78,15 @@ void main() {
     // umbra (h(1 - h) = 0) the box stays tight, so a shadow that moved away leaves at once.
     // The small fixed margin keeps the clamp from chasing each frame's blur noise.
     float margin = 0.05 + 3.0 * sqrt(h * (1.0 - h) / 9.0);
-    float result = mix(clamp(hist.x, lo - margin, hi + margin), v, 1.0 / len);
+    float kept = clamp(hist.x, lo - margin, hi + margin);
+    float result = mix(kept, v, 1.0 / len);
+    // Checkerboard: a pixel not traced this frame holds its neighbours' mean, not a sample of
+    // its own; folding that in every other frame blurred edges into the history (3x the
+    // full-resolution error after 32 frames). With a history, it keeps it (clamped) instead.
+    if (!hrt_traced_now(pixel) && prior >= 1.0) {
+        len = prior;
+        result = kept;
+    }
     hrt_store_hist_cur(0u, pixel, vec4(result, len, 0.0, 0.0));
     hrt_store_output(0u, pixel, vec4(result, result, result, 1.0));
 }

@@ -34,6 +34,8 @@ pub struct Stage {
     pub dn: DenoisingContextHandle,
     /// The frame index of the next build: it seeds every ray (`set_frame_index`).
     pub next_frame: u64,
+    /// Trace and denoise in checkerboard mode (`half_resolution_mode`). Default false.
+    pub half_resolution: bool,
 }
 
 impl Stage {
@@ -56,7 +58,15 @@ impl Stage {
         let dn = ctx
             .create_denoising_context(&DenoisingContextInput { max_width: size, max_height: size, signal, ..Default::default() })
             .unwrap();
-        Stage { host, ctx, frame, g, camera, images, gpu_scene, noisy, den, dn, next_frame: seed }
+        Stage { host, ctx, frame, g, camera, images, gpu_scene, noisy, den, dn, next_frame: seed, half_resolution: false }
+    }
+
+    /// Replaces the denoising context with a fresh one of `method` (same signal and size).
+    pub fn use_method(&mut self, method: DenoisingMethod, signal: SignalType) {
+        self.ctx.destroy_denoising_context(self.dn).unwrap();
+        let (w, h) = (self.g.width, self.g.height);
+        let input = DenoisingContextInput { max_width: w, max_height: h, signal, method };
+        self.dn = self.ctx.create_denoising_context(&input).unwrap();
     }
 
     pub fn trace_common(&self) -> TraceCommon {
@@ -142,6 +152,8 @@ impl Signal {
     /// One frame traced at `rays` per pixel into the stage's noisy image, denoised or not.
     pub fn frame(self, st: &mut Stage, rays: u32, denoise: bool) {
         let (mut common, mut dc) = (st.trace_common(), st.denoising_common());
+        common.half_resolution_mode = st.half_resolution;
+        dc.half_resolution_mode = st.half_resolution;
         let (input, output, context) = (st.noisy.input(GENERAL), st.den.input(GENERAL), st.dn);
         let f = &mut st.frame;
         match self {
@@ -455,7 +467,10 @@ pub fn convergence(
     converged_frames: u32,
     mask: Option<&[bool]>,
 ) -> Convergence {
+    // The reference traces every pixel, whatever the stage's checkerboard mode.
+    let half = std::mem::replace(&mut st.half_resolution, false);
     let reference = signal.converged(st, converged_frames);
+    st.half_resolution = half;
     let mask: Vec<bool> = mask.map_or_else(|| st.g.hit.clone(), |m| m.to_vec());
     let penumbra: Vec<bool> = mask.iter().zip(&reference).map(|(m, r)| *m && r[0] > 0.02 && r[0] < 0.98).collect();
     let shadow = matches!(signal, Signal::Shadow(_));
