@@ -20,9 +20,23 @@ pub const GENERAL: vk::ImageLayout = vk::ImageLayout::GENERAL;
 /// with one seed and +1.9% with another, as far apart as the thresholds they are held to.)
 pub const SEEDS: [u64; 4] = [0, 1 << 20, 2 << 20, 3 << 20];
 
+thread_local! {
+    static HOST: std::rc::Rc<Host> =
+        std::rc::Rc::new(Host::new().expect("a Vulkan device with ray tracing (run scripts/setup.sh)"));
+}
+
+/// One host (instance and device) per thread, for all its stages: each stage still makes its
+/// own `ExecuteContext`. NVIDIA's driver (580) refuses vkCreateInstance with
+/// INCOMPATIBLE_DRIVER after a few dozen instances in one process, which these measurements
+/// (a fresh stage per seed) reached.
+fn thread_host() -> std::rc::Rc<Host> {
+    HOST.with(|h| h.clone())
+}
+
 /// A scene on the GPU with a G-buffer, noisy and denoised images, a denoising context.
 pub struct Stage {
-    pub host: Host,
+    /// This thread's host, shared by its stages (see `thread_host`).
+    pub host: std::rc::Rc<Host>,
     pub ctx: ExecuteContext,
     pub frame: TaskContainer,
     pub g: GBuffer,
@@ -42,7 +56,7 @@ impl Stage {
     /// `colours`: each instance's cache colour (None: black). Panics where the device fails:
     /// a measurement without a device has nothing to say.
     pub fn new(scene: &Scene, colours: Option<&[[f32; 3]]>, camera: Camera, size: u32, signal: SignalType, seed: u64) -> Stage {
-        let host = Host::new().expect("a Vulkan device with ray tracing (run scripts/setup.sh)");
+        let host = thread_host();
         let ctx = host.create_context(&InitSettings::default()).expect("context");
         let g = GBuffer::render(&Tracer::new(scene), &camera, size, size);
         let images = GBufferImages::upload(&host, &g).unwrap();
@@ -111,7 +125,7 @@ impl Stage {
         }
         images.destroy(&host);
         gpu_scene.destroy(&host);
-        // The context before the device it was made on.
+        // The context before the device it was made on (which this thread keeps).
         drop(ctx);
         drop(host);
     }
