@@ -21,22 +21,25 @@ use hybrid_rt_testkit::reference::{Mesh, Scene};
 use std::collections::HashMap;
 use std::path::Path;
 
+/// The bytes a buffer's or an image's URI names: a base64 data URI, or a file beside the glTF.
+fn read_uri(uri: &str, dir: &Path) -> Result<Vec<u8>, String> {
+    if uri.starts_with("data:") {
+        let (_, payload) = uri
+            .split_once(";base64,")
+            .ok_or_else(|| format!("unsupported data URI {}", uri.chars().take(40).collect::<String>()))?;
+        return base64::engine::general_purpose::STANDARD.decode(payload).map_err(|e| format!("data URI: {e}"));
+    }
+    let path = dir.join(uri.replace("%20", " "));
+    std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
 fn buffers(doc: &gltf::Document, blob: Option<Vec<u8>>, dir: &Path) -> Result<Vec<Vec<u8>>, String> {
     let mut blob = blob;
     doc.buffers()
         .map(|b| {
             let data = match b.source() {
                 gltf::buffer::Source::Bin => blob.take().ok_or("the GLB has no binary chunk")?,
-                gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
-                    let (_, payload) = uri
-                        .split_once(";base64,")
-                        .ok_or_else(|| format!("unsupported data URI {}", uri.chars().take(40).collect::<String>()))?;
-                    base64::engine::general_purpose::STANDARD.decode(payload).map_err(|e| format!("data URI: {e}"))?
-                }
-                gltf::buffer::Source::Uri(uri) => {
-                    let path = dir.join(uri.replace("%20", " "));
-                    std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?
-                }
+                gltf::buffer::Source::Uri(uri) => read_uri(uri, dir)?,
             };
             if data.len() < b.length() {
                 return Err(format!("buffer {} holds {} bytes, the file says {}", b.index(), data.len(), b.length()));
@@ -56,14 +59,7 @@ fn image_texture(image: &gltf::Image, data: &[Vec<u8>], dir: &Path) -> Result<Op
                 view.offset().checked_add(view.length()).filter(|&e| e <= buffer.len()).ok_or("its view is past its buffer")?;
             buffer[view.offset()..end].to_vec()
         }
-        gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
-            let (_, payload) = uri.split_once(";base64,").ok_or("an unsupported data URI")?;
-            base64::engine::general_purpose::STANDARD.decode(payload).map_err(|e| format!("data URI: {e}"))?
-        }
-        gltf::image::Source::Uri { uri, .. } => {
-            let path = dir.join(uri.replace("%20", " "));
-            std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?
-        }
+        gltf::image::Source::Uri { uri, .. } => read_uri(uri, dir)?,
     };
     if !bytes.starts_with(b"\x89PNG") {
         return Ok(None);

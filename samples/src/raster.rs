@@ -427,6 +427,7 @@ impl GBufferPass {
             d.cmd_set_scissor(cmd, 0, &[area]);
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline);
             self.push.cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::GRAPHICS, self.layout, 0, &writes);
+            let mut bound_texture: Option<vk::ImageView> = None;
             for (i, dr) in draws.iter().enumerate() {
                 let (vb, ib, count, _) = &meshes.meshes[dr.mesh];
                 d.cmd_push_constants(
@@ -436,16 +437,17 @@ impl GBufferPass {
                     0,
                     &(i as u32).to_ne_bytes(),
                 );
-                let texture = [vk::DescriptorImageInfo {
-                    sampler: meshes.sampler,
-                    image_view: meshes.albedo(dr.albedo_texture).view,
-                    image_layout: READ,
-                }];
-                let write = vk::WriteDescriptorSet::default()
-                    .dst_binding(2)
-                    .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                    .image_info(&texture);
-                self.push.cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::GRAPHICS, self.layout, 0, &[write]);
+                // Pushed only when it changes: the forest's 2,500 draws use two textures.
+                let view = meshes.albedo(dr.albedo_texture).view;
+                if bound_texture != Some(view) {
+                    bound_texture = Some(view);
+                    let texture = [vk::DescriptorImageInfo { sampler: meshes.sampler, image_view: view, image_layout: READ }];
+                    let write = vk::WriteDescriptorSet::default()
+                        .dst_binding(2)
+                        .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                        .image_info(&texture);
+                    self.push.cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::GRAPHICS, self.layout, 0, &[write]);
+                }
                 d.cmd_bind_vertex_buffers(cmd, 0, &[dr.vertex_buffer.unwrap_or(vb.buffer)], &[0]);
                 d.cmd_bind_index_buffer(cmd, ib.buffer, 0, vk::IndexType::UINT32);
                 d.cmd_draw_indexed(cmd, *count, 1, 0, 0, 0);
