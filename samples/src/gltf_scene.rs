@@ -1,28 +1,29 @@
 //! glTF 2.0 scenes (`.gltf` with `.bin` or data-URI buffers, or `.glb`), parsed by the `gltf`
 //! crate: every triangle primitive (lists, strips and fans) of every node of the default scene
 //! becomes an instance with the node's world transform, its normals (computed from the
-//! triangles where the file has none), its first texture coordinates and its material's
-//! base colour (factor x PNG texture), metallic and roughness factors; metallic-roughness,
-//! normal and emissive textures are not read yet, nor JPEG images (drawn untextured, with a
-//! warning). Perspective cameras are kept for `--camera`. The camera path, lights, surfel
-//! size and AO length are fitted to the scene's bounds.
+//! triangles where the file has none), its first texture coordinates and tangents, and its
+//! metallic-roughness material: base colour, metallic, roughness, normal and emissive factors
+//! with their PNG or JPEG textures (`gltf_textures`), and KHR_materials_emissive_strength.
+//! Perspective cameras (with their roll) are kept for `--camera`. The camera path, lights,
+//! surfel size and AO length are fitted to the scene's bounds.
 //!
 //! Any file gives a scene or an error that names the file and what is wrong in it — the node,
 //! the primitive, the extension — and never hangs or panics: a node that is its own ancestor
 //! (or has two parents) is refused, extensions the file requires and this loader lacks (Draco,
 //! meshopt, quantized meshes) are named before validation buries them under its own errors,
 //! and validation errors are summed up to the first three.
+use crate::gltf_textures::TextureCache;
 use crate::lighting::Lights;
-use crate::raster::{Material, Texture};
+use crate::raster::{Material, MaterialTextures};
 use crate::scene::{vertex_normals, CameraPath, Motion, SampleScene};
 use base64::Engine;
-use glam::{Affine3A, Mat4, Vec3};
+use glam::{Affine3A, Mat4, Vec3, Vec4};
 use hybrid_rt_testkit::reference::{Mesh, Scene};
 use std::collections::HashMap;
 use std::path::Path;
 
 /// The bytes a buffer's or an image's URI names: a base64 data URI, or a file beside the glTF.
-fn read_uri(uri: &str, dir: &Path) -> Result<Vec<u8>, String> {
+pub(crate) fn read_uri(uri: &str, dir: &Path) -> Result<Vec<u8>, String> {
     if uri.starts_with("data:") {
         let (_, payload) = uri
             .split_once(";base64,")
@@ -49,47 +50,42 @@ fn buffers(doc: &gltf::Document, blob: Option<Vec<u8>>, dir: &Path) -> Result<Ve
         .collect()
 }
 
-/// A glTF image as a texture: PNG (in a buffer view, a data URI or a file) decoded to RGBA8;
-/// None for other formats (JPEG, KTX2: not read).
-fn image_texture(image: &gltf::Image, data: &[Vec<u8>], dir: &Path) -> Result<Option<Texture>, String> {
-    let bytes: Vec<u8> = match image.source() {
-        gltf::image::Source::View { view, .. } => {
-            let buffer = data.get(view.buffer().index()).ok_or("its buffer is missing")?;
-            let end =
-                view.offset().checked_add(view.length()).filter(|&e| e <= buffer.len()).ok_or("its view is past its buffer")?;
-            buffer[view.offset()..end].to_vec()
-        }
-        gltf::image::Source::Uri { uri, .. } => read_uri(uri, dir)?,
-    };
-    if !bytes.starts_with(b"\x89PNG") {
-        return Ok(None);
-    }
-    let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
-    // Palettes and low bit depths expanded, 16-bit channels cut to 8: RGB(A) or grey(+alpha).
-    decoder.set_transformations(png::Transformations::normalize_to_color8());
-    let mut reader = decoder.read_info().map_err(|e| format!("PNG: {e}"))?;
-    let mut texels = vec![0; reader.output_buffer_size()];
-    let info = reader.next_frame(&mut texels).map_err(|e| format!("PNG: {e}"))?;
-    let texels = &texels[..info.buffer_size()];
-    let rgba: Vec<u8> = match info.color_type {
-        png::ColorType::Rgba => texels.to_vec(),
-        png::ColorType::Rgb => texels.chunks_exact(3).flat_map(|c| [c[0], c[1], c[2], 255]).collect(),
-        png::ColorType::GrayscaleAlpha => texels.chunks_exact(2).flat_map(|c| [c[0], c[0], c[0], c[1]]).collect(),
-        png::ColorType::Grayscale => texels.iter().flat_map(|&g| [g, g, g, 255]).collect(),
-        png::ColorType::Indexed => return Err("PNG: a palette left unexpanded".into()),
-    };
-    Ok(Some(Texture { width: info.width, height: info.height, rgba }))
-}
-
 fn material(m: &gltf::Material) -> Material {
     let pbr = m.pbr_metallic_roughness();
     let c = pbr.base_color_factor();
-    Material { albedo: [c[0], c[1], c[2]], roughness: pbr.roughness_factor(), metalness: pbr.metallic_factor() }
+    // KHR_materials_emissive_strength scales the (0..1) factor past 1: HDR emitters.
+    let e = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
+    Material {
+        albedo: [c[0], c[1], c[2]],
+        roughness: pbr.roughness_factor(),
+        metalness: pbr.metallic_factor(),
+        emissive: e.to_array(),
+    }
 }
 
-/// Extensions a file may require that this loader reads: none (it reads positions and indices
-/// as glTF 2.0 defines them, and material factors).
-const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &[];
+/// The material's textures, decoded into `cache` (colour textures sRGB, data textures linear).
+fn material_textures_of(
+    m: &gltf::Material,
+    cache: &mut TextureCache,
+    data: &[Vec<u8>],
+    dir: &Path,
+    name: &str,
+) -> Result<MaterialTextures, String> {
+    let pbr = m.pbr_metallic_roughness();
+    let mut get = |t: Option<gltf::Texture>, linear| t.map_or(Ok(None), |t| cache.get(t, linear, data, dir, name));
+    let normal = m.normal_texture();
+    Ok(MaterialTextures {
+        base_color: get(pbr.base_color_texture().map(|i| i.texture()), false)?,
+        metallic_roughness: get(pbr.metallic_roughness_texture().map(|i| i.texture()), true)?,
+        normal_scale: normal.as_ref().map_or(1.0, |n| n.scale()),
+        normal: get(normal.map(|n| n.texture()), true)?,
+        emissive: get(m.emissive_texture().map(|i| i.texture()), false)?,
+    })
+}
+
+/// Extensions a file may require that this loader reads (beyond positions, indices and the
+/// core metallic-roughness material).
+const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &["KHR_materials_emissive_strength"];
 
 /// Validation errors shown in full; the rest are counted.
 const SHOWN_ERRORS: usize = 3;
@@ -143,13 +139,12 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
     let name = path.display();
     let gltf::Gltf { document, blob } = open(path)?;
     let data = buffers(&document, blob, path.parent().unwrap_or(Path::new("."))).map_err(|e| format!("{name}: {e}"))?;
+    let file = name.to_string();
     let mut scene = Scene::default();
-    let mut normals = Vec::new();
-    let mut uvs = Vec::new();
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let (mut normals, mut uvs, mut tangents) = (Vec::new(), Vec::new(), Vec::new());
     let mut materials = Vec::new();
-    // glTF image -> our texture (None: not PNG, drawn untextured), and each instance's.
-    let mut images: HashMap<usize, Option<usize>> = HashMap::new();
-    let (mut textures, mut albedo_textures) = (Vec::new(), Vec::new());
+    let (mut textures, mut material_textures) = (TextureCache::default(), Vec::new());
     // (glTF mesh, primitive) -> our mesh, so instanced glTF meshes share one BLAS.
     let mut meshes: HashMap<(usize, usize), usize> = HashMap::new();
     let root = document.default_scene().or_else(|| document.scenes().next()).ok_or(format!("{name}: the file has no scene"))?;
@@ -158,8 +153,8 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
     // or has two parents (which glTF forbids).
     let mut seen = vec![false; document.nodes().len()];
     let mut skipped = 0usize;
-    // Perspective cameras: (eye, forward, vertical field of view).
-    let mut cameras: Vec<(Vec3, Vec3, f32)> = Vec::new();
+    // Perspective cameras: (eye, forward, up, vertical field of view).
+    let mut cameras: Vec<(Vec3, Vec3, Vec3, f32)> = Vec::new();
     while let Some((node, parent)) = stack.pop() {
         if std::mem::replace(&mut seen[node.index()], true) {
             return Err(format!("{name}: node {} is its own ancestor or has two parents", node.index()));
@@ -174,8 +169,11 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
         });
         if let Some(yfov) = yfov {
             let (eye, forward) = (world.transform_point3(Vec3::ZERO), world.transform_vector3(Vec3::NEG_Z));
+            // Its up is the node's +Y, made perpendicular to the view (a sheared node's is not).
+            let up = world.transform_vector3(Vec3::Y);
             if let (true, Some(forward)) = (eye.is_finite() && yfov > 0.0 && yfov < 3.1, forward.try_normalize()) {
-                cameras.push((eye, forward, yfov));
+                let up = (up - forward * up.dot(forward)).try_normalize().unwrap_or(Vec3::Y);
+                cameras.push((eye, forward, up, yfov));
             }
         }
         let Some(mesh) = node.mesh() else { continue };
@@ -209,6 +207,12 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
                         });
                         let coords: Option<Vec<[f32; 2]>> = reader.read_tex_coords(0).map(|t| t.into_f32().collect());
                         uvs.push(coords.filter(|t| t.len() == positions.len()).unwrap_or_default());
+                        let file_tangents: Option<Vec<Vec4>> = reader.read_tangents().map(|t| t.map(Vec4::from).collect());
+                        tangents.push(
+                            file_tangents
+                                .filter(|t| t.len() == positions.len() && t.iter().all(|v| v.is_finite()))
+                                .unwrap_or_default(),
+                        );
                         let m = scene.add_mesh(Mesh { positions, indices });
                         meshes.insert(key, m);
                         Some(m)
@@ -221,30 +225,7 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
             };
             scene.add_instance(ours, Affine3A::from_mat4(world));
             materials.push(material(&prim.material()));
-            let source = prim.material().pbr_metallic_roughness().base_color_texture().map(|t| t.texture().source());
-            let texture = match source {
-                None => None,
-                Some(image) => match images.get(&image.index()) {
-                    Some(&t) => t,
-                    None => {
-                        let decoded = image_texture(&image, &data, path.parent().unwrap_or(Path::new(".")))
-                            .map_err(|e| format!("{name}: image {}: {e}", image.index()))?;
-                        let t = decoded.map(|tex| {
-                            textures.push(tex);
-                            textures.len() - 1
-                        });
-                        if t.is_none() {
-                            eprintln!(
-                                "{name}: image {} is not a PNG: drawn untextured (only PNG textures are read)",
-                                image.index()
-                            );
-                        }
-                        images.insert(image.index(), t);
-                        t
-                    }
-                },
-            };
-            albedo_textures.push(texture);
+            material_textures.push(material_textures_of(&prim.material(), &mut textures, &data, dir, &file)?);
         }
     }
     if scene.instances.is_empty() {
@@ -252,14 +233,20 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
     }
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let mut s = fitted(name, scene, normals, materials);
-    (s.uvs, s.textures, s.albedo_textures) = (uvs, textures, albedo_textures);
-    // A glTF camera looks down its node's -Z; the path's target sits a bounding radius ahead
-    // (the near and far planes follow from that distance). Its roll is not kept (Y is up).
+    (s.uvs, s.tangents, s.textures, s.material_textures) = (uvs, tangents, textures.textures, material_textures);
+    // A glTF camera looks down its node's -Z with +Y up; the path's target sits a bounding
+    // radius ahead (the near and far planes follow from that distance).
     let (lo, hi) = s.bounds();
     let reach = ((hi - lo).length() * 0.5).max(1e-3);
     s.file_cameras = cameras
         .into_iter()
-        .map(|(eye, forward, fov_y_radians)| CameraPath { from: eye, to: eye, target: eye + forward * reach, fov_y_radians })
+        .map(|(eye, forward, up, fov_y_radians)| CameraPath {
+            from: eye,
+            to: eye,
+            target: eye + forward * reach,
+            up,
+            fov_y_radians,
+        })
         .collect();
     Ok(s)
 }
@@ -275,8 +262,9 @@ fn fitted(name: String, scene: Scene, normals: Vec<Vec<Vec3>>, materials: Vec<Ma
         scene,
         normals,
         uvs: Vec::new(),
+        tangents: Vec::new(),
         textures: Vec::new(),
-        albedo_textures: Vec::new(),
+        material_textures: Vec::new(),
         alpha_textures: Vec::new(),
         materials,
         motions,
@@ -291,7 +279,13 @@ fn fitted(name: String, scene: Scene, normals: Vec<Vec<Vec3>>, materials: Vec<Ma
         sun_angular_extent: 0.03,
         point_radius: 0.0,
         sky: [0.35, 0.45, 0.6],
-        camera_path: CameraPath { from: Vec3::ZERO, to: Vec3::ZERO, target: Vec3::ZERO, fov_y_radians: 60f32.to_radians() },
+        camera_path: CameraPath {
+            from: Vec3::ZERO,
+            to: Vec3::ZERO,
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_y_radians: 60f32.to_radians(),
+        },
         file_cameras: Vec::new(),
         lidar_eye: Vec3::ZERO,
         tile_unit_length: 0.1,
@@ -307,6 +301,7 @@ fn fitted(name: String, scene: Scene, normals: Vec<Vec<Vec3>>, materials: Vec<Ma
         from: center + distance * Vec3::new(-0.45, 0.3, 1.1).normalize(),
         to: center + distance * Vec3::new(0.45, 0.3, 1.1).normalize(),
         target: center,
+        up: Vec3::Y,
         fov_y_radians: fov_y,
     };
     // A point light a little above the middle, as bright at a radius as the sun.

@@ -4,9 +4,11 @@
 //! comes from `raster` (a Vulkan graphics pass, as an engine's) or, for comparison, from the
 //! CPU reference renderer.
 pub mod gltf_scene;
+pub mod gltf_textures;
 pub mod gpu;
 pub mod images;
 pub mod lighting;
+pub mod mesh_buffers;
 pub mod modes;
 pub mod progress;
 pub mod raster;

@@ -54,7 +54,7 @@ pub struct LightingPass(ComputePass);
 
 impl LightingPass {
     pub fn new(host: &Host) -> HostResult<LightingPass> {
-        Ok(LightingPass(ComputePass::new(host, spirv::LIGHTING_COMP, 5, 1)?))
+        Ok(LightingPass(ComputePass::new(host, spirv::LIGHTING_COMP, 6, 1)?))
     }
 
     /// A lit image for `targets` (STORAGE for this pass, SAMPLED for the SDK), in GENERAL.
@@ -92,6 +92,7 @@ impl LightingPass {
             (&targets.albedo_metalness, read),
             (visibility.sun, visibility.layout),
             (visibility.point, visibility.layout),
+            (&targets.emissive, read),
         ];
         self.0.dispatch(host, cmd, slot, &sampled, &[lit], bytemuck::bytes_of(&c), targets.width, targets.height)
     }

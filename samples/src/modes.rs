@@ -16,6 +16,8 @@ pub enum Mode {
     Metalness,
     /// Motion vectors (pixels, previous - current), 0.5 = still.
     Motion,
+    /// Emitted radiance (the G-buffer's emissive target, added into `Direct`).
+    Emissive,
     SunShadowNoisy,
     SunShadow,
     PointShadowNoisy,
@@ -32,7 +34,7 @@ pub enum Mode {
     Debug(DebugOutput),
 }
 
-pub const ALL: [Mode; 23] = [
+pub const ALL: [Mode; 24] = [
     Mode::Composite,
     Mode::Direct,
     Mode::Albedo,
@@ -40,6 +42,7 @@ pub const ALL: [Mode; 23] = [
     Mode::Roughness,
     Mode::Metalness,
     Mode::Motion,
+    Mode::Emissive,
     Mode::SunShadowNoisy,
     Mode::SunShadow,
     Mode::PointShadowNoisy,
@@ -76,6 +79,7 @@ impl Mode {
             Mode::Roughness => "roughness",
             Mode::Metalness => "metalness",
             Mode::Motion => "motion",
+            Mode::Emissive => "emissive",
             Mode::SunShadowNoisy => "sun_shadow_noisy",
             Mode::SunShadow => "sun_shadow",
             Mode::PointShadowNoisy => "point_shadow_noisy",
@@ -111,6 +115,7 @@ impl Mode {
         let (swizzle, bias, tone_map) = match self {
             Mode::Composite
             | Mode::Direct
+            | Mode::Emissive
             | Mode::Diffuse
             | Mode::DiffuseNoisy
             | Mode::Specular

@@ -1,26 +1,43 @@
 //! The sample's own rasterizer: what an engine already has before it meets hybrid-rt. One
 //! graphics pass (dynamic rendering) writes a G-buffer — hardware depth, world normal +
-//! roughness, albedo + metalness, screen-space motion in pixels — that the SDK then reads as
-//! its `DepthInput`, `NormalInput`, `RoughnessInput` and `MotionInput`.
+//! roughness, albedo + metalness, screen-space motion in pixels, emitted radiance — that the
+//! SDK then reads as its `DepthInput`, `NormalInput`, `RoughnessInput` and `MotionInput` (and
+//! the sample's lighting pass turns into the lit image the SDK injects). Materials follow glTF's
+//! metallic-roughness model: factors times base-colour, metallic-roughness, normal and
+//! emissive textures.
 use crate::gpu::{self, spirv, UploadSlots};
+pub use crate::mesh_buffers::{interleave, MaterialTextures, MeshBuffers, Texture, VertexAttributes, VERTEX_STRIDE};
+use crate::mesh_buffers::{TANGENT_OFFSET, TEXTURE_SLOTS, UV_OFFSET};
 use ash::vk;
-use glam::{Affine3A, Mat4, Vec3};
-use hybrid_rt_testkit::host::{Host, HostBuffer, HostImage, HostResult};
+use glam::{Affine3A, Mat4};
+use hybrid_rt_testkit::host::{Host, HostImage, HostResult};
 use hybrid_rt_testkit::reference::{Camera, Scene};
 
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 pub const NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 pub const ALBEDO_FORMAT: vk::Format = vk::Format::R8G8B8A8_UNORM;
 pub const MOTION_FORMAT: vk::Format = vk::Format::R16G16_SFLOAT;
+/// Emitted radiance (emissive factor x texture x strength): unbounded, so half floats.
+pub const EMISSIVE_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 /// The layout the targets are left in after a pass, ready for the SDK to sample.
 pub const READ: vk::ImageLayout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
 
-/// A surface's material in the G-buffer.
+/// A surface's material in the G-buffer: glTF's factors (its textures are
+/// [`MaterialTextures`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Material {
     pub albedo: [f32; 3],
     pub roughness: f32,
     pub metalness: f32,
+    /// Emitted radiance (glTF's emissive factor times KHR_materials_emissive_strength).
+    pub emissive: [f32; 3],
+}
+
+impl Default for Material {
+    /// A grey dielectric: albedo 0.8, roughness 0.5, no emission.
+    fn default() -> Material {
+        Material { albedo: [0.8; 3], roughness: 0.5, metalness: 0.0, emissive: [0.0; 3] }
+    }
 }
 
 /// `Instance` in shaders/sample/gbuffer_common.glsl (std430).
@@ -31,6 +48,7 @@ struct InstanceGpu {
     prev_model: [f32; 16],
     material: [f32; 4],
     extra: [f32; 4],
+    emissive: [f32; 4],
 }
 
 /// `Camera` in shaders/sample/gbuffer_common.glsl (std140).
@@ -49,6 +67,7 @@ pub struct Targets {
     pub normal_roughness: HostImage,
     pub albedo_metalness: HostImage,
     pub motion: HostImage,
+    pub emissive: HostImage,
     pub width: u32,
     pub height: u32,
 }
@@ -62,149 +81,20 @@ impl Targets {
             normal_roughness: host.create_image(NORMAL_FORMAT, width, height, color)?,
             albedo_metalness: host.create_image(ALBEDO_FORMAT, width, height, color)?,
             motion: host.create_image(MOTION_FORMAT, width, height, color)?,
+            emissive: host.create_image(EMISSIVE_FORMAT, width, height, color)?,
             width,
             height,
         })
     }
 
-    fn colors(&self) -> [&HostImage; 3] {
-        [&self.normal_roughness, &self.albedo_metalness, &self.motion]
+    fn colors(&self) -> [&HostImage; 4] {
+        [&self.normal_roughness, &self.albedo_metalness, &self.motion, &self.emissive]
     }
 
     pub fn destroy(self, host: &Host) {
-        for i in [self.depth, self.normal_roughness, self.albedo_metalness, self.motion] {
+        for i in [self.depth, self.normal_roughness, self.albedo_metalness, self.motion, self.emissive] {
             host.destroy_image(i);
         }
-    }
-}
-
-/// Vertex and index buffers of every mesh of a scene, in engine memory.
-pub struct MeshBuffers {
-    /// Vertex buffer, index buffer, index count, vertex count.
-    meshes: Vec<(HostBuffer, HostBuffer, u32, u32)>,
-    /// Base-colour textures: a white texel first (what untextured draws sample), then the
-    /// scene's (`Draw::albedo_texture` k is image k + 1).
-    textures: Vec<HostImage>,
-    sampler: vk::Sampler,
-}
-
-/// Bytes per vertex: a position, a shading normal (RGB32F each) and a texture coordinate
-/// (RG32F), interleaved. The SDK reads the positions out of the same buffer
-/// (`VertexBufferInput::stride`), as an engine's.
-pub const VERTEX_STRIDE: u32 = 32;
-
-/// Interleaves positions, normals and texture coordinates (one each per vertex) into
-/// vertices. Vertices past the normals' end get a zero normal, which the G-buffer pass shades
-/// flat (the triangle's plane, as the CPU reference does); past the coordinates' end, (0, 0).
-pub fn interleave(positions: &[Vec3], normals: &[Vec3], uvs: &[[f32; 2]]) -> Vec<[f32; 8]> {
-    let normals = normals.iter().chain(std::iter::repeat(&Vec3::ZERO));
-    let uvs = uvs.iter().chain(std::iter::repeat(&[0.0; 2]));
-    positions.iter().zip(normals).zip(uvs).map(|((p, n), t)| [p.x, p.y, p.z, n.x, n.y, n.z, t[0], t[1]]).collect()
-}
-
-/// A base-colour texture: sRGB-encoded RGBA8 texels, row by row.
-#[derive(Clone, Debug, Default)]
-pub struct Texture {
-    pub width: u32,
-    pub height: u32,
-    pub rgba: Vec<u8>,
-}
-
-impl MeshBuffers {
-    /// Vertex buffers are drawn and copied by the SDK into its BLAS inputs.
-    pub const VERTEX_USAGE: vk::BufferUsageFlags = vk::BufferUsageFlags::from_raw(
-        vk::BufferUsageFlags::VERTEX_BUFFER.as_raw() | vk::BufferUsageFlags::TRANSFER_SRC.as_raw(),
-    );
-
-    /// `normals` and `uvs`: one list per mesh, one entry per vertex (no normals: flat shading;
-    /// no coordinates: (0, 0)); `textures`: the scene's base-colour textures.
-    pub fn upload(
-        host: &Host,
-        scene: &Scene,
-        normals: &[Vec<Vec3>],
-        uvs: &[Vec<[f32; 2]>],
-        textures: &[Texture],
-    ) -> HostResult<MeshBuffers> {
-        let mut meshes = Vec::new();
-        for (k, m) in scene.meshes.iter().enumerate() {
-            let vertices = interleave(
-                &m.positions,
-                normals.get(k).map_or(&[][..], |n| n.as_slice()),
-                uvs.get(k).map_or(&[][..], |t| t.as_slice()),
-            );
-            let vb = host.buffer_with_data(bytemuck::cast_slice(&vertices), Self::VERTEX_USAGE)?;
-            let ib_usage = vk::BufferUsageFlags::INDEX_BUFFER | vk::BufferUsageFlags::TRANSFER_SRC;
-            let ib = host.buffer_with_data(bytemuck::cast_slice(&m.indices), ib_usage)?;
-            meshes.push((vb, ib, m.indices.len() as u32, m.positions.len() as u32));
-        }
-        let white = Texture { width: 1, height: 1, rgba: vec![255; 4] };
-        let mut images = Vec::new();
-        for t in std::iter::once(&white).chain(textures) {
-            if t.width == 0 || t.height == 0 || t.rgba.len() as u64 != t.width as u64 * t.height as u64 * 4 {
-                return Err(format!("a {}x{} texture with {} bytes", t.width, t.height, t.rgba.len()));
-            }
-            let usage = vk::ImageUsageFlags::SAMPLED;
-            images.push(host.image_with_data(vk::Format::R8G8B8A8_SRGB, t.width, t.height, usage, &t.rgba, READ)?);
-        }
-        let info = vk::SamplerCreateInfo::default()
-            .mag_filter(vk::Filter::LINEAR)
-            .min_filter(vk::Filter::LINEAR)
-            .address_mode_u(vk::SamplerAddressMode::REPEAT)
-            .address_mode_v(vk::SamplerAddressMode::REPEAT)
-            .address_mode_w(vk::SamplerAddressMode::REPEAT);
-        // SAFETY: plain object creation; destroyed in `destroy`.
-        let sampler = unsafe { host.device.create_sampler(&info, None) }.map_err(|e| format!("sampler: {e:?}"))?;
-        Ok(MeshBuffers { meshes, textures: images, sampler })
-    }
-
-    /// Scene texture `k` as an SDK input (an alpha-tested geometry's cut-out), if it exists.
-    pub fn texture_input(&self, k: usize) -> Option<hybrid_rt::ImageInput> {
-        self.textures.get(k + 1).map(|t| t.input(READ))
-    }
-
-    /// Mesh `i`'s texture coordinates inside its vertices, for an alpha-tested geometry.
-    pub fn uv_input(&self, i: usize) -> hybrid_rt::VertexBufferInput {
-        let (vb, _, _, vertex_count) = &self.meshes[i];
-        hybrid_rt::VertexBufferInput {
-            buffer: vb.buffer,
-            offset: 24,
-            stride: VERTEX_STRIDE as u64,
-            count: *vertex_count,
-            format: vk::Format::R32G32_SFLOAT,
-        }
-    }
-
-    /// The texture a draw samples (white without one, or with an index past the scene's).
-    fn albedo(&self, texture: Option<usize>) -> &HostImage {
-        texture.and_then(|k| self.textures.get(k + 1)).unwrap_or(&self.textures[0])
-    }
-
-    /// The SDK's view of mesh `i`: the same buffers the rasterizer draws (RGB32F positions
-    /// interleaved with normals, u32 indices).
-    pub fn geometry_input(&self, i: usize) -> hybrid_rt::GeometryInput {
-        let (vb, ib, index_count, vertex_count) = &self.meshes[i];
-        hybrid_rt::GeometryInput {
-            vertices: hybrid_rt::VertexBufferInput {
-                buffer: vb.buffer,
-                count: *vertex_count,
-                stride: VERTEX_STRIDE as u64,
-                ..Default::default()
-            },
-            indices: hybrid_rt::IndexBufferInput { buffer: ib.buffer, count: *index_count, ..Default::default() },
-            ..Default::default()
-        }
-    }
-
-    pub fn destroy(self, host: &Host) {
-        for (v, i, _, _) in self.meshes {
-            host.destroy_buffer(v);
-            host.destroy_buffer(i);
-        }
-        for t in self.textures {
-            host.destroy_image(t);
-        }
-        // SAFETY: the frames that sampled with it are finished (the caller's rule).
-        unsafe { host.device.destroy_sampler(self.sampler, None) };
     }
 }
 
@@ -217,8 +107,8 @@ pub struct Draw {
     pub material: Material,
     /// Vertices to draw instead of the mesh's own (a deforming mesh's of this frame).
     pub vertex_buffer: Option<vk::Buffer>,
-    /// Base-colour texture (an index into the scene's), multiplied into the albedo.
-    pub albedo_texture: Option<usize>,
+    /// The material's textures (indices into the scene's).
+    pub textures: MaterialTextures,
     /// Alpha-tested: fragments whose texture alpha is below this are holes (0: opaque).
     pub alpha_cutoff: f32,
 }
@@ -251,7 +141,7 @@ impl GBufferPass {
             vk::DescriptorSetLayoutBinding::default()
                 .binding(2)
                 .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                .descriptor_count(1)
+                .descriptor_count(TEXTURE_SLOTS as u32)
                 .stage_flags(stages),
         ];
         let (set_layout, layout) = gpu::push_layout(host, &bindings, 4, stages)?;
@@ -266,15 +156,18 @@ impl GBufferPass {
                 stride: VERTEX_STRIDE,
                 input_rate: vk::VertexInputRate::VERTEX,
             }];
-            let attribute = |location: u32, offset: u32| vk::VertexInputAttributeDescription {
+            let attribute = |location: u32, format: vk::Format, offset: u32| vk::VertexInputAttributeDescription {
                 location,
                 binding: 0,
-                format: vk::Format::R32G32B32_SFLOAT,
+                format,
                 offset,
             };
-            let uv =
-                vk::VertexInputAttributeDescription { location: 2, binding: 0, format: vk::Format::R32G32_SFLOAT, offset: 24 };
-            let vertex_attributes = [attribute(0, 0), attribute(1, 12), uv];
+            let vertex_attributes = [
+                attribute(0, vk::Format::R32G32B32_SFLOAT, 0),
+                attribute(1, vk::Format::R32G32B32_SFLOAT, 12),
+                attribute(2, vk::Format::R32G32_SFLOAT, UV_OFFSET),
+                attribute(3, vk::Format::R32G32B32A32_SFLOAT, TANGENT_OFFSET),
+            ];
             let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
                 .vertex_binding_descriptions(&vertex_bindings)
                 .vertex_attribute_descriptions(&vertex_attributes);
@@ -291,11 +184,11 @@ impl GBufferPass {
                 .depth_write_enable(true)
                 .depth_compare_op(vk::CompareOp::LESS);
             let attachments =
-                [vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA); 3];
+                [vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA); 4];
             let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&attachments);
             let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
             let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-            let color_formats = [NORMAL_FORMAT, ALBEDO_FORMAT, MOTION_FORMAT];
+            let color_formats = [NORMAL_FORMAT, ALBEDO_FORMAT, MOTION_FORMAT, EMISSIVE_FORMAT];
             let mut rendering = vk::PipelineRenderingCreateInfo::default()
                 .color_attachment_formats(&color_formats)
                 .depth_attachment_format(DEPTH_FORMAT);
@@ -357,7 +250,13 @@ impl GBufferPass {
                 model: Mat4::from(dr.transform).to_cols_array(),
                 prev_model: Mat4::from(dr.prev_transform).to_cols_array(),
                 material: [dr.material.albedo[0], dr.material.albedo[1], dr.material.albedo[2], dr.material.roughness],
-                extra: [dr.material.metalness, dr.alpha_cutoff, 0.0, 0.0],
+                extra: [
+                    dr.material.metalness,
+                    dr.alpha_cutoff,
+                    dr.textures.normal.map_or(0.0, |_| dr.textures.normal_scale),
+                    0.0,
+                ],
+                emissive: [dr.material.emissive[0], dr.material.emissive[1], dr.material.emissive[2], 0.0],
             })
             .collect();
         let ubo = self.cameras.write(host, slot, bytemuck::bytes_of(&cam))?;
@@ -427,9 +326,9 @@ impl GBufferPass {
             d.cmd_set_scissor(cmd, 0, &[area]);
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline);
             self.push.cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::GRAPHICS, self.layout, 0, &writes);
-            let mut bound_texture: Option<vk::ImageView> = None;
+            let mut bound_textures = None;
             for (i, dr) in draws.iter().enumerate() {
-                let (vb, ib, count, _) = &meshes.meshes[dr.mesh];
+                let (vb, ib, count) = meshes.mesh(dr.mesh);
                 d.cmd_push_constants(
                     cmd,
                     self.layout,
@@ -437,20 +336,24 @@ impl GBufferPass {
                     0,
                     &(i as u32).to_ne_bytes(),
                 );
-                // Pushed only when it changes: the forest's 2,500 draws use two textures.
-                let view = meshes.albedo(dr.albedo_texture).view;
-                if bound_texture != Some(view) {
-                    bound_texture = Some(view);
-                    let texture = [vk::DescriptorImageInfo { sampler: meshes.sampler, image_view: view, image_layout: READ }];
+                // Pushed only when they change: the forest's 2,500 draws use two texture sets.
+                let views = meshes.views(&dr.textures);
+                if bound_textures != Some(views) {
+                    bound_textures = Some(views);
+                    let textures = views.map(|image_view| vk::DescriptorImageInfo {
+                        sampler: meshes.sampler(),
+                        image_view,
+                        image_layout: READ,
+                    });
                     let write = vk::WriteDescriptorSet::default()
                         .dst_binding(2)
                         .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
-                        .image_info(&texture);
+                        .image_info(&textures);
                     self.push.cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::GRAPHICS, self.layout, 0, &[write]);
                 }
-                d.cmd_bind_vertex_buffers(cmd, 0, &[dr.vertex_buffer.unwrap_or(vb.buffer)], &[0]);
-                d.cmd_bind_index_buffer(cmd, ib.buffer, 0, vk::IndexType::UINT32);
-                d.cmd_draw_indexed(cmd, *count, 1, 0, 0, 0);
+                d.cmd_bind_vertex_buffers(cmd, 0, &[dr.vertex_buffer.unwrap_or(vb)], &[0]);
+                d.cmd_bind_index_buffer(cmd, ib, 0, vk::IndexType::UINT32);
+                d.cmd_draw_indexed(cmd, count, 1, 0, 0, 0);
             }
             d.cmd_end_rendering(cmd);
         }
@@ -488,7 +391,7 @@ pub fn static_draws(scene: &Scene, material: impl Fn(usize) -> Material) -> Vec<
             prev_transform: inst.transform,
             material: material(i),
             vertex_buffer: None,
-            albedo_texture: None,
+            textures: MaterialTextures::default(),
             alpha_cutoff: 0.0,
         })
         .collect()

@@ -2,8 +2,8 @@
 //! material per instance, what moves, the lights, and the camera path of a headless run.
 //! Built by `scenes::cornell_room` or loaded from glTF (`gltf_scene`).
 use crate::lighting::Lights;
-use crate::raster::{Material, Texture};
-use glam::{Affine3A, Quat, Vec3};
+use crate::raster::{Material, MaterialTextures, Texture, VertexAttributes};
+use glam::{Affine3A, Quat, Vec3, Vec4};
 use hybrid_rt_testkit::reference::{Camera, Scene};
 
 /// How an instance moves over time (seconds).
@@ -50,6 +50,8 @@ pub struct CameraPath {
     pub from: Vec3,
     pub to: Vec3,
     pub target: Vec3,
+    /// The camera's up (a glTF camera's roll); Y for the built-in paths.
+    pub up: Vec3,
     pub fov_y_radians: f32,
 }
 
@@ -61,7 +63,7 @@ impl CameraPath {
         let eye = self.from.lerp(self.to, s);
         let far = (self.to - self.target).length().max((self.from - self.target).length()) * 20.0;
         let near = ((eye - self.target).length() * 0.01).min(0.05);
-        Camera { fov_y_radians: self.fov_y_radians, near, far: far.max(100.0), ..Camera::look_at(eye, self.target) }
+        Camera { fov_y_radians: self.fov_y_radians, near, far: far.max(100.0), up: self.up, ..Camera::look_at(eye, self.target) }
     }
 }
 
@@ -74,10 +76,13 @@ pub struct SampleScene {
     pub normals: Vec<Vec<Vec3>>,
     /// Texture coordinates, one list per mesh (empty: none), for `textures`.
     pub uvs: Vec<Vec<[f32; 2]>>,
-    /// Base-colour textures, and which one each instance's material multiplies its albedo by
-    /// (one per instance, or empty: none).
+    /// Tangents (xyz, bitangent sign), one list per mesh: the file's where it has them (empty:
+    /// none; normal maps then take their frame from screen derivatives).
+    pub tangents: Vec<Vec<Vec4>>,
+    /// Material textures, and which each instance's material samples (one per instance, or
+    /// empty: none).
     pub textures: Vec<Texture>,
-    pub albedo_textures: Vec<Option<usize>>,
+    pub material_textures: Vec<MaterialTextures>,
     /// Alpha-tested meshes (foliage): per mesh, the texture whose alpha (< 0.5: a hole) cuts
     /// it, in the raster pass and in every ray the SDK traces (one list per mesh, or empty).
     pub alpha_textures: Vec<Option<usize>>,
@@ -106,6 +111,14 @@ pub struct SampleScene {
 }
 
 impl SampleScene {
+    /// Mesh `k`'s normals, texture coordinates and tangents (what `MeshBuffers` interleaves).
+    pub fn vertex_attributes(&self, k: usize) -> VertexAttributes<'_> {
+        fn of<T>(lists: &[Vec<T>], k: usize) -> &[T] {
+            lists.get(k).map_or(&[][..], |l| l.as_slice())
+        }
+        VertexAttributes { normals: of(&self.normals, k), uvs: of(&self.uvs, k), tangents: of(&self.tangents, k) }
+    }
+
     /// The transform of instance `i` at `time` seconds.
     pub fn transform(&self, i: usize, time: f32) -> Affine3A {
         let rest = self.scene.instances[i].transform;

@@ -1,6 +1,6 @@
 //! Built-in scenes.
 use crate::lighting::Lights;
-use crate::raster::{Material, Texture};
+use crate::raster::{Material, MaterialTextures, Texture};
 use crate::scene::{vertex_normals, CameraPath, Deformer, Motion, SampleScene};
 use glam::{Affine3A, Quat, Vec3};
 use hybrid_rt_testkit::reference::{Camera, Mesh, Rng, Scene};
@@ -20,7 +20,7 @@ pub fn cornell_room() -> SampleScene {
         motions.push(motion);
         scene.add_instance(mesh, t)
     };
-    let matte = |albedo: [f32; 3]| Material { albedo, roughness: 0.9, metalness: 0.0 };
+    let matte = |albedo: [f32; 3]| Material { albedo, roughness: 0.9, ..Default::default() };
     let white = matte([0.73, 0.71, 0.68]);
     let (half, height) = (3.0, 4.0);
     let quarter = std::f32::consts::FRAC_PI_2;
@@ -29,7 +29,7 @@ pub fn cornell_room() -> SampleScene {
         &mut scene,
         floor,
         Affine3A::IDENTITY,
-        Material { albedo: [0.42, 0.4, 0.38], roughness: 0.22, metalness: 0.0 },
+        Material { albedo: [0.42, 0.4, 0.38], roughness: 0.22, metalness: 0.0, ..Default::default() },
         Motion::Static,
     );
     // The walls are the floor grid stood up; `height / 6` squashes the grid's edge that ends
@@ -51,11 +51,11 @@ pub fn cornell_room() -> SampleScene {
         &mut scene,
         mirror,
         Affine3A::from_translation(Vec3::new(0.9, 2.1, -half + 0.03)),
-        Material { albedo: [0.95; 3], roughness: 0.0, metalness: 1.0 },
+        Material { albedo: [0.95; 3], roughness: 0.0, metalness: 1.0, ..Default::default() },
         Motion::Static,
     );
     let sphere = scene.add_mesh(Mesh::sphere(0.7, 128, 64));
-    let gold = Material { albedo: [1.0, 0.78, 0.34], roughness: 0.15, metalness: 1.0 };
+    let gold = Material { albedo: [1.0, 0.78, 0.34], roughness: 0.15, metalness: 1.0, ..Default::default() };
     add(&mut scene, sphere, Affine3A::from_translation(Vec3::new(-1.4, 0.7, -1.0)), gold, Motion::Static);
     let cube = scene.add_mesh(Mesh::cuboid(Vec3::splat(0.55)));
     add(
@@ -70,7 +70,7 @@ pub fn cornell_room() -> SampleScene {
         &mut scene,
         column,
         Affine3A::from_translation(Vec3::new(-0.3, 1.2, -2.2)),
-        Material { albedo: [0.2, 0.35, 0.75], roughness: 0.5, metalness: 0.0 },
+        Material { albedo: [0.2, 0.35, 0.75], roughness: 0.5, metalness: 0.0, ..Default::default() },
         Motion::Static,
     );
     let pebble = scene.add_mesh(Mesh::sphere(0.15, 24, 12));
@@ -78,17 +78,26 @@ pub fn cornell_room() -> SampleScene {
     for k in 0..6 {
         let p = Vec3::new(-0.4 + rng.next_f32() * 1.4, 0.15, 0.2 + rng.next_f32() * 1.0);
         let hue = [[0.8, 0.3, 0.2], [0.2, 0.6, 0.8], [0.9, 0.8, 0.3]][k % 3];
+        // One pebble glows (its emission the hue of its albedo): it lights the floor around
+        // it through the cache, as the lit image the SDK injects carries its emission.
+        let emissive = if k == 2 { hue.map(|c| 3.0 * c) } else { [0.0; 3] };
         add(
             &mut scene,
             pebble,
             Affine3A::from_translation(p),
-            Material { albedo: hue, roughness: 0.35, metalness: 0.0 },
+            Material { albedo: hue, roughness: 0.35, metalness: 0.0, emissive },
             Motion::Static,
         );
     }
     let mover = scene.add_mesh(Mesh::cuboid(Vec3::splat(0.22)));
     let orbit = Motion::Orbit { center: Vec3::new(0.2, 0.22, -0.3), radius: 1.0, period: 6.0 };
-    add(&mut scene, mover, Affine3A::IDENTITY, Material { albedo: [0.95, 0.45, 0.1], roughness: 0.3, metalness: 0.0 }, orbit);
+    add(
+        &mut scene,
+        mover,
+        Affine3A::IDENTITY,
+        Material { albedo: [0.95, 0.45, 0.1], roughness: 0.3, metalness: 0.0, ..Default::default() },
+        orbit,
+    );
     // The flag: a 1.6 x 1.0 cloth in the XY plane, pinned along its left edge.
     let cloth = Mesh::grid(1.0, 16);
     let rest: Vec<Vec3> = cloth.positions.iter().map(|p| Vec3::new((p.x + 0.5) * 1.6, -p.z, 0.0)).collect();
@@ -97,15 +106,16 @@ pub fn cornell_room() -> SampleScene {
         &mut scene,
         flag,
         Affine3A::from_translation(Vec3::new(0.9, 3.0, -2.0)),
-        Material { albedo: [0.8, 0.15, 0.3], roughness: 0.7, metalness: 0.0 },
+        Material { albedo: [0.8, 0.15, 0.3], roughness: 0.7, metalness: 0.0, ..Default::default() },
         Motion::Static,
     );
     SampleScene {
         name: "cornell room".into(),
         file_cameras: Vec::new(),
         uvs: Vec::new(),
+        tangents: Vec::new(),
         textures: Vec::new(),
-        albedo_textures: Vec::new(),
+        material_textures: Vec::new(),
         alpha_textures: Vec::new(),
         normals: scene.meshes.iter().map(|m| vertex_normals(&m.positions, &m.indices)).collect(),
         scene,
@@ -126,6 +136,7 @@ pub fn cornell_room() -> SampleScene {
             from: Vec3::new(-1.6, 2.1, 2.6),
             to: Vec3::new(1.6, 1.7, 2.6),
             target: Vec3::new(0.0, 1.2, -1.5),
+            up: Vec3::Y,
             fov_y_radians: 65f32.to_radians(),
         },
         lidar_eye: Vec3::new(0.0, 2.0, 0.5),
@@ -217,19 +228,23 @@ pub fn forest() -> SampleScene {
         &mut scene,
         terrain,
         Affine3A::IDENTITY,
-        Material { albedo: [0.35, 0.42, 0.22], roughness: 0.95, metalness: 0.0 },
+        Material { albedo: [0.35, 0.42, 0.22], roughness: 0.95, metalness: 0.0, ..Default::default() },
         Motion::Static,
     );
     let trunk = scene.add_mesh(Mesh::cuboid(Vec3::new(0.04, 1.0, 0.04)));
     let canopy = scene.add_mesh(Mesh::sphere(0.6, 12, 6));
-    let bark = Material { albedo: [0.35, 0.25, 0.15], roughness: 0.9, metalness: 0.0 };
+    let bark = Material { albedo: [0.35, 0.25, 0.15], roughness: 0.9, metalness: 0.0, ..Default::default() };
     let mut rng = Rng::new(11);
     for k in 0..TREES {
         let (x, z) = ((rng.next_f32() - 0.5) * (SIZE - 4.0), (rng.next_f32() - 0.5) * (SIZE - 4.0));
         let ground = height(x, z);
         add(&mut scene, trunk, Affine3A::from_translation(Vec3::new(x, ground + 1.0, z)), bark, Motion::Static);
-        let leaves =
-            Material { albedo: [0.12 + 0.1 * rng.next_f32(), 0.35 + 0.2 * rng.next_f32(), 0.1], roughness: 0.8, metalness: 0.0 };
+        let leaves = Material {
+            albedo: [0.12 + 0.1 * rng.next_f32(), 0.35 + 0.2 * rng.next_f32(), 0.1],
+            roughness: 0.8,
+            metalness: 0.0,
+            ..Default::default()
+        };
         let top = Vec3::new(x, ground + 2.3, z);
         let motion = if k % 50 == 0 { Motion::Orbit { center: top, radius: 0.3, period: 4.0 } } else { Motion::Static };
         add(&mut scene, canopy, Affine3A::from_translation(top), leaves, motion);
@@ -247,23 +262,23 @@ pub fn forest() -> SampleScene {
         fern.indices.extend_from_slice(&[base, base + 1, base + 2, base + 2, base + 1, base + 3]);
     }
     let fern = scene.add_mesh(fern);
-    let mut albedo_textures = vec![None; scene.instances.len()];
+    let mut material_textures = vec![MaterialTextures::default(); scene.instances.len()];
     // In the stretch the camera flies past, where they are seen up close.
     for _ in 0..FERNS {
         let (x, z) = ((rng.next_f32() - 0.5) * 28.0, 14.0 + rng.next_f32() * 14.0);
         let turn = Quat::from_rotation_y(rng.next_f32() * std::f32::consts::TAU);
-        let leaf = Material { albedo: [0.6, 0.8, 0.5], roughness: 0.8, metalness: 0.0 };
+        let leaf = Material { albedo: [0.6, 0.8, 0.5], roughness: 0.8, metalness: 0.0, ..Default::default() };
         add(&mut scene, fern, Affine3A::from_rotation_translation(turn, Vec3::new(x, height(x, z), z)), leaf, Motion::Static);
-        albedo_textures.push(Some(0));
+        material_textures.push(MaterialTextures::base_color(0));
     }
     // The flag: a 1.6 x 1.0 cloth on a pole at the forest's edge.
     let cloth = Mesh::grid(1.0, 16);
     let rest: Vec<Vec3> = cloth.positions.iter().map(|p| Vec3::new((p.x + 0.5) * 1.6, -p.z, 0.0)).collect();
     let flag = scene.add_mesh(Mesh { positions: rest.clone(), indices: cloth.indices });
     let flag_at = Vec3::new(2.0, height(2.0, 26.0) + 2.5, 26.0);
-    let red = Material { albedo: [0.8, 0.15, 0.3], roughness: 0.7, metalness: 0.0 };
+    let red = Material { albedo: [0.8, 0.15, 0.3], roughness: 0.7, metalness: 0.0, ..Default::default() };
     let flag_instance = add(&mut scene, flag, Affine3A::from_translation(flag_at), red, Motion::Static);
-    albedo_textures.push(None);
+    material_textures.push(MaterialTextures::default());
     let mut uvs = vec![Vec::new(); scene.meshes.len()];
     uvs[fern] = fern_uvs;
     let mut alpha_textures = vec![None; scene.meshes.len()];
@@ -272,8 +287,9 @@ pub fn forest() -> SampleScene {
         name: "forest".into(),
         file_cameras: Vec::new(),
         uvs,
+        tangents: Vec::new(),
         textures: vec![leaf_texture()],
-        albedo_textures,
+        material_textures,
         alpha_textures,
         normals: scene.meshes.iter().map(|m| vertex_normals(&m.positions, &m.indices)).collect(),
         scene,
@@ -294,6 +310,7 @@ pub fn forest() -> SampleScene {
             from: Vec3::new(-8.0, 3.0, 31.0),
             to: Vec3::new(8.0, 2.5, 31.0),
             target: Vec3::new(0.0, 1.0, 18.0),
+            up: Vec3::Y,
             fov_y_radians: 60f32.to_radians(),
         },
         lidar_eye: Vec3::new(0.0, 4.0, 24.0),
@@ -320,5 +337,5 @@ fn leaf_texture() -> Texture {
             rgba.extend_from_slice(&[(70.0 * shade) as u8, g, (60.0 * shade) as u8, if leaf { 255 } else { 0 }]);
         }
     }
-    Texture { width: N, height: N, rgba }
+    Texture { width: N, height: N, rgba, linear: false }
 }

@@ -197,7 +197,8 @@ fn write_textured_quad(name: &str) -> PathBuf {
 fn base_colour_textures_are_read() {
     let scene = gltf_scene::load(&write_textured_quad("textured.gltf")).unwrap();
     assert_eq!(scene.uvs[0], [[0.0, 1.0], [1.0, 1.0], [0.0, 0.0], [1.0, 0.0]]);
-    assert_eq!(scene.albedo_textures, [Some(0)]);
+    assert_eq!(scene.material_textures.len(), 1);
+    assert_eq!(scene.material_textures[0].base_color, Some(0));
     let t = &scene.textures[0];
     assert_eq!((t.width, t.height), (2, 2));
     assert_eq!(t.rgba, [255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 255]);
@@ -236,4 +237,145 @@ fn a_textured_gltf_renders_its_texture() {
         count(&|t| t[2] > 0.6 && t[0] < 0.25 && t[1] < 0.25),
     );
     assert!(red > 5 && green > 5 && blue > 5, "texture colours in the albedo: red {red}, green {green}, blue {blue}");
+}
+
+/// PNG bytes of a `w`x`h` RGB image of one colour.
+fn png_of(w: u32, h: u32, rgb: [u8; 3]) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    let mut enc = png::Encoder::new(&mut bytes, w, h);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    let texels: Vec<u8> = (0..w * h).flat_map(|_| rgb).collect();
+    enc.write_header().unwrap().write_image_data(&texels).unwrap();
+    bytes
+}
+
+/// JPEG bytes (quality 100) of an 8x8 RGB image of one colour.
+fn jpeg_of(rgb: [u8; 3]) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    let texels: Vec<u8> = (0..64).flat_map(|_| rgb).collect();
+    jpeg_encoder::Encoder::new(&mut bytes, 100).encode(&texels, 8, 8, jpeg_encoder::ColorType::Rgb).unwrap();
+    bytes
+}
+
+/// The normal map's one texel: the tangent-space normal (0.6, 0.48, 0.64), tilted towards +U
+/// and glTF's up (-V).
+const NORMAL_TEXEL: [u8; 3] = [204, 189, 209];
+
+/// A unit quad in the XY plane facing +Z (U along +X, V down along -Y, glTF's convention)
+/// with every texture of the metallic-roughness material: a PNG base colour, a JPEG
+/// metallic-roughness (roughness 128/255, metalness 1), a PNG normal map tilting the normal
+/// towards +X and +Y, a JPEG emissive (1, 0.5, 0 in sRGB) at KHR_materials_emissive_strength 4 (a
+/// required extension), with or without TANGENT vertices; and a camera rolled 90 degrees.
+fn write_material_quad(name: &str, tangents: bool) -> PathBuf {
+    let b64 = |b: &[u8]| base64::engine::general_purpose::STANDARD.encode(b);
+    let positions: [[f32; 3]; 4] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
+    let uvs: [[f32; 2]; 4] = [[0.0, 1.0], [1.0, 1.0], [0.0, 0.0], [1.0, 0.0]];
+    let indices: [u16; 6] = [0, 1, 2, 2, 1, 3];
+    let mut bytes: Vec<u8> = positions.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    bytes.extend(uvs.iter().flatten().flat_map(|v| v.to_le_bytes()));
+    bytes.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    bytes.extend([0u8; 4]);
+    bytes.extend([[1.0f32, 0.0, 0.0, 1.0]; 4].iter().flatten().flat_map(|v| v.to_le_bytes()));
+    let tangent_attribute = if tangents { r#", "TANGENT": 3"# } else { "" };
+    let png = |rgb| format!("data:image/png;base64,{}", b64(&png_of(1, 1, rgb)));
+    let jpeg = |rgb| format!("data:image/jpeg;base64,{}", b64(&jpeg_of(rgb)));
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0, 1]}}],
+  "extensionsUsed": ["KHR_materials_emissive_strength"], "extensionsRequired": ["KHR_materials_emissive_strength"],
+  "nodes": [{{"mesh": 0}}, {{"camera": 0, "translation": [0.5, 0.5, 3.0], "rotation": [0.0, 0.0, 0.7071068, 0.7071068]}}],
+  "cameras": [{{"type": "perspective", "perspective": {{"yfov": 0.8, "znear": 0.1}}}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "TEXCOORD_0": 1{tangent_attribute}}}, "indices": 2, "material": 0}}]}}],
+  "materials": [{{"pbrMetallicRoughness": {{"baseColorTexture": {{"index": 0}}, "metallicRoughnessTexture": {{"index": 1}},
+      "roughnessFactor": 0.8, "metallicFactor": 1.0}},
+    "normalTexture": {{"index": 2, "scale": 1.0}}, "emissiveTexture": {{"index": 3}}, "emissiveFactor": [1.0, 1.0, 1.0],
+    "extensions": {{"KHR_materials_emissive_strength": {{"emissiveStrength": 4.0}}}}}}],
+  "textures": [{{"source": 0}}, {{"source": 1}}, {{"source": 2}}, {{"source": 3}}],
+  "images": [{{"uri": "{base}"}}, {{"uri": "{mr}"}}, {{"uri": "{normal}"}}, {{"uri": "{emissive}"}}],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}},
+    {{"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"}},
+    {{"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}},
+    {{"bufferView": 3, "componentType": 5126, "count": 4, "type": "VEC4"}}],
+  "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 48}}, {{"buffer": 0, "byteOffset": 48, "byteLength": 32}},
+    {{"buffer": 0, "byteOffset": 80, "byteLength": 12}}, {{"buffer": 0, "byteOffset": 96, "byteLength": 64}}],
+  "buffers": [{{"byteLength": {len}, "uri": "data:application/octet-stream;base64,{data}"}}]}}"#,
+        base = png([200, 100, 50]),
+        mr = jpeg([0, 128, 255]),
+        normal = png(NORMAL_TEXEL),
+        emissive = jpeg([255, 128, 0]),
+        len = bytes.len(),
+        data = b64(&bytes),
+    );
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    std::fs::write(&path, json).unwrap();
+    path
+}
+
+/// Every texture of the material is read, colour textures as sRGB and data textures as
+/// linear, JPEG as well as PNG; the emissive strength scales the factor; the file's tangents
+/// are kept; the camera keeps its roll.
+#[test]
+fn material_textures_tangents_and_camera_roll_are_read() {
+    let scene = gltf_scene::load(&write_material_quad("material.gltf", true)).unwrap();
+    let t = scene.material_textures[0];
+    let (base, mr, normal, emissive) =
+        (t.base_color.unwrap(), t.metallic_roughness.unwrap(), t.normal.unwrap(), t.emissive.unwrap());
+    let linear: Vec<bool> = [base, mr, normal, emissive].iter().map(|&k| scene.textures[k].linear).collect();
+    assert_eq!(linear, [false, true, true, false]);
+    assert_eq!(scene.textures[normal].rgba, [NORMAL_TEXEL[0], NORMAL_TEXEL[1], NORMAL_TEXEL[2], 255]);
+    // JPEG at quality 100: within two levels of what was written.
+    let close = |k: usize, rgb: [u8; 3]| scene.textures[k].rgba.chunks(4).all(|c| (0..3).all(|i| c[i].abs_diff(rgb[i]) <= 2));
+    assert!(close(mr, [0, 128, 255]) && close(emissive, [255, 128, 0]), "JPEG texels");
+    assert_eq!((scene.textures[mr].width, scene.textures[mr].height), (8, 8));
+    assert_eq!(scene.materials[0].emissive, [4.0; 3]);
+    assert_eq!(scene.tangents[0], [glam::Vec4::new(1.0, 0.0, 0.0, 1.0); 4]);
+    let up = scene.file_cameras[0].up;
+    assert!((up - glam::Vec3::NEG_X).length() < 1e-5, "a camera rolled 90 degrees about its view: up {up}");
+}
+
+/// Renders `file` headless and returns each mode's EXR texels.
+fn render_modes(file: &std::path::Path, out: &str, modes: &str) -> Vec<Vec<[f32; 4]>> {
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(out);
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_sample"))
+        .args(["--headless", file.to_str().unwrap(), "--width", "48", "--height", "32", "--frames", "2", "--modes", modes])
+        .arg("--out")
+        .arg(&out)
+        .env_remove("DISPLAY")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&run.stdout).to_string() + &String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{text}");
+    modes.split(',').map(|m| hybrid_rt_samples::images::read_exr_rgba(&out.join(format!("{m}.exr"))).unwrap().2).collect()
+}
+
+/// Rendered, every texture lands in the G-buffer and the lit image: the normal map tilts the
+/// quad's normal to (0.6, 0.48, 0.64) whether the tangent frame comes from the file's tangents or
+/// from screen derivatives; roughness is factor x texture; the metal has no diffuse, so its
+/// direct light is its emission alone (4 x (1, sRGB 128, 0)).
+#[test]
+fn a_gltf_with_every_texture_renders_them() {
+    let texel = NORMAL_TEXEL.map(|c| 2.0 * c as f32 / 255.0 - 1.0);
+    let expected = glam::Vec3::from(texel).normalize();
+    let srgb_128 = ((128.0f32 / 255.0 + 0.055) / 1.055).powf(2.4);
+    for tangents in [true, false] {
+        let file = write_material_quad(&format!("material-render-{tangents}.gltf"), tangents);
+        let images = render_modes(&file, &format!("sample-material-{tangents}"), "normals,roughness,metalness,emissive,direct");
+        let [normals, roughness, metalness, emissive, direct] = &images[..] else { unreachable!() };
+        // Pixels on the quad: the ones that emit.
+        let on: Vec<usize> = (0..emissive.len()).filter(|&i| emissive[i][0] > 1.0).collect();
+        assert!(on.len() > 150, "{} of {} pixels see the quad", on.len(), emissive.len());
+        for &i in &on {
+            let n = glam::Vec3::new(normals[i][0], normals[i][1], normals[i][2]) * 2.0 - 1.0;
+            assert!(n.normalize().dot(expected) > 0.999, "tangents {tangents}: normal {n} at {i}, expected {expected}");
+            assert!((roughness[i][0] - 0.8 * 128.0 / 255.0).abs() < 0.01, "roughness {}", roughness[i][0]);
+            assert!(metalness[i][0] > 0.99, "metalness {}", metalness[i][0]);
+            let e = [4.0, 4.0 * srgb_128, 0.0];
+            for c in 0..3 {
+                // fp16 targets; JPEG within two levels (1.5% at 128).
+                assert!((emissive[i][c] - e[c]).abs() < 0.02 * e[c] + 0.01, "emissive {:?} vs {e:?}", emissive[i]);
+                assert!((direct[i][c] - e[c]).abs() < 0.03 * e[c] + 0.02, "direct {:?} vs emitted {e:?}", direct[i]);
+            }
+        }
+    }
 }

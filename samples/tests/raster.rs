@@ -20,10 +20,11 @@ fn rasterized_gbuffer_matches_the_reference_and_motion_follows_the_camera() {
     let host = Host::new().expect("device");
     let (scene, camera) = scenes::room();
     let g = GBuffer::render(&Tracer::new(&scene), &camera, W, H);
-    let meshes = MeshBuffers::upload(&host, &scene, &[], &[], &[]).unwrap();
+    let meshes = MeshBuffers::upload(&host, &scene, &[], &[]).unwrap();
     let targets = Targets::new(&host, W, H).unwrap();
     let mut pass = GBufferPass::new(&host).unwrap();
-    let material = |i: usize| Material { albedo: [0.1 * i as f32 % 1.0, 0.5, 0.25], roughness: 0.5, metalness: 0.0 };
+    let material =
+        |i: usize| Material { albedo: [0.1 * i as f32 % 1.0, 0.5, 0.25], roughness: 0.5, metalness: 0.0, ..Default::default() };
     let draws: Vec<Draw> = raster::static_draws(&scene, material);
     // Last frame the camera was 0.1 m to the left: motion vectors point there.
     let prev = Camera { eye: camera.eye - Vec3::X * 0.1, target: camera.target - Vec3::X * 0.1, ..camera };
@@ -109,11 +110,16 @@ fn deferred_lighting_with_sdk_shadows_matches_the_reference_lit_frame() {
     let tracer = Tracer::new(&scene);
     let g = GBuffer::render(&tracer, &camera, W, H);
     let albedo = |i: u32| [0.2 + 0.05 * (i % 8) as f32, 0.6, 0.4];
-    let meshes = MeshBuffers::upload(&host, &scene, &[], &[], &[]).unwrap();
+    let meshes = MeshBuffers::upload(&host, &scene, &[], &[]).unwrap();
     let targets = Targets::new(&host, W, H).unwrap();
     let mut pass = GBufferPass::new(&host).unwrap();
     let mut lighting = LightingPass::new(&host).unwrap();
-    let draws = raster::static_draws(&scene, |i| Material { albedo: albedo(i as u32), roughness: 0.5, metalness: 0.0 });
+    let draws = raster::static_draws(&scene, |i| Material {
+        albedo: albedo(i as u32),
+        roughness: 0.5,
+        metalness: 0.0,
+        ..Default::default()
+    });
     host.run(|cmd| pass.record(&host, cmd, 0, &targets, &meshes, &draws, &camera, &camera)).unwrap().unwrap();
 
     // The engine's frame: SDK shadows from its own G-buffer, denoised, then its lighting.

@@ -1,25 +1,29 @@
 #version 460
-// The sample's rasterized G-buffer (what an engine already has): world position and shading
-// normal, current and previous clip positions (for motion vectors) of each vertex.
+// The sample's rasterized G-buffer (what an engine already has): world position, shading
+// normal and tangent, current and previous clip positions (for motion vectors) of each vertex.
 #extension GL_GOOGLE_include_directive : require
 #include "gbuffer_common.glsl"
 
 layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec3 a_normal;
 layout(location = 2) in vec2 a_uv;
+layout(location = 3) in vec4 a_tangent;   // xyz, bitangent sign (glTF); zero: none
 layout(location = 0) out vec3 v_world;
 layout(location = 1) out vec4 v_clip;
 layout(location = 2) out vec4 v_prev_clip;
 layout(location = 3) out vec3 v_normal;
 layout(location = 4) out vec2 v_uv;
+layout(location = 5) out vec4 v_tangent;
 
 void main() {
     Instance i = u_instances.items[u_push.instance];
     vec4 world = i.model * vec4(a_position, 1.0);
     v_world = world.xyz;
     v_uv = a_uv;
-    // Normals transform with the inverse transpose (instances may scale unevenly).
+    // Normals transform with the inverse transpose (instances may scale unevenly); tangents,
+    // lying in the surface, with the model matrix itself.
     v_normal = transpose(inverse(mat3(i.model))) * a_normal;
+    v_tangent = vec4(mat3(i.model) * a_tangent.xyz, a_tangent.w);
     v_clip = u_camera.view_proj * world;
     v_prev_clip = u_camera.prev_view_proj * (i.prev_model * vec4(a_position, 1.0));
     gl_Position = v_clip;

@@ -3,7 +3,8 @@ struct Instance {
     mat4 model;
     mat4 prev_model;
     vec4 material;   // albedo rgb, roughness
-    vec4 extra;      // metalness, alpha cutoff (0: opaque), unused
+    vec4 extra;      // metalness, alpha cutoff (0: opaque), normal-map scale (0: no normal map), unused
+    vec4 emissive;   // emitted radiance rgb (factor x strength), unused
 };
 layout(set = 0, binding = 0, std140) uniform Camera {
     mat4 view_proj;

@@ -2,16 +2,19 @@
 // The sample's deferred direct lighting (what an engine already has): a sun and a point light,
 // each with its visibility from the SDK's (denoised) shadow output, and a constant ambient.
 // Lambertian over the diffuse albedo (albedo x (1 - metalness): metals have no diffuse):
-// lit = diffuse x (sun E x sun visibility + point E x point visibility + ambient), the
-// convention of the test kit's reference (tests/src/reference.rs, direct_lighting).
+// lit = diffuse x (sun E x sun visibility + point E x point visibility + ambient) + emitted,
+// the convention of the test kit's reference (tests/src/reference.rs, direct_lighting). The
+// emission is part of the lit image the SDK injects: glowing surfaces light the scene's GI
+// and show in its reflections through the cache.
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 0, binding = 0) uniform sampler2D u_depth;
 layout(set = 0, binding = 1) uniform sampler2D u_normal_roughness;
 layout(set = 0, binding = 2) uniform sampler2D u_albedo_metalness;
 layout(set = 0, binding = 3) uniform sampler2D u_sun_visibility;
 layout(set = 0, binding = 4) uniform sampler2D u_point_visibility;
-layout(set = 0, binding = 5, rgba16f) uniform writeonly image2D u_lit;
-layout(set = 0, binding = 6, std140) uniform Lighting {
+layout(set = 0, binding = 5) uniform sampler2D u_emissive;
+layout(set = 0, binding = 6, rgba16f) uniform writeonly image2D u_lit;
+layout(set = 0, binding = 7, std140) uniform Lighting {
     mat4 clip_to_world;
     vec4 sun;        // direction towards the sun, intensity
     vec4 point;      // position, intensity
@@ -37,5 +40,6 @@ void main() {
     vec3 to_point = u.point.xyz - p;
     float d2 = max(dot(to_point, to_point), 1e-4);
     e += max(dot(n, to_point * inversesqrt(d2)), 0.0) * u.point.w / d2 * point_visibility;
-    imageStore(u_lit, pixel, vec4(diffuse * (e + u.ambient.x), 1.0));
+    vec3 emitted = texelFetch(u_emissive, pixel, 0).rgb;
+    imageStore(u_lit, pixel, vec4(diffuse * (e + u.ambient.x) + emitted, 1.0));
 }

@@ -23,8 +23,9 @@
 //! starts with a barrier on the previous one's writes.
 use crate::gpu::{spirv, ComputePass};
 use crate::lighting::{LightingPass, Visibility};
+use crate::mesh_buffers::Vertex;
 use crate::modes::Mode;
-use crate::raster::{self, Draw, GBufferPass, MeshBuffers};
+use crate::raster::{self, Draw, GBufferPass, MeshBuffers, VertexAttributes};
 use crate::scene::SampleScene;
 use ash::vk;
 use glam::Vec3;
@@ -123,7 +124,8 @@ impl<'h> Renderer<'h> {
         let ctx =
             host.create_context(&InitSettings { supported_working_sets: SLOTS as u32, ..Default::default() }).map_err(sdk_err)?;
         let mut container = ctx.create_task_container();
-        let meshes = MeshBuffers::upload(host, &scene.scene, &scene.normals, &scene.uvs, &scene.textures)?;
+        let attributes: Vec<_> = (0..scene.scene.meshes.len()).map(|k| scene.vertex_attributes(k)).collect();
+        let meshes = MeshBuffers::upload(host, &scene.scene, &attributes, &scene.textures)?;
         // Register every mesh and instance (one BLAS per mesh; the flag's may be refit).
         let geometries = ctx.create_geometry_handles(scene.scene.meshes.len());
         let deformed_mesh = scene.deformer.as_ref().map(|d| scene.scene.instances[d.instance].mesh);
@@ -303,7 +305,7 @@ impl<'h> Renderer<'h> {
                 prev_transform: self.prev_transforms[i],
                 material: self.scene.materials[i],
                 vertex_buffer: deformed_buffer.filter(|(m, _)| *m == self.scene.scene.instances[i].mesh).map(|(_, b)| b),
-                albedo_texture: self.scene.albedo_textures.get(i).copied().flatten(),
+                textures: self.scene.material_textures.get(i).copied().unwrap_or_default(),
                 alpha_cutoff: match self.scene.alpha_textures.get(self.scene.scene.instances[i].mesh) {
                     Some(Some(_)) => AlphaTestInput::default().cutoff,
                     _ => 0.0,
@@ -705,10 +707,12 @@ impl<'h> Renderer<'h> {
 
 /// The deforming mesh's vertices at `time`: its positions and their normals, recomputed (the
 /// cloth's shading follows its waves).
-fn deformed_vertices(scene: &SampleScene, d: &crate::scene::Deformer, time: f32) -> Vec<[f32; 8]> {
+fn deformed_vertices(scene: &SampleScene, d: &crate::scene::Deformer, time: f32) -> Vec<Vertex> {
     let positions = d.positions(time);
     let mesh = scene.scene.instances[d.instance].mesh;
-    let indices = &scene.scene.meshes[mesh].indices;
-    let uvs = scene.uvs.get(mesh).map_or(&[][..], |t| t.as_slice());
-    raster::interleave(&positions, &crate::scene::vertex_normals(&positions, indices), uvs)
+    let normals = crate::scene::vertex_normals(&positions, &scene.scene.meshes[mesh].indices);
+    // The rest pose's tangents would tilt with the waves: the cloth's normal maps (it has none)
+    // would take their frame from screen derivatives.
+    let attributes = VertexAttributes { normals: &normals, tangents: &[], ..scene.vertex_attributes(mesh) };
+    raster::interleave(&positions, attributes)
 }

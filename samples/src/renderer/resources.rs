@@ -78,7 +78,7 @@ impl Slot {
         width: u32,
         height: u32,
         lidar_size: u32,
-        deformer_rest: Option<&[[f32; 8]]>,
+        deformer_rest: Option<&[crate::mesh_buffers::Vertex]>,
         camera: Camera,
     ) -> HostResult<Slot> {
         let deformed = match deformer_rest {
@@ -190,6 +190,7 @@ pub(super) fn source<'a>(wk: &'a Work, s: &'a Slot, mode: Mode) -> (&'a HostImag
         Mode::Albedo | Mode::Metalness => (&s.main.targets.albedo_metalness, read),
         Mode::Normals | Mode::Roughness => (&s.main.targets.normal_roughness, read),
         Mode::Motion => (&s.main.targets.motion, read),
+        Mode::Emissive => (&s.main.targets.emissive, read),
         Mode::SunShadowNoisy => (&wk.sun_noisy, GENERAL),
         Mode::SunShadow => (&wk.sun, GENERAL),
         Mode::PointShadowNoisy => (&wk.point_noisy, GENERAL),
