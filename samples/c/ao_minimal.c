@@ -826,6 +826,27 @@ int main(void) {
     printf("mirror at the centre: %.3f %.3f %.3f at %.3f; corner %.3f %.3f %.3f\n", m[0], m[1], m[2], m[3], spec_px[0], spec_px[1], spec_px[2]);
     EXPECT(m[0] == 1.0f && m[1] == 0.0f && m[2] == 1.0f && fabsf(m[3] - 0.2f) < 0.01f, "the centre mirrors the ceiling");
     EXPECT(spec_px[0] == 0.0f && spec_px[1] == 0.25f && spec_px[3] == 10.0f, "the corner mirrors the sky");
+
+    /* ---- Relighting: no camera injected the ceiling, so its cache holds magenta. Given the
+     * engine's light (a sun straight down, intensity 2, warm) it takes albedo (0.5) x the
+     * sun's irradiance on its front face, and the mirror shows that instead. */
+    HrtLightInfo sun = hrt_trace_shadow_task_default().light;
+    sun.intensity = 2.0f;
+    sun.color[0] = 1.0f;
+    sun.color[1] = 0.5f;
+    sun.color[2] = 0.25f;
+    HrtRelightCacheTask relight = hrt_relight_cache_task_default();
+    relight.lights = &sun;
+    relight.light_count = 1;
+    CHECK_HRT(hrt_schedule_cache_relight(frame, &relight));
+    CHECK_HRT(hrt_schedule_specular(frame, &mirror));
+    printf("relight + specular frame:\n");
+    run_frame(ctx, frame, &spec, 16, spec_px);
+    printf("mirror at the centre, relit: %.3f %.3f %.3f\n", m[0], m[1], m[2]);
+    EXPECT(fabsf(m[0] - 1.0f) < 1e-3f && fabsf(m[1] - 0.5f) < 1e-3f && fabsf(m[2] - 0.25f) < 1e-3f,
+           "the mirror shows the relit ceiling: 0.5 x 2 x (1, 0.5, 0.25)");
+    relight.light_count = 0;
+    EXPECT(hrt_schedule_cache_relight(frame, &relight) == HRT_ERROR_INVALID_INPUT, "a relight without lights is refused");
     free_image(spec);
 
     /* ---- Alpha testing: the ceiling updated into a cut-out whose texture is all holes (alpha

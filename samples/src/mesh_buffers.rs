@@ -56,6 +56,33 @@ pub struct Texture {
     pub linear: bool,
 }
 
+impl Texture {
+    /// The mean colour in linear light of the texels with alpha >= 0.5 (sRGB decoded unless
+    /// `linear`); white for a texture without any.
+    pub fn mean_linear_rgb(&self) -> Vec3 {
+        let decode = |c: u8| {
+            let v = c as f32 / 255.0;
+            if self.linear {
+                v
+            } else if v <= 0.04045 {
+                v / 12.92
+            } else {
+                ((v + 0.055) / 1.055).powf(2.4)
+            }
+        };
+        let (sum, n) = self
+            .rgba
+            .chunks_exact(4)
+            .filter(|t| t[3] >= 128)
+            .fold((Vec3::ZERO, 0u32), |(s, n), t| (s + Vec3::new(decode(t[0]), decode(t[1]), decode(t[2])), n + 1));
+        if n == 0 {
+            Vec3::ONE
+        } else {
+            sum / n as f32
+        }
+    }
+}
+
 /// The textures a draw's material samples, each an index into the scene's textures (None:
 /// the material's factor alone). glTF's metallic-roughness layout: roughness in G, metalness in
 /// B; normal maps in tangent space, scaled in X and Y by `normal_scale`.

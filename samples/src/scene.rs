@@ -111,6 +111,17 @@ pub struct SampleScene {
 }
 
 impl SampleScene {
+    /// Instance `i`'s diffuse albedo as the SDK's cache relighting takes it: its material's
+    /// albedo x (1 - metalness) (metals have no diffuse), times the mean of its base-colour
+    /// texture (in linear light, over the texels its alpha test keeps).
+    pub fn diffuse_albedo(&self, i: usize) -> [f32; 3] {
+        let Some(m) = self.materials.get(i) else { return [0.5; 3] };
+        let texture = self.material_textures.get(i).and_then(|t| t.base_color).and_then(|k| self.textures.get(k));
+        let mean = texture.map_or(Vec3::ONE, |t| t.mean_linear_rgb());
+        let a = Vec3::from(m.albedo) * (1.0 - m.metalness.clamp(0.0, 1.0)) * mean;
+        a.clamp(Vec3::ZERO, Vec3::ONE).to_array()
+    }
+
     /// Mesh `k`'s normals, texture coordinates and tangents (what `MeshBuffers` interleaves).
     pub fn vertex_attributes(&self, k: usize) -> VertexAttributes<'_> {
         fn of<T>(lists: &[Vec<T>], k: usize) -> &[T] {

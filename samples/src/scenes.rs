@@ -80,7 +80,7 @@ pub fn cornell_room() -> SampleScene {
         let hue = [[0.8, 0.3, 0.2], [0.2, 0.6, 0.8], [0.9, 0.8, 0.3]][k % 3];
         // One pebble glows (its emission the hue of its albedo): it lights the floor around
         // it through the cache, as the lit image the SDK injects carries its emission.
-        let emissive = if k == 2 { hue.map(|c| 3.0 * c) } else { [0.0; 3] };
+        let emissive = if k == 5 { hue.map(|c| 3.0 * c) } else { [0.0; 3] };
         add(
             &mut scene,
             pebble,

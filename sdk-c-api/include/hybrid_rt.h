@@ -47,6 +47,11 @@
 #define HRT_MAX_LIGHT_OUTPUTS 4
 
 /**
+ * Most samples one HrtRelightCacheTask may take.
+ */
+#define HRT_MAX_RELIGHT_SAMPLES (1 << 24)
+
+/**
  * Largest HrtSurfelSettings.tile_resolution_limit.
  */
 #define HRT_MAX_TILE_RESOLUTION 256
@@ -150,6 +155,7 @@ typedef enum HrtTaskKind {
   HRT_TASK_DENOISE_DIFFUSE_OCCLUSION = 14,
   HRT_TASK_DENOISE_SHADOW = 15,
   HRT_TASK_DENOISE_MULTI_SHADOW = 16,
+  HRT_TASK_CACHE_RELIGHT = 17,
 } HrtTaskKind;
 
 /**
@@ -540,6 +546,10 @@ typedef struct HrtInstanceInput {
    * Default black.
    */
   float initial_tile_color[3];
+  /**
+   * Diffuse albedo for HrtRelightCacheTask (each 0..=1). Default 0.5 grey.
+   */
+  float albedo[3];
 } HrtInstanceInput;
 
 typedef struct HrtInstanceTask {
@@ -819,9 +829,13 @@ typedef struct HrtLightInfo {
    */
   float range;
   /**
-   * Weight in the multi-light mean (>= 0). Default 1.
+   * Weight in the multi-light mean (>= 0); HrtRelightCacheTask's brightness. Default 1.
    */
   float intensity;
+  /**
+   * Linear RGB (each >= 0), used by HrtRelightCacheTask. Default white.
+   */
+  float color[3];
 } HrtLightInfo;
 
 /**
@@ -1101,6 +1115,36 @@ typedef struct HrtDenoiseSpecularAndDiffuseTask {
   struct HrtImageInput output_specular;
   struct HrtImageInput output_diffuse;
 } HrtDenoiseSpecularAndDiffuseTask;
+
+/**
+ * Lights cache samples no camera has injected from the engine's lights, with shadow rays:
+ * albedo (HrtInstanceInput.albedo) x the lights' irradiance (intensity x color; directional:
+ * irradiance at normal incidence, point/spot: / d²). The lights are copied when the task is
+ * scheduled.
+ */
+typedef struct HrtRelightCacheTask {
+  const struct HrtLightInfo *lights;
+  /**
+   * 1..=HRT_MAX_SHADOW_LIGHTS.
+   */
+  uint32_t light_count;
+  /**
+   * Samples relit per build, at most (1..=HRT_MAX_RELIGHT_SAMPLES). Default 65536.
+   */
+  uint32_t max_samples;
+  /**
+   * Frames a relit sample's average runs over (1..=1024). Default 16.
+   */
+  uint32_t history_frames;
+  /**
+   * Gather one diffuse bounce from the caches (multi-bounce over builds). Default false.
+   */
+  bool bounce;
+  /**
+   * Radiance of bounce rays that leave the scene (each >= 0). Default black.
+   */
+  float sky[3];
+} HrtRelightCacheTask;
 
 #ifdef __cplusplus
 extern "C" {
@@ -1421,6 +1465,15 @@ enum HrtStatus hrt_schedule_denoise_shadow(struct HrtTaskContainer *container,
 
 enum HrtStatus hrt_schedule_denoise_specular_and_diffuse(struct HrtTaskContainer *container,
                                                          const struct HrtDenoiseSpecularAndDiffuseTask *task);
+
+struct HrtRelightCacheTask hrt_relight_cache_task_default(void);
+
+/**
+ * # Safety
+ * `container` from hrt_create_task_container; `task` valid, its `lights` `light_count` long.
+ */
+enum HrtStatus hrt_schedule_cache_relight(struct HrtTaskContainer *container,
+                                          const struct HrtRelightCacheTask *task);
 
 #ifdef __cplusplus
 }  // extern "C"

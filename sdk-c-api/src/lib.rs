@@ -11,6 +11,7 @@
 mod denoise;
 mod live;
 mod log_bridge;
+mod relight;
 mod status;
 mod types;
 
@@ -31,6 +32,8 @@ pub const HRT_API_VERSION: u32 = 1 << 12; // (major 0 << 22) | (minor 1 << 12) |
 pub const HRT_MAX_SHADOW_LIGHTS: u32 = 32;
 /// Most per-light outputs of one HrtTraceMultiShadowTask.
 pub const HRT_MAX_LIGHT_OUTPUTS: u32 = 4;
+/// Most samples one HrtRelightCacheTask may take.
+pub const HRT_MAX_RELIGHT_SAMPLES: u32 = 1 << 24;
 /// Largest HrtSurfelSettings.tile_resolution_limit.
 pub const HRT_MAX_TILE_RESOLUTION: u32 = 256;
 /// Largest HrtDenoisingContextInput.max_width / max_height.
@@ -575,6 +578,7 @@ pub unsafe extern "C" fn hrt_mark_gpu_task_completed(
                         rt::TaskKind::DenoiseDiffuseOcclusion => HrtTaskKind::HRT_TASK_DENOISE_DIFFUSE_OCCLUSION,
                         rt::TaskKind::DenoiseShadow => HrtTaskKind::HRT_TASK_DENOISE_SHADOW,
                         rt::TaskKind::DenoiseMultiShadow => HrtTaskKind::HRT_TASK_DENOISE_MULTI_SHADOW,
+                        rt::TaskKind::CacheRelight => HrtTaskKind::HRT_TASK_CACHE_RELIGHT,
                     },
                     task_index: t.task_index,
                     gpu_ms: t.gpu_ms,

@@ -254,6 +254,8 @@ pub struct HrtInstanceInput {
     pub mask: u32,
     /// Default black.
     pub initial_tile_color: [f32; 3],
+    /// Diffuse albedo for HrtRelightCacheTask (each 0..=1). Default 0.5 grey.
+    pub albedo: [f32; 3],
 }
 
 #[repr(C)]
@@ -495,8 +497,10 @@ pub struct HrtLightInfo {
     pub outer_cone: f32,
     /// Point/spot: influence ends at this distance; 0 = unlimited (default).
     pub range: f32,
-    /// Weight in the multi-light mean (>= 0). Default 1.
+    /// Weight in the multi-light mean (>= 0); HrtRelightCacheTask's brightness. Default 1.
     pub intensity: f32,
+    /// Linear RGB (each >= 0), used by HrtRelightCacheTask. Default white.
+    pub color: [f32; 3],
 }
 
 /// One light of an HrtTraceMultiShadowTask written on its own, in HrtTraceShadowTask's output
@@ -663,6 +667,7 @@ pub enum HrtTaskKind {
     HRT_TASK_DENOISE_DIFFUSE_OCCLUSION = 14,
     HRT_TASK_DENOISE_SHADOW = 15,
     HRT_TASK_DENOISE_MULTI_SHADOW = 16,
+    HRT_TASK_CACHE_RELIGHT = 17,
 }
 
 #[repr(C)]
@@ -897,6 +902,7 @@ pub(crate) fn instance_task(t: &HrtInstanceTask) -> Result<rt::InstanceTask, Fai
             transform,
             mask: rt::InstanceInclusionMask::from_bits_truncate(t.input.mask as u8),
             initial_tile_color: t.input.initial_tile_color,
+            albedo: t.input.albedo,
         },
     })
 }
@@ -911,6 +917,7 @@ pub(crate) fn instance_task_default() -> HrtInstanceTask {
             transform: [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
             mask: d.mask.bits() as u32,
             initial_tile_color: d.initial_tile_color,
+            albedo: d.albedo,
         },
     }
 }
@@ -1128,6 +1135,7 @@ pub(crate) fn light(l: &HrtLightInfo) -> Result<rt::LightInfo, Failure> {
         outer_cone: l.outer_cone,
         range: l.range,
         intensity: l.intensity,
+        color: l.color,
     })
 }
 
@@ -1181,6 +1189,7 @@ pub(crate) fn shadow_task_default() -> HrtTraceShadowTask {
             outer_cone: l.outer_cone,
             range: l.range,
             intensity: l.intensity,
+            color: l.color,
         },
         output: image_c(&d.output),
         rays_per_pixel: d.rays_per_pixel,

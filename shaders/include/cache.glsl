@@ -13,7 +13,9 @@
 //     [v0, v1, v2, e0, e1, e2, edge_info, face_base, R]. Edge k runs from vertex k to vertex
 //     (k+1)%3; e_k is its first inner sample; edge_info packs, per edge, 9 bits of the edge's
 //     resolution and 1 bit "stored in the opposite direction".
-// Sample = 32 bytes: vec4(cached rgb, history length) then vec4(accumulated rgb, count).
+// Sample = 32 bytes: vec4(cached rgb, history length) then vec4(accumulated rgb, count). The
+// history length counts injected frames (> 0); a sample only relit from the engine's lights
+// (shaders/relight.rgen) holds minus its relit frames (< 0); 0: its initial colour.
 #ifndef HRT_CACHE_GLSL
 #define HRT_CACHE_GLSL
 #extension GL_EXT_buffer_reference : require
@@ -44,6 +46,7 @@ struct InstanceGpu {
     uint alpha_height;
     uint alpha_pitch;
     float alpha_cutoff;
+    vec4 albedo;         // diffuse albedo for relighting (rgb, unused)
 };
 
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer InstanceTable { InstanceGpu v[]; };
@@ -101,11 +104,11 @@ MeshColorTri hrt_mc_tri(InstanceGpu inst, uint prim) {
     return t;
 }
 
-// A sample as (rgb, lit): lit = 1 once injection or a transfer has written it, 0 while it
-// still holds its initial colour.
+// A sample as (rgb, lit): lit = 1 once injection, a relight or a transfer has written it, 0
+// while it still holds its initial colour.
 vec4 hrt_sample(CacheSamples c, uint i) {
     vec4 v = c.s[i].value;
-    return vec4(v.rgb, v.w > 0.0 ? 1.0 : 0.0);
+    return vec4(v.rgb, v.w != 0.0 ? 1.0 : 0.0);
 }
 
 // Interpolates (rgb, lit) values by weight, over lit ones only; all unlit -> the plain mix

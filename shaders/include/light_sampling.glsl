@@ -10,7 +10,7 @@ struct LightGpu {
     vec4 position;   // xyz, light type (as float)
     vec4 direction;  // direction the light travels, tan of half the angular extent
     vec4 shape;      // radius, range (0: unlimited), cos inner cone, cos outer cone
-    vec4 power;      // intensity, unused...
+    vec4 power;      // intensity, colour (RelightCacheTask)
 };
 
 // How much of a point or spot light reaches p, before shadowing: 0 beyond the range or outside

@@ -79,6 +79,10 @@ struct Cli {
     /// Show surfaces the cache has not lit in magenta instead of black.
     #[arg(long)]
     magenta_unlit: bool,
+    /// Cache samples relit from the scene's lights per frame (RelightCacheTask); 0 turns
+    /// relighting off, leaving what no camera saw unlit.
+    #[arg(long, default_value_t = 65_536, value_parser = clap::value_parser!(u32).range(0..=16_777_216))]
+    relight_samples: u32,
     /// Look through the file's camera N (glTF perspective cameras, in node order) instead of
     /// the fitted camera path.
     #[arg(long)]
@@ -105,6 +109,7 @@ fn run() -> Result<(), String> {
         height: cli.height,
         lidar_size: cli.lidar_size,
         unlit_color: if cli.magenta_unlit { [1.0, 0.0, 1.0] } else { [0.0; 3] },
+        relight_samples: cli.relight_samples,
         max_blas_build_count: cli.blas_per_frame,
         rays_per_pixel: cli.rays,
         checkerboard: cli.checkerboard,

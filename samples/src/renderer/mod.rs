@@ -72,6 +72,10 @@ pub struct Settings {
     /// Default black; magenta (`--magenta-unlit`) makes coverage holes visible while
     /// integrating, as the guide suggests.
     pub unlit_color: [f32; 3],
+    /// Cache samples relit from the scene's lights per frame (`RelightCacheTask::max_samples`;
+    /// 0: no relighting). Default 65,536: the room's 17 caches (about 40,000 samples) are all
+    /// relit every frame, the forest's round-robin in a few dozen.
+    pub relight_samples: u32,
 }
 
 impl Default for Settings {
@@ -86,6 +90,7 @@ impl Default for Settings {
             checkerboard: false,
             injection_window: 24.0,
             exposure: 1.0,
+            relight_samples: 65_536,
         }
     }
 }
@@ -147,6 +152,7 @@ impl<'h> Renderer<'h> {
                 geometry: geometries[inst.mesh],
                 transform: scene.transform(i, 0.0),
                 initial_tile_color: settings.unlit_color,
+                albedo: scene.diffuse_albedo(i),
                 ..Default::default()
             };
             container
@@ -331,6 +337,7 @@ impl<'h> Renderer<'h> {
                     geometry: self.geometries[self.scene.scene.instances[i].mesh],
                     transform: *t,
                     initial_tile_color: self.settings.unlit_color,
+                    albedo: self.scene.diffuse_albedo(i),
                     ..Default::default()
                 };
                 c.schedule_instance(&InstanceTask { handle: self.instances[i], operation: InstanceOperation::Update, input })
@@ -370,6 +377,20 @@ impl<'h> Renderer<'h> {
                 .map_err(sdk_err)?;
                 labels.push((TaskKind::DirectLightingInjection, label));
             }
+        }
+        // Surfaces no camera has injected (the column's back, seen only in the mirror) take
+        // the sun's and the point light's direct light and a bounce of the caches' light (the
+        // walls', the sky's), before anything reads the cache.
+        if self.settings.relight_samples > 0 {
+            c.schedule_cache_relight(&RelightCacheTask {
+                lights: vec![sun, point],
+                max_samples: self.settings.relight_samples,
+                bounce: true,
+                sky: self.scene.sky,
+                ..Default::default()
+            })
+            .map_err(sdk_err)?;
+            labels.push((TaskKind::CacheRelight, "cache relight"));
         }
         let wk = &self.work;
         let rays = self.settings.rays_per_pixel;
@@ -508,14 +529,22 @@ impl<'h> Renderer<'h> {
         Ok(())
     }
 
-    /// The sun and the point light as the SDK's shadow tasks take them.
+    /// The sun and the point light as the SDK's shadow and relight tasks take them: their
+    /// intensities are the lighting pass's (sun: irradiance at normal incidence; point:
+    /// irradiance x d²), so relit cache samples match the lit image the cameras inject.
     fn lights(&self) -> (LightInfo, LightInfo) {
         let l = &self.scene.lights;
-        let sun = LightInfo { direction: -l.sun_direction, angular_extent: self.scene.sun_angular_extent, ..Default::default() };
+        let sun = LightInfo {
+            direction: -l.sun_direction,
+            angular_extent: self.scene.sun_angular_extent,
+            intensity: l.sun_intensity,
+            ..Default::default()
+        };
         let point = LightInfo {
             light_type: LightType::Point,
             position: l.point_position,
             radius: self.scene.point_radius,
+            intensity: l.point_intensity,
             ..Default::default()
         };
         (sun, point)

@@ -57,6 +57,9 @@ impl TaskContainer {
             if task.input.initial_tile_color.iter().any(|c| !c.is_finite()) {
                 return Err(crate::Error::invalid("InstanceInput.initial_tile_color", "is not finite"));
             }
+            if !task.input.albedo.iter().all(|c| (0.0..=1.0).contains(c)) {
+                return Err(crate::Error::invalid("InstanceInput.albedo", "each channel must be in 0..=1"));
+            }
         }
         self.tasks.push(Task::Instance(*task));
         Ok(())
@@ -159,6 +162,15 @@ impl TaskContainer {
     pub fn schedule_clear_cache(&mut self, task: &ClearCacheTask) -> Result<()> {
         self.shared()?.check_instance_alive(task.instance)?;
         self.tasks.push(Task::ClearCache(*task));
+        Ok(())
+    }
+
+    /// Lights cache samples no camera has injected from the engine's lights (see
+    /// `RelightCacheTask`).
+    pub fn schedule_cache_relight(&mut self, task: &RelightCacheTask) -> Result<()> {
+        self.shared()?;
+        validate::relight(task)?;
+        self.tasks.push(Task::Render(RenderTask::CacheRelight(task.clone())));
         Ok(())
     }
 

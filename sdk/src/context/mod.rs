@@ -69,6 +69,8 @@ struct State {
     denoisers: Registry<DenoisingContextHandle, DenoiserState>,
     /// The intermediates every denoising context shares (as large as the largest).
     denoise_temps: TempPool,
+    /// Where `RelightCacheTask`'s walk over the caches goes on next build.
+    relight_cursor: crate::passes::relight::RelightCursor,
     working_sets: Vec<WorkingSet>,
     deferred: DeferredFrees,
     next_serial: u64,
@@ -147,6 +149,7 @@ impl ExecuteContext {
                 cache_pool: CachePool::default(),
                 denoisers: Registry::new(id),
                 denoise_temps: TempPool::default(),
+                relight_cursor: Default::default(),
                 working_sets: Vec::new(),
                 deferred: DeferredFrees::default(),
                 next_serial: 1,

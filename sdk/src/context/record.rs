@@ -141,6 +141,7 @@ impl Recorder<'_> {
             cache_pool: &st.cache_pool,
             denoisers: &mut st.denoisers,
             denoise_temps: &mut st.denoise_temps,
+            relight_cursor: &mut st.relight_cursor,
             limits: &device.limits,
         };
         for (index, task) in renders {

@@ -109,6 +109,7 @@ pub(super) fn validate_handles(st: &mut State, tasks: &[Task], limits: &Limits) 
         denoisers: &mut st.denoisers,
         denoise_temps: &mut st.denoise_temps,
         limits,
+        relight_cursor: &mut st.relight_cursor,
     };
     for task in tasks {
         if let Task::Render(r) = task {
@@ -319,6 +320,7 @@ impl Recorder<'_> {
             transform: t.input.transform,
             mask: t.input.mask.bits(),
             initial_tile_color: t.input.initial_tile_color,
+            albedo: t.input.albedo,
             cache: keep,
         });
         st.scene.caches_dirty = true;

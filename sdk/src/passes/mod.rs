@@ -16,6 +16,7 @@ pub(crate) mod diffuse;
 pub(crate) mod geometry_pack;
 pub(crate) mod inject;
 pub(crate) mod program;
+pub(crate) mod relight;
 pub(crate) mod shadow;
 pub(crate) mod specular;
 pub(crate) mod transfer;
@@ -58,6 +59,8 @@ pub(crate) struct World<'a> {
     /// The denoisers' shared intermediates.
     pub denoise_temps: &'a mut denoise::TempPool,
     pub limits: &'a crate::gpu::device::Limits,
+    /// Where the cache relight walk goes on (`RelightCacheTask`).
+    pub relight_cursor: &'a mut relight::RelightCursor,
 }
 
 /// The one description of a render task kind (see the module doc).
@@ -91,6 +94,7 @@ pub(crate) enum RenderTask {
     Specular(TraceSpecularTask),
     DirectLightingInjection(DirectLightingInjectionTask),
     DirectLightTransfer(DirectLightTransferTask),
+    CacheRelight(RelightCacheTask),
     /// Boxed: a denoise task is several times larger than the others.
     Denoise(Box<DenoiseJob>),
 }
@@ -105,6 +109,7 @@ impl RenderTask {
             RenderTask::Specular(t) => t,
             RenderTask::DirectLightingInjection(t) => t,
             RenderTask::DirectLightTransfer(t) => t,
+            RenderTask::CacheRelight(t) => t,
             RenderTask::Denoise(t) => t.as_ref(),
         }
     }
@@ -141,6 +146,7 @@ pub(crate) struct Passes {
     pub debug: debug::DebugPass,
     pub inject: inject::InjectPass,
     pub transfer: transfer::TransferPass,
+    pub relight: relight::RelightPass,
     pub cache_ops: cache_ops::CacheOps,
     pub denoise: denoise::DenoisePass,
     pub geometry_pack: geometry_pack::GeometryPack,
@@ -195,6 +201,8 @@ impl Passes {
         let inject = inject::InjectPass::new(b, sampler)?;
         b.label = "cache transfer";
         let transfer = transfer::TransferPass::new(b)?;
+        b.label = "cache relight";
+        let relight = relight::RelightPass::new(b)?;
         b.label = "cache fill/resolve";
         let cache_ops = cache_ops::CacheOps::new(b)?;
         b.label = "denoiser";
@@ -210,6 +218,7 @@ impl Passes {
             debug,
             inject,
             transfer,
+            relight,
             cache_ops,
             denoise,
             geometry_pack,

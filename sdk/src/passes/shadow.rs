@@ -35,7 +35,7 @@ impl LightGpu {
                 l.inner_cone.cos(),
                 l.outer_cone.cos(),
             ],
-            power: [l.intensity, 0.0, 0.0, 0.0],
+            power: [l.intensity, l.color[0], l.color[1], l.color[2]],
         }
     }
 }

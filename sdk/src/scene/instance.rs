@@ -18,6 +18,8 @@ pub(crate) struct Placement {
     pub mask: u8,
     /// Kept for the direct-lighting cache, which fills a new instance's cache with it.
     pub initial_tile_color: [f32; 3],
+    /// What `RelightCacheTask` lights its cache with.
+    pub albedo: [f32; 3],
     /// This instance's cache and the layout id it was made for.
     pub cache: Option<(CacheRange, u64)>,
 }

@@ -33,6 +33,8 @@ pub(crate) struct InstanceGpu {
     pub alpha_height: u32,
     pub alpha_pitch: u32,
     pub alpha_cutoff: f32,
+    /// Diffuse albedo for relighting (rgb, unused).
+    pub albedo: [f32; 4],
 }
 
 pub(crate) const HAS_CACHE: u32 = 1;
@@ -74,6 +76,7 @@ pub(crate) fn instance_table(scene: &Scene) -> Vec<InstanceGpu> {
             triangle_count: g.layout.map_or(0, |l| l.primitive_count),
             flags: if p.cache.is_some() && surfel.is_some() { HAS_CACHE } else { 0 },
             sample_count: surfel.map_or(0, |s| s.sample_count),
+            albedo: [p.albedo[0], p.albedo[1], p.albedo[2], 0.0],
         };
     }
     table
@@ -100,6 +103,7 @@ mod tests {
         assert_eq!(offset_of!(InstanceGpu, vertex_stride), 112);
         assert_eq!(offset_of!(InstanceGpu, uv_addr), 128);
         assert_eq!(offset_of!(InstanceGpu, alpha_width), 144);
-        assert_eq!(size_of::<InstanceGpu>(), 160);
+        assert_eq!(offset_of!(InstanceGpu, albedo), 160);
+        assert_eq!(size_of::<InstanceGpu>(), 176);
     }
 }

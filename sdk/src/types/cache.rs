@@ -1,7 +1,8 @@
-//! Direct-lighting cache tasks: injection of a lit view, clears, and transfers between
-//! instances (LOD switches).
+//! Direct-lighting cache tasks: injection of a lit view, relighting from the engine's lights,
+//! clears, and transfers between instances (LOD switches).
 use super::handles::InstanceHandle;
 use super::inputs::{Camera, DepthInput, ImageInput, Viewport};
+use super::trace::LightInfo;
 
 /// Bakes a lit image into the direct-lighting caches of the surfaces it shows. Each pixel
 /// finds the surface under it (a ray from the camera to the depth buffer's point; the hit must
@@ -77,3 +78,53 @@ impl Default for DirectLightTransferTask {
         }
     }
 }
+
+/// Lights cache samples that no camera has injected from the engine's lights, so surfaces seen
+/// only in reflections, or by GI rays, or not yet seen at all, get their direct light instead
+/// of their `initial_tile_color` (Kickstart RT's guide flies a "lidar" camera around for
+/// that). For each sample: one shadow ray per light towards a random point of its extent
+/// (the shadow tasks' sampling), and the sample's colour becomes `InstanceInput::albedo` x the
+/// lights' irradiance there (Lambert, no 1/pi: the convention of a lit image `albedo x
+/// irradiance`), averaged over the frames that relit it (up to `history_frames`).
+///
+/// Injected camera light wins: a sample a camera has injected is never relit, and a relit
+/// sample's history is dropped the first time a camera sees it. Each build relights up to
+/// `max_samples` samples, walking every instance's cache round-robin across builds (oldest
+/// first), so its cost is bounded whatever the scene. Light units: a directional light's
+/// `intensity x color` is its irradiance at normal incidence, a point or spot light's its
+/// intensity (irradiance = that / d²), in the units of the engine's lit image.
+/// The sample's surface is the triangle's front face (counter-clockwise winding, as the
+/// engine's vertex order gives it): a plane seen from its back is lit as its front is.
+///
+/// With `bounce`, each relit sample also gathers one diffuse bounce from the caches: a
+/// cosine-distributed ray reads the cache sample it hits (`sky` where it leaves the scene;
+/// nothing where the hit's sample is still unlit), and the sample becomes albedo x (direct
+/// irradiance + the mean gathered radiance) — the convention of `TraceDiffuseTask`'s output
+/// and an engine's `albedo x GI`. The gather reads caches that already hold earlier
+/// bounces, so light goes one bounce further per build and the caches converge to the
+/// multi-bounce solution (Lumen's and Solari's feedback); camera-injected samples keep the
+/// engine's direct light and pass it on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RelightCacheTask {
+    /// 1..=32 lights (`MAX_SHADOW_LIGHTS`), each with `intensity` and `color`.
+    pub lights: Vec<LightInfo>,
+    /// Samples relit per build, at most: the cost bound (about 1 ray per sample per light).
+    /// 1..=16,777,216. Default 65,536.
+    pub max_samples: u32,
+    /// Frames a relit sample's average runs over (its noise falls as 1/sqrt of it; a light that
+    /// moves takes about this many relights to show). 1..=1024. Default 16.
+    pub history_frames: u32,
+    /// Gather one diffuse bounce from the caches (see above). Default false.
+    pub bounce: bool,
+    /// Radiance of bounce rays that leave the scene (each >= 0). Default black.
+    pub sky: [f32; 3],
+}
+
+impl Default for RelightCacheTask {
+    fn default() -> Self {
+        RelightCacheTask { lights: Vec::new(), max_samples: 65_536, history_frames: 16, bounce: false, sky: [0.0; 3] }
+    }
+}
+
+/// Most samples one relight task may take (`RelightCacheTask::max_samples`).
+pub const MAX_RELIGHT_SAMPLES: u32 = 1 << 24;

@@ -285,6 +285,9 @@ pub struct InstanceInput {
     pub mask: InstanceInclusionMask,
     /// Colour a new direct-lighting cache starts with (used by the cache). Default black.
     pub initial_tile_color: [f32; 3],
+    /// Diffuse albedo (linear RGB, each in 0..=1) that `RelightCacheTask` lights the
+    /// instance's cache with. Default 0.5 grey: an engine that relights gives the real one.
+    pub albedo: [f32; 3],
 }
 
 impl Default for InstanceInput {
@@ -294,6 +297,7 @@ impl Default for InstanceInput {
             transform: Affine3A::IDENTITY,
             mask: InstanceInclusionMask::ALL,
             initial_tile_color: [0.0; 3],
+            albedo: [0.5; 3],
         }
     }
 }

@@ -66,6 +66,8 @@ pub enum TaskKind {
     DenoiseShadow = 15,
     /// `DenoiseMultiShadowTask`.
     DenoiseMultiShadow = 16,
+    /// `RelightCacheTask`.
+    CacheRelight = 17,
 }
 
 /// The GPU time of one task of a ticket, from timestamp queries around it.

@@ -77,8 +77,12 @@ pub struct LightInfo {
     /// Point and spot: the distance at which the light's influence ends (a windowed falloff
     /// (1 - (d/range)^4)^2 weighs it before that); 0 = unlimited (default).
     pub range: f32,
-    /// Relative brightness (>= 0), the light's weight in the multi-light mean. Default 1.
+    /// Relative brightness (>= 0), the light's weight in the multi-light mean; for
+    /// `RelightCacheTask`, its absolute brightness (see there). Default 1.
     pub intensity: f32,
+    /// Linear RGB colour (each >= 0), multiplied into `intensity` by `RelightCacheTask`
+    /// (shadow tasks weigh lights by `intensity` alone). Default white.
+    pub color: [f32; 3],
 }
 
 impl Default for LightInfo {
@@ -93,6 +97,7 @@ impl Default for LightInfo {
             outer_cone: 0.6,
             range: 0.0,
             intensity: 1.0,
+            color: [1.0; 3],
         }
     }
 }

@@ -62,6 +62,34 @@ pub(super) fn light(what: &'static str, l: &LightInfo) -> Result<()> {
     if !(l.intensity.is_finite() && l.intensity >= 0.0) {
         return Err(Error::invalid(what, "intensity must be finite and >= 0"));
     }
+    if !l.color.iter().all(|c| c.is_finite() && *c >= 0.0) {
+        return Err(Error::invalid(what, "color must be finite and >= 0"));
+    }
+    Ok(())
+}
+
+pub(crate) fn relight(t: &RelightCacheTask) -> Result<()> {
+    if t.lights.is_empty() || t.lights.len() > MAX_SHADOW_LIGHTS {
+        return Err(Error::invalid(
+            "RelightCacheTask.lights",
+            format!("{} lights: 1..={MAX_SHADOW_LIGHTS} are supported", t.lights.len()),
+        ));
+    }
+    for l in &t.lights {
+        light("RelightCacheTask.lights[]", l)?;
+    }
+    if !(1..=MAX_RELIGHT_SAMPLES).contains(&t.max_samples) {
+        return Err(Error::invalid(
+            "RelightCacheTask.max_samples",
+            format!("{} is not in 1..={MAX_RELIGHT_SAMPLES}", t.max_samples),
+        ));
+    }
+    if !(1..=1024).contains(&t.history_frames) {
+        return Err(Error::invalid("RelightCacheTask.history_frames", format!("{} is not in 1..=1024", t.history_frames)));
+    }
+    if !t.sky.iter().all(|c| c.is_finite() && *c >= 0.0) {
+        return Err(Error::invalid("RelightCacheTask.sky", "must be finite and >= 0"));
+    }
     Ok(())
 }
 

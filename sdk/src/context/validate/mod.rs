@@ -11,7 +11,7 @@ mod geometry;
 mod lights;
 pub(crate) use geometry::geometry_input;
 use lights::{light, SHADOW_OUTPUT_FORMATS};
-pub(crate) use lights::{multi_shadow, shadow};
+pub(crate) use lights::{multi_shadow, relight, shadow};
 
 pub(crate) fn transform(what: &'static str, t: &Affine3A) -> Result<()> {
     if !t.is_finite() || t.matrix3.determinant() == 0.0 {
