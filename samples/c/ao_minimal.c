@@ -906,6 +906,17 @@ int main(void) {
     CHECK_HRT(hrt_instance_cache_bytes(ctx, instances[0], &cache_bytes));
     EXPECT(cache_bytes > 0, "the ground has a cache");
     printf("ground cache: %llu bytes\n", (unsigned long long)cache_bytes);
+    {
+        /* No budget set: every cache is resident, none evicted. */
+        HrtCacheReport report;
+        uint64_t ceiling_bytes = 0;
+        CHECK_HRT(hrt_instance_cache_bytes(ctx, instances[1], &ceiling_bytes));
+        CHECK_HRT(hrt_cache_report(ctx, &report));
+        printf("caches: %llu bytes resident, %llu evicted\n", (unsigned long long)report.resident_bytes,
+               (unsigned long long)report.evicted_bytes);
+        EXPECT(report.resident_bytes == cache_bytes + ceiling_bytes && report.budget_bytes == 0 && report.evictions == 0,
+               "the cache report sums the instances' caches");
+    }
     Image lit = make_image(VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_SAMPLED_BIT);
     Image view = make_image(VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT);
     cmd = begin();

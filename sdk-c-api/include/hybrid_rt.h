@@ -324,6 +324,11 @@ typedef struct HrtInitSettings {
    */
   uint32_t queue_family_indices[4];
   uint32_t queue_family_count;
+  /**
+   * Most bytes the direct-lighting caches may hold; the least recently used instances'
+   * caches are evicted past it (0: no limit, the default). See hrt_cache_report.
+   */
+  uint64_t cache_budget_bytes;
 } HrtInitSettings;
 
 /**
@@ -1146,6 +1151,30 @@ typedef struct HrtRelightCacheTask {
   float sky[3];
 } HrtRelightCacheTask;
 
+/**
+ * The direct-lighting caches' memory under HrtInitSettings.cache_budget_bytes.
+ */
+typedef struct HrtCacheReport {
+  /**
+   * Bytes of the caches held now.
+   */
+  uint64_t resident_bytes;
+  /**
+   * The budget (0: none).
+   */
+  uint64_t budget_bytes;
+  /**
+   * Placed instances without a cache (evicted, or waiting for room): they read as their
+   * initial colour until used.
+   */
+  uint32_t waiting_instances;
+  /**
+   * Caches evicted since the context was made, and their bytes.
+   */
+  uint64_t evictions;
+  uint64_t evicted_bytes;
+} HrtCacheReport;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -1474,6 +1503,12 @@ struct HrtRelightCacheTask hrt_relight_cache_task_default(void);
  */
 enum HrtStatus hrt_schedule_cache_relight(struct HrtTaskContainer *container,
                                           const struct HrtRelightCacheTask *task);
+
+/**
+ * # Safety
+ * `ctx` from hrt_context_create; `out` writable.
+ */
+enum HrtStatus hrt_cache_report(const struct HrtContext *ctx, struct HrtCacheReport *out);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -1,8 +1,8 @@
-//! Cache relighting in C (see the Rust docs of `hybrid_rt::RelightCacheTask`): the engine's
-//! lights light the cache samples no camera has injected.
+//! The direct-lighting cache's own C entry points: relighting (see the Rust docs of
+//! `hybrid_rt::RelightCacheTask`) and the cache's memory under its budget (`CacheReport`).
 use crate::status::{guard, HrtStatus};
 use crate::types::{light, HrtLightInfo};
-use crate::{container_mut, get, slice, HrtTaskContainer};
+use crate::{container_mut, context, get, get_mut, slice, HrtContext, HrtTaskContainer};
 use hybrid_rt as rt;
 
 /// Lights cache samples no camera has injected from the engine's lights, with shadow rays:
@@ -56,6 +56,40 @@ pub unsafe extern "C" fn hrt_schedule_cache_relight(
             bounce: t.bounce,
             sky: t.sky,
         })?)
+    })
+}
+
+/// The direct-lighting caches' memory under HrtInitSettings.cache_budget_bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Default)]
+pub struct HrtCacheReport {
+    /// Bytes of the caches held now.
+    pub resident_bytes: u64,
+    /// The budget (0: none).
+    pub budget_bytes: u64,
+    /// Placed instances without a cache (evicted, or waiting for room): they read as their
+    /// initial colour until used.
+    pub waiting_instances: u32,
+    /// Caches evicted since the context was made, and their bytes.
+    pub evictions: u64,
+    pub evicted_bytes: u64,
+}
+
+/// # Safety
+/// `ctx` from hrt_context_create; `out` writable.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_cache_report(ctx: *const HrtContext, out: *mut HrtCacheReport) -> HrtStatus {
+    guard(|| {
+        let c = context(ctx)?;
+        let r = c.ctx.cache_report();
+        *get_mut(out, "out")? = HrtCacheReport {
+            resident_bytes: r.resident_bytes,
+            budget_bytes: r.budget_bytes,
+            waiting_instances: r.waiting_instances,
+            evictions: r.evictions,
+            evicted_bytes: r.evicted_bytes,
+        };
+        Ok(())
     })
 }
 

@@ -44,6 +44,9 @@ pub struct HrtInitSettings {
     /// VK_SHARING_MODE_CONCURRENT over them, for BVH work on an async-compute queue).
     pub queue_family_indices: [u32; 4],
     pub queue_family_count: u32,
+    /// Most bytes the direct-lighting caches may hold; the least recently used instances'
+    /// caches are evicted past it (0: no limit, the default). See hrt_cache_report.
+    pub cache_budget_bytes: u64,
 }
 
 impl From<rt::InitSettings> for HrtInitSettings {
@@ -55,6 +58,7 @@ impl From<rt::InitSettings> for HrtInitSettings {
             pipeline_cache: s.pipeline_cache.as_raw(),
             queue_family_indices: s.queue_family_indices,
             queue_family_count: s.queue_family_count,
+            cache_budget_bytes: s.cache_budget_bytes,
         }
     }
 }
@@ -67,6 +71,7 @@ impl From<&HrtInitSettings> for rt::InitSettings {
             pipeline_cache: vk::PipelineCache::from_raw(s.pipeline_cache),
             queue_family_indices: s.queue_family_indices,
             queue_family_count: s.queue_family_count,
+            cache_budget_bytes: s.cache_budget_bytes,
         }
     }
 }

@@ -4,12 +4,7 @@
 #ifndef HRT_ALPHA_TEST_GLSL
 #define HRT_ALPHA_TEST_GLSL
 #include "cache.glsl"
-
-// Every trace program's push constants (sdk/src/passes/program.rs): the instance table.
-layout(push_constant) uniform HrtTracePush {
-    uvec2 instance_table;
-    uvec2 unused;
-} u_trace_push;
+#include "trace_push.glsl"
 
 // Whether the ray stops at this hit: opaque geometry always (its BLAS is built opaque, so no
 // test runs for it at all), alpha-tested geometry where alpha >= cutoff.

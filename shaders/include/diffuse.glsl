@@ -9,6 +9,7 @@
 // for the denoiser.
 #include "common.glsl"
 #include "cache.glsl"
+#include "trace_push.glsl"
 #include "environment.glsl"
 
 layout(set = 0, binding = 0) uniform accelerationStructureEXT u_tlas;
@@ -74,6 +75,7 @@ void hrt_diffuse_main() {
             sum += hrt_miss_radiance(u_c.environment, u_environment, dir, u_c.miss.rgb) * w;
             dist += ray_length;
         } else {
+            hrt_mark_used(p_hit.instance);
             sum += hrt_hit_radiance(c, origin + dir * p_hit.t, table.v[p_hit.instance], p_hit.prim, p_hit.bary, bilinear) * w;
             dist += p_hit.t;
         }

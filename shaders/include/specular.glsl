@@ -10,6 +10,7 @@
 // the ray length). An optional firefly clamp limits each sample's luminance (seeds/003).
 #include "common.glsl"
 #include "cache.glsl"
+#include "trace_push.glsl"
 #include "environment.glsl"
 
 layout(set = 0, binding = 0) uniform accelerationStructureEXT u_tlas;
@@ -96,6 +97,7 @@ void hrt_specular_main() {
             weight = hrt_smith_g1(ndotl, alpha);
         }
         HitRecord p_hit = hrt_trace_record(u_tlas, c.frame.y & 0xffu, origin, dir, ray_length);
+        if (p_hit.t >= 0.0) hrt_mark_used(p_hit.instance);
         vec3 radiance = p_hit.t < 0.0 ? hrt_miss_radiance(u_c.environment, u_environment, dir, u_c.miss.rgb) : hrt_hit_radiance(c, origin + dir * p_hit.t, table.v[p_hit.instance], p_hit.prim, p_hit.bary, bilinear);
         if (clamp_lum > 0.0) {
             float lum = dot(radiance, vec3(0.2126, 0.7152, 0.0722));

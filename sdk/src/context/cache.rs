@@ -7,6 +7,7 @@
 //! read-back buffer; when that ticket comes back the CPU builds the layout; the next recording
 //! uploads it and gives every instance of the geometry its cache. Until then an instance reads
 //! as its `initial_tile_color` and injection skips it.
+use super::budget::{self, Candidate};
 use super::container::Task;
 use super::journal::{Held, Journal, Slot};
 use super::record::Recorder;
@@ -88,9 +89,10 @@ impl Recorder<'_> {
         // 2. Caches for instances whose geometry has a (new) layout; 3. clears.
         let mut fills: Vec<(u64, u64, [f32; 3])> = Vec::new();
         if st.scene.caches_dirty {
-            let handles: Vec<InstanceHandle> = st.scene.instances.iter().map(|(h, _)| h).collect();
-            for h in handles {
-                let Some(p) = st.scene.instances.get(h)?.placement else { continue };
+            // Every instance whose geometry has a layout its cache was not made for.
+            let mut candidates = Vec::new();
+            for (h, rec) in st.scene.instances.iter() {
+                let Some(p) = rec.placement else { continue };
                 let Some((count, id)) =
                     st.scene.geometries.get(p.geometry).ok().and_then(|g| g.surfel.as_ref()).map(|s| (s.sample_count, s.id))
                 else {
@@ -99,7 +101,13 @@ impl Recorder<'_> {
                 if p.cache.is_some_and(|(_, made_for)| made_for == id) {
                     continue;
                 }
-                let range = st.cache_pool.allocate(memory, count as u64)?;
+                candidates.push(Candidate { handle: h, samples: count as u64, layout_id: id, last_used: rec.last_used });
+            }
+            // With a budget: the most recently used first, room made by evictions.
+            for c in budget::admit(st, journal, candidates) {
+                let (h, count, id) = (c.handle, c.samples, c.layout_id);
+                let Some(p) = st.scene.instances.get(h)?.placement else { continue };
+                let range = st.cache_pool.allocate(memory, count)?;
                 journal.allocated_cache(range);
                 journal.touch_instance(h, Some(p));
                 if let Some((old, _)) = p.cache {
@@ -108,6 +116,7 @@ impl Recorder<'_> {
                 fills.push((range.address, range.count, p.initial_tile_color));
                 if let Some(pl) = st.scene.instances.get_mut(h)?.placement.as_mut() {
                     pl.cache = Some((range, id));
+                    pl.evicted = false;
                 }
             }
             st.scene.caches_dirty = false;
@@ -127,6 +136,7 @@ impl Recorder<'_> {
             tlas,
             seed: self.seed,
             instance_table: 0,
+            usage: 0,
             inline: false,
             floor: false,
         };

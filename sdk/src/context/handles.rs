@@ -41,7 +41,7 @@ impl ExecuteContext {
     pub fn create_instance_handles(&self, count: usize) -> Vec<InstanceHandle> {
         let mut st = self.shared.state.lock();
         let handles: Vec<InstanceHandle> =
-            (0..count).map(|_| st.scene.instances.insert(InstanceRecord { placement: None, name: None })).collect();
+            (0..count).map(|_| st.scene.instances.insert(InstanceRecord { placement: None, name: None, last_used: 0 })).collect();
         self.shared.live.write().instances.extend(handles.iter().map(|h| h.0));
         handles
     }
@@ -159,6 +159,20 @@ impl ExecuteContext {
         let st = self.shared.state.lock();
         let rec = st.scene.instances.get(instance)?;
         Ok(rec.placement.and_then(|p| p.cache).map_or(0, |(r, _)| r.count * crate::cache::pool::SAMPLE_BYTES))
+    }
+
+    /// The direct-lighting caches' memory: what is resident, what waits for room and what the
+    /// budget (`InitSettings::cache_budget_bytes`) has evicted.
+    pub fn cache_report(&self) -> crate::types::CacheReport {
+        let st = self.shared.state.lock();
+        let r = st.residency();
+        crate::types::CacheReport {
+            resident_bytes: r.resident_bytes,
+            budget_bytes: st.cache_budget,
+            waiting_instances: r.waiting,
+            evictions: st.scene.evictions.count,
+            evicted_bytes: st.scene.evictions.bytes,
+        }
     }
 
     /// Device memory the SDK holds now, per kind.

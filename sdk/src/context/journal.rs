@@ -26,6 +26,8 @@ pub(super) enum Slot {
     Surfel(GeometryHandle),
     Scratch,
     IndexCounters,
+    Usage,
+    UsageReadback,
     Ring,
     Tlas,
 }
@@ -69,6 +71,7 @@ struct SceneMeta {
     snapshot_dirty: bool,
     caches_dirty: bool,
     next_layout_id: u64,
+    evictions: crate::scene::Evictions,
 }
 
 pub(super) struct Journal {
@@ -101,6 +104,7 @@ impl Journal {
                 snapshot_dirty: s.snapshot_dirty,
                 caches_dirty: s.caches_dirty,
                 next_layout_id: s.next_layout_id,
+                evictions: s.evictions,
             },
             old_snapshot: None,
             geometries: Vec::new(),
@@ -174,6 +178,8 @@ impl Journal {
                 }),
                 Slot::Scratch => Held::swap_buffer(&mut w.scratch, old),
                 Slot::IndexCounters => Held::swap_buffer(&mut w.index_counters, old),
+                Slot::Usage => Held::swap_buffer(&mut w.usage, old),
+                Slot::UsageReadback => Held::swap_buffer(&mut w.usage_readback, old),
                 Slot::Tlas => Held::swap_accel(&mut w.tlas.accel, old),
                 Slot::Ring => match old {
                     Some(Held::Ring(old)) => Some(Held::Ring(std::mem::replace(&mut w.ring, old))),
@@ -209,8 +215,8 @@ impl Journal {
         let s = &mut st.scene;
         let m = self.scene;
         (s.build_queue, s.refit_queue, s.compaction_ready) = (m.build_queue, m.refit_queue, m.compaction_ready);
-        (s.snapshot_version, s.snapshot_dirty, s.caches_dirty, s.next_layout_id) =
-            (m.snapshot_version, m.snapshot_dirty, m.caches_dirty, m.next_layout_id);
+        (s.snapshot_version, s.snapshot_dirty, s.caches_dirty, s.next_layout_id, s.evictions) =
+            (m.snapshot_version, m.snapshot_dirty, m.caches_dirty, m.next_layout_id, m.evictions);
         if let Some(old) = self.old_snapshot {
             s.snapshot = old;
         }
@@ -219,6 +225,7 @@ impl Journal {
         // A working set is recorded only when idle, so these started empty.
         w.compactions.clear();
         w.index_checks.clear();
+        w.usage_slots = 0;
         for (_, _, b) in w.readbacks.drain(..) {
             memory.destroy_buffer(b);
         }

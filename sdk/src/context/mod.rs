@@ -14,6 +14,7 @@
 pub(crate) mod container;
 pub(crate) mod validate;
 
+mod budget;
 mod bvh;
 mod cache;
 mod denoise;
@@ -71,6 +72,8 @@ struct State {
     denoise_temps: TempPool,
     /// Where `RelightCacheTask`'s walk over the caches goes on next build.
     relight_cursor: crate::passes::relight::RelightCursor,
+    /// `InitSettings::cache_budget_bytes` (0: none).
+    cache_budget: u64,
     working_sets: Vec<WorkingSet>,
     deferred: DeferredFrees,
     next_serial: u64,
@@ -150,6 +153,7 @@ impl ExecuteContext {
                 denoisers: Registry::new(id),
                 denoise_temps: TempPool::default(),
                 relight_cursor: Default::default(),
+                cache_budget: settings.cache_budget_bytes,
                 working_sets: Vec::new(),
                 deferred: DeferredFrees::default(),
                 next_serial: 1,

@@ -130,6 +130,22 @@ impl Recorder<'_> {
         let align = self.device.ubo_alignment;
         let task_bytes: u64 = renders.iter().map(|(_, t)| t.upload_bytes() + align).sum();
         self.ensure_ring(table::instance_table_bytes(&self.st.scene) + 16 + task_bytes)?;
+        // With a cache budget: per-instance usage flags, cleared, set by the shaders that use
+        // an instance, copied for the host when the ticket comes back (see `budget`).
+        let usage = if self.st.cache_budget > 0 {
+            let slots = self.st.scene.instances.slot_count().max(1) as u32;
+            let (flags, address, readback) = self.ensure_usage(slots)?;
+            self.working_set().usage_slots = slots;
+            Some((flags, address, readback, slots as u64 * 4))
+        } else {
+            None
+        };
+        if let Some((flags, _, _, bytes)) = usage {
+            let (d, cmd) = (&self.device.raw, self.cmd);
+            self.hazards.write(d, cmd, sync::TRANSFER_WRITE);
+            // SAFETY: the buffer holds at least `bytes`; the command buffer is recording.
+            unsafe { d.cmd_fill_buffer(cmd, flags, 0, bytes, 0) };
+        }
 
         let (device, cmd, seed) = (self.device, self.cmd, self.seed);
         let st = &mut *self.st;
@@ -162,12 +178,20 @@ impl Recorder<'_> {
                 tlas,
                 seed,
                 instance_table,
+                usage: usage.map_or(0, |u| u.1),
                 inline: wants_inline && device.ray_query,
                 floor: st.passes.floor,
             };
             task.record(&mut r, &st.passes, &mut world);
             ws.timer.end(&device.raw, cmd, span);
             device.end_label(cmd);
+        }
+        if let Some((flags, _, readback, bytes)) = usage {
+            let d = &device.raw;
+            self.hazards.read_write(d, cmd, sync::TRANSFER_READ, sync::TRANSFER_WRITE);
+            let region = [vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes }];
+            // SAFETY: both buffers hold `bytes`; the host reads the copy after the ticket's marker.
+            unsafe { d.cmd_copy_buffer(cmd, flags, readback, &region) };
         }
         Ok(())
     }

@@ -287,6 +287,7 @@ impl Recorder<'_> {
             tlas: vk::AccelerationStructureKHR::null(),
             seed: 0,
             instance_table: 0,
+            usage: 0,
             inline: false,
             floor: false,
         };
@@ -322,12 +323,19 @@ impl Recorder<'_> {
             initial_tile_color: t.input.initial_tile_color,
             albedo: t.input.albedo,
             cache: keep,
+            evicted: false,
         });
         st.scene.caches_dirty = true;
         if let Some(p) = placement {
             st.scene.geometries.get_mut(p.geometry)?.instance_refs += 1;
         }
-        st.scene.instances.get_mut(t.handle)?.placement = placement;
+        let serial = st.next_serial;
+        let rec = st.scene.instances.get_mut(t.handle)?;
+        rec.placement = placement;
+        // A new instance counts as used now: the cache budget places it like a fresh one.
+        if t.operation == InstanceOperation::Register {
+            rec.last_used = serial;
+        }
         st.scene.snapshot_dirty = true;
         Ok(())
     }

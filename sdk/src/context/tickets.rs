@@ -139,6 +139,16 @@ impl ExecuteContext {
                 }
             }
         }
+        // The usage flags of the cache budget.
+        let ws = &mut st.working_sets[ws_index];
+        let slots = std::mem::take(&mut ws.usage_slots) as usize;
+        let used: Vec<bool> = match ws.usage_readback.as_ref().and_then(|b| b.mapped_bytes()) {
+            Some(bytes) if slots > 0 => bytes.chunks_exact(4).take(slots).map(|w| w != [0; 4]).collect(),
+            _ => Vec::new(),
+        };
+        if !used.is_empty() {
+            st.mark_used(&used, ticket.serial);
+        }
         // One cache must fit one buffer, and stay within MAX_CACHE_SAMPLES.
         let max_samples = MAX_CACHE_SAMPLES.min(d.limits.max_buffer_size / crate::cache::pool::SAMPLE_BYTES);
         st.finish_readbacks(&self.shared.memory, ws_index, max_samples);

@@ -29,6 +29,12 @@ pub(super) struct WorkingSet {
     pub index_counters: Option<Buffer>,
     /// Copies this ticket checked: (geometry, the copy's buffer, counter slot).
     pub index_checks: Vec<(GeometryHandle, vk::Buffer, u32)>,
+    /// With a cache budget: one flag per instance slot that the ticket's shaders set when they
+    /// use the instance (device-local), and its copy for the host.
+    pub usage: Option<Buffer>,
+    pub usage_readback: Option<Buffer>,
+    /// Instance slots the ticket's flags cover (0: it recorded none).
+    pub usage_slots: u32,
     pub tlas: Tlas,
     /// Host-visible: the last command of every recording writes its ticket's serial here, so
     /// a ticket handed back before its commands ran is recognised (`TicketNotComplete`).
@@ -70,6 +76,9 @@ impl WorkingSet {
             readbacks: Vec::new(),
             index_counters: None,
             index_checks: Vec::new(),
+            usage: None,
+            usage_readback: None,
+            usage_slots: 0,
             tlas: Tlas { accel: None, version: 0 },
             marker,
         })
@@ -116,7 +125,9 @@ impl WorkingSet {
         }
         memory.destroy_buffer(self.ring.buffer);
         memory.destroy_buffer(self.marker);
-        for b in [self.scratch.take(), self.index_counters.take()].into_iter().flatten() {
+        for b in
+            [self.scratch.take(), self.index_counters.take(), self.usage.take(), self.usage_readback.take()].into_iter().flatten()
+        {
             memory.destroy_buffer(b);
         }
         self.timer.destroy(&device.raw);
@@ -198,6 +209,55 @@ impl Recorder<'_> {
             journal.replaced(Slot::IndexCounters, None);
         }
         Ok(ws.index_counters.as_ref().map_or(vk::Buffer::null(), |b| b.raw))
+    }
+
+    /// The usage flags for `slots` instance slots (device-local) and their read-back, both
+    /// `slots` words at least; returns (flags, read-back).
+    pub fn ensure_usage(&mut self, slots: u32) -> Result<(vk::Buffer, u64, vk::Buffer)> {
+        let memory = self.memory;
+        let ws = &mut self.st.working_sets[self.ws];
+        let journal = &mut self.journal;
+        let size = slots as u64 * 4;
+        for (slot, kind) in [(Slot::Usage, 0), (Slot::UsageReadback, 1)] {
+            let target = if kind == 0 { &mut ws.usage } else { &mut ws.usage_readback };
+            let had = target.is_some();
+            let mut replaced = None;
+            memory::ensure_capacity(
+                target,
+                size,
+                |size| {
+                    if kind == 0 {
+                        memory.create_buffer(
+                            "cache usage flags",
+                            size.max(256),
+                            vk::BufferUsageFlags::STORAGE_BUFFER
+                                | vk::BufferUsageFlags::TRANSFER_DST
+                                | vk::BufferUsageFlags::TRANSFER_SRC,
+                            MemoryLocation::GpuOnly,
+                            MemoryKind::Cache,
+                        )
+                    } else {
+                        memory.create_buffer(
+                            "cache usage read-back",
+                            size.max(256),
+                            vk::BufferUsageFlags::TRANSFER_DST,
+                            MemoryLocation::GpuToCpu,
+                            MemoryKind::Readback,
+                        )
+                    }
+                },
+                |old| replaced = Some(old),
+            )?;
+            if let Some(old) = replaced {
+                journal.replaced(slot, Some(Held::Buffer(old)));
+            } else if !had && target.is_some() {
+                journal.replaced(slot, None);
+            }
+        }
+        let (Some(flags), Some(readback)) = (ws.usage.as_ref(), ws.usage_readback.as_ref()) else {
+            return Err(crate::Error::invalid("InitSettings.cache_budget_bytes", "usage buffers missing: SDK bug"));
+        };
+        Ok((flags.raw, flags.address, readback.raw))
     }
 
     pub fn working_set(&mut self) -> &mut WorkingSet {

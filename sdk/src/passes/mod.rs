@@ -45,6 +45,8 @@ pub(crate) struct Recording<'a> {
     pub seed: u32,
     /// Device address of this recording's instance table (0 when the recording has none).
     pub instance_table: u64,
+    /// Device address of the per-instance usage flags (0 without a cache budget).
+    pub usage: u64,
     /// The task asked for inline ray queries and the device has them (see `program`).
     pub inline: bool,
     /// Bench only: trace with the programs' floor pipelines (empty hit and miss shaders).

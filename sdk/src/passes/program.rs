@@ -45,13 +45,14 @@ pub(crate) enum Writes {
     Atomics,
 }
 
-/// The push constants of every trace program (`HrtTracePush` in shaders/include/alpha_test.glsl):
-/// the instance table, which the alpha test of any-hit shaders and ray-query loops reads.
+/// The push constants of every trace program (`HrtTracePush` in shaders/include/trace_push.glsl):
+/// the instance table, which the alpha test of any-hit shaders and ray-query loops reads, and
+/// the per-instance usage flags of the cache budget (0: none).
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 struct TracePush {
     instance_table: u64,
-    unused: u64,
+    usage: u64,
 }
 
 pub(crate) struct RtProgram {
@@ -140,7 +141,7 @@ impl RtProgram {
         };
         r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), write);
         let d = &r.device.raw;
-        let push = TracePush { instance_table: r.instance_table, unused: 0 };
+        let push = TracePush { instance_table: r.instance_table, usage: r.usage };
         // SAFETY: the layout has this push-constant range for these stages.
         unsafe { d.cmd_push_constants(r.cmd, self.layout, self.push_stages, 0, bytemuck::bytes_of(&push)) };
         match variant {

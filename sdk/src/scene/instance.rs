@@ -9,6 +9,9 @@ pub(crate) struct InstanceRecord {
     pub placement: Option<Placement>,
     /// The engine's debug name (`ExecuteContext::set_instance_name`).
     pub name: Option<String>,
+    /// The serial of the last ticket that used it (see `InitSettings::cache_budget_bytes`),
+    /// or of the build that placed it.
+    pub last_used: u64,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -22,6 +25,8 @@ pub(crate) struct Placement {
     pub albedo: [f32; 3],
     /// This instance's cache and the layout id it was made for.
     pub cache: Option<(CacheRange, u64)>,
+    /// The cache budget took its cache (it gets one again when it is used).
+    pub evicted: bool,
 }
 
 /// The TLAS record of an instance. `custom_index` is the instance's slot, so shaders can find

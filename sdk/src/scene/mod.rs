@@ -35,6 +35,15 @@ pub(crate) struct Scene {
     pub caches_dirty: bool,
     /// Source of surfel layout ids (an instance cache is made for one layout id).
     pub next_layout_id: u64,
+    /// What the cache budget has evicted so far.
+    pub evictions: Evictions,
+}
+
+/// Caches the budget evicted (`CacheReport`), totals since the context was made.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub(crate) struct Evictions {
+    pub count: u64,
+    pub bytes: u64,
 }
 
 impl Scene {
@@ -50,6 +59,7 @@ impl Scene {
             snapshot_dirty: false,
             caches_dirty: false,
             next_layout_id: 0,
+            evictions: Evictions::default(),
         }
     }
 

@@ -126,5 +126,22 @@ impl Default for RelightCacheTask {
     }
 }
 
+/// The direct-lighting caches' memory (`ExecuteContext::cache_report`), under the budget of
+/// `InitSettings::cache_budget_bytes`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct CacheReport {
+    /// Bytes of the caches held now (32 per sample).
+    pub resident_bytes: u64,
+    /// The budget (0: none).
+    pub budget_bytes: u64,
+    /// Placed instances whose geometry has a layout but that hold no cache (evicted, or never
+    /// given one for lack of room): they read as their initial colour.
+    pub waiting_instances: u32,
+    /// Caches evicted since the context was made.
+    pub evictions: u64,
+    /// Their bytes.
+    pub evicted_bytes: u64,
+}
+
 /// Most samples one relight task may take (`RelightCacheTask::max_samples`).
 pub const MAX_RELIGHT_SAMPLES: u32 = 1 << 24;

@@ -30,6 +30,14 @@ pub struct InitSettings {
     pub queue_family_indices: [u32; 4],
     /// How many entries of `queue_family_indices` are used (0..=4). Default 0.
     pub queue_family_count: u32,
+    /// Most bytes the direct-lighting caches may hold (0: no limit, the default). When a cache
+    /// would not fit, the caches of the instances unused for longest are evicted — "used":
+    /// a camera's injection, a GI or reflection ray, or a debug view reached the instance in a
+    /// ticket that came back — and an evicted instance gets a new cache (its initial colour,
+    /// relit or injected again) once it is used again. `ExecuteContext::cache_report` says
+    /// what is resident, waiting and evicted. A single cache larger than the budget never
+    /// gets one.
+    pub cache_budget_bytes: u64,
 }
 
 impl Default for InitSettings {
@@ -41,6 +49,7 @@ impl Default for InitSettings {
             pipeline_cache: vk::PipelineCache::null(),
             queue_family_indices: [0; 4],
             queue_family_count: 0,
+            cache_budget_bytes: 0,
         }
     }
 }
