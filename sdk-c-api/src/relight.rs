@@ -73,6 +73,8 @@ pub struct HrtCacheReport {
     /// Caches evicted since the context was made, and their bytes.
     pub evictions: u64,
     pub evicted_bytes: u64,
+    /// Geometry bytes copied to the host to size surfel layouts (0 for tiles, sized on the GPU).
+    pub geometry_readback_bytes: u64,
 }
 
 /// # Safety
@@ -88,6 +90,7 @@ pub unsafe extern "C" fn hrt_cache_report(ctx: *const HrtContext, out: *mut HrtC
             waiting_instances: r.waiting_instances,
             evictions: r.evictions,
             evicted_bytes: r.evicted_bytes,
+            geometry_readback_bytes: r.geometry_readback_bytes,
         };
         Ok(())
     })

@@ -403,3 +403,48 @@ fn transfer_between_tessellations_preserves_colours() {
     assert!(after.iter().zip(&g.hit).filter(|(_, h)| **h).all(|(c, _)| c[..3] != MAGENTA), "every target sample was written");
     w.finish(vec![images], vec![lit]);
 }
+
+/// Tiles layouts are sized on the GPU: the cache holds exactly the CPU rule's samples —
+/// clamp(ceil(longest edge / tile_unit_length), 1, limit)² per triangle, over a sphere's
+/// uneven triangles — and no byte of geometry goes to the host. Mesh colors, still built on
+/// the CPU, read their geometry back (positions and 32-bit indices).
+#[test]
+fn tiles_layouts_are_sized_on_the_gpu_without_a_geometry_read_back() {
+    let mut scene = Scene::default();
+    let sphere = Mesh::sphere(1.0, 48, 24);
+    let m = scene.add_mesh(sphere.clone());
+    scene.add_instance(m, Affine3A::IDENTITY);
+    let (unit, limit) = (0.05f32, 6u32);
+    let expected: u64 = sphere
+        .indices
+        .chunks(3)
+        .map(|t| {
+            let p = [0, 1, 2].map(|k| sphere.positions[t[k] as usize]);
+            let longest = (0..3).map(|k| p[k].distance(p[(k + 1) % 3])).fold(0.0f32, f32::max);
+            let r = ((longest / unit).ceil() as u32).clamp(1, limit) as u64;
+            r * r
+        })
+        .sum();
+    let tiles = world(
+        scene.clone(),
+        SurfelSettings { surfel_type: SurfelType::Tiles, tile_unit_length: unit, tile_resolution_limit: limit },
+    );
+    let bytes = tiles.ctx.instance_cache_bytes(tiles.gpu_scene.instances[0]).unwrap();
+    let report = tiles.ctx.cache_report();
+    eprintln!(
+        "tiles on the GPU: {} samples (CPU rule {expected}), {} geometry bytes read back",
+        bytes / 32,
+        report.geometry_readback_bytes
+    );
+    assert_eq!(bytes / 32, expected);
+    assert_eq!(report.geometry_readback_bytes, 0);
+    tiles.finish(Vec::new(), Vec::new());
+
+    let colors = world(
+        scene,
+        SurfelSettings { surfel_type: SurfelType::MeshColors, tile_unit_length: unit, tile_resolution_limit: limit },
+    );
+    let read = colors.ctx.cache_report().geometry_readback_bytes;
+    assert_eq!(read, (sphere.positions.len() * 12 + sphere.indices.len() * 4) as u64, "mesh colors read the copy back");
+    colors.finish(Vec::new(), Vec::new());
+}

@@ -222,9 +222,13 @@ fn big_caches_fill_completely_and_oversized_ones_are_coarsened() {
     }
     c.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 2 }).unwrap();
     run_frame(&host, &ctx, &mut c).unwrap();
-    // The layouts come back with the ticket; the next recording allocates and fills caches.
-    c.schedule_bvh_build(&BvhBuildTask::default()).unwrap();
-    run_frame(&host, &ctx, &mut c).unwrap();
+    // The layouts' sample counts come back with the ticket; the next recording allocates and
+    // fills the caches. A count over the budget is laid out again at a smaller resolution
+    // limit, one round trip per try.
+    for _ in 0..4 {
+        c.schedule_bvh_build(&BvhBuildTask::default()).unwrap();
+        run_frame(&host, &ctx, &mut c).unwrap();
+    }
     let bytes = ctx.instance_cache_bytes(instances[0]).unwrap();
     assert_eq!(bytes, (grid.indices.len() / 3 * 256 * 32) as u64, "16 x 16 tiles per triangle");
     let coarse = ctx.instance_cache_bytes(instances[1]).unwrap();

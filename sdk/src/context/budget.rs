@@ -119,7 +119,7 @@ fn evict(st: &mut State, journal: &mut Journal, h: InstanceHandle) -> bool {
     p.evicted = true;
     let serial = st.next_serial;
     st.cache_pool.free_after(serial, range);
-    st.scene.evictions.count += 1;
-    st.scene.evictions.bytes += range.count * SAMPLE_BYTES;
+    st.scene.cache_stats.evictions += 1;
+    st.scene.cache_stats.evicted_bytes += range.count * SAMPLE_BYTES;
     true
 }

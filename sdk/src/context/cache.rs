@@ -11,31 +11,49 @@ use super::budget::{self, Candidate};
 use super::container::Task;
 use super::journal::{Held, Journal, Slot};
 use super::record::Recorder;
+use super::working_set::Readback;
 use super::State;
 use crate::cache::layout;
 use crate::error::Result;
 use crate::gpu::deferred::Garbage;
 use crate::gpu::memory::{Buffer, Memory, MemoryKind};
 use crate::gpu::sync::{self, Hazards};
-use crate::passes::Recording;
-use crate::scene::geometry::{self, SurfelGpu};
+use crate::passes::{surfel_layout, Recording};
+use crate::scene::geometry::{self, GeometryLayout, SurfelGpu};
 use crate::scene::instance::Placement;
-use crate::types::{GeometryHandle, InstanceHandle};
+use crate::types::{GeometryHandle, InstanceHandle, SurfelType};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
 impl Recorder<'_> {
-    /// Copies freshly registered geometry to read-back buffers (after the geometry copies).
+    /// Sizes the surfel layouts of freshly registered geometry (after the geometry copies):
+    /// tiles layouts are built on the GPU and only their sample count is read back; mesh
+    /// colors copy the geometry to a read-back buffer for the CPU builder.
     pub fn record_readbacks(&mut self, handles: &[GeometryHandle]) -> Result<()> {
-        if handles.is_empty() {
+        // Layouts built again with a smaller resolution limit (too many samples before).
+        let mut jobs: Vec<(GeometryHandle, Option<u32>)> = handles.iter().map(|&h| (h, None)).collect();
+        jobs.extend(std::mem::take(&mut self.st.scene.relayout).into_iter().map(|(h, limit)| (h, Some(limit))));
+        if jobs.is_empty() {
             return Ok(());
         }
-        let (d, cmd) = (&self.device.raw, self.cmd);
-        self.hazards.read_write(d, cmd, sync::TRANSFER_READ, sync::TRANSFER_WRITE);
-        let st = &mut *self.st;
-        for &h in handles {
+        let max_gpu = surfel_layout::max_triangles(self.device.limits.max_dispatch_groups[0]);
+        let mut copied = false;
+        for (h, limit) in jobs {
+            let st = &mut *self.st;
             let g = st.scene.geometries.get(h)?;
             let (Some(copy), Some(l)) = (g.copy.as_ref(), g.layout) else { continue };
+            let (copy_raw, copy_address, build_id) = (copy.raw, copy.address, g.build_id);
+            let surfels = g.input.surfels;
+            if surfels.surfel_type == SurfelType::Tiles && (l.primitive_count as u64) <= max_gpu && l.primitive_count > 0 {
+                let limit = limit.unwrap_or(surfels.tile_resolution_limit.clamp(1, layout::MAX_RESOLUTION));
+                self.record_gpu_tiles(h, build_id, copy_address, l, surfels.tile_unit_length, limit)?;
+                continue;
+            }
+            let (d, cmd) = (&self.device.raw, self.cmd);
+            if !copied {
+                self.hazards.read_write(d, cmd, sync::TRANSFER_READ, sync::TRANSFER_WRITE);
+                copied = true;
+            }
             let readback = self.memory.create_buffer(
                 "geometry read-back",
                 l.total_bytes(),
@@ -44,10 +62,90 @@ impl Recorder<'_> {
                 MemoryKind::Readback,
             )?;
             let region = [vk::BufferCopy { src_offset: 0, dst_offset: 0, size: l.total_bytes() }];
-            unsafe { d.cmd_copy_buffer(cmd, copy.raw, readback.raw, &region) };
-            let build_id = g.build_id;
-            st.working_sets[self.ws].readbacks.push((h, build_id, readback));
+            unsafe { d.cmd_copy_buffer(cmd, copy_raw, readback.raw, &region) };
+            self.st.scene.cache_stats.readback_bytes += l.total_bytes();
+            self.st.working_sets[self.ws].readbacks.push(Readback::Geometry { geometry: h, build_id, buffer: readback });
         }
+        Ok(())
+    }
+
+    /// Builds a tiles layout on the GPU from the geometry's copy (`passes::surfel_layout`).
+    fn record_gpu_tiles(
+        &mut self,
+        h: GeometryHandle,
+        build_id: u64,
+        copy: u64,
+        l: GeometryLayout,
+        unit: f32,
+        limit: u32,
+    ) -> Result<()> {
+        let t = l.primitive_count as u64;
+        let memory = self.memory;
+        let words = memory.create_buffer(
+            "surfel layout",
+            t * 8,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+            MemoryKind::Cache,
+        )?;
+        let made = (|| -> Result<(Buffer, Buffer)> {
+            let scratch = memory.create_buffer(
+                "surfel layout scratch",
+                surfel_layout::scratch_words(t) * 4,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryLocation::GpuOnly,
+                MemoryKind::BuildScratch,
+            )?;
+            match memory.create_buffer(
+                "surfel layout count",
+                16,
+                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+                MemoryKind::Readback,
+            ) {
+                Ok(result) => Ok((scratch, result)),
+                Err(e) => {
+                    memory.destroy_buffer(scratch);
+                    Err(e)
+                }
+            }
+        })();
+        let (scratch, result) = match made {
+            Ok(b) => b,
+            Err(e) => {
+                memory.destroy_buffer(words);
+                return Err(e);
+            }
+        };
+        let job = surfel_layout::TilesJob {
+            positions: copy,
+            indices: copy + l.index_offset(),
+            triangles: l.primitive_count,
+            unit,
+            limit,
+            words: words.address,
+            scratch: scratch.address,
+            result: result.raw,
+            result_address: result.address,
+        };
+        let st = &mut *self.st;
+        let ws = &mut st.working_sets[self.ws];
+        let tlas = ws.tlas_handle();
+        let mut r = Recording {
+            device: self.device,
+            cmd: self.cmd,
+            ring: &mut ws.ring,
+            hazards: &mut self.hazards,
+            tlas,
+            seed: self.seed,
+            instance_table: 0,
+            usage: 0,
+            inline: false,
+            floor: false,
+        };
+        st.passes.surfel_layout.record_tiles(&mut r, &job);
+        self.journal.retire_at_commit(Garbage::Buffer(scratch));
+        ws.readbacks.push(Readback::Counted { geometry: h, build_id, words, result, limit });
         Ok(())
     }
 
@@ -195,20 +293,77 @@ impl Recorder<'_> {
 }
 
 impl State {
-    /// A ticket came back: builds the surfel layouts of the geometry it read back.
-    /// `max_samples` bounds one geometry's cache (see `cache::layout::build`).
+    /// A ticket came back: builds the surfel layouts of the geometry it read back, or installs
+    /// the ones the GPU built. `max_samples` bounds one geometry's cache (see
+    /// `cache::layout::build`).
     pub(super) fn finish_readbacks(&mut self, memory: &Memory, ws_index: usize, max_samples: u64) {
         let readbacks = std::mem::take(&mut self.working_sets[ws_index].readbacks);
-        for (h, build_id, buffer) in readbacks {
-            if let Ok(g) = self.scene.geometries.get_mut(h) {
-                if let (true, Some(gl), Some(bytes)) = (g.build_id == build_id, g.layout, buffer.mapped_bytes()) {
-                    let (positions, triangles) = geometry::read_geometry(bytes, &gl);
-                    g.pending_layout = layout::build(&positions, &triangles, &g.input.surfels, max_samples);
-                    self.scene.caches_dirty = true;
+        for readback in readbacks {
+            match readback {
+                Readback::Geometry { geometry: h, build_id, buffer } => {
+                    if let Ok(g) = self.scene.geometries.get_mut(h) {
+                        if let (true, Some(gl), Some(bytes)) = (g.build_id == build_id, g.layout, buffer.mapped_bytes()) {
+                            let (positions, triangles) = geometry::read_geometry(bytes, &gl);
+                            g.pending_layout = layout::build(&positions, &triangles, &g.input.surfels, max_samples);
+                            self.scene.caches_dirty = true;
+                        }
+                    }
+                    // The ticket is complete: nothing on the GPU reads this buffer any more.
+                    memory.destroy_buffer(buffer);
+                }
+                Readback::Counted { geometry: h, build_id, words, result, limit } => {
+                    let counted = result
+                        .mapped_bytes()
+                        .and_then(|b| b.get(..8))
+                        .map(|b| (u32::from_le_bytes([b[0], b[1], b[2], b[3]]), u32::from_le_bytes([b[4], b[5], b[6], b[7]])));
+                    memory.destroy_buffer(result);
+                    let current = self.scene.geometries.get(h).is_ok_and(|g| g.build_id == build_id);
+                    match counted {
+                        Some((samples, max_resolution)) if current && samples > 0 && samples as u64 <= max_samples => {
+                            self.install_gpu_layout(h, words, samples, max_resolution);
+                        }
+                        Some((samples, _)) if current && limit > 1 => {
+                            // Samples grow with the limit squared where it binds: scale it by
+                            // sqrt(budget / samples) (a saturated count only overestimates),
+                            // at least halving; the next recording builds it again.
+                            let scale = (max_samples as f64 / samples.max(1) as f64).sqrt();
+                            let next = ((limit as f64 * scale).floor() as u32).clamp(1, limit / 2);
+                            log::warn!(
+                                "surfel layout: {samples} samples at tile_resolution_limit {limit}, over {max_samples}; trying {next}"
+                            );
+                            self.scene.relayout.push((h, next));
+                            memory.destroy_buffer(words);
+                        }
+                        _ => {
+                            if current {
+                                log::error!("surfel layout needs more than {max_samples} samples: no cache");
+                            }
+                            memory.destroy_buffer(words);
+                        }
+                    }
                 }
             }
-            // The ticket is complete: nothing on the GPU reads this buffer any more.
-            memory.destroy_buffer(buffer);
+        }
+    }
+
+    /// Makes a GPU-built layout the geometry's (the one it replaces goes once the tickets in
+    /// flight are done with it).
+    fn install_gpu_layout(&mut self, h: GeometryHandle, words: Buffer, samples: u32, max_resolution: u32) {
+        self.scene.next_layout_id += 1;
+        let fresh = SurfelGpu {
+            buffer: words,
+            sample_count: samples,
+            surfel_type: SurfelType::Tiles,
+            id: self.scene.next_layout_id,
+            max_resolution: max_resolution.max(1),
+        };
+        let last_issued = self.next_serial.saturating_sub(1);
+        if let Ok(g) = self.scene.geometries.get_mut(h) {
+            g.pending_layout = None;
+            if let Some(old) = g.surfel.replace(fresh) {
+                self.deferred.retire(last_issued, Garbage::Buffer(old.buffer));
+            }
+            self.scene.caches_dirty = true;
         }
     }
 }

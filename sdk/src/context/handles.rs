@@ -170,8 +170,9 @@ impl ExecuteContext {
             resident_bytes: r.resident_bytes,
             budget_bytes: st.cache_budget,
             waiting_instances: r.waiting,
-            evictions: st.scene.evictions.count,
-            evicted_bytes: st.scene.evictions.bytes,
+            evictions: st.scene.cache_stats.evictions,
+            evicted_bytes: st.scene.cache_stats.evicted_bytes,
+            geometry_readback_bytes: st.scene.cache_stats.readback_bytes,
         }
     }
 

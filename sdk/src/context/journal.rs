@@ -71,7 +71,8 @@ struct SceneMeta {
     snapshot_dirty: bool,
     caches_dirty: bool,
     next_layout_id: u64,
-    evictions: crate::scene::Evictions,
+    cache_stats: crate::scene::CacheStats,
+    relayout: Vec<(GeometryHandle, u32)>,
 }
 
 pub(super) struct Journal {
@@ -104,7 +105,8 @@ impl Journal {
                 snapshot_dirty: s.snapshot_dirty,
                 caches_dirty: s.caches_dirty,
                 next_layout_id: s.next_layout_id,
-                evictions: s.evictions,
+                cache_stats: s.cache_stats,
+                relayout: s.relayout.clone(),
             },
             old_snapshot: None,
             geometries: Vec::new(),
@@ -215,8 +217,9 @@ impl Journal {
         let s = &mut st.scene;
         let m = self.scene;
         (s.build_queue, s.refit_queue, s.compaction_ready) = (m.build_queue, m.refit_queue, m.compaction_ready);
-        (s.snapshot_version, s.snapshot_dirty, s.caches_dirty, s.next_layout_id, s.evictions) =
-            (m.snapshot_version, m.snapshot_dirty, m.caches_dirty, m.next_layout_id, m.evictions);
+        (s.snapshot_version, s.snapshot_dirty, s.caches_dirty, s.next_layout_id, s.cache_stats) =
+            (m.snapshot_version, m.snapshot_dirty, m.caches_dirty, m.next_layout_id, m.cache_stats);
+        s.relayout = m.relayout;
         if let Some(old) = self.old_snapshot {
             s.snapshot = old;
         }
@@ -226,8 +229,8 @@ impl Journal {
         w.compactions.clear();
         w.index_checks.clear();
         w.usage_slots = 0;
-        for (_, _, b) in w.readbacks.drain(..) {
-            memory.destroy_buffer(b);
+        for r in w.readbacks.drain(..) {
+            r.destroy(memory);
         }
     }
 }

@@ -13,6 +13,27 @@ use crate::types::{GeometryHandle, InitSettings};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
+/// A ticket's read-back for a geometry's surfel layout (geometry, build id of the copy).
+pub(super) enum Readback {
+    /// The whole copy, for the CPU builders (mesh colors, or a mesh too big for the GPU pass).
+    Geometry { geometry: GeometryHandle, build_id: u64, buffer: Buffer },
+    /// A tiles layout the GPU built into `words`; `result` holds its (samples, largest R),
+    /// counted with resolution limit `limit`.
+    Counted { geometry: GeometryHandle, build_id: u64, words: Buffer, result: Buffer, limit: u32 },
+}
+
+impl Readback {
+    pub fn destroy(self, memory: &Memory) {
+        match self {
+            Readback::Geometry { buffer, .. } => memory.destroy_buffer(buffer),
+            Readback::Counted { words, result, .. } => {
+                memory.destroy_buffer(words);
+                memory.destroy_buffer(result);
+            }
+        }
+    }
+}
+
 pub(super) struct WorkingSet {
     /// The serial of the ticket using it, while one is in flight.
     pub in_flight: Option<u64>,
@@ -23,8 +44,8 @@ pub(super) struct WorkingSet {
     pub compaction_slots: u32,
     /// Geometries whose compacted size this ticket queries: (geometry, build id).
     pub compactions: Vec<(GeometryHandle, u64)>,
-    /// Geometry copies read back for their surfel layouts: (geometry, build id, buffer).
-    pub readbacks: Vec<(GeometryHandle, u64, Buffer)>,
+    /// What this ticket sends home to size surfel layouts.
+    pub readbacks: Vec<Readback>,
     /// Host-visible counters of the index checks: one u32 per checked copy.
     pub index_counters: Option<Buffer>,
     /// Copies this ticket checked: (geometry, the copy's buffer, counter slot).
@@ -120,8 +141,8 @@ impl WorkingSet {
     /// Destroys everything it owns (no ticket of it may be in flight).
     pub fn destroy(mut self, device: &Device, memory: &Memory) {
         self.tlas.destroy(device, memory);
-        for (_, _, b) in self.readbacks.drain(..) {
-            memory.destroy_buffer(b);
+        for r in self.readbacks.drain(..) {
+            r.destroy(memory);
         }
         memory.destroy_buffer(self.ring.buffer);
         memory.destroy_buffer(self.marker);

@@ -19,6 +19,7 @@ pub(crate) mod program;
 pub(crate) mod relight;
 pub(crate) mod shadow;
 pub(crate) mod specular;
+pub(crate) mod surfel_layout;
 pub(crate) mod transfer;
 
 use crate::cache::pool::CachePool;
@@ -152,6 +153,7 @@ pub(crate) struct Passes {
     pub cache_ops: cache_ops::CacheOps,
     pub denoise: denoise::DenoisePass,
     pub geometry_pack: geometry_pack::GeometryPack,
+    pub surfel_layout: surfel_layout::SurfelLayoutPass,
     /// The one sampler of every sampled G-buffer binding (nearest, clamped: texel fetches).
     sampler: vk::Sampler,
     arena: PipelineArena,
@@ -211,6 +213,8 @@ impl Passes {
         let denoise = denoise::DenoisePass::new(b, sampler)?;
         b.label = "index check";
         let geometry_pack = geometry_pack::GeometryPack::new(b, sampler)?;
+        b.label = "surfel layout";
+        let surfel_layout = surfel_layout::SurfelLayoutPass::new(b)?;
         Ok(Passes {
             ao,
             shadow,
@@ -224,6 +228,7 @@ impl Passes {
             cache_ops,
             denoise,
             geometry_pack,
+            surfel_layout,
             sampler,
             arena: PipelineArena::default(),
             floor: false,

@@ -35,15 +35,20 @@ pub(crate) struct Scene {
     pub caches_dirty: bool,
     /// Source of surfel layout ids (an instance cache is made for one layout id).
     pub next_layout_id: u64,
-    /// What the cache budget has evicted so far.
-    pub evictions: Evictions,
+    /// What the cache budget has evicted and what layouts read back, so far.
+    pub cache_stats: CacheStats,
+    /// Geometries whose GPU-built layout had too many samples: built again at the next
+    /// recording with this (halved) resolution limit.
+    pub relayout: Vec<(GeometryHandle, u32)>,
 }
 
-/// Caches the budget evicted (`CacheReport`), totals since the context was made.
+/// Totals since the context was made (`CacheReport`): caches the budget evicted, and geometry
+/// bytes copied to the host for the CPU layout builders.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub(crate) struct Evictions {
-    pub count: u64,
-    pub bytes: u64,
+pub(crate) struct CacheStats {
+    pub evictions: u64,
+    pub evicted_bytes: u64,
+    pub readback_bytes: u64,
 }
 
 impl Scene {
@@ -59,7 +64,8 @@ impl Scene {
             snapshot_dirty: false,
             caches_dirty: false,
             next_layout_id: 0,
-            evictions: Evictions::default(),
+            cache_stats: CacheStats::default(),
+            relayout: Vec::new(),
         }
     }
 

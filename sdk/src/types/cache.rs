@@ -141,6 +141,11 @@ pub struct CacheReport {
     pub evictions: u64,
     /// Their bytes.
     pub evicted_bytes: u64,
+    /// Geometry bytes copied to the host since the context was made, to size surfel layouts:
+    /// tiles layouts are sized on the GPU (0 bytes; their 16-byte sample count comes home
+    /// with the ticket); mesh colors, whose samples are shared between triangles, are still
+    /// built on the CPU from a copy of the geometry.
+    pub geometry_readback_bytes: u64,
 }
 
 /// Most samples one relight task may take (`RelightCacheTask::max_samples`).
