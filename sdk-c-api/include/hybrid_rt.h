@@ -170,6 +170,10 @@ enum HrtBuildHint
   HRT_BUILD_HINT_PREFER_FAST_TRACE = 1,
   HRT_BUILD_HINT_PREFER_FAST_BUILD = 2,
   HRT_BUILD_HINT_LOW_MEMORY = 3,
+  /**
+   * Fast build when registered, rebuilt for fast trace (and compacted) at a later BVH build.
+   */
+  HRT_BUILD_HINT_FAST_THEN_TRACE = 4,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -1173,6 +1177,10 @@ typedef struct HrtCacheReport {
    */
   uint64_t evictions;
   uint64_t evicted_bytes;
+  /**
+   * Geometry bytes copied to the host to size surfel layouts (0 for tiles, sized on the GPU).
+   */
+  uint64_t geometry_readback_bytes;
 } HrtCacheReport;
 
 #ifdef __cplusplus

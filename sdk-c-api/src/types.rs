@@ -230,6 +230,8 @@ pub enum HrtBuildHint {
     HRT_BUILD_HINT_PREFER_FAST_TRACE = 1,
     HRT_BUILD_HINT_PREFER_FAST_BUILD = 2,
     HRT_BUILD_HINT_LOW_MEMORY = 3,
+    /// Fast build when registered, rebuilt for fast trace (and compacted) at a later BVH build.
+    HRT_BUILD_HINT_FAST_THEN_TRACE = 4,
 }
 
 #[repr(C)]
@@ -814,7 +816,13 @@ pub(crate) unsafe fn geometry_task(t: &HrtGeometryTask) -> Result<rt::GeometryTa
             build_hint: pick(
                 "HrtGeometryInput.build_hint",
                 i.build_hint,
-                &[rt::BuildHint::Auto, rt::BuildHint::PreferFastTrace, rt::BuildHint::PreferFastBuild, rt::BuildHint::LowMemory],
+                &[
+                    rt::BuildHint::Auto,
+                    rt::BuildHint::PreferFastTrace,
+                    rt::BuildHint::PreferFastBuild,
+                    rt::BuildHint::LowMemory,
+                    rt::BuildHint::FastThenTrace,
+                ],
             )?,
             surfels: rt::SurfelSettings {
                 surfel_type: pick(

@@ -5,8 +5,8 @@ use ash::vk;
 use common::*;
 use glam::{Affine3A, Vec3};
 use hybrid_rt::{
-    BvhBuildTask, Error, GeometryInput, GeometryTask, IndexBufferInput, InitSettings, InstanceInput, InstanceOperation,
-    InstanceTask, RayOffset, TaskOperation, VertexBufferInput,
+    BuildHint, BvhBuildTask, Error, GeometryInput, GeometryTask, IndexBufferInput, InitSettings, InstanceInput,
+    InstanceOperation, InstanceTask, RayOffset, TaskOperation, VertexBufferInput,
 };
 use hybrid_rt_testkit::host::Host;
 use hybrid_rt_testkit::reference::*;
@@ -260,6 +260,35 @@ fn updating_a_deformable_geometry_refits_its_blas() {
     images.destroy(&host);
     drop(ctx);
     assert_no_validation_errors();
+}
+
+/// `BuildHint::FastThenTrace`: the frame that registers a mesh builds it fast; later BVH
+/// builds rebuild it for fast trace after their new registrations, within the same
+/// `max_blas_build_count`, and tracing is right throughout.
+#[test]
+fn fast_first_builds_are_rebuilt_for_fast_trace_later() {
+    let mut f = fixture(4, false);
+    for (k, (vb, ib)) in f.gpu_scene.buffers.iter().enumerate() {
+        let mesh = &f.b.boxes.meshes[k];
+        let input = GeometryInput {
+            vertices: VertexBufferInput { buffer: vb.buffer, count: mesh.positions.len() as u32, ..Default::default() },
+            indices: IndexBufferInput { buffer: ib.buffer, count: mesh.indices.len() as u32, ..Default::default() },
+            build_hint: BuildHint::FastThenTrace,
+            ..Default::default()
+        };
+        let task = GeometryTask { handle: f.gpu_scene.geometries[k], operation: TaskOperation::Update, input };
+        f.frame.schedule_geometry(&task).unwrap();
+    }
+    // (in TLAS, pending builds: queued registrations + quality rebuilds) after each build.
+    for (k, (in_tlas, pending)) in [(2usize, 4usize), (4, 4), (4, 2), (4, 0)].into_iter().enumerate() {
+        f.frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 2 }).unwrap();
+        f.frame.schedule_ambient_occlusion(&f.ao()).unwrap();
+        run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
+        assert_eq!((f.ctx.tlas_instance_count(), f.ctx.pending_blas_builds()), (in_tlas, pending), "build {k}");
+        let gpu = f.images.read_output(&f.host).unwrap();
+        check_rings(&gpu, &f.g, &f.b, |i| i < in_tlas, &format!("build {k}"));
+    }
+    f.finish();
 }
 
 /// Static BLASes are compacted a frame after their build (no stall), and tracing still works.

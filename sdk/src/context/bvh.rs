@@ -8,7 +8,7 @@ use crate::gpu::sync;
 use crate::scene::blas::{self, BuildJob};
 use crate::scene::geometry::BlasState;
 use crate::scene::{instance, tlas};
-use crate::types::GeometryHandle;
+use crate::types::{BuildHint, GeometryHandle};
 use ash::vk;
 
 impl Recorder<'_> {
@@ -60,7 +60,8 @@ impl Recorder<'_> {
             journal.touch_geometry(h, g.meta());
             g.needs_refit = false;
             let (Some(layout), Some(copy), Some(b)) = (g.layout, g.copy.as_ref(), g.blas.as_ref()) else { continue };
-            let (geometry, flags, sizes) = blas::describe(device, copy.address, &layout);
+            // Refits keep the flags the BLAS was built with.
+            let (geometry, flags, sizes) = blas::describe(device, copy.address, &layout, g.provisional);
             jobs.push(BuildJob {
                 geometry,
                 flags,
@@ -72,11 +73,22 @@ impl Recorder<'_> {
             scratch_total += sizes.update_scratch_size.div_ceil(align) * align;
         }
         let mut built = 0;
+        // Fast first builds of this recording, rebuilt for fast trace at a later one.
+        let mut rebuild_later = Vec::new();
         while built < max_builds {
-            let Some(h) = st.scene.build_queue.pop_front() else { break };
+            // New registrations first, then the quality rebuilds of earlier fast builds.
+            let (h, rebuild) = match st.scene.build_queue.pop_front() {
+                Some(h) => (h, false),
+                None => match st.scene.quality_queue.pop_front() {
+                    Some((h, id)) if st.scene.geometries.get(h).is_ok_and(|g| g.build_id == id && g.provisional) => (h, true),
+                    Some(_) => continue,
+                    None => break,
+                },
+            };
             let Ok(g) = st.scene.geometries.get_mut(h) else { continue };
             let (Some(layout), Some(copy)) = (g.layout, g.copy.as_ref()) else { continue };
-            let (geometry, flags, sizes) = blas::describe(device, copy.address, &layout);
+            let provisional = !rebuild && layout.build_hint == BuildHint::FastThenTrace && !layout.allow_update;
+            let (geometry, flags, sizes) = blas::describe(device, copy.address, &layout, provisional);
             let fresh = blas::create(
                 device,
                 memory,
@@ -93,7 +105,10 @@ impl Recorder<'_> {
             journal.replaced(Slot::Blas(h), old.map(Held::Accel));
             g.state = BlasState::Ready;
             g.needs_refit = false;
-            if blas::compacts(&layout) {
+            g.provisional = provisional;
+            if provisional {
+                rebuild_later.push((h, g.build_id));
+            } else if blas::compacts(&layout) {
                 compaction_candidates.push((h, g.build_id, dst));
             }
             jobs.push(BuildJob {
@@ -108,6 +123,7 @@ impl Recorder<'_> {
             st.scene.snapshot_dirty = true;
             built += 1;
         }
+        st.scene.quality_queue.extend(rebuild_later);
         if jobs.is_empty() {
             return Ok(());
         }

@@ -73,6 +73,7 @@ struct SceneMeta {
     next_layout_id: u64,
     cache_stats: crate::scene::CacheStats,
     relayout: Vec<(GeometryHandle, u32)>,
+    quality_queue: VecDeque<(GeometryHandle, u64)>,
 }
 
 pub(super) struct Journal {
@@ -107,6 +108,7 @@ impl Journal {
                 next_layout_id: s.next_layout_id,
                 cache_stats: s.cache_stats,
                 relayout: s.relayout.clone(),
+                quality_queue: s.quality_queue.clone(),
             },
             old_snapshot: None,
             geometries: Vec::new(),
@@ -219,7 +221,7 @@ impl Journal {
         (s.build_queue, s.refit_queue, s.compaction_ready) = (m.build_queue, m.refit_queue, m.compaction_ready);
         (s.snapshot_version, s.snapshot_dirty, s.caches_dirty, s.next_layout_id, s.cache_stats) =
             (m.snapshot_version, m.snapshot_dirty, m.caches_dirty, m.next_layout_id, m.cache_stats);
-        s.relayout = m.relayout;
+        (s.relayout, s.quality_queue) = (m.relayout, m.quality_queue);
         if let Some(old) = self.old_snapshot {
             s.snapshot = old;
         }

@@ -13,11 +13,12 @@ use gpu_allocator::MemoryLocation;
 
 /// A BLAS's build flags: the hint's preference (see `BuildHint`), ALLOW_UPDATE for deformable
 /// geometry, ALLOW_COMPACTION where `compacts` says.
-pub(crate) fn flags(layout: &GeometryLayout) -> vk::BuildAccelerationStructureFlagsKHR {
+pub(crate) fn flags(layout: &GeometryLayout, provisional: bool) -> vk::BuildAccelerationStructureFlagsKHR {
     use vk::BuildAccelerationStructureFlagsKHR as F;
     let preference = match (layout.build_hint, layout.allow_update) {
-        (BuildHint::Auto, true) | (BuildHint::PreferFastBuild, _) => F::PREFER_FAST_BUILD,
-        (BuildHint::Auto, false) | (BuildHint::PreferFastTrace, _) => F::PREFER_FAST_TRACE,
+        _ if provisional => F::PREFER_FAST_BUILD,
+        (BuildHint::Auto, true) | (BuildHint::PreferFastBuild, _) | (BuildHint::FastThenTrace, true) => F::PREFER_FAST_BUILD,
+        (BuildHint::Auto, false) | (BuildHint::PreferFastTrace, _) | (BuildHint::FastThenTrace, false) => F::PREFER_FAST_TRACE,
         (BuildHint::LowMemory, _) => F::LOW_MEMORY,
     };
     let mut f = preference;
@@ -60,17 +61,19 @@ pub(crate) fn triangles(
 }
 
 /// What a build or a refit of a geometry's BLAS needs: its triangles, flags and sizes.
+/// `provisional`: the fast first build of a `BuildHint::FastThenTrace` geometry.
 pub(crate) fn describe(
     device: &Device,
     copy_address: vk::DeviceAddress,
     layout: &GeometryLayout,
+    provisional: bool,
 ) -> (
     vk::AccelerationStructureGeometryKHR<'static>,
     vk::BuildAccelerationStructureFlagsKHR,
     vk::AccelerationStructureBuildSizesInfoKHR<'static>,
 ) {
     let geometry = triangles(copy_address, layout);
-    let flags = flags(layout);
+    let flags = flags(layout, provisional);
     let sizes = build_sizes(device, vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL, flags, &geometry, layout.primitive_count);
     (geometry, flags, sizes)
 }

@@ -307,6 +307,9 @@ pub(crate) struct GeometryRecord {
     /// The engine's debug name (`ExecuteContext::set_geometry_name`): in errors, logs and the
     /// Vulkan names of its BLAS and copy.
     pub name: Option<String>,
+    /// Its BLAS is the fast first build of `BuildHint::FastThenTrace` (rebuilt for fast trace
+    /// from `Scene::quality_queue`).
+    pub provisional: bool,
 }
 
 /// A geometry's surfel layout on the GPU. `id` changes with every new layout, so instance
@@ -330,6 +333,7 @@ pub(crate) struct GeometryMeta {
     compacted_size: Option<u64>,
     instance_refs: usize,
     input: GeometryInput,
+    provisional: bool,
 }
 
 impl GeometryRecord {
@@ -342,13 +346,15 @@ impl GeometryRecord {
             compacted_size: self.compacted_size,
             instance_refs: self.instance_refs,
             input: self.input.clone(),
+            provisional: self.provisional,
         }
     }
 
     pub fn restore(&mut self, m: GeometryMeta) {
-        let GeometryMeta { layout, state, needs_refit, build_id, compacted_size, instance_refs, input } = m;
+        let GeometryMeta { layout, state, needs_refit, build_id, compacted_size, instance_refs, input, provisional } = m;
         (self.layout, self.state, self.needs_refit, self.build_id) = (layout, state, needs_refit, build_id);
-        (self.compacted_size, self.instance_refs, self.input) = (compacted_size, instance_refs, input);
+        (self.compacted_size, self.instance_refs, self.input, self.provisional) =
+            (compacted_size, instance_refs, input, provisional);
     }
 
     pub fn new() -> GeometryRecord {
@@ -366,6 +372,7 @@ impl GeometryRecord {
             pending_layout: None,
             invalid_triangles: 0,
             name: None,
+            provisional: false,
         }
     }
 

@@ -40,6 +40,9 @@ pub(crate) struct Scene {
     /// Geometries whose GPU-built layout had too many samples: built again at the next
     /// recording with this (halved) resolution limit.
     pub relayout: Vec<(GeometryHandle, u32)>,
+    /// `BuildHint::FastThenTrace` geometries built fast, to rebuild for fast trace after the
+    /// build queue: (geometry, build id of the fast build; a newer one skips the entry).
+    pub quality_queue: VecDeque<(GeometryHandle, u64)>,
 }
 
 /// Totals since the context was made (`CacheReport`): caches the budget evicted, and geometry
@@ -66,6 +69,7 @@ impl Scene {
             next_layout_id: 0,
             cache_stats: CacheStats::default(),
             relayout: Vec::new(),
+            quality_queue: VecDeque::new(),
         }
     }
 
@@ -82,7 +86,8 @@ impl Scene {
 
     /// BLAS builds still queued (registered geometries not built yet, and rebuilds).
     pub fn pending_blas_builds(&self) -> usize {
-        self.build_queue.iter().filter(|h| self.geometries.get(**h).is_ok()).count()
+        let quality = self.quality_queue.iter().filter(|(h, id)| self.geometries.get(*h).is_ok_and(|g| g.build_id == *id));
+        self.build_queue.iter().filter(|h| self.geometries.get(**h).is_ok()).count() + quality.count()
     }
 
     pub fn rebuild_snapshot(&mut self) {
