@@ -130,19 +130,7 @@ impl Recorder<'_> {
         };
         let st = &mut *self.st;
         let ws = &mut st.working_sets[self.ws];
-        let tlas = ws.tlas_handle();
-        let mut r = Recording {
-            device: self.device,
-            cmd: self.cmd,
-            ring: &mut ws.ring,
-            hazards: &mut self.hazards,
-            tlas,
-            seed: self.seed,
-            instance_table: 0,
-            usage: 0,
-            inline: false,
-            floor: false,
-        };
+        let mut r = Recording::maintenance(self.device, self.cmd, &mut ws.ring, &mut self.hazards, self.seed);
         st.passes.surfel_layout.record_tiles(&mut r, &job);
         self.journal.retire_at_commit(Garbage::Buffer(scratch));
         ws.readbacks.push(Readback::Counted { geometry: h, build_id, words, result, limit });
@@ -225,19 +213,7 @@ impl Recorder<'_> {
             }
         }
         let ws = &mut st.working_sets[self.ws];
-        let tlas = ws.tlas_handle();
-        let mut r = Recording {
-            device,
-            cmd,
-            ring: &mut ws.ring,
-            hazards,
-            tlas,
-            seed: self.seed,
-            instance_table: 0,
-            usage: 0,
-            inline: false,
-            floor: false,
-        };
+        let mut r = Recording::maintenance(device, cmd, &mut ws.ring, hazards, self.seed);
         for (address, count, color) in fills {
             st.passes.cache_ops.fill(&mut r, address, count, color);
         }

@@ -279,18 +279,7 @@ impl Recorder<'_> {
             }
             ws.index_checks.push((h, copy.raw, slot as u32));
         }
-        let mut r = Recording {
-            device,
-            cmd,
-            ring: &mut ws.ring,
-            hazards: &mut self.hazards,
-            tlas: vk::AccelerationStructureKHR::null(),
-            seed: 0,
-            instance_table: 0,
-            usage: 0,
-            inline: false,
-            floor: false,
-        };
+        let mut r = Recording::maintenance(device, cmd, &mut ws.ring, &mut self.hazards, 0);
         st.passes.geometry_pack.record(&mut r, &jobs);
         st.passes.geometry_pack.record_alpha(&mut r, &alpha_jobs);
         Ok(())

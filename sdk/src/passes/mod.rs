@@ -54,6 +54,31 @@ pub(crate) struct Recording<'a> {
     pub floor: bool,
 }
 
+impl<'a> Recording<'a> {
+    /// A recording for the compute passes of scene and cache maintenance (geometry packs,
+    /// cache fills, surfel layouts): no TLAS, instance table or usage flags.
+    pub fn maintenance(
+        device: &'a Device,
+        cmd: vk::CommandBuffer,
+        ring: &'a mut UploadRing,
+        hazards: &'a mut Hazards,
+        seed: u32,
+    ) -> Recording<'a> {
+        Recording {
+            device,
+            cmd,
+            ring,
+            hazards,
+            tlas: vk::AccelerationStructureKHR::null(),
+            seed,
+            instance_table: 0,
+            usage: 0,
+            inline: false,
+            floor: false,
+        }
+    }
+}
+
 /// The SDK state some tasks read or advance while they record.
 pub(crate) struct World<'a> {
     pub scene: &'a Scene,
