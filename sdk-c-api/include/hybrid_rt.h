@@ -1178,7 +1178,8 @@ typedef struct HrtCacheReport {
   uint64_t evictions;
   uint64_t evicted_bytes;
   /**
-   * Geometry bytes copied to the host to size surfel layouts (0 for tiles, sized on the GPU).
+   * Geometry bytes copied to the host to size surfel layouts (0 unless a mesh was too big
+   * for the GPU layout passes).
    */
   uint64_t geometry_readback_bytes;
 } HrtCacheReport;

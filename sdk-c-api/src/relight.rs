@@ -73,7 +73,8 @@ pub struct HrtCacheReport {
     /// Caches evicted since the context was made, and their bytes.
     pub evictions: u64,
     pub evicted_bytes: u64,
-    /// Geometry bytes copied to the host to size surfel layouts (0 for tiles, sized on the GPU).
+    /// Geometry bytes copied to the host to size surfel layouts (0 unless a mesh was too big
+    /// for the GPU layout passes).
     pub geometry_readback_bytes: u64,
 }
 

@@ -404,47 +404,50 @@ fn transfer_between_tessellations_preserves_colours() {
     w.finish(vec![images], vec![lit]);
 }
 
-/// Tiles layouts are sized on the GPU: the cache holds exactly the CPU rule's samples —
-/// clamp(ceil(longest edge / tile_unit_length), 1, limit)² per triangle, over a sphere's
-/// uneven triangles — and no byte of geometry goes to the host. Mesh colors, still built on
-/// the CPU, read their geometry back (positions and 32-bit indices).
+/// Surfel layouts are sized on the GPU: the caches hold exactly the CPU rule's samples over a
+/// sphere's uneven triangles — tiles: clamp(ceil(longest edge / tile_unit_length), 1, limit)²
+/// per triangle; mesh colors: a sample per vertex, R_e - 1 per edge (R_e: the finest of its
+/// two triangles) and the interior lattice points — and no byte of geometry goes to the host.
 #[test]
-fn tiles_layouts_are_sized_on_the_gpu_without_a_geometry_read_back() {
+fn surfel_layouts_are_sized_on_the_gpu_without_a_geometry_read_back() {
     let mut scene = Scene::default();
     let sphere = Mesh::sphere(1.0, 48, 24);
     let m = scene.add_mesh(sphere.clone());
     scene.add_instance(m, Affine3A::IDENTITY);
     let (unit, limit) = (0.05f32, 6u32);
-    let expected: u64 = sphere
+    let res: Vec<u64> = sphere
         .indices
         .chunks(3)
         .map(|t| {
             let p = [0, 1, 2].map(|k| sphere.positions[t[k] as usize]);
             let longest = (0..3).map(|k| p[k].distance(p[(k + 1) % 3])).fold(0.0f32, f32::max);
-            let r = ((longest / unit).ceil() as u32).clamp(1, limit) as u64;
-            r * r
+            ((longest / unit).ceil() as u32).clamp(1, limit) as u64
         })
-        .sum();
-    let tiles = world(
-        scene.clone(),
-        SurfelSettings { surfel_type: SurfelType::Tiles, tile_unit_length: unit, tile_resolution_limit: limit },
-    );
-    let bytes = tiles.ctx.instance_cache_bytes(tiles.gpu_scene.instances[0]).unwrap();
-    let report = tiles.ctx.cache_report();
-    eprintln!(
-        "tiles on the GPU: {} samples (CPU rule {expected}), {} geometry bytes read back",
-        bytes / 32,
-        report.geometry_readback_bytes
-    );
-    assert_eq!(bytes / 32, expected);
-    assert_eq!(report.geometry_readback_bytes, 0);
-    tiles.finish(Vec::new(), Vec::new());
-
-    let colors = world(
-        scene,
-        SurfelSettings { surfel_type: SurfelType::MeshColors, tile_unit_length: unit, tile_resolution_limit: limit },
-    );
-    let read = colors.ctx.cache_report().geometry_readback_bytes;
-    assert_eq!(read, (sphere.positions.len() * 12 + sphere.indices.len() * 4) as u64, "mesh colors read the copy back");
-    colors.finish(Vec::new(), Vec::new());
+        .collect();
+    let tiles_expected: u64 = res.iter().map(|r| r * r).sum();
+    let mut edges: std::collections::HashMap<(u32, u32), u64> = std::collections::HashMap::new();
+    for (t, r) in sphere.indices.chunks(3).zip(&res) {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let e = edges.entry((a.min(b), a.max(b))).or_insert(1);
+            *e = (*e).max(*r);
+        }
+    }
+    let interior = |r: u64| if r < 3 { 0 } else { (r - 1) * (r - 2) / 2 };
+    let colors_expected = sphere.positions.len() as u64
+        + edges.values().map(|r| r - 1).sum::<u64>()
+        + res.iter().map(|&r| interior(r)).sum::<u64>();
+    for (surfel_type, expected) in [(SurfelType::Tiles, tiles_expected), (SurfelType::MeshColors, colors_expected)] {
+        let w = world(scene.clone(), SurfelSettings { surfel_type, tile_unit_length: unit, tile_resolution_limit: limit });
+        let bytes = w.ctx.instance_cache_bytes(w.gpu_scene.instances[0]).unwrap();
+        let report = w.ctx.cache_report();
+        eprintln!(
+            "{surfel_type:?} on the GPU: {} samples (CPU rule {expected}), {} geometry bytes read back",
+            bytes / 32,
+            report.geometry_readback_bytes
+        );
+        assert_eq!(bytes / 32, expected, "{surfel_type:?}");
+        assert_eq!(report.geometry_readback_bytes, 0, "{surfel_type:?}");
+        w.finish(Vec::new(), Vec::new());
+    }
 }

@@ -1,10 +1,8 @@
-//! Surfel layouts of a geometry, built on the CPU from the geometry's vertices and indices
-//! (read back once, when the ticket that copied them returns — no stall). Shaders read them
-//! through shaders/include/cache.glsl; the two must agree word for word.
-//!
-//! Kickstart RT computes sizes on the GPU and reads them back to allocate; we read back the
-//! geometry instead and build the whole layout here, where it is easy to test, including the
-//! edge sharing that mesh colors need.
+//! Surfel layouts of a geometry built on the CPU from its vertices and indices: the
+//! specification the GPU builder (`passes::surfel_layout`, which every geometry that fits its
+//! dispatches uses) is tested against, and the fallback for a mesh too big for it (read back
+//! once, when the ticket that copied it returns — no stall). Shaders read layouts through
+//! shaders/include/cache.glsl; the builders and it must agree word for word.
 use crate::types::{SurfelSettings, SurfelType};
 use glam::Vec3;
 use std::collections::HashMap;

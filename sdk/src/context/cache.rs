@@ -27,8 +27,9 @@ use gpu_allocator::MemoryLocation;
 
 impl Recorder<'_> {
     /// Sizes the surfel layouts of freshly registered geometry (after the geometry copies):
-    /// tiles layouts are built on the GPU and only their sample count is read back; mesh
-    /// colors copy the geometry to a read-back buffer for the CPU builder.
+    /// layouts are built on the GPU and only their sample count is read back; a mesh too
+    /// big for one dispatch of the passes copies the geometry to a read-back buffer for the
+    /// CPU builder.
     pub fn record_readbacks(&mut self, handles: &[GeometryHandle]) -> Result<()> {
         // Layouts built again with a smaller resolution limit (too many samples before).
         let mut jobs: Vec<(GeometryHandle, Option<u32>)> = handles.iter().map(|&h| (h, None)).collect();
@@ -36,7 +37,8 @@ impl Recorder<'_> {
         if jobs.is_empty() {
             return Ok(());
         }
-        let max_gpu = surfel_layout::max_triangles(self.device.limits.max_dispatch_groups[0]);
+        let max_groups = self.device.limits.max_dispatch_groups[0];
+        let max_tiles = surfel_layout::max_triangles(max_groups);
         let mut copied = false;
         for (h, limit) in jobs {
             let st = &mut *self.st;
@@ -44,9 +46,14 @@ impl Recorder<'_> {
             let (Some(copy), Some(l)) = (g.copy.as_ref(), g.layout) else { continue };
             let (copy_raw, copy_address, build_id) = (copy.raw, copy.address, g.build_id);
             let surfels = g.input.surfels;
-            if surfels.surfel_type == SurfelType::Tiles && (l.primitive_count as u64) <= max_gpu && l.primitive_count > 0 {
+            let (t, v) = (l.primitive_count as u64, l.vertex_count as u64);
+            let on_gpu = match surfels.surfel_type {
+                SurfelType::Tiles => t > 0 && t <= max_tiles,
+                SurfelType::MeshColors => surfel_layout::mesh_colors_fits(max_groups, t, v),
+            };
+            if on_gpu {
                 let limit = limit.unwrap_or(surfels.tile_resolution_limit.clamp(1, layout::MAX_RESOLUTION));
-                self.record_gpu_tiles(h, build_id, copy_address, l, surfels.tile_unit_length, limit)?;
+                self.record_gpu_layout(h, build_id, copy_address, l, surfels, limit)?;
                 continue;
             }
             let (d, cmd) = (&self.device.raw, self.cmd);
@@ -69,30 +76,33 @@ impl Recorder<'_> {
         Ok(())
     }
 
-    /// Builds a tiles layout on the GPU from the geometry's copy (`passes::surfel_layout`).
-    fn record_gpu_tiles(
+    /// Builds a layout on the GPU from the geometry's copy (`passes::surfel_layout`).
+    fn record_gpu_layout(
         &mut self,
         h: GeometryHandle,
         build_id: u64,
         copy: u64,
         l: GeometryLayout,
-        unit: f32,
+        surfels: crate::types::SurfelSettings,
         limit: u32,
     ) -> Result<()> {
-        let t = l.primitive_count as u64;
+        let (t, v) = (l.primitive_count as u64, l.vertex_count as u64);
+        let tiles = surfels.surfel_type == SurfelType::Tiles;
         let memory = self.memory;
         let words = memory.create_buffer(
             "surfel layout",
-            t * 8,
+            t * if tiles { 8 } else { 36 },
             vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
             MemoryKind::Cache,
         )?;
         let made = (|| -> Result<(Buffer, Buffer)> {
+            let scratch_words =
+                if tiles { surfel_layout::scratch_words(t) } else { surfel_layout::mesh_colors_scratch_words(t, v) };
             let scratch = memory.create_buffer(
                 "surfel layout scratch",
-                surfel_layout::scratch_words(t) * 4,
-                vk::BufferUsageFlags::STORAGE_BUFFER,
+                scratch_words * 4,
+                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
                 MemoryLocation::GpuOnly,
                 MemoryKind::BuildScratch,
             )?;
@@ -117,23 +127,43 @@ impl Recorder<'_> {
                 return Err(e);
             }
         };
-        let job = surfel_layout::TilesJob {
-            positions: copy,
-            indices: copy + l.index_offset(),
-            triangles: l.primitive_count,
-            unit,
-            limit,
-            words: words.address,
-            scratch: scratch.address,
-            result: result.raw,
-            result_address: result.address,
-        };
         let st = &mut *self.st;
         let ws = &mut st.working_sets[self.ws];
         let mut r = Recording::maintenance(self.device, self.cmd, &mut ws.ring, &mut self.hazards, self.seed);
-        st.passes.surfel_layout.record_tiles(&mut r, &job);
+        let (positions, indices, unit) = (copy, copy + l.index_offset(), surfels.tile_unit_length);
+        if tiles {
+            let job = surfel_layout::TilesJob {
+                positions,
+                indices,
+                triangles: l.primitive_count,
+                unit,
+                limit,
+                words: words.address,
+                scratch: scratch.address,
+                result: result.raw,
+                result_address: result.address,
+            };
+            st.passes.surfel_layout.record_tiles(&mut r, &job);
+        } else {
+            let job = surfel_layout::MeshColorsJob {
+                positions,
+                indices,
+                triangles: l.primitive_count,
+                vertices: l.vertex_count,
+                unit,
+                limit,
+                words: words.raw,
+                words_address: words.address,
+                scratch: scratch.raw,
+                scratch_address: scratch.address,
+                result: result.raw,
+                result_address: result.address,
+            };
+            st.passes.surfel_layout.record_mesh_colors(&mut r, &job);
+        }
         self.journal.retire_at_commit(Garbage::Buffer(scratch));
-        ws.readbacks.push(Readback::Counted { geometry: h, build_id, words, result, limit });
+        let surfel_type = surfels.surfel_type;
+        ws.readbacks.push(Readback::Counted { geometry: h, build_id, surfel_type, words, result, limit });
         Ok(())
     }
 
@@ -287,7 +317,7 @@ impl State {
                     // The ticket is complete: nothing on the GPU reads this buffer any more.
                     memory.destroy_buffer(buffer);
                 }
-                Readback::Counted { geometry: h, build_id, words, result, limit } => {
+                Readback::Counted { geometry: h, build_id, surfel_type, words, result, limit } => {
                     let counted = result
                         .mapped_bytes()
                         .and_then(|b| b.get(..8))
@@ -296,7 +326,7 @@ impl State {
                     let current = self.scene.geometries.get(h).is_ok_and(|g| g.build_id == build_id);
                     match counted {
                         Some((samples, max_resolution)) if current && samples > 0 && samples as u64 <= max_samples => {
-                            self.install_gpu_layout(h, words, samples, max_resolution);
+                            self.install_gpu_layout(h, words, surfel_type, samples, max_resolution);
                         }
                         Some((samples, _)) if current && limit > 1 => {
                             // Samples grow with the limit squared where it binds: scale it by
@@ -324,12 +354,19 @@ impl State {
 
     /// Makes a GPU-built layout the geometry's (the one it replaces goes once the tickets in
     /// flight are done with it).
-    fn install_gpu_layout(&mut self, h: GeometryHandle, words: Buffer, samples: u32, max_resolution: u32) {
+    fn install_gpu_layout(
+        &mut self,
+        h: GeometryHandle,
+        words: Buffer,
+        surfel_type: SurfelType,
+        samples: u32,
+        max_resolution: u32,
+    ) {
         self.scene.next_layout_id += 1;
         let fresh = SurfelGpu {
             buffer: words,
             sample_count: samples,
-            surfel_type: SurfelType::Tiles,
+            surfel_type,
             id: self.scene.next_layout_id,
             max_resolution: max_resolution.max(1),
         };

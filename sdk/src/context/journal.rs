@@ -17,7 +17,7 @@ use crate::scene::geometry::{Blas, GeometryMeta, SurfelGpu};
 use crate::scene::instance::Placement;
 use crate::types::{GeometryHandle, InstanceHandle};
 use ash::vk;
-use std::collections::VecDeque;
+use std::collections::{HashSet, VecDeque};
 
 /// Where a replaced GPU object lived.
 pub(super) enum Slot {
@@ -82,6 +82,10 @@ pub(super) struct Journal {
     old_snapshot: Option<Vec<vk::AccelerationStructureInstanceKHR>>,
     geometries: Vec<(GeometryHandle, GeometryMeta)>,
     instances: Vec<(InstanceHandle, Option<Placement>)>,
+    /// Which records are saved already (a linear search made a build of 60,000 instance
+    /// registrations take seconds).
+    touched_geometries: HashSet<GeometryHandle>,
+    touched_instances: HashSet<InstanceHandle>,
     /// GPU objects the build replaced (None: the slot was empty), in order.
     replaced: Vec<(Slot, Option<Held>)>,
     /// Objects the build made and retires itself (staging): retired at commit, destroyed on
@@ -113,6 +117,8 @@ impl Journal {
             old_snapshot: None,
             geometries: Vec::new(),
             instances: Vec::new(),
+            touched_geometries: HashSet::new(),
+            touched_instances: HashSet::new(),
             replaced: Vec::new(),
             made_to_retire: Vec::new(),
             pending_layouts: Vec::new(),
@@ -123,13 +129,13 @@ impl Journal {
     }
 
     pub fn touch_geometry(&mut self, h: GeometryHandle, meta: GeometryMeta) {
-        if !self.geometries.iter().any(|(g, _)| *g == h) {
+        if self.touched_geometries.insert(h) {
             self.geometries.push((h, meta));
         }
     }
 
     pub fn touch_instance(&mut self, h: InstanceHandle, placement: Option<Placement>) {
-        if !self.instances.iter().any(|(i, _)| *i == h) {
+        if self.touched_instances.insert(h) {
             self.instances.push((h, placement));
         }
     }

@@ -9,7 +9,7 @@ use crate::gpu::memory::{self, Buffer, Memory, MemoryKind};
 use crate::gpu::timestamps::Timer;
 use crate::gpu::upload::UploadRing;
 use crate::scene::tlas::Tlas;
-use crate::types::{GeometryHandle, InitSettings};
+use crate::types::{GeometryHandle, InitSettings, SurfelType};
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
@@ -17,9 +17,9 @@ use gpu_allocator::MemoryLocation;
 pub(super) enum Readback {
     /// The whole copy, for the CPU builders (mesh colors, or a mesh too big for the GPU pass).
     Geometry { geometry: GeometryHandle, build_id: u64, buffer: Buffer },
-    /// A tiles layout the GPU built into `words`; `result` holds its (samples, largest R),
-    /// counted with resolution limit `limit`.
-    Counted { geometry: GeometryHandle, build_id: u64, words: Buffer, result: Buffer, limit: u32 },
+    /// A layout the GPU built into `words`; `result` holds its (samples, largest R), counted
+    /// with resolution limit `limit`.
+    Counted { geometry: GeometryHandle, build_id: u64, surfel_type: SurfelType, words: Buffer, result: Buffer, limit: u32 },
 }
 
 impl Readback {

@@ -142,9 +142,9 @@ pub struct CacheReport {
     /// Their bytes.
     pub evicted_bytes: u64,
     /// Geometry bytes copied to the host since the context was made, to size surfel layouts:
-    /// tiles layouts are sized on the GPU (0 bytes; their 16-byte sample count comes home
-    /// with the ticket); mesh colors, whose samples are shared between triangles, are still
-    /// built on the CPU from a copy of the geometry.
+    /// 0 unless a mesh was too big for the GPU layout passes (more than 65,535 x 256 / 3
+    /// triangles on most devices), which the CPU builder then lays out from a copy. Layouts
+    /// are sized on the GPU and only their 16-byte sample count comes home with the ticket.
     pub geometry_readback_bytes: u64,
 }
 
