@@ -225,11 +225,10 @@ fn run() -> Result<(), String> {
     let vb = host.device_buffer_with_data(bytemuck::cast_slice(&mesh.positions), usage)?;
     let ib = host.device_buffer_with_data(bytemuck::cast_slice(&mesh.indices), usage)?;
     let mut frame = ctx.create_task_container();
-    // The registration frame with each surfel layout: mesh colors (the default) still copy
-    // the geometry to the host for the CPU builder; tiles are sized on the GPU.
-    // And with the fast-build hint (what a level streaming in would ask for).
+    // The registration frame with each surfel layout (both sized on the GPU), and with the
+    // fast-build hints (what a level streaming in would ask for).
     for (surfel_type, build_hint, what, key) in [
-        (SurfelType::MeshColors, BuildHint::Auto, "mesh-colors layout read back", "blas_big_mesh"),
+        (SurfelType::MeshColors, BuildHint::Auto, "mesh-colors layout sized on the GPU", "blas_big_mesh"),
         (SurfelType::Tiles, BuildHint::Auto, "tiles layout sized on the GPU", "blas_big_mesh_tiles"),
         (SurfelType::Tiles, BuildHint::PreferFastBuild, "tiles, PreferFastBuild", "blas_big_mesh_tiles_fast_build"),
         (SurfelType::Tiles, BuildHint::FastThenTrace, "tiles, FastThenTrace's first build", "blas_big_mesh_fast_then_trace"),

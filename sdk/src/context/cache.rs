@@ -40,6 +40,7 @@ impl Recorder<'_> {
         let max_groups = self.device.limits.max_dispatch_groups[0];
         let max_tiles = surfel_layout::max_triangles(max_groups);
         let mut copied = false;
+        let mut plans = Vec::new();
         for (h, limit) in jobs {
             let st = &mut *self.st;
             let g = st.scene.geometries.get(h)?;
@@ -53,7 +54,7 @@ impl Recorder<'_> {
             };
             if on_gpu {
                 let limit = limit.unwrap_or(surfels.tile_resolution_limit.clamp(1, layout::MAX_RESOLUTION));
-                self.record_gpu_layout(h, build_id, copy_address, l, surfels, limit)?;
+                plans.push(self.plan_gpu_layout(h, build_id, copy_address, l, surfels, limit)?);
                 continue;
             }
             let (d, cmd) = (&self.device.raw, self.cmd);
@@ -73,11 +74,19 @@ impl Recorder<'_> {
             self.st.scene.cache_stats.readback_bytes += l.total_bytes();
             self.st.working_sets[self.ws].readbacks.push(Readback::Geometry { geometry: h, build_id, buffer: readback });
         }
+        // Every layout of the recording together: one barrier per pass, not per pass per mesh.
+        if !plans.is_empty() {
+            let st = &mut *self.st;
+            let ws = &mut st.working_sets[self.ws];
+            let mut r = Recording::maintenance(self.device, self.cmd, &mut ws.ring, &mut self.hazards, self.seed);
+            st.passes.surfel_layout.record(&mut r, &plans);
+        }
         Ok(())
     }
 
-    /// Builds a layout on the GPU from the geometry's copy (`passes::surfel_layout`).
-    fn record_gpu_layout(
+    /// Makes the buffers of a layout built on the GPU from the geometry's copy, and the plan
+    /// of its passes (`passes::surfel_layout`; recorded with the recording's others).
+    fn plan_gpu_layout(
         &mut self,
         h: GeometryHandle,
         build_id: u64,
@@ -85,7 +94,7 @@ impl Recorder<'_> {
         l: GeometryLayout,
         surfels: crate::types::SurfelSettings,
         limit: u32,
-    ) -> Result<()> {
+    ) -> Result<surfel_layout::Plan> {
         let (t, v) = (l.primitive_count as u64, l.vertex_count as u64);
         let tiles = surfels.surfel_type == SurfelType::Tiles;
         let memory = self.memory;
@@ -128,10 +137,8 @@ impl Recorder<'_> {
             }
         };
         let st = &mut *self.st;
-        let ws = &mut st.working_sets[self.ws];
-        let mut r = Recording::maintenance(self.device, self.cmd, &mut ws.ring, &mut self.hazards, self.seed);
         let (positions, indices, unit) = (copy, copy + l.index_offset(), surfels.tile_unit_length);
-        if tiles {
+        let plan = if tiles {
             let job = surfel_layout::TilesJob {
                 positions,
                 indices,
@@ -143,7 +150,7 @@ impl Recorder<'_> {
                 result: result.raw,
                 result_address: result.address,
             };
-            st.passes.surfel_layout.record_tiles(&mut r, &job);
+            st.passes.surfel_layout.plan_tiles(&job)
         } else {
             let job = surfel_layout::MeshColorsJob {
                 positions,
@@ -159,12 +166,12 @@ impl Recorder<'_> {
                 result: result.raw,
                 result_address: result.address,
             };
-            st.passes.surfel_layout.record_mesh_colors(&mut r, &job);
-        }
+            st.passes.surfel_layout.plan_mesh_colors(&job)
+        };
         self.journal.retire_at_commit(Garbage::Buffer(scratch));
         let surfel_type = surfels.surfel_type;
-        ws.readbacks.push(Readback::Counted { geometry: h, build_id, surfel_type, words, result, limit });
-        Ok(())
+        st.working_sets[self.ws].readbacks.push(Readback::Counted { geometry: h, build_id, surfel_type, words, result, limit });
+        Ok(plan)
     }
 
     /// Uploads new layouts, gives instances the caches their layouts need (filled with their
