@@ -185,6 +185,33 @@ uint hrt_mc_nearest(MeshColorTri t, vec3 b) {
     return t.e[k] + uint(m - 1);
 }
 
+// Sample `local` of triangle `tri` of the instance's layout, as the passes that visit every
+// sample enumerate them (cache transfer, relight): its barycentrics and index; false past the
+// triangle's samples. Tiles: cell `local` of the R x R square; mesh colors: lattice point
+// `local`, rows of decreasing length R + 1, R, ..., 1 (shared points come out once per
+// triangle, with the same index).
+bool hrt_layout_sample(InstanceGpu inst, uint tri, uint local, out vec3 b, out uint sample_index) {
+    b = vec3(1.0 / 3.0);
+    sample_index = 0u;
+    if (inst.surfel_type == HRT_SURFEL_TILES) {
+        LayoutWords l = LayoutWords(inst.layout_addr);
+        uint base = l.w[tri * 2u], r = l.w[tri * 2u + 1u];
+        if (local >= r * r) return false;
+        vec2 st = (vec2(local % r, local / r) + 0.5) / float(r);
+        b = vec3(1.0 - st.x, st.x * (1.0 - st.y), st.x * st.y);
+        sample_index = base + local;
+        return true;
+    }
+    MeshColorTri t = hrt_mc_tri(inst, tri);
+    uint r = t.r, n = (r + 1u) * (r + 2u) / 2u;
+    if (local >= n) return false;
+    uint i = 0u, row = r + 1u, rest = local;
+    while (rest >= row) { rest -= row; row -= 1u; i += 1u; }
+    b = vec3(float(i), float(rest), float(r - i - rest)) / float(r);
+    sample_index = hrt_mc_nearest(t, b);
+    return true;
+}
+
 // Barycentrics of hit attributes (b1, b2) -> (b0, b1, b2).
 vec3 hrt_bary3(vec2 b) { return vec3(1.0 - b.x - b.y, b.x, b.y); }
 

@@ -184,18 +184,21 @@ int hrt_gbuffer_pixel(TraceCommon c, uvec2 launch, sampler2D depth, sampler2D no
 // from. World position: Wächter & Binder, "A Fast and Robust Method for Avoiding
 // Self-Intersection" (Ray Tracing Gems ch. 6) — exact in the float's own precision.
 // Camera distance: offset grows with the distance to the camera, as depth precision does.
+vec3 hrt_offset_world(vec3 p, vec3 n, float threshold, float float_scale, float int_scale) {
+    ivec3 of_i = ivec3(int_scale * n);
+    vec3 p_i = vec3(
+        intBitsToFloat(floatBitsToInt(p.x) + ((p.x < 0.0) ? -of_i.x : of_i.x)),
+        intBitsToFloat(floatBitsToInt(p.y) + ((p.y < 0.0) ? -of_i.y : of_i.y)),
+        intBitsToFloat(floatBitsToInt(p.z) + ((p.z < 0.0) ? -of_i.z : of_i.z)));
+    return vec3(abs(p.x) < threshold ? p.x + float_scale * n.x : p_i.x,
+                abs(p.y) < threshold ? p.y + float_scale * n.y : p_i.y,
+                abs(p.z) < threshold ? p.z + float_scale * n.z : p_i.z);
+}
+
 vec3 hrt_offset_ray(TraceCommon c, vec3 p, vec3 n) {
     uint kind = c.modes.w;
     if (kind == HRT_RAY_OFFSET_WORLD_POSITION) {
-        float threshold = c.offset_world.x, float_scale = c.offset_world.y, int_scale = c.offset_world.z;
-        ivec3 of_i = ivec3(int_scale * n);
-        vec3 p_i = vec3(
-            intBitsToFloat(floatBitsToInt(p.x) + ((p.x < 0.0) ? -of_i.x : of_i.x)),
-            intBitsToFloat(floatBitsToInt(p.y) + ((p.y < 0.0) ? -of_i.y : of_i.y)),
-            intBitsToFloat(floatBitsToInt(p.z) + ((p.z < 0.0) ? -of_i.z : of_i.z)));
-        return vec3(abs(p.x) < threshold ? p.x + float_scale * n.x : p_i.x,
-                    abs(p.y) < threshold ? p.y + float_scale * n.y : p_i.y,
-                    abs(p.z) < threshold ? p.z + float_scale * n.z : p_i.z);
+        return hrt_offset_world(p, n, c.offset_world.x, c.offset_world.y, c.offset_world.z);
     }
     if (kind == HRT_RAY_OFFSET_CAMERA_DISTANCE) {
         float d = distance(p, c.view_to_world[3].xyz);
