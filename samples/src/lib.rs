@@ -3,6 +3,7 @@
 //! The engine side (device, images, submission) is `hybrid_rt_testkit::host`; the G-buffer
 //! comes from `raster` (a Vulkan graphics pass, as an engine's) or, for comparison, from the
 //! CPU reference renderer.
+pub mod blas_floor;
 pub mod gltf_scene;
 pub mod gltf_textures;
 pub mod gpu;

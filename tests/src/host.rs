@@ -205,7 +205,7 @@ pub fn layout_access(layout: vk::ImageLayout, src: bool) -> vk::AccessFlags2 {
     }
 }
 
-fn vkerr(what: &'static str) -> impl Fn(vk::Result) -> String {
+pub fn vkerr(what: &'static str) -> impl Fn(vk::Result) -> String {
     move |e| format!("{what}: {e:?}")
 }
 
@@ -355,7 +355,9 @@ impl Host {
             device: device.clone(),
             physical_device,
             debug_settings: Default::default(),
-            buffer_device_address: false,
+            // The bench's BLAS floor builds from these buffers' addresses (the device has the
+            // feature: the SDK requires it).
+            buffer_device_address: true,
             allocation_sizes: AllocationSizes::new(64 << 20, 64 << 20),
         })
         .map_err(|e| format!("gpu-allocator: {e}"))?;
