@@ -847,6 +847,41 @@ int main(void) {
            "the mirror shows the relit ceiling: 0.5 x 2 x (1, 0.5, 0.25)");
     relight.light_count = 0;
     EXPECT(hrt_schedule_cache_relight(frame, &relight) == HRT_ERROR_INVALID_INPUT, "a relight without lights is refused");
+
+    /* ---- Hit lighting: the mirror's hit is shaded from the lights instead of the cache. The
+     * ceiling glows (emission 0.1, 0.2, 0.3); the sun above lights only its top, and the
+     * mirror sees its underside: the hit-lit mirror shows the emission alone. */
+    {
+        HrtInstanceTask glow = hrt_instance_task_default();
+        glow.handle = instances[1];
+        glow.operation = HRT_OPERATION_UPDATE;
+        glow.input.geometry = geometries[1];
+        glow.input.initial_tile_color[0] = 1.0f;
+        glow.input.initial_tile_color[2] = 1.0f;
+        glow.input.emission[0] = 0.1f;
+        glow.input.emission[1] = 0.2f;
+        glow.input.emission[2] = 0.3f;
+        CHECK_HRT(hrt_schedule_instance(frame, &glow));
+        HrtTraceSpecularTask lit = mirror;
+        lit.hit_lighting.lights = &sun;
+        lit.hit_lighting.light_count = 1;
+        lit.hit_lighting.max_roughness = 0.0f;
+        lit.hit_lighting.indirect = HRT_HIT_INDIRECT_NONE;
+        CHECK_HRT(hrt_schedule_specular(frame, &lit));
+        printf("hit-lit specular frame:\n");
+        run_frame(ctx, frame, &spec, 16, spec_px);
+        printf("hit-lit mirror at the centre: %.3f %.3f %.3f\n", m[0], m[1], m[2]);
+        EXPECT(fabsf(m[0] - 0.1f) < 1e-4f && fabsf(m[1] - 0.2f) < 1e-4f && fabsf(m[2] - 0.3f) < 1e-4f,
+               "the hit-lit mirror shows the unlit underside's emission");
+        HrtTraceSpecularTask bad_lit = lit;
+        bad_lit.hit_lighting.gather_rays = HRT_MAX_HIT_GATHER_RAYS + 1;
+        EXPECT(hrt_schedule_specular(frame, &bad_lit) == HRT_ERROR_INVALID_INPUT, "too many gather rays are refused");
+        bad_lit = lit;
+        bad_lit.hit_lighting.lights = NULL;
+        EXPECT(hrt_schedule_specular(frame, &bad_lit) == HRT_ERROR_NULL_POINTER, "hit lighting without its lights is refused");
+        glow.input.emission[1] = -1.0f;
+        EXPECT(hrt_schedule_instance(frame, &glow) == HRT_ERROR_INVALID_INPUT, "a negative emission is refused");
+    }
     free_image(spec);
 
     /* ---- Alpha testing: the ceiling updated into a cut-out whose texture is all holes (alpha

@@ -122,6 +122,15 @@ impl SampleScene {
         a.clamp(Vec3::ZERO, Vec3::ONE).to_array()
     }
 
+    /// Instance `i`'s emitted radiance as relighting and hit lighting take it: its material's
+    /// emissive factor x the mean of its emissive texture (in linear light).
+    pub fn emission(&self, i: usize) -> [f32; 3] {
+        let Some(m) = self.materials.get(i) else { return [0.0; 3] };
+        let texture = self.material_textures.get(i).and_then(|t| t.emissive).and_then(|k| self.textures.get(k));
+        let mean = texture.map_or(Vec3::ONE, |t| t.mean_linear_rgb());
+        (Vec3::from(m.emissive) * mean).max(Vec3::ZERO).to_array()
+    }
+
     /// Mesh `k`'s normals, texture coordinates and tangents (what `MeshBuffers` interleaves).
     pub fn vertex_attributes(&self, k: usize) -> VertexAttributes<'_> {
         fn of<T>(lists: &[Vec<T>], k: usize) -> &[T] {

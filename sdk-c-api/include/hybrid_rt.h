@@ -47,6 +47,11 @@
 #define HRT_MAX_LIGHT_OUTPUTS 4
 
 /**
+ * Most gather rays per hit of HrtHitLighting.
+ */
+#define HRT_MAX_HIT_GATHER_RAYS 8
+
+/**
  * Most samples one HrtRelightCacheTask may take.
  */
 #define HRT_MAX_RELIGHT_SAMPLES (1 << 24)
@@ -556,9 +561,13 @@ typedef struct HrtInstanceInput {
    */
   float initial_tile_color[3];
   /**
-   * Diffuse albedo for HrtRelightCacheTask (each 0..=1). Default 0.5 grey.
+   * Diffuse albedo for HrtRelightCacheTask and hit lighting (each 0..=1). Default 0.5 grey.
    */
   float albedo[3];
+  /**
+   * Emitted radiance relighting and hit lighting add (each finite, >= 0). Default black.
+   */
+  float emission[3];
 } HrtInstanceInput;
 
 typedef struct HrtInstanceTask {
@@ -921,6 +930,32 @@ typedef struct HrtTraceDiffuseTask {
 } HrtTraceDiffuseTask;
 
 /**
+ * Hit lighting (see the Rust docs of HitLighting): hits of pixels with roughness up to
+ * max_roughness are shaded from these lights with shadow rays (HrtInstanceInput.albedo x
+ * irradiance + emission) plus an indirect part from the caches (an HrtHitIndirect). The
+ * lights are copied when the task is scheduled.
+ */
+typedef struct HrtHitLighting {
+  const struct HrtLightInfo *lights;
+  /**
+   * 0..=HRT_MAX_SHADOW_LIGHTS (0: off). Default 0.
+   */
+  uint32_t light_count;
+  /**
+   * 0..=1. Default 0.1.
+   */
+  float max_roughness;
+  /**
+   * An HrtHitIndirect. Default HRT_HIT_INDIRECT_CACHE_RESIDUAL.
+   */
+  uint32_t indirect;
+  /**
+   * Gather rays per hit with HRT_HIT_INDIRECT_GATHER, 1..=HRT_MAX_HIT_GATHER_RAYS. Default 1.
+   */
+  uint32_t gather_rays;
+} HrtHitLighting;
+
+/**
  * Specular reflections shaded from the cache (see the Rust docs of TraceSpecularTask).
  */
 typedef struct HrtTraceSpecularTask {
@@ -953,6 +988,10 @@ typedef struct HrtTraceSpecularTask {
    * Optional (environment.image = VK_NULL_HANDLE: none): what misses see.
    */
   struct HrtEnvironmentInput environment;
+  /**
+   * Optional hit lighting for smooth pixels (hit_lighting.light_count = 0: off, default).
+   */
+  struct HrtHitLighting hit_lighting;
 } HrtTraceSpecularTask;
 
 /**
@@ -1455,6 +1494,11 @@ enum HrtStatus hrt_schedule_diffuse(struct HrtTaskContainer *container,
 
 struct HrtTraceSpecularTask hrt_trace_specular_task_default(void);
 
+/**
+ * # Safety
+ * `container` from hrt_create_task_container; `task` valid, its `hit_lighting.lights`
+ * `hit_lighting.light_count` long (or null with a count of 0).
+ */
 enum HrtStatus hrt_schedule_specular(struct HrtTaskContainer *container,
                                      const struct HrtTraceSpecularTask *task);
 

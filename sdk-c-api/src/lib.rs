@@ -32,6 +32,8 @@ pub const HRT_API_VERSION: u32 = 1 << 12; // (major 0 << 22) | (minor 1 << 12) |
 pub const HRT_MAX_SHADOW_LIGHTS: u32 = 32;
 /// Most per-light outputs of one HrtTraceMultiShadowTask.
 pub const HRT_MAX_LIGHT_OUTPUTS: u32 = 4;
+/// Most gather rays per hit of HrtHitLighting.
+pub const HRT_MAX_HIT_GATHER_RAYS: u32 = 8;
 /// Most samples one HrtRelightCacheTask may take.
 pub const HRT_MAX_RELIGHT_SAMPLES: u32 = 1 << 24;
 /// Largest HrtSurfelSettings.tile_resolution_limit.
@@ -852,9 +854,19 @@ pub extern "C" fn hrt_trace_specular_task_default() -> HrtTraceSpecularTask {
         firefly_clamp: d.firefly_clamp,
         demodulated_output: types::ao_task_default().output,
         environment: types::environment_default(),
+        hit_lighting: types::HrtHitLighting {
+            lights: std::ptr::null(),
+            light_count: 0,
+            max_roughness: d.hit_lighting.max_roughness,
+            indirect: d.hit_lighting.indirect as u32,
+            gather_rays: d.hit_lighting.gather_rays,
+        },
     }
 }
 
+/// # Safety
+/// `container` from hrt_create_task_container; `task` valid, its `hit_lighting.lights`
+/// `hit_lighting.light_count` long (or null with a count of 0).
 #[no_mangle]
 pub unsafe extern "C" fn hrt_schedule_specular(container: *mut HrtTaskContainer, task: *const HrtTraceSpecularTask) -> HrtStatus {
     guard(|| {
@@ -873,6 +885,19 @@ pub unsafe extern "C" fn hrt_schedule_specular(container: *mut HrtTaskContainer,
             firefly_clamp: t.firefly_clamp,
             demodulated_output: demod,
             environment: types::environment(&t.environment),
+            hit_lighting: rt::HitLighting {
+                lights: slice(t.hit_lighting.lights, t.hit_lighting.light_count, "task->hit_lighting.lights")?
+                    .iter()
+                    .map(types::light)
+                    .collect::<Result<_, _>>()?,
+                max_roughness: t.hit_lighting.max_roughness,
+                indirect: types::pick(
+                    "HrtHitLighting.indirect",
+                    t.hit_lighting.indirect,
+                    &[rt::HitIndirect::CacheResidual, rt::HitIndirect::Gather, rt::HitIndirect::None],
+                )?,
+                gather_rays: t.hit_lighting.gather_rays,
+            },
         })?)
     })
 }

@@ -102,5 +102,6 @@ mod tests {
     #[test]
     fn the_limit_is_the_sdk_one() {
         assert_eq!(crate::HRT_MAX_RELIGHT_SAMPLES, hybrid_rt::MAX_RELIGHT_SAMPLES);
+        assert_eq!(crate::HRT_MAX_HIT_GATHER_RAYS, hybrid_rt::MAX_HIT_GATHER_RAYS);
     }
 }

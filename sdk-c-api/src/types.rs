@@ -261,8 +261,10 @@ pub struct HrtInstanceInput {
     pub mask: u32,
     /// Default black.
     pub initial_tile_color: [f32; 3],
-    /// Diffuse albedo for HrtRelightCacheTask (each 0..=1). Default 0.5 grey.
+    /// Diffuse albedo for HrtRelightCacheTask and hit lighting (each 0..=1). Default 0.5 grey.
     pub albedo: [f32; 3],
+    /// Emitted radiance relighting and hit lighting add (each finite, >= 0). Default black.
+    pub emission: [f32; 3],
 }
 
 #[repr(C)]
@@ -604,6 +606,38 @@ pub struct HrtTraceSpecularTask {
     pub demodulated_output: HrtImageInput,
     /// Optional (environment.image = VK_NULL_HANDLE: none): what misses see.
     pub environment: HrtEnvironmentInput,
+    /// Optional hit lighting for smooth pixels (hit_lighting.light_count = 0: off, default).
+    pub hit_lighting: HrtHitLighting,
+}
+
+/// Hit lighting (see the Rust docs of HitLighting): hits of pixels with roughness up to
+/// max_roughness are shaded from these lights with shadow rays (HrtInstanceInput.albedo x
+/// irradiance + emission) plus an indirect part from the caches (an HrtHitIndirect). The
+/// lights are copied when the task is scheduled.
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtHitLighting {
+    pub lights: *const HrtLightInfo,
+    /// 0..=HRT_MAX_SHADOW_LIGHTS (0: off). Default 0.
+    pub light_count: u32,
+    /// 0..=1. Default 0.1.
+    pub max_roughness: f32,
+    /// An HrtHitIndirect. Default HRT_HIT_INDIRECT_CACHE_RESIDUAL.
+    pub indirect: u32,
+    /// Gather rays per hit with HRT_HIT_INDIRECT_GATHER, 1..=HRT_MAX_HIT_GATHER_RAYS. Default 1.
+    pub gather_rays: u32,
+}
+
+/// HrtHitLighting.indirect (see the Rust docs of HitIndirect).
+#[repr(u32)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtHitIndirect {
+    /// The cache sample less the listed lights' direct light there (no noise). Default.
+    HRT_HIT_INDIRECT_CACHE_RESIDUAL = 0,
+    /// gather_rays cosine rays reading the caches (noisy).
+    HRT_HIT_INDIRECT_GATHER = 1,
+    /// Direct light and emission only.
+    HRT_HIT_INDIRECT_NONE = 2,
 }
 
 /// Shadows from 1..=16 lights in one pass (see the Rust docs of TraceMultiShadowTask): the
@@ -712,7 +746,7 @@ pub struct HrtResourceAllocations {
 
 use crate::status::Failure;
 
-fn pick<T: Copy>(what: &str, v: u32, table: &[T]) -> Result<T, Failure> {
+pub(crate) fn pick<T: Copy>(what: &str, v: u32, table: &[T]) -> Result<T, Failure> {
     table.get(v as usize).copied().ok_or_else(|| {
         Failure(crate::status::HrtStatus::HRT_ERROR_INVALID_INPUT, format!("invalid {what}: {v} is not a valid enum value"))
     })
@@ -916,6 +950,7 @@ pub(crate) fn instance_task(t: &HrtInstanceTask) -> Result<rt::InstanceTask, Fai
             mask: rt::InstanceInclusionMask::from_bits_truncate(t.input.mask as u8),
             initial_tile_color: t.input.initial_tile_color,
             albedo: t.input.albedo,
+            emission: t.input.emission,
         },
     })
 }
@@ -931,6 +966,7 @@ pub(crate) fn instance_task_default() -> HrtInstanceTask {
             mask: d.mask.bits() as u32,
             initial_tile_color: d.initial_tile_color,
             albedo: d.albedo,
+            emission: d.emission,
         },
     }
 }

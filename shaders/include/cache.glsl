@@ -46,7 +46,8 @@ struct InstanceGpu {
     uint alpha_height;
     uint alpha_pitch;
     float alpha_cutoff;
-    vec4 albedo;         // diffuse albedo for relighting (rgb, unused)
+    vec4 albedo;         // diffuse albedo for relighting and hit lighting (rgb, unused)
+    vec4 emission;       // emitted radiance for relighting and hit lighting (rgb, unused)
 };
 
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer InstanceTable { InstanceGpu v[]; };
@@ -219,6 +220,25 @@ vec3 hrt_bary3(vec2 b) { return vec3(1.0 - b.x - b.y, b.x, b.y); }
 uint hrt_cache_sample_index(InstanceGpu inst, uint prim, vec2 bary) {
     if (inst.surfel_type == HRT_SURFEL_TILES) return hrt_tile_sample(inst, prim, bary);
     return hrt_mc_nearest(hrt_mc_tri(inst, prim), hrt_bary3(bary));
+}
+
+// The sample a hit lands on (nearest), and where that sample sits on the triangle: the tile
+// cell's centre, or the mesh-colors lattice point (a point of an edge stored at another
+// resolution: approximately).
+uint hrt_cache_sample_point(InstanceGpu inst, uint prim, vec2 bary, out vec3 b) {
+    if (inst.surfel_type == HRT_SURFEL_TILES) {
+        LayoutWords l = LayoutWords(inst.layout_addr);
+        uint r = l.w[prim * 2u + 1u];
+        float s = clamp(bary.x + bary.y, 0.0, 1.0);
+        float t = s > 0.0 ? clamp(bary.y / s, 0.0, 1.0) : 0.0;
+        vec2 st = (vec2(min(uvec2(vec2(s, t) * float(r)), uvec2(r - 1u))) + 0.5) / float(r);
+        b = vec3(1.0 - st.x, st.x * (1.0 - st.y), st.x * st.y);
+        return hrt_tile_sample(inst, prim, bary);
+    }
+    MeshColorTri t = hrt_mc_tri(inst, prim);
+    b = clamp(floor(hrt_bary3(bary) * float(t.r) + 0.5) / float(t.r), vec3(0.0), vec3(1.0));
+    b /= max(b.x + b.y + b.z, 1e-6);
+    return hrt_mc_nearest(t, hrt_bary3(bary));
 }
 
 // Cached radiance at a hit. Mesh colors interpolate linearly over the lattice triangle that

@@ -8,10 +8,15 @@
 // the output is demodulated by Fresnel — the engine multiplies by its F (or split-sum
 // specular albedo). RGB = mean weighted radiance, A = hit distance of the first ray (misses:
 // the ray length). An optional firefly clamp limits each sample's luminance (seeds/003).
+// With hit lighting, hits of pixels up to a roughness are lit from the engine's lights.
 #include "common.glsl"
 #include "cache.glsl"
 #include "trace_push.glsl"
 #include "environment.glsl"
+#include "light_sampling.glsl"
+#ifndef HRT_MAX_LIGHTS
+#define HRT_MAX_LIGHTS 32
+#endif
 
 layout(set = 0, binding = 0) uniform accelerationStructureEXT u_tlas;
 layout(set = 0, binding = 1) uniform sampler2D u_depth;
@@ -25,7 +30,11 @@ layout(set = 0, binding = 5, std140) uniform SpecularConstants {
     uvec4 counts;          // rays per pixel, bilinear, instance table (uvec2)
     vec4 specular;         // global metalness, has specular image, has demodulated output, unused
     EnvironmentGpu environment;
+    uvec4 hit_lighting;    // light count (0: off), shadow-ray mask, gather rays, gather-ray mask
+    vec4 hit_params;       // largest roughness hit-lit, indirect mode (HRT_HIT_INDIRECT_*), unused x2
+    LightGpu lights[HRT_MAX_LIGHTS];
 } u_c;
+#define HRT_LIGHTS u_c.lights
 
 
 // GGX visible normal in the local frame (z = normal), Heitz 2018, isotropic alpha.
@@ -54,6 +63,50 @@ layout(set = 0, binding = 8) uniform writeonly image2D u_demodulated;
 layout(set = 0, binding = 9) uniform sampler2D u_input_mask;
 layout(set = 0, binding = 10) uniform sampler2D u_environment;
 #include "screen_lighting.glsl"
+#include "direct_light.glsl"
+
+// Hit lighting (TraceSpecularTask::hit_lighting, Lumen's name for it): the hit is shaded from
+// the engine's lights with shadow rays — albedo x direct light + emission, exact where the
+// cache is a tile wide — plus the indirect part (HitIndirect): the cache sample's radiance
+// less the direct light and emission the same lights give at that sample (what the relight
+// stored beyond them: its bounce), or `gather` cosine rays reading the caches at their own
+// hits, or nothing. Both faces are lit: the one the ray sees.
+#define HRT_HIT_INDIRECT_CACHE 0u
+#define HRT_HIT_INDIRECT_GATHER 1u
+#define HRT_HIT_INDIRECT_NONE 2u
+vec3 hrt_hit_lighting(InstanceTable table, HitRecord hit, vec3 dir, inout uint h) {
+    InstanceGpu inst = table.v[hit.instance];
+    vec3 p, n;
+    if (!hrt_surface_point(inst, hit.prim, hrt_bary3(hit.bary), p, n)) return inst.emission.rgb;
+    if (dot(n, dir) > 0.0) n = -n;
+    // The paper's constants (RayOffset's defaults): relative to the float's own precision.
+    vec3 origin = hrt_offset_world(p, n, 1.0 / 32.0, 1.0 / 65536.0, 256.0);
+    uint count = u_c.hit_lighting.x, shadow_mask = u_c.hit_lighting.y;
+    vec3 lit = inst.albedo.rgb * hrt_direct_light(u_tlas, count, shadow_mask, p, n, origin, h) + inst.emission.rgb;
+    uint mode = uint(u_c.hit_params.y);
+    if (mode == HRT_HIT_INDIRECT_CACHE && hrt_has_cache(inst)) {
+        // The relight lit the front face a hair inside the triangle; light the sample there.
+        vec3 bs;
+        uint index = hrt_cache_sample_point(inst, hit.prim, hit.bary, bs);
+        vec4 cached = hrt_sample(CacheSamples(inst.cache_addr), index);
+        vec3 q, nq;
+        if (cached.w > 0.0 && hrt_surface_point(inst, hit.prim, mix(bs, vec3(1.0 / 3.0), 1e-3), q, nq)) {
+            vec3 oq = hrt_offset_world(q, nq, 1.0 / 32.0, 1.0 / 65536.0, 256.0);
+            vec3 at_sample = inst.albedo.rgb * hrt_direct_light(u_tlas, count, shadow_mask, q, nq, oq, h) + inst.emission.rgb;
+            lit += max(cached.rgb - at_sample, vec3(0.0));
+        }
+    } else if (mode == HRT_HIT_INDIRECT_GATHER) {
+        uint gathers = max(u_c.hit_lighting.z, 1u);
+        vec3 sum = vec3(0.0);
+        for (uint i = 0u; i < gathers; ++i) {
+            vec3 r, d;
+            bool landed = hrt_gather_cache(u_tlas, table, u_c.hit_lighting.w, origin, n, h, r, d);
+            sum += landed ? r : hrt_miss_radiance(u_c.environment, u_environment, d, u_c.miss.rgb);
+        }
+        lit += inst.albedo.rgb * sum / float(gathers);
+    }
+    return lit;
+}
 
 void hrt_specular_main() {
     TraceCommon c = u_c.common_;
@@ -81,6 +134,8 @@ void hrt_specular_main() {
     float clamp_lum = u_c.params.y;
     // A new rotation every frame (see hrt_independent_frames).
     HrtSequence seq = hrt_sequence(0u, false, pixel, hrt_independent_frames(c.frame.x, 0x5bec7u), rays);
+    bool hit_lit = u_c.hit_lighting.x > 0u && roughness <= u_c.hit_params.x;
+    uint h = hrt_pcg(pixel.x ^ hrt_pcg(pixel.y ^ hrt_pcg(c.frame.x ^ 0x4c1u)));
 
     vec3 sum = vec3(0.0);
     float first_t = ray_length;
@@ -98,7 +153,10 @@ void hrt_specular_main() {
         }
         HitRecord p_hit = hrt_trace_record(u_tlas, c.frame.y & 0xffu, origin, dir, ray_length);
         if (p_hit.t >= 0.0) hrt_mark_used(p_hit.instance);
-        vec3 radiance = p_hit.t < 0.0 ? hrt_miss_radiance(u_c.environment, u_environment, dir, u_c.miss.rgb) : hrt_hit_radiance(c, origin + dir * p_hit.t, table.v[p_hit.instance], p_hit.prim, p_hit.bary, bilinear);
+        vec3 radiance;
+        if (p_hit.t < 0.0) radiance = hrt_miss_radiance(u_c.environment, u_environment, dir, u_c.miss.rgb);
+        else if (hit_lit) radiance = hrt_hit_lighting(table, p_hit, dir, h);
+        else radiance = hrt_hit_radiance(c, origin + dir * p_hit.t, table.v[p_hit.instance], p_hit.prim, p_hit.bary, bilinear);
         if (clamp_lum > 0.0) {
             float lum = dot(radiance, vec3(0.2126, 0.7152, 0.0722));
             if (lum > clamp_lum) radiance *= clamp_lum / lum;

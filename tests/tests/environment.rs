@@ -197,19 +197,19 @@ fn bad_environments_are_refused() {
         ..Default::default()
     };
     f.frame.schedule_specular(&good).unwrap();
-    let mut bad = good;
+    let mut bad = good.clone();
     bad.environment.rotation = Mat3::from_diagonal(Vec3::new(1.0, 1.0, -1.0));
     assert!(matches!(f.frame.schedule_specular(&bad).unwrap_err(), Error::InvalidTransform { .. }), "a mirror is no rotation");
-    bad = good;
+    bad = good.clone();
     bad.environment.rotation = Mat3::IDENTITY * 2.0;
     assert!(matches!(f.frame.schedule_specular(&bad).unwrap_err(), Error::InvalidTransform { .. }), "a scale is no rotation");
-    bad = good;
+    bad = good.clone();
     bad.environment.intensity = f32::NAN;
     assert!(matches!(f.frame.schedule_specular(&bad).unwrap_err(), Error::InvalidInput { .. }));
-    bad = good;
+    bad = good.clone();
     bad.environment.image.format = vk::Format::R32_SFLOAT;
     assert!(matches!(f.frame.schedule_specular(&bad).unwrap_err(), Error::UnsupportedFormat { .. }));
-    bad = good;
+    bad = good.clone();
     bad.environment.image.usage = vk::ImageUsageFlags::STORAGE;
     assert!(matches!(f.frame.schedule_specular(&bad).unwrap_err(), Error::InvalidInput { .. }));
     let diffuse =

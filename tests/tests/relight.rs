@@ -3,157 +3,15 @@
 //! budget walks the caches round-robin; bad input is refused.
 mod common;
 use ash::vk;
+use common::relit_scene::*;
 use common::*;
 use glam::{Affine3A, Vec3};
 use hybrid_rt::{
-    DebugOutput, DepthInput, DepthType, DirectLightingInjectionTask, InitSettings, InstanceInput, InstanceOperation,
-    InstanceTask, LightInfo, LightType, RelightCacheTask, SurfelSettings, Viewport,
+    DepthInput, DepthType, DirectLightingInjectionTask, InitSettings, InstanceInput, InstanceOperation, InstanceTask, LightInfo,
+    LightType, RelightCacheTask, Viewport,
 };
-use hybrid_rt_testkit::host::{Host, HostImage};
 use hybrid_rt_testkit::reference::*;
 use hybrid_rt_testkit::sdk_scene::*;
-
-const W: u32 = 64;
-const H: u32 = 64;
-/// What a sample no light has reached yet holds: far from any lit value.
-const UNLIT: [f32; 3] = [1.0, 0.0, 1.0];
-const ALBEDO: [[f32; 3]; 2] = [[0.7, 0.6, 0.5], [0.3, 0.5, 0.8]];
-const TILE: f32 = 0.05;
-
-/// A ground plane and a floating box that shadows it; a sun and a coloured point light, both
-/// hard (radius 0), so one relit frame is the converged answer and every difference from the
-/// reference is the cache's own resolution.
-fn scene() -> Scene {
-    let mut s = Scene::default();
-    let ground = s.add_mesh(Mesh::grid(4.0, 8));
-    let cube = s.add_mesh(Mesh::cuboid(Vec3::splat(0.35)));
-    s.add_instance(ground, Affine3A::IDENTITY);
-    s.add_instance(cube, Affine3A::from_translation(Vec3::new(0.2, 0.9, -0.1)));
-    s
-}
-
-fn lights() -> Vec<LightInfo> {
-    vec![
-        LightInfo { direction: Vec3::new(-0.4, -1.0, -0.3), intensity: 1.5, color: [1.0, 0.95, 0.9], ..Default::default() },
-        LightInfo {
-            light_type: LightType::Point,
-            position: Vec3::new(-1.0, 1.6, 0.8),
-            intensity: 2.0,
-            color: [0.4, 0.6, 1.0],
-            ..Default::default()
-        },
-    ]
-}
-
-fn camera() -> Camera {
-    Camera::look_at(Vec3::new(0.0, 3.2, 2.4), Vec3::new(0.0, 0.0, -0.2))
-}
-
-/// The reference: albedo x sum of colour x irradiance x visibility (one ray to each hard light).
-fn reference_radiance(tracer: &Tracer, p: Vec3, n: Vec3, albedo: [f32; 3]) -> Vec3 {
-    reference_light(tracer, p, n, albedo).0
-}
-
-/// `reference_radiance`, and whether a light that faces the point is occluded there.
-fn reference_light(tracer: &Tracer, p: Vec3, n: Vec3, albedo: [f32; 3]) -> (Vec3, bool) {
-    let (mut e, mut occluded) = (Vec3::ZERO, false);
-    for l in lights() {
-        let w = light_weight(&l, p, n);
-        if w <= 0.0 {
-            continue;
-        }
-        let (dir, tmax) = match l.light_type {
-            LightType::Directional => (-l.direction.normalize(), f32::MAX),
-            _ => ((l.position - p).normalize(), (l.position - p).length() * 0.999),
-        };
-        if tracer.closest_hit(p + n * 1e-3, dir, 0.0, tmax).is_none() {
-            e += Vec3::from(l.color) * w;
-        } else {
-            occluded = true;
-        }
-    }
-    (Vec3::from(albedo) * e, occluded)
-}
-
-struct Fixture {
-    host: Host,
-    ctx: hybrid_rt::ExecuteContext,
-    frame: hybrid_rt::TaskContainer,
-    gpu_scene: SceneOnGpu,
-    scene: Scene,
-}
-
-impl Fixture {
-    /// Registers the scene with the albedos above (two frames: BVH and read-back, then the caches).
-    fn new() -> Fixture {
-        Fixture::with(scene(), &ALBEDO)
-    }
-
-    /// `new` for another scene, instance i with albedo `albedos[i]`.
-    fn with(scene: Scene, albedos: &[[f32; 3]]) -> Fixture {
-        let (host, ctx) = host_and_context(InitSettings::default());
-        let mut frame = ctx.create_task_container();
-        let surfels = SurfelSettings { tile_unit_length: TILE, ..Default::default() };
-        let gpu_scene = SceneOnGpu::register_with(&host, &ctx, &mut frame, &scene, surfels, UNLIT).unwrap();
-        for (i, inst) in scene.instances.iter().enumerate() {
-            let input = InstanceInput {
-                geometry: gpu_scene.geometries[inst.mesh],
-                transform: inst.transform,
-                initial_tile_color: UNLIT,
-                albedo: albedos[i],
-                ..Default::default()
-            };
-            let task = InstanceTask { handle: gpu_scene.instances[i], operation: InstanceOperation::Update, input };
-            frame.schedule_instance(&task).unwrap();
-        }
-        for _ in 0..2 {
-            frame.schedule_bvh_build(&Default::default()).unwrap();
-            run_frame(&host, &ctx, &mut frame).unwrap();
-        }
-        Fixture { host, ctx, frame, gpu_scene, scene }
-    }
-
-    fn relight(&mut self, max_samples: u32) {
-        self.relight_with(&RelightCacheTask { lights: lights(), max_samples, ..Default::default() });
-    }
-
-    fn relight_with(&mut self, task: &RelightCacheTask) {
-        self.frame.schedule_cache_relight(task).unwrap();
-        let done = run_frame(&self.host, &self.ctx, &mut self.frame).unwrap();
-        assert!(done.timings.iter().any(|t| t.kind == hybrid_rt::TaskKind::CacheRelight) || done.timings.is_empty());
-    }
-
-    /// The cache as the camera sees it (`DebugOutput::DirectLightingCache`).
-    fn cache_view(&mut self, images: &GBufferImages) -> Vec<[f32; 4]> {
-        self.cache_view_from(images, &camera())
-    }
-
-    fn cache_view_from(&mut self, images: &GBufferImages, camera: &Camera) -> Vec<[f32; 4]> {
-        let out = self
-            .host
-            .image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL)
-            .unwrap();
-        let mut task = images.ao_task(camera, 1.0, 1);
-        task.common.debug_output = DebugOutput::DirectLightingCache;
-        task.common.enable_bilinear_sampling = false;
-        task.output = out.input(vk::ImageLayout::GENERAL);
-        self.frame.schedule_ambient_occlusion(&task).unwrap();
-        run_frame(&self.host, &self.ctx, &mut self.frame).unwrap();
-        let bytes = self.host.read_image(&out, vk::ImageLayout::GENERAL).unwrap();
-        self.host.destroy_image(out);
-        bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).to_vec()
-    }
-
-    fn finish(self, images: GBufferImages, lits: Vec<HostImage>) {
-        images.destroy(&self.host);
-        for l in lits {
-            self.host.destroy_image(l);
-        }
-        self.gpu_scene.destroy(&self.host);
-        drop(self.ctx);
-        assert_no_validation_errors();
-    }
-}
 
 /// Pixels whose reference light is the same within a tile around them (shadow edges move by
 /// up to a tile in the cache), with their reference radiance and whether a light is occluded.
@@ -288,22 +146,10 @@ fn a_mirror_shows_relit_surfaces_no_camera_saw() {
     let tracer = Tracer::new(&f.scene);
     let g = GBuffer::render(&tracer, &low, W, H);
     let images = GBufferImages::upload(&f.host, &g).unwrap();
-    let out = f
-        .host
-        .image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL)
-        .unwrap();
     f.relight(hybrid_rt::MAX_RELIGHT_SAMPLES);
     let mut common = images.trace_common(&low);
     common.roughness = hybrid_rt::RoughnessInput { global_roughness: 0.0, ..Default::default() };
-    let task = hybrid_rt::TraceSpecularTask {
-        common,
-        output: out.input(vk::ImageLayout::GENERAL),
-        ray_length: 100.0,
-        ..Default::default()
-    };
-    f.frame.schedule_specular(&task).unwrap();
-    run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
-    let gpu: Vec<[f32; 4]> = bytemuck::cast_slice(&f.host.read_image(&out, vk::ImageLayout::GENERAL).unwrap()).to_vec();
+    let gpu = f.trace_specular(hybrid_rt::TraceSpecularTask { common, ray_length: 100.0, ..Default::default() });
     let offset = hybrid_rt::RayOffset::default();
     let (mut err2, mut ref2, mut n, mut unseen) = (0.0f64, 0.0f64, 0, 0);
     for i in (0..g.depth.len()).filter(|&i| g.hit[i] && g.instance[i] == 0) {
@@ -333,7 +179,6 @@ fn a_mirror_shows_relit_surfaces_no_camera_saw() {
     eprintln!("mirror: {n} reflected pixels ({unseen} show faces the camera cannot see), relative RMSE {rel_rmse:.4}");
     assert!(n > 150 && unseen > 30, "{n} pixels, {unseen} of them unseen faces");
     assert!(rel_rmse < 0.05, "relative RMSE {rel_rmse}");
-    f.host.destroy_image(out);
     f.finish(images, Vec::new());
 }
 

@@ -528,6 +528,36 @@ fn run() -> Result<(), String> {
     let specular = hybrid_rt::TraceSpecularTask { common: glossy, output, ray_length: 100.0, ..Default::default() };
     let (specular_ms, specular_floor) =
         time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::Specular, |f| f.schedule_specular(&specular).map_err(e))?;
+    // Mirrors shaded from the cache, and hit-lit from a sun and a point light (a shadow ray
+    // each) with one gather ray: what hit lighting costs per mirror pixel.
+    let mut mirror_common = common;
+    mirror_common.roughness.global_roughness = 0.0;
+    let mirror = hybrid_rt::TraceSpecularTask { common: mirror_common, output, ray_length: 100.0, ..Default::default() };
+    let (mirror_ms, _) =
+        time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::Specular, |f| f.schedule_specular(&mirror).map_err(e))?;
+    let hit_lit = hybrid_rt::TraceSpecularTask {
+        hit_lighting: hybrid_rt::HitLighting {
+            lights: vec![
+                shadow.light,
+                hybrid_rt::LightInfo {
+                    light_type: hybrid_rt::LightType::Point,
+                    position: glam::Vec3::new(0.0, 4.0, 0.0),
+                    radius: 0.3,
+                    ..Default::default()
+                },
+            ],
+            max_roughness: 0.0,
+            ..Default::default()
+        },
+        ..mirror.clone()
+    };
+    let (hit_lit_ms, _) =
+        time_vs_floor(&host, &ctx, &mut frame, frames, TaskKind::Specular, |f| f.schedule_specular(&hit_lit).map_err(e))?;
+    rows.push((
+        format!("Specular mirrors {width}x{height}: from the cache / hit-lit (2 lights, the cache's residual)"),
+        format!("{mirror_ms:.3} ms / {hit_lit_ms:.3} ms"),
+    ));
+    json.insert("specular_mirror".into(), json!({"cache_gpu_ms": mirror_ms, "hit_lit_gpu_ms": hit_lit_ms}));
     let vis = host.image_cleared(
         ash::vk::Format::R32_UINT,
         width,

@@ -83,6 +83,10 @@ struct Cli {
     /// relighting off, leaving what no camera saw unlit.
     #[arg(long, default_value_t = 65_536, value_parser = clap::value_parser!(u32).range(0..=16_777_216))]
     relight_samples: u32,
+    /// Hit-light the mirror's reflections from the scene's lights instead of shading them from
+    /// the cache (TraceSpecularTask::hit_lighting).
+    #[arg(long)]
+    hit_lighting: bool,
     /// Look through the file's camera N (glTF perspective cameras, in node order) instead of
     /// the fitted camera path.
     #[arg(long)]
@@ -110,6 +114,7 @@ fn run() -> Result<(), String> {
         lidar_size: cli.lidar_size,
         unlit_color: if cli.magenta_unlit { [1.0, 0.0, 1.0] } else { [0.0; 3] },
         relight_samples: cli.relight_samples,
+        hit_lighting: cli.hit_lighting,
         max_blas_build_count: cli.blas_per_frame,
         rays_per_pixel: cli.rays,
         checkerboard: cli.checkerboard,

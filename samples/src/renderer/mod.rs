@@ -76,6 +76,12 @@ pub struct Settings {
     /// 0: no relighting). Default 65,536: the room's 17 caches (about 40,000 samples) are all
     /// relit every frame, the forest's round-robin in a few dozen.
     pub relight_samples: u32,
+    /// Shade the mirror's reflections from the sun and the point light with shadow rays
+    /// (`TraceSpecularTask::hit_lighting`, pixels of roughness up to 0.1) instead of the
+    /// cache: sharp shadow edges in the mirror, but surfaces lit only by the bounce (the
+    /// column's back) read one cache sample's residual, unfiltered, so they stay noisier
+    /// than the cache's interpolation for the first frames. Default false.
+    pub hit_lighting: bool,
 }
 
 impl Default for Settings {
@@ -91,6 +97,7 @@ impl Default for Settings {
             injection_window: 24.0,
             exposure: 1.0,
             relight_samples: 65_536,
+            hit_lighting: false,
         }
     }
 }
@@ -153,6 +160,7 @@ impl<'h> Renderer<'h> {
                 transform: scene.transform(i, 0.0),
                 initial_tile_color: settings.unlit_color,
                 albedo: scene.diffuse_albedo(i),
+                emission: scene.emission(i),
                 ..Default::default()
             };
             container
@@ -338,6 +346,7 @@ impl<'h> Renderer<'h> {
                     transform: *t,
                     initial_tile_color: self.settings.unlit_color,
                     albedo: self.scene.diffuse_albedo(i),
+                    emission: self.scene.emission(i),
                     ..Default::default()
                 };
                 c.schedule_instance(&InstanceTask { handle: self.instances[i], operation: InstanceOperation::Update, input })
@@ -469,6 +478,12 @@ impl<'h> Renderer<'h> {
             // One sample of a glossy lobe that finds the sun-lit wall can be 50x its
             // neighbours; the denoiser spreads such a spike into a blotch.
             firefly_clamp: 8.0,
+            // The mirror shows the column's shadow edges as sharp as the lights make them.
+            hit_lighting: if self.settings.hit_lighting {
+                HitLighting { lights: vec![sun, point], ..Default::default() }
+            } else {
+                HitLighting::default()
+            },
             ..Default::default()
         })
         .map_err(sdk_err)?;

@@ -60,6 +60,9 @@ impl TaskContainer {
             if !task.input.albedo.iter().all(|c| (0.0..=1.0).contains(c)) {
                 return Err(crate::Error::invalid("InstanceInput.albedo", "each channel must be in 0..=1"));
             }
+            if !task.input.emission.iter().all(|c| c.is_finite() && *c >= 0.0) {
+                return Err(crate::Error::invalid("InstanceInput.emission", "each channel must be finite and >= 0"));
+            }
         }
         self.tasks.push(Task::Instance(*task));
         Ok(())
@@ -108,7 +111,7 @@ impl TaskContainer {
     pub fn schedule_specular(&mut self, task: &TraceSpecularTask) -> Result<()> {
         let shared = self.shared()?;
         validate::specular(task, &shared.device.limits)?;
-        self.tasks.push(Task::Render(RenderTask::Specular(*task)));
+        self.tasks.push(Task::Render(RenderTask::Specular(task.clone())));
         Ok(())
     }
 

@@ -311,6 +311,7 @@ impl Recorder<'_> {
             mask: t.input.mask.bits(),
             initial_tile_color: t.input.initial_tile_color,
             albedo: t.input.albedo,
+            emission: t.input.emission,
             cache: keep,
             evicted: false,
         });

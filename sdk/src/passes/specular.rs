@@ -1,13 +1,14 @@
-//! Specular reflections (`TraceSpecularTask`): mirror or GGX-VNDF rays shaded from the cache
-//! (shaders/specular.rgen).
+//! Specular reflections (`TraceSpecularTask`): mirror or GGX-VNDF rays shaded from the cache,
+//! or on smooth pixels from the engine's lights (hit lighting) (shaders/specular.rgen).
 use super::constants::{EnvironmentGpu, TraceCommonGpu};
 use super::descriptors::{optional_or, Slot};
 use super::program::{Payload, RtProgram, Shaders, Writes};
+use super::shadow::LightGpu;
 use super::{PassTask, Passes, Recording, World};
 use crate::error::Result;
 use crate::gpu::pipeline::{Binding, PipelineBuilder};
 use crate::shaders;
-use crate::types::{ImageInput, InstanceInclusionMask, TaskKind, TraceCommon, TraceSpecularTask};
+use crate::types::{ImageInput, InstanceInclusionMask, TaskKind, TraceCommon, TraceSpecularTask, MAX_SHADOW_LIGHTS};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
@@ -21,6 +22,9 @@ struct SpecularConstantsGpu {
     counts: [u32; 4],
     specular: [f32; 4],
     environment: EnvironmentGpu,
+    hit_lighting: [u32; 4],
+    hit_params: [f32; 4],
+    lights: [LightGpu; MAX_SHADOW_LIGHTS],
 }
 
 pub(crate) struct SpecularPass {
@@ -61,6 +65,11 @@ impl SpecularPass {
         let c = &task.common;
         let table = r.instance_table;
         let m = task.miss_radiance;
+        let hit = &task.hit_lighting;
+        let mut lights = [LightGpu::default(); MAX_SHADOW_LIGHTS];
+        for (g, l) in lights.iter_mut().zip(&hit.lights) {
+            *g = LightGpu::new(l);
+        }
         let constants = SpecularConstantsGpu {
             common: TraceCommonGpu::new(c, r.seed, InstanceInclusionMask::REFLECTIONS.bits()),
             params: [task.ray_length, task.firefly_clamp, 0.0, 0.0],
@@ -73,6 +82,14 @@ impl SpecularPass {
                 0.0,
             ],
             environment: EnvironmentGpu::new(&task.environment),
+            hit_lighting: [
+                hit.lights.len() as u32,
+                InstanceInclusionMask::SHADOWS.bits() as u32,
+                hit.gather_rays,
+                InstanceInclusionMask::DIFFUSE_GI.bits() as u32,
+            ],
+            hit_params: [hit.max_roughness, hit.indirect as u32 as f32, 0.0, 0.0],
+            lights,
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
         // Without a roughness image the binding still needs a valid view: the normals stand in

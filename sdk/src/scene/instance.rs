@@ -23,6 +23,8 @@ pub(crate) struct Placement {
     pub initial_tile_color: [f32; 3],
     /// What `RelightCacheTask` lights its cache with.
     pub albedo: [f32; 3],
+    /// What relighting and hit lighting add as its emission.
+    pub emission: [f32; 3],
     /// This instance's cache and the layout id it was made for.
     pub cache: Option<(CacheRange, u64)>,
     /// The cache budget took its cache (it gets one again when it is used).

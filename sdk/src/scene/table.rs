@@ -5,7 +5,7 @@
 use super::Scene;
 use bytemuck::{Pod, Zeroable};
 
-/// `InstanceGpu` in shaders/include/cache.glsl (std430, 128 bytes).
+/// `InstanceGpu` in shaders/include/cache.glsl (std430, 192 bytes).
 #[derive(Clone, Copy, Pod, Zeroable, Default)]
 #[repr(C)]
 pub(crate) struct InstanceGpu {
@@ -33,8 +33,10 @@ pub(crate) struct InstanceGpu {
     pub alpha_height: u32,
     pub alpha_pitch: u32,
     pub alpha_cutoff: f32,
-    /// Diffuse albedo for relighting (rgb, unused).
+    /// Diffuse albedo for relighting and hit lighting (rgb, unused).
     pub albedo: [f32; 4],
+    /// Emission for relighting and hit lighting (rgb, unused).
+    pub emission: [f32; 4],
 }
 
 pub(crate) const HAS_CACHE: u32 = 1;
@@ -77,6 +79,7 @@ pub(crate) fn instance_table(scene: &Scene) -> Vec<InstanceGpu> {
             flags: if p.cache.is_some() && surfel.is_some() { HAS_CACHE } else { 0 },
             sample_count: surfel.map_or(0, |s| s.sample_count),
             albedo: [p.albedo[0], p.albedo[1], p.albedo[2], 0.0],
+            emission: [p.emission[0], p.emission[1], p.emission[2], 0.0],
         };
     }
     table
@@ -104,6 +107,7 @@ mod tests {
         assert_eq!(offset_of!(InstanceGpu, uv_addr), 128);
         assert_eq!(offset_of!(InstanceGpu, alpha_width), 144);
         assert_eq!(offset_of!(InstanceGpu, albedo), 160);
-        assert_eq!(size_of::<InstanceGpu>(), 176);
+        assert_eq!(offset_of!(InstanceGpu, emission), 176);
+        assert_eq!(size_of::<InstanceGpu>(), 192);
     }
 }

@@ -293,8 +293,12 @@ pub struct InstanceInput {
     /// Colour a new direct-lighting cache starts with (used by the cache). Default black.
     pub initial_tile_color: [f32; 3],
     /// Diffuse albedo (linear RGB, each in 0..=1) that `RelightCacheTask` lights the
-    /// instance's cache with. Default 0.5 grey: an engine that relights gives the real one.
+    /// instance's cache with, and hit lighting its specular hits. Default 0.5 grey: an engine
+    /// that relights gives the real one.
     pub albedo: [f32; 3],
+    /// Emitted radiance (linear RGB, each finite and >= 0) that relighting and hit lighting
+    /// add to the lit surface (a camera's injection already holds it). Default black.
+    pub emission: [f32; 3],
 }
 
 impl Default for InstanceInput {
@@ -305,6 +309,7 @@ impl Default for InstanceInput {
             mask: InstanceInclusionMask::ALL,
             initial_tile_color: [0.0; 3],
             albedo: [0.5; 3],
+            emission: [0.0; 3],
         }
     }
 }

@@ -289,7 +289,7 @@ impl Default for TraceDiffuseTask {
 /// without the specular colour (denoise that, then multiply back).
 /// Reflections off clear glass: a second task with the glass's own depth, normals and
 /// roughness as its G-buffer.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct TraceSpecularTask {
     /// The G-buffer the rays start from (plus roughness, specular colour and the optional lit frame), viewport and camera.
     pub common: TraceCommon,
@@ -308,7 +308,63 @@ pub struct TraceSpecularTask {
     /// Optional: what rays that hit nothing see, instead of `miss_radiance` (glass reflections
     /// too: they are a specular task).
     pub environment: EnvironmentInput,
+    /// Optional: shade the hits of smooth pixels from the engine's lights instead of the
+    /// cache (see `HitLighting`). Default off (no lights).
+    pub hit_lighting: HitLighting,
 }
+
+/// Hit lighting for mirrors (`TraceSpecularTask::hit_lighting`; Lumen's name for it). The
+/// cache is a tile wide: a shadow edge or a small light's falloff seen in a mirror is as
+/// blurred as the tiles. On pixels whose roughness is at most `max_roughness`, each specular
+/// hit is shaded instead with the engine's lights — the hit's `InstanceInput::albedo` x the
+/// lights' irradiance with one shadow ray per light, plus its `InstanceInput::emission` —
+/// and the indirect part comes from the caches (see `HitIndirect`). Rougher pixels keep
+/// reading the cache, where its blur is below the lobe's. Only the listed lights light the
+/// hits directly, so list every light that matters.
+///
+/// Cost per hit-lit ray: one shadow ray per light that reaches the hit, plus the indirect
+/// part's rays (`HitIndirect`); hard lights give a noise-free result, sized lights soft
+/// shadows over frames.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HitLighting {
+    /// 0..=32 lights (`MAX_SHADOW_LIGHTS`), `intensity` and `color` absolute as for
+    /// `RelightCacheTask`. Empty: hit lighting off. Default empty.
+    pub lights: Vec<LightInfo>,
+    /// Pixels with roughness up to this (0..=1) are hit-lit. Default 0.1.
+    pub max_roughness: f32,
+    /// Where the indirect part comes from. Default `HitIndirect::CacheResidual`.
+    pub indirect: HitIndirect,
+    /// `HitIndirect::Gather`'s rays per hit, 1..=8 (`MAX_HIT_GATHER_RAYS`). Default 1.
+    pub gather_rays: u32,
+}
+
+impl Default for HitLighting {
+    fn default() -> Self {
+        HitLighting { lights: Vec::new(), max_roughness: 0.1, indirect: HitIndirect::CacheResidual, gather_rays: 1 }
+    }
+}
+
+/// The indirect part of hit lighting (`HitLighting::indirect`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+#[repr(u32)]
+pub enum HitIndirect {
+    /// The cache sample the hit lands on, less the direct light and emission the listed
+    /// lights give at that sample (one more shadow ray per light): what the cache holds beyond
+    /// them — a relit sample's bounce exactly, an injected sample's other light (your ambient,
+    /// light maps, unlisted lights) up to the tile's variation of direct light. No noise;
+    /// clamped at 0. Default.
+    #[default]
+    CacheResidual = 0,
+    /// `gather_rays` cosine rays at the hit, each reading the cache sample it lands on (misses
+    /// see the task's miss radiance or environment), times the albedo: unbiased but noisy
+    /// (denoise the output).
+    Gather = 1,
+    /// Direct light and emission only.
+    None = 2,
+}
+
+/// The most gather rays per hit-lit ray (`HitLighting::gather_rays`).
+pub const MAX_HIT_GATHER_RAYS: u32 = 8;
 
 impl Default for TraceSpecularTask {
     fn default() -> Self {
@@ -321,6 +377,7 @@ impl Default for TraceSpecularTask {
             firefly_clamp: 0.0,
             demodulated_output: ImageInput { layout: vk::ImageLayout::GENERAL, ..Default::default() },
             environment: EnvironmentInput::default(),
+            hit_lighting: HitLighting::default(),
         }
     }
 }

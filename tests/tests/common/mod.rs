@@ -1,6 +1,7 @@
 //! Shared set-up for the integration tests.
 #![allow(dead_code)]
 use hybrid_rt::{ExecuteContext, InitSettings};
+pub mod relit_scene;
 use hybrid_rt_testkit::host::Host;
 
 pub fn host_and_context(settings: InitSettings) -> (Host, ExecuteContext) {

@@ -93,6 +93,28 @@ pub(crate) fn relight(t: &RelightCacheTask) -> Result<()> {
     Ok(())
 }
 
+pub(super) fn hit_lighting(h: &HitLighting) -> Result<()> {
+    if h.lights.len() > MAX_SHADOW_LIGHTS {
+        return Err(Error::invalid(
+            "TraceSpecularTask.hit_lighting.lights",
+            format!("{} lights: at most {MAX_SHADOW_LIGHTS} are supported", h.lights.len()),
+        ));
+    }
+    for l in &h.lights {
+        light("TraceSpecularTask.hit_lighting.lights[]", l)?;
+    }
+    if !(h.max_roughness.is_finite() && (0.0..=1.0).contains(&h.max_roughness)) {
+        return Err(Error::invalid("TraceSpecularTask.hit_lighting.max_roughness", "must be in 0..=1"));
+    }
+    if !(1..=MAX_HIT_GATHER_RAYS).contains(&h.gather_rays) {
+        return Err(Error::invalid(
+            "TraceSpecularTask.hit_lighting.gather_rays",
+            format!("{} is not in 1..={MAX_HIT_GATHER_RAYS}", h.gather_rays),
+        ));
+    }
+    Ok(())
+}
+
 pub(crate) fn multi_shadow(t: &TraceMultiShadowTask, limits: &Limits) -> Result<()> {
     trace_common(&t.common, limits)?;
     if t.common.debug_output != DebugOutput::Default {

@@ -418,7 +418,7 @@ pub(crate) fn specular(t: &TraceSpecularTask, limits: &Limits) -> Result<()> {
     if t.miss_radiance.iter().any(|c| !c.is_finite() || *c < 0.0) || !(t.firefly_clamp.is_finite() && t.firefly_clamp >= 0.0) {
         return Err(Error::invalid("TraceSpecularTask", "miss_radiance and firefly_clamp must be finite and >= 0"));
     }
-    Ok(())
+    lights::hit_lighting(&t.hit_lighting)
 }
 
 const RADIANCE_FORMATS: &[vk::Format] = &[vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT];
