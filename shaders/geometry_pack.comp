@@ -5,8 +5,10 @@
 // index outside the part's vertices (undefined behaviour in a BLAS build, a read past the
 // vertices in shading) becomes degenerate — all three corners on the part's first vertex, a
 // zero-area triangle no ray hits — and is counted. One invocation per vertex and per triangle.
-// Modes 1-3 pack an alpha-tested part's texture coordinates instead: two f32 per vertex, from
-// R32G32_SFLOAT, R16G16_SFLOAT or R16G16_UNORM at the engine's stride.
+// Modes 1-3 pack a part's texture coordinates instead: two f32 per vertex, from R32G32_SFLOAT,
+// R16G16_SFLOAT or R16G16_UNORM at the engine's stride; modes 4-7 its colours: one RGBA8
+// unorm word per vertex (linear, alpha dropped), from R8G8B8A8_UNORM, R16G16B16A16_SFLOAT,
+// R32G32B32_SFLOAT or R32G32B32A32_SFLOAT.
 #extension GL_EXT_buffer_reference : require
 #extension GL_EXT_buffer_reference_uvec2 : require
 layout(local_size_x = 256) in;
@@ -27,7 +29,8 @@ layout(push_constant) uniform Push {
     uint first_vertex;   // the first copied vertex's index in the engine's buffer
     uint vertex_base;    // the part's first vertex in the geometry
     uint first_item;     // this dispatch's first invocation (large parts take several)
-    uint mode;           // 0 positions and indices; texture coordinates: 1 RG32F, 2 RG16F, 3 RG16 unorm
+    uint mode;           // 0 positions and indices; texture coordinates: 1 RG32F, 2 RG16F, 3 RG16 unorm;
+                         // colours: 4 RGBA8 unorm, 5 RGBA16F, 6 RGB32F, 7 RGBA32F
 } pc;
 
 uint engine_index(uint j) {
@@ -40,6 +43,17 @@ uint engine_index(uint j) {
 
 void main() {
     uint i = gl_GlobalInvocationID.x + pc.first_item;
+    if (pc.mode >= 4u) {
+        if (i >= pc.vertex_count) return;
+        Words src = Words(pc.src_vertices);
+        uint o = i * pc.stride_words;
+        vec3 c;
+        if (pc.mode == 4u) c = unpackUnorm4x8(src.w[o]).rgb;
+        else if (pc.mode == 5u) c = vec3(unpackHalf2x16(src.w[o]), unpackHalf2x16(src.w[o + 1u]).x);
+        else c = vec3(uintBitsToFloat(src.w[o]), uintBitsToFloat(src.w[o + 1u]), uintBitsToFloat(src.w[o + 2u]));
+        Packed(pc.dst_vertices).w[i] = packUnorm4x8(vec4(clamp(c, 0.0, 1.0), 1.0));
+        return;
+    }
     if (pc.mode != 0u) {
         if (i >= pc.vertex_count) return;
         Words src = Words(pc.src_vertices);

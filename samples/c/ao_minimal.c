@@ -912,6 +912,19 @@ int main(void) {
         HrtGeometryTask bad_cut = cut;
         bad_cut.input.alpha_test.cutoff = 2.0f;
         EXPECT(hrt_schedule_geometry(frame, &bad_cut) == HRT_ERROR_INVALID_INPUT, "an alpha cutoff above 1 is refused");
+        /* Albedo sources for relighting: an albedo texture needs the texture coordinates; vertex
+         * colours need a colour format. */
+        HrtGeometryTask tinted = cut;
+        tinted.input.has_alpha_test = false;
+        tinted.input.has_albedo_texture = true;
+        tinted.input.albedo_texture = cut.input.alpha_test.texture;
+        tinted.input.has_uvs = false;
+        EXPECT(hrt_schedule_geometry(frame, &tinted) == HRT_ERROR_INVALID_INPUT, "an albedo texture without uvs is refused");
+        tinted.input.has_uvs = true;
+        tinted.input.has_colors = true;
+        tinted.input.colors = cut.input.uvs;
+        tinted.input.colors.format = VK_FORMAT_R8_UNORM;
+        EXPECT(hrt_schedule_geometry(frame, &tinted) == HRT_ERROR_UNSUPPORTED_FORMAT, "vertex colours in R8 are refused");
         CHECK_HRT(hrt_schedule_geometry(frame, &cut));
         CHECK_HRT(hrt_schedule_bvh_build(frame, &bvh));
         CHECK_HRT(hrt_schedule_ambient_occlusion(frame, &ao));

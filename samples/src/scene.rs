@@ -111,15 +111,30 @@ pub struct SampleScene {
 }
 
 impl SampleScene {
-    /// Instance `i`'s diffuse albedo as the SDK's cache relighting takes it: its material's
-    /// albedo x (1 - metalness) (metals have no diffuse), times the mean of its base-colour
-    /// texture (in linear light, over the texels its alpha test keeps).
+    /// Instance `i`'s diffuse albedo as the SDK's relighting and hit lighting take it
+    /// (`InstanceInput::albedo`): its material's albedo x (1 - metalness) (metals have no
+    /// diffuse) — a tint of the base-colour texture its geometry hands the SDK
+    /// (`mesh_albedo_texture`) — or, when its material's texture is not its geometry's, times
+    /// that texture's mean (in linear light).
     pub fn diffuse_albedo(&self, i: usize) -> [f32; 3] {
         let Some(m) = self.materials.get(i) else { return [0.5; 3] };
-        let texture = self.material_textures.get(i).and_then(|t| t.base_color).and_then(|k| self.textures.get(k));
-        let mean = texture.map_or(Vec3::ONE, |t| t.mean_linear_rgb());
+        let own = self.material_textures.get(i).and_then(|t| t.base_color);
+        let mesh = self.scene.instances.get(i).map(|inst| inst.mesh);
+        let mean = match own {
+            Some(k) if mesh.and_then(|k| self.mesh_albedo_texture(k)) != Some(k) => {
+                self.textures.get(k).map_or(Vec3::ONE, |t| t.mean_linear_rgb())
+            }
+            _ => Vec3::ONE,
+        };
         let a = Vec3::from(m.albedo) * (1.0 - m.metalness.clamp(0.0, 1.0)) * mean;
         a.clamp(Vec3::ZERO, Vec3::ONE).to_array()
+    }
+
+    /// The base-colour texture mesh `k` hands the SDK (`GeometryInput::albedo_texture`): that
+    /// of the material of the first instance that draws it.
+    pub fn mesh_albedo_texture(&self, k: usize) -> Option<usize> {
+        let i = self.scene.instances.iter().position(|inst| inst.mesh == k)?;
+        self.material_textures.get(i).and_then(|t| t.base_color)
     }
 
     /// Instance `i`'s emitted radiance as relighting and hit lighting take it: its material's

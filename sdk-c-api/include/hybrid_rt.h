@@ -47,6 +47,11 @@
 #define HRT_MAX_LIGHT_OUTPUTS 4
 
 /**
+ * The most texels a side of a geometry's copy of its albedo texture (HrtGeometryInput.albedo_texture).
+ */
+#define HRT_MAX_ALBEDO_TEXTURE_SIZE 256
+
+/**
  * Most gather rays per hit of HrtHitLighting.
  */
 #define HRT_MAX_HIT_GATHER_RAYS 8
@@ -185,6 +190,35 @@ enum HrtBuildHint
 typedef enum HrtBuildHint HrtBuildHint;
 #else
 typedef uint32_t HrtBuildHint;
+#endif // __STDC_VERSION__ >= 202311L
+#endif // __cplusplus
+
+/**
+ * HrtHitLighting.indirect (see the Rust docs of HitIndirect).
+ */
+enum HrtHitIndirect
+#if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+  : uint32_t
+#endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
+ {
+  /**
+   * The cache sample less the listed lights' direct light there (no noise). Default.
+   */
+  HRT_HIT_INDIRECT_CACHE_RESIDUAL = 0,
+  /**
+   * gather_rays cosine rays reading the caches (noisy).
+   */
+  HRT_HIT_INDIRECT_GATHER = 1,
+  /**
+   * Direct light and emission only.
+   */
+  HRT_HIT_INDIRECT_NONE = 2,
+};
+#ifndef __cplusplus
+#if __STDC_VERSION__ >= 202311L
+typedef enum HrtHitIndirect HrtHitIndirect;
+#else
+typedef uint32_t HrtHitIndirect;
 #endif // __STDC_VERSION__ >= 202311L
 #endif // __cplusplus
 
@@ -469,10 +503,17 @@ typedef struct HrtGeometryComponent {
   uint32_t vertex_range_last;
   /**
    * Texture coordinates (R32G32_SFLOAT, R16G16_SFLOAT or R16G16_UNORM) when has_uvs: needed
-   * on every part of an alpha-tested geometry. Default false.
+   * on every part of an alpha-tested or albedo-textured geometry. Default false.
    */
   bool has_uvs;
   struct HrtVertexBufferInput uvs;
+  /**
+   * Per-vertex diffuse colours (R8G8B8A8_UNORM, R16G16B16A16_SFLOAT, R32G32B32_SFLOAT or
+   * R32G32B32A32_SFLOAT; linear) when has_colors: on every part when the first has them.
+   * Default false.
+   */
+  bool has_colors;
+  struct HrtVertexBufferInput colors;
 } HrtGeometryComponent;
 
 typedef struct HrtSurfelSettings {
@@ -511,10 +552,24 @@ typedef struct HrtGeometryInput {
   uint32_t vertex_range_first;
   uint32_t vertex_range_last;
   /**
-   * The first part's texture coordinates when has_uvs (alpha testing). Default false.
+   * The first part's texture coordinates when has_uvs (alpha testing, albedo texture).
+   * Default false.
    */
   bool has_uvs;
   struct HrtVertexBufferInput uvs;
+  /**
+   * The first part's per-vertex diffuse colours when has_colors (relighting, hit
+   * lighting). Default false.
+   */
+  bool has_colors;
+  struct HrtVertexBufferInput colors;
+  /**
+   * A diffuse-colour texture when has_albedo_texture (see the Rust docs of
+   * AlbedoTextureInput): SAMPLED usage, read-only layout while the registering ticket runs;
+   * every part needs uvs. Default false.
+   */
+  bool has_albedo_texture;
+  struct HrtImageInput albedo_texture;
   /**
    * Alpha-test the geometry when has_alpha_test. Default false (opaque).
    */

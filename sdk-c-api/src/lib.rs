@@ -32,6 +32,8 @@ pub const HRT_API_VERSION: u32 = 1 << 12; // (major 0 << 22) | (minor 1 << 12) |
 pub const HRT_MAX_SHADOW_LIGHTS: u32 = 32;
 /// Most per-light outputs of one HrtTraceMultiShadowTask.
 pub const HRT_MAX_LIGHT_OUTPUTS: u32 = 4;
+/// The most texels a side of a geometry's copy of its albedo texture (HrtGeometryInput.albedo_texture).
+pub const HRT_MAX_ALBEDO_TEXTURE_SIZE: u32 = 256;
 /// Most gather rays per hit of HrtHitLighting.
 pub const HRT_MAX_HIT_GATHER_RAYS: u32 = 8;
 /// Most samples one HrtRelightCacheTask may take.

@@ -103,5 +103,6 @@ mod tests {
     fn the_limit_is_the_sdk_one() {
         assert_eq!(crate::HRT_MAX_RELIGHT_SAMPLES, hybrid_rt::MAX_RELIGHT_SAMPLES);
         assert_eq!(crate::HRT_MAX_HIT_GATHER_RAYS, hybrid_rt::MAX_HIT_GATHER_RAYS);
+        assert_eq!(crate::HRT_MAX_ALBEDO_TEXTURE_SIZE, hybrid_rt::MAX_ALBEDO_TEXTURE_SIZE);
     }
 }

@@ -173,9 +173,14 @@ pub struct HrtGeometryComponent {
     pub vertex_range_first: u32,
     pub vertex_range_last: u32,
     /// Texture coordinates (R32G32_SFLOAT, R16G16_SFLOAT or R16G16_UNORM) when has_uvs: needed
-    /// on every part of an alpha-tested geometry. Default false.
+    /// on every part of an alpha-tested or albedo-textured geometry. Default false.
     pub has_uvs: bool,
     pub uvs: HrtVertexBufferInput,
+    /// Per-vertex diffuse colours (R8G8B8A8_UNORM, R16G16B16A16_SFLOAT, R32G32B32_SFLOAT or
+    /// R32G32B32A32_SFLOAT; linear) when has_colors: on every part when the first has them.
+    /// Default false.
+    pub has_colors: bool,
+    pub colors: HrtVertexBufferInput,
 }
 
 /// Alpha testing of a geometry (see the Rust docs of AlphaTestInput): rays pass where the
@@ -205,9 +210,19 @@ pub struct HrtGeometryInput {
     pub has_vertex_range: bool,
     pub vertex_range_first: u32,
     pub vertex_range_last: u32,
-    /// The first part's texture coordinates when has_uvs (alpha testing). Default false.
+    /// The first part's texture coordinates when has_uvs (alpha testing, albedo texture).
+    /// Default false.
     pub has_uvs: bool,
     pub uvs: HrtVertexBufferInput,
+    /// The first part's per-vertex diffuse colours when has_colors (relighting, hit
+    /// lighting). Default false.
+    pub has_colors: bool,
+    pub colors: HrtVertexBufferInput,
+    /// A diffuse-colour texture when has_albedo_texture (see the Rust docs of
+    /// AlbedoTextureInput): SAMPLED usage, read-only layout while the registering ticket runs;
+    /// every part needs uvs. Default false.
+    pub has_albedo_texture: bool,
+    pub albedo_texture: HrtImageInput,
     /// Alpha-test the geometry when has_alpha_test. Default false (opaque).
     pub has_alpha_test: bool,
     pub alpha_test: HrtAlphaTestInput,
@@ -806,6 +821,7 @@ fn component(c: &HrtGeometryComponent) -> rt::GeometryComponent {
         transform: c.has_transform.then(|| affine(&c.transform)),
         vertex_range: c.has_vertex_range.then_some(rt::VertexRange { first: c.vertex_range_first, last: c.vertex_range_last }),
         uvs: c.has_uvs.then(|| vertices(&c.uvs)),
+        colors: c.has_colors.then(|| vertices(&c.colors)),
     }
 }
 
@@ -830,6 +846,8 @@ pub(crate) unsafe fn geometry_task(t: &HrtGeometryTask) -> Result<rt::GeometryTa
         vertex_range_last: i.vertex_range_last,
         has_uvs: i.has_uvs,
         uvs: i.uvs,
+        has_colors: i.has_colors,
+        colors: i.colors,
     });
     Ok(rt::GeometryTask {
         handle: rt::GeometryHandle(t.handle),
@@ -840,6 +858,8 @@ pub(crate) unsafe fn geometry_task(t: &HrtGeometryTask) -> Result<rt::GeometryTa
             transform: first.transform,
             vertex_range: first.vertex_range,
             uvs: first.uvs,
+            colors: first.colors,
+            albedo_texture: i.has_albedo_texture.then(|| rt::AlbedoTextureInput { texture: image(&i.albedo_texture) }),
             alpha_test: i.has_alpha_test.then(|| rt::AlphaTestInput {
                 texture: image(&i.alpha_test.texture),
                 channel: i.alpha_test.channel,
@@ -891,6 +911,8 @@ pub(crate) fn geometry_component_default() -> HrtGeometryComponent {
         vertex_range_last: 0,
         has_uvs: false,
         uvs: vertices_c(&rt::VertexBufferInput { stride: 8, format: ash::vk::Format::R32G32_SFLOAT, ..Default::default() }),
+        has_colors: false,
+        colors: vertices_c(&rt::VertexBufferInput { stride: 4, format: ash::vk::Format::R8G8B8A8_UNORM, ..Default::default() }),
     }
 }
 
@@ -911,6 +933,10 @@ pub(crate) fn geometry_task_default() -> HrtGeometryTask {
             vertex_range_last: 0,
             has_uvs: false,
             uvs: c.uvs,
+            has_colors: false,
+            colors: c.colors,
+            has_albedo_texture: false,
+            albedo_texture: image_c(&rt::ImageInput::default()),
             has_alpha_test: false,
             alpha_test: {
                 let a = rt::AlphaTestInput::default();

@@ -10,14 +10,8 @@
 // test runs for it at all), alpha-tested geometry where alpha >= cutoff.
 bool hrt_alpha_opaque(uint instance, uint prim, vec2 bary) {
     InstanceGpu inst = InstanceTable(u_trace_push.instance_table).v[instance];
-    if (inst.uv_addr == uvec2(0u)) return true;
-    LayoutWords uv = LayoutWords(inst.uv_addr);
-    vec2 t = vec2(0.0);
-    vec3 w = vec3(1.0 - bary.x - bary.y, bary.x, bary.y);
-    for (uint k = 0u; k < 3u; ++k) {
-        uint v = hrt_index(inst, 3u * prim + k);
-        t += w[k] * vec2(uintBitsToFloat(uv.w[2u * v]), uintBitsToFloat(uv.w[2u * v + 1u]));
-    }
+    if (inst.alpha_addr == uvec2(0u)) return true;
+    vec2 t = hrt_uv(inst, prim, hrt_bary3(bary));
     vec2 size = vec2(inst.alpha_width, inst.alpha_height);
     uvec2 texel = min(uvec2(fract(t) * size), uvec2(inst.alpha_width - 1u, inst.alpha_height - 1u));
     uint word = LayoutWords(inst.alpha_addr).w[texel.y * inst.alpha_pitch + (texel.x >> 2)];

@@ -48,6 +48,11 @@ struct InstanceGpu {
     float alpha_cutoff;
     vec4 albedo;         // diffuse albedo for relighting and hit lighting (rgb, unused)
     vec4 emission;       // emitted radiance for relighting and hit lighting (rgb, unused)
+    uvec2 color_addr;    // vertex colours, one RGBA8 word per vertex (0: none)
+    uvec2 albedo_addr;   // albedo texture, RGBA8 sRGB, rows of albedo_width texels (0: none)
+    uint albedo_width;
+    uint albedo_height;
+    uint pad2[2];
 };
 
 layout(buffer_reference, std430, buffer_reference_align = 16) readonly buffer InstanceTable { InstanceGpu v[]; };
@@ -215,6 +220,37 @@ bool hrt_layout_sample(InstanceGpu inst, uint tri, uint local, out vec3 b, out u
 
 // Barycentrics of hit attributes (b1, b2) -> (b0, b1, b2).
 vec3 hrt_bary3(vec2 b) { return vec3(1.0 - b.x - b.y, b.x, b.y); }
+
+// Texture coordinates at barycentrics w of triangle `prim` (geometry with uv_addr).
+vec2 hrt_uv(InstanceGpu inst, uint prim, vec3 w) {
+    LayoutWords uv = LayoutWords(inst.uv_addr);
+    vec2 t = vec2(0.0);
+    for (uint k = 0u; k < 3u; ++k) {
+        uint v = hrt_index(inst, 3u * prim + k);
+        t += w[k] * vec2(uintBitsToFloat(uv.w[2u * v]), uintBitsToFloat(uv.w[2u * v + 1u]));
+    }
+    return t;
+}
+
+// The diffuse albedo relighting and hit lighting use at barycentrics w of triangle `prim`:
+// the instance's albedo x the geometry's vertex colour x its albedo texture (nearest texel,
+// wrapping; stored sRGB-encoded), each where present (AlbedoTextureInput).
+vec3 hrt_albedo(InstanceGpu inst, uint prim, vec3 w) {
+    vec3 a = inst.albedo.rgb;
+    if (inst.color_addr != uvec2(0u)) {
+        LayoutWords colors = LayoutWords(inst.color_addr);
+        vec3 c = vec3(0.0);
+        for (uint k = 0u; k < 3u; ++k) c += w[k] * unpackUnorm4x8(colors.w[hrt_index(inst, 3u * prim + k)]).rgb;
+        a *= c;
+    }
+    if (inst.albedo_addr != uvec2(0u) && inst.uv_addr != uvec2(0u)) {
+        vec2 size = vec2(inst.albedo_width, inst.albedo_height);
+        uvec2 texel = min(uvec2(fract(hrt_uv(inst, prim, w)) * size), uvec2(inst.albedo_width - 1u, inst.albedo_height - 1u));
+        vec3 e = unpackUnorm4x8(LayoutWords(inst.albedo_addr).w[texel.y * inst.albedo_width + texel.x]).rgb;
+        a *= mix(e / 12.92, pow((e + 0.055) / 1.055, vec3(2.4)), step(vec3(0.04045), e));
+    }
+    return a;
+}
 
 // The sample a hit lands on (nearest), as an index into the instance's cache.
 uint hrt_cache_sample_index(InstanceGpu inst, uint prim, vec2 bary) {

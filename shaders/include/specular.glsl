@@ -82,7 +82,8 @@ vec3 hrt_hit_lighting(InstanceTable table, HitRecord hit, vec3 dir, inout uint h
     // The paper's constants (RayOffset's defaults): relative to the float's own precision.
     vec3 origin = hrt_offset_world(p, n, 1.0 / 32.0, 1.0 / 65536.0, 256.0);
     uint count = u_c.hit_lighting.x, shadow_mask = u_c.hit_lighting.y;
-    vec3 lit = inst.albedo.rgb * hrt_direct_light(u_tlas, count, shadow_mask, p, n, origin, h) + inst.emission.rgb;
+    vec3 albedo = hrt_albedo(inst, hit.prim, hrt_bary3(hit.bary));
+    vec3 lit = albedo * hrt_direct_light(u_tlas, count, shadow_mask, p, n, origin, h) + inst.emission.rgb;
     uint mode = uint(u_c.hit_params.y);
     if (mode == HRT_HIT_INDIRECT_CACHE && hrt_has_cache(inst)) {
         // The relight lit the front face a hair inside the triangle; light the sample there.
@@ -90,9 +91,11 @@ vec3 hrt_hit_lighting(InstanceTable table, HitRecord hit, vec3 dir, inout uint h
         uint index = hrt_cache_sample_point(inst, hit.prim, hit.bary, bs);
         vec4 cached = hrt_sample(CacheSamples(inst.cache_addr), index);
         vec3 q, nq;
-        if (cached.w > 0.0 && hrt_surface_point(inst, hit.prim, mix(bs, vec3(1.0 / 3.0), 1e-3), q, nq)) {
+        bs = mix(bs, vec3(1.0 / 3.0), 1e-3);
+        if (cached.w > 0.0 && hrt_surface_point(inst, hit.prim, bs, q, nq)) {
             vec3 oq = hrt_offset_world(q, nq, 1.0 / 32.0, 1.0 / 65536.0, 256.0);
-            vec3 at_sample = inst.albedo.rgb * hrt_direct_light(u_tlas, count, shadow_mask, q, nq, oq, h) + inst.emission.rgb;
+            vec3 e = hrt_direct_light(u_tlas, count, shadow_mask, q, nq, oq, h);
+            vec3 at_sample = hrt_albedo(inst, hit.prim, bs) * e + inst.emission.rgb;
             lit += max(cached.rgb - at_sample, vec3(0.0));
         }
     } else if (mode == HRT_HIT_INDIRECT_GATHER) {
@@ -103,7 +106,7 @@ vec3 hrt_hit_lighting(InstanceTable table, HitRecord hit, vec3 dir, inout uint h
             bool landed = hrt_gather_cache(u_tlas, table, u_c.hit_lighting.w, origin, n, h, r, d);
             sum += landed ? r : hrt_miss_radiance(u_c.environment, u_environment, d, u_c.miss.rgb);
         }
-        lit += inst.albedo.rgb * sum / float(gathers);
+        lit += albedo * sum / float(gathers);
     }
     return lit;
 }

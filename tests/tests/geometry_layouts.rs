@@ -109,6 +109,7 @@ fn two_parts(host: &Host, m: &Mesh) -> Layout {
             transform: Some(back),
             vertex_range: None,
             uvs: None,
+            colors: None,
         }],
         ..Default::default()
     };

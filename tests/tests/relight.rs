@@ -13,6 +13,8 @@ use hybrid_rt::{
 use hybrid_rt_testkit::reference::*;
 use hybrid_rt_testkit::sdk_scene::*;
 
+const READ: vk::ImageLayout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+
 /// Pixels whose reference light is the same within a tile around them (shadow edges move by
 /// up to a tile in the cache), with their reference radiance and whether a light is occluded.
 fn comparable(tracer: &Tracer, g: &GBuffer) -> Vec<(usize, Vec3, bool)> {
@@ -278,6 +280,175 @@ fn bounces_converge_to_the_reference_in_a_closed_box() {
     assert!(rel(got, want).abs().max_element() < 0.04, "mean {got} vs the reference {want}");
     assert!(rel_rmse < 0.12, "per-pixel relative RMSE {rel_rmse}");
     f.finish(images, Vec::new());
+}
+
+/// The ground's albedo from all three sources: its instance's tint x per-vertex colours
+/// (linear in x and z, so barycentric interpolation is exact; given as RGB32F, kept as RGBA8)
+/// x a 512² texture whose quadrants each hold a one-texel checker of two colours (the SDK's
+/// 256² copy box-filters each 2 x 2 to their mean). After one relight the cache the camera
+/// sees is the reference's direct light times that albedo, within the cache's resolution
+/// (pixels within 1.5 tiles of a quadrant's edge or a light edge are left out) and 8-bit
+/// storage (< 1%).
+#[test]
+fn vertex_colours_and_textures_give_the_relit_albedo() {
+    const TINT: [f32; 3] = [0.9, 0.8, 0.9];
+    let mut f = Fixture::with(scene(), &[TINT, ALBEDO[1]]);
+    let ground = Mesh::grid(4.0, 8);
+    let colour = |p: Vec3| Vec3::new(0.3 + 0.1 * p.x, 0.5, 0.4 - 0.05 * p.z);
+    // Quadrant q (u >= 0.5: +1, v >= 0.5: +2) alternates these two colours texel by texel.
+    let checker: [[Vec3; 2]; 4] = [
+        [Vec3::new(1.0, 0.2, 0.2), Vec3::new(0.6, 0.6, 0.2)],
+        [Vec3::new(0.2, 1.0, 0.2), Vec3::new(0.2, 0.6, 0.6)],
+        [Vec3::new(0.2, 0.2, 1.0), Vec3::new(1.0, 1.0, 1.0)],
+        [Vec3::new(0.6, 0.4, 0.2), Vec3::new(0.2, 0.4, 0.6)],
+    ];
+    let uv_of = |p: Vec3| (p.x / 4.0 + 0.5, p.z / 4.0 + 0.5);
+    let quadrant = |u: f32, v: f32| (u >= 0.5) as usize + 2 * (v >= 0.5) as usize;
+    let mut texels = vec![0u8; 512 * 512 * 4];
+    for y in 0..512 {
+        for x in 0..512 {
+            let c = checker[quadrant(x as f32 / 512.0, y as f32 / 512.0)][(x + y) % 2];
+            let t = &mut texels[(y * 512 + x) * 4..][..4];
+            t.copy_from_slice(&[(c.x * 255.0).round() as u8, (c.y * 255.0).round() as u8, (c.z * 255.0).round() as u8, 255]);
+        }
+    }
+    let texture =
+        f.host.image_with_data(vk::Format::R8G8B8A8_UNORM, 512, 512, vk::ImageUsageFlags::SAMPLED, &texels, READ).unwrap();
+    let usage = vk::BufferUsageFlags::TRANSFER_SRC;
+    let colours: Vec<[f32; 3]> = ground.positions.iter().map(|p| colour(*p).to_array()).collect();
+    let uvs: Vec<[f32; 2]> = ground.positions.iter().map(|p| [uv_of(*p).0, uv_of(*p).1]).collect();
+    let cb = f.host.buffer_with_data(bytemuck::cast_slice(&colours), usage).unwrap();
+    let ub = f.host.buffer_with_data(bytemuck::cast_slice(&uvs), usage).unwrap();
+    let (vb, ib) = &f.gpu_scene.buffers[0];
+    let n = ground.positions.len() as u32;
+    let input = hybrid_rt::GeometryInput {
+        vertices: hybrid_rt::VertexBufferInput { buffer: vb.buffer, count: n, ..Default::default() },
+        indices: hybrid_rt::IndexBufferInput { buffer: ib.buffer, count: ground.indices.len() as u32, ..Default::default() },
+        colors: Some(hybrid_rt::VertexBufferInput {
+            buffer: cb.buffer,
+            count: n,
+            stride: 12,
+            format: vk::Format::R32G32B32_SFLOAT,
+            ..Default::default()
+        }),
+        uvs: Some(hybrid_rt::VertexBufferInput {
+            buffer: ub.buffer,
+            count: n,
+            stride: 8,
+            format: vk::Format::R32G32_SFLOAT,
+            ..Default::default()
+        }),
+        albedo_texture: Some(hybrid_rt::AlbedoTextureInput { texture: texture.input(READ) }),
+        surfels: hybrid_rt::SurfelSettings { tile_unit_length: TILE, ..Default::default() },
+        ..Default::default()
+    };
+    let task = hybrid_rt::GeometryTask { handle: f.gpu_scene.geometries[0], operation: hybrid_rt::TaskOperation::Update, input };
+    f.frame.schedule_geometry(&task).unwrap();
+    for _ in 0..2 {
+        f.frame.schedule_bvh_build(&Default::default()).unwrap();
+        run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
+    }
+    f.relight(hybrid_rt::MAX_RELIGHT_SAMPLES);
+    let tracer = Tracer::new(&f.scene);
+    let g = GBuffer::render(&tracer, &camera(), W, H);
+    let images = GBufferImages::upload(&f.host, &g).unwrap();
+    let view = f.cache_view(&images);
+    let albedo_at = |p: Vec3| {
+        let (u, v) = uv_of(p);
+        let q = checker[quadrant(u, v)];
+        Vec3::from(TINT) * colour(p) * (q[0] + q[1]) * 0.5
+    };
+    let (mut err2, mut ref2, mut n_px) = (0.0f64, 0.0f64, 0);
+    for &(i, _, _) in &comparable(&tracer, &g) {
+        let p = g.position[i];
+        if g.instance[i] != 0 || p.x.abs() < 1.5 * TILE || p.z.abs() < 1.5 * TILE {
+            continue;
+        }
+        let want = reference_radiance(&tracer, p, g.normal[i], albedo_at(p).to_array());
+        let got = Vec3::from_slice(&view[i][..3]);
+        err2 += (got - want).length_squared() as f64;
+        ref2 += want.length_squared() as f64;
+        n_px += 1;
+    }
+    let rel_rmse = (err2 / ref2.max(1e-12)).sqrt();
+    eprintln!("relit albedo (tint x vertex colours x filtered texture): {n_px} ground pixels, relative RMSE {rel_rmse:.4}");
+    assert!(n_px > 500, "{n_px} pixels");
+    assert!(rel_rmse < 0.05, "relative RMSE {rel_rmse}");
+    f.host.destroy_buffer(cb);
+    f.host.destroy_buffer(ub);
+    f.finish(images, vec![texture]);
+}
+
+/// Bad albedo sources are typed errors, and the container stays usable.
+#[test]
+fn bad_albedo_sources_are_refused() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let mut frame = ctx.create_task_container();
+    let quad = Mesh::quad(1.0);
+    let usage = vk::BufferUsageFlags::TRANSFER_SRC;
+    let vb = host.buffer_with_data(bytemuck::cast_slice(&quad.positions), usage).unwrap();
+    let ib = host.buffer_with_data(bytemuck::cast_slice(&quad.indices), usage).unwrap();
+    let attributes = host.buffer_with_data(&[0u8; 256], usage).unwrap();
+    let texture =
+        host.image_with_data(vk::Format::R8G8B8A8_UNORM, 2, 2, vk::ImageUsageFlags::SAMPLED, &[128u8; 16], READ).unwrap();
+    let n = quad.positions.len() as u32;
+    let attribute =
+        |format, stride| hybrid_rt::VertexBufferInput { buffer: attributes.buffer, count: n, stride, format, offset: 0 };
+    let good = hybrid_rt::GeometryInput {
+        vertices: hybrid_rt::VertexBufferInput { buffer: vb.buffer, count: n, ..Default::default() },
+        indices: hybrid_rt::IndexBufferInput { buffer: ib.buffer, count: quad.indices.len() as u32, ..Default::default() },
+        colors: Some(attribute(vk::Format::R8G8B8A8_UNORM, 4)),
+        uvs: Some(attribute(vk::Format::R32G32_SFLOAT, 8)),
+        albedo_texture: Some(hybrid_rt::AlbedoTextureInput { texture: texture.input(READ) }),
+        ..Default::default()
+    };
+    let bad = [
+        hybrid_rt::GeometryInput { colors: Some(attribute(vk::Format::R8_UNORM, 4)), ..good.clone() },
+        hybrid_rt::GeometryInput { colors: Some(attribute(vk::Format::R32G32B32_SFLOAT, 8)), ..good.clone() },
+        hybrid_rt::GeometryInput {
+            colors: Some(hybrid_rt::VertexBufferInput { count: 1, ..attribute(vk::Format::R8G8B8A8_UNORM, 4) }),
+            ..good.clone()
+        },
+        hybrid_rt::GeometryInput { uvs: None, ..good.clone() },
+        hybrid_rt::GeometryInput {
+            albedo_texture: Some(hybrid_rt::AlbedoTextureInput {
+                texture: hybrid_rt::ImageInput { width: 0, ..texture.input(READ) },
+            }),
+            ..good.clone()
+        },
+        hybrid_rt::GeometryInput {
+            albedo_texture: Some(hybrid_rt::AlbedoTextureInput {
+                texture: hybrid_rt::ImageInput { format: vk::Format::D32_SFLOAT, ..texture.input(READ) },
+            }),
+            ..good.clone()
+        },
+        hybrid_rt::GeometryInput { colors: Some(attribute(vk::Format::R8G8B8A8_UNORM, 1 << 20)), ..good.clone() },
+    ];
+    let handle = ctx.create_geometry_handles(1)[0];
+    for input in bad {
+        let task = hybrid_rt::GeometryTask { handle, operation: hybrid_rt::TaskOperation::Register, input: input.clone() };
+        let e = frame.schedule_geometry(&task).expect_err("refused");
+        assert!(
+            matches!(
+                e,
+                hybrid_rt::Error::InvalidInput { .. }
+                    | hybrid_rt::Error::UnsupportedFormat { .. }
+                    | hybrid_rt::Error::BufferTooSmall { .. }
+            ),
+            "{e}"
+        );
+    }
+    let task = hybrid_rt::GeometryTask { handle, operation: hybrid_rt::TaskOperation::Register, input: good };
+    frame.schedule_geometry(&task).unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    run_frame(&host, &ctx, &mut frame).unwrap();
+    ctx.destroy_geometry_handles(&[handle]).unwrap();
+    for b in [vb, ib, attributes] {
+        host.destroy_buffer(b);
+    }
+    host.destroy_image(texture);
+    drop(ctx);
+    assert_no_validation_errors();
 }
 
 /// Bad relight tasks and albedos are typed errors that leave the container usable.

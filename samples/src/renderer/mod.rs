@@ -130,6 +130,22 @@ fn sdk_err(e: hybrid_rt::Error) -> String {
     e.to_string()
 }
 
+/// Mesh `i` as the SDK registers it: its buffers, its cache's tile size, its cut-out's alpha
+/// test, and the base-colour texture relighting and hit lighting read (texture x the
+/// instance's tint), with the texture coordinates either needs.
+fn sdk_geometry_input(scene: &SampleScene, meshes: &MeshBuffers, i: usize, allow_update: bool) -> GeometryInput {
+    let cutout = scene.alpha_textures.get(i).copied().flatten().and_then(|k| meshes.texture_input(k));
+    let albedo = scene.mesh_albedo_texture(i).and_then(|k| meshes.texture_input(k));
+    GeometryInput {
+        allow_update,
+        surfels: SurfelSettings { tile_unit_length: scene.tile_unit_length, ..Default::default() },
+        uvs: cutout.or(albedo).map(|_| meshes.uv_input(i)),
+        alpha_test: cutout.map(|texture| AlphaTestInput { texture, ..Default::default() }),
+        albedo_texture: albedo.map(|texture| AlbedoTextureInput { texture }),
+        ..meshes.geometry_input(i)
+    }
+}
+
 impl<'h> Renderer<'h> {
     pub fn new(host: &'h Host, scene: SampleScene, settings: Settings) -> HostResult<Renderer<'h>> {
         let (w, h) = (settings.width, settings.height);
@@ -142,14 +158,7 @@ impl<'h> Renderer<'h> {
         let geometries = ctx.create_geometry_handles(scene.scene.meshes.len());
         let deformed_mesh = scene.deformer.as_ref().map(|d| scene.scene.instances[d.instance].mesh);
         for (i, &handle) in geometries.iter().enumerate() {
-            let cutout = scene.alpha_textures.get(i).copied().flatten().and_then(|k| meshes.texture_input(k));
-            let input = GeometryInput {
-                allow_update: Some(i) == deformed_mesh,
-                surfels: SurfelSettings { tile_unit_length: scene.tile_unit_length, ..Default::default() },
-                uvs: cutout.map(|_| meshes.uv_input(i)),
-                alpha_test: cutout.map(|texture| AlphaTestInput { texture, ..Default::default() }),
-                ..meshes.geometry_input(i)
-            };
+            let input = sdk_geometry_input(&scene, &meshes, i, Some(i) == deformed_mesh);
             container.schedule_geometry(&GeometryTask { handle, operation: TaskOperation::Register, input }).map_err(sdk_err)?;
         }
         let instances = ctx.create_instance_handles(scene.scene.instances.len());
@@ -354,13 +363,8 @@ impl<'h> Renderer<'h> {
             }
         }
         if let Some((mesh, buffer)) = deformed_buffer {
-            let base = self.meshes.geometry_input(mesh);
-            let input = GeometryInput {
-                vertices: VertexBufferInput { buffer, ..base.vertices },
-                allow_update: true,
-                surfels: SurfelSettings { tile_unit_length: self.scene.tile_unit_length, ..Default::default() },
-                ..base
-            };
+            let base = sdk_geometry_input(&self.scene, &self.meshes, mesh, true);
+            let input = GeometryInput { vertices: VertexBufferInput { buffer, ..base.vertices }, ..base };
             c.schedule_geometry(&GeometryTask { handle: self.geometries[mesh], operation: TaskOperation::Update, input })
                 .map_err(sdk_err)?;
         }

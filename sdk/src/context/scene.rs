@@ -10,7 +10,7 @@ use crate::gpu::deferred::Garbage;
 use crate::gpu::device::Limits;
 use crate::gpu::memory::{Buffer, MemoryKind};
 use crate::gpu::sync;
-use crate::passes::geometry_pack::{AlphaJob, PackJob, PackMode};
+use crate::passes::geometry_pack::{AlbedoJob, AlphaJob, PackJob, PackMode};
 use crate::passes::{Recording, World};
 use crate::scene::geometry::{self, BlasState, CopyPlan, GeometryLayout};
 use crate::scene::instance::Placement;
@@ -226,7 +226,7 @@ impl Recorder<'_> {
         let st = &mut *self.st;
         let ws = &mut st.working_sets[self.ws];
         let base = ws.index_counters.as_ref().map_or(0, |b| b.address);
-        let (mut jobs, mut alpha_jobs) = (Vec::new(), Vec::new());
+        let (mut jobs, mut alpha_jobs, mut albedo_jobs) = (Vec::new(), Vec::new(), Vec::new());
         for (slot, &(h, plan_index)) in packs.iter().enumerate() {
             let g = st.scene.geometries.get(h)?;
             let Some(copy) = g.copy.as_ref() else { continue };
@@ -248,6 +248,23 @@ impl Recorder<'_> {
                     rows: p.rows(),
                     mode: PackMode::Positions,
                 });
+                if p.color_buffer != vk::Buffer::null() {
+                    jobs.push(PackJob {
+                        src_vertices: staging.address + span + p.staging_colors,
+                        dst_vertices: copy.address + plan.layout.color_offset() + p.vertex_base as u64 * geometry::COLOR_STRIDE,
+                        src_indices: 0,
+                        dst_indices: 0,
+                        counter: base + slot as u64 * 4,
+                        stride: p.color_stride,
+                        vertex_count: p.vertex_count,
+                        triangle_count: 0,
+                        index_size: 0,
+                        first_vertex: 0,
+                        vertex_base: p.vertex_base,
+                        rows: p.rows(),
+                        mode: PackMode::Colors(p.color_format),
+                    });
+                }
                 if p.uv_buffer != vk::Buffer::null() {
                     jobs.push(PackJob {
                         src_vertices: staging.address + span + p.staging_uvs,
@@ -277,11 +294,21 @@ impl Recorder<'_> {
                     pitch_words: l.alpha_pitch_words(),
                 });
             }
+            if let Some(a) = g.input.albedo_texture.as_ref() {
+                let l = &plan.layout;
+                albedo_jobs.push(AlbedoJob {
+                    texture: a.texture,
+                    dst: copy.address + l.albedo_offset(),
+                    width: l.albedo_width,
+                    height: l.albedo_height,
+                });
+            }
             ws.index_checks.push((h, copy.raw, slot as u32));
         }
         let mut r = Recording::maintenance(device, cmd, &mut ws.ring, &mut self.hazards, 0);
         st.passes.geometry_pack.record(&mut r, &jobs);
         st.passes.geometry_pack.record_alpha(&mut r, &alpha_jobs);
+        st.passes.geometry_pack.record_albedo(&mut r, &albedo_jobs);
         Ok(())
     }
 

@@ -10,9 +10,11 @@
 //! count comes back with the ticket (`ExecuteContext::geometry_invalid_triangles`).
 //! Kickstart RT trusts the engine's indices.
 //!
-//! Alpha-tested geometry also gets its texture coordinates packed (the same shader, a UV mode)
-//! and its alpha texture copied into the copy (shaders/alpha_pack.comp), so traces read them
-//! through the instance table's addresses and bind no texture per geometry.
+//! Alpha-tested and albedo-textured geometry also gets its texture coordinates packed (the
+//! same shader, a UV mode), coloured geometry its vertex colours (a colour mode), and the alpha
+//! texture (shaders/alpha_pack.comp) and albedo texture (shaders/albedo_pack.comp) are copied
+//! into the copy, so traces read them through the instance table's addresses and bind no
+//! texture per geometry.
 use super::descriptors::{self, Slot};
 use super::Recording;
 use crate::error::Result;
@@ -42,6 +44,17 @@ struct PackPush {
     mode: u32,
 }
 
+/// `Push` of shaders/albedo_pack.comp.
+#[derive(Clone, Copy, Pod, Zeroable)]
+#[repr(C)]
+struct AlbedoPush {
+    dst: u64,
+    width: u32,
+    height: u32,
+    src_width: u32,
+    src_height: u32,
+}
+
 /// `Push` of shaders/alpha_pack.comp.
 #[derive(Clone, Copy, Pod, Zeroable)]
 #[repr(C)]
@@ -60,6 +73,8 @@ pub(crate) struct GeometryPack {
     pipeline: vk::Pipeline,
     alpha_layout: vk::PipelineLayout,
     alpha_pipeline: vk::Pipeline,
+    albedo_layout: vk::PipelineLayout,
+    albedo_pipeline: vk::Pipeline,
 }
 
 /// What a pack job copies.
@@ -67,8 +82,18 @@ pub(crate) struct GeometryPack {
 pub(crate) enum PackMode {
     /// Positions and indices.
     Positions,
-    /// An alpha-tested part's texture coordinates, from this format.
+    /// A part's texture coordinates, from this format.
     Uvs(vk::Format),
+    /// A part's vertex colours, from this format.
+    Colors(vk::Format),
+}
+
+/// One albedo texture to copy (box-filtered to `width` x `height`) into a geometry's copy.
+pub(crate) struct AlbedoJob {
+    pub texture: crate::types::ImageInput,
+    pub dst: vk::DeviceAddress,
+    pub width: u32,
+    pub height: u32,
 }
 
 /// One alpha texture to copy into a geometry's copy.
@@ -113,7 +138,36 @@ impl GeometryPack {
         let set = b.set_layout(&[texture], vk::ShaderStageFlags::COMPUTE)?;
         let alpha_layout = b.layout(Some(set), std::mem::size_of::<AlphaPush>() as u32, vk::ShaderStageFlags::COMPUTE)?;
         let alpha_pipeline = b.compute(alpha_layout, shaders::ALPHA_PACK_COMP)?;
-        Ok(GeometryPack { layout, pipeline, alpha_layout, alpha_pipeline })
+        let albedo_layout = b.layout(Some(set), std::mem::size_of::<AlbedoPush>() as u32, vk::ShaderStageFlags::COMPUTE)?;
+        let albedo_pipeline = b.compute(albedo_layout, shaders::ALBEDO_PACK_COMP)?;
+        Ok(GeometryPack { layout, pipeline, alpha_layout, alpha_pipeline, albedo_layout, albedo_pipeline })
+    }
+
+    /// Copies albedo textures into their geometries' copies (with the packs: same hazards).
+    pub fn record_albedo(&self, r: &mut Recording<'_>, jobs: &[AlbedoJob]) {
+        if jobs.is_empty() {
+            return;
+        }
+        let stage = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
+        let d = &r.device.raw;
+        let bind = vk::PipelineBindPoint::COMPUTE;
+        unsafe { d.cmd_bind_pipeline(r.cmd, bind, self.albedo_pipeline) };
+        for j in jobs {
+            descriptors::push(r.device, r.cmd, bind, self.albedo_layout, &[Slot::Sampled(&j.texture)]);
+            let push = AlbedoPush {
+                dst: j.dst,
+                width: j.width,
+                height: j.height,
+                src_width: j.texture.width,
+                src_height: j.texture.height,
+            };
+            // The copy is at most MAX_ALBEDO_TEXTURE_SIZE a side: 32 x 32 groups at most.
+            unsafe {
+                d.cmd_push_constants(r.cmd, self.albedo_layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&push));
+                d.cmd_dispatch(r.cmd, j.width.div_ceil(8), j.height.div_ceil(8), 1);
+            }
+        }
     }
 
     /// Copies alpha textures into their geometries' copies (with the packs: same hazards).
@@ -175,6 +229,10 @@ impl GeometryPack {
                         PackMode::Uvs(vk::Format::R32G32_SFLOAT) => 1,
                         PackMode::Uvs(vk::Format::R16G16_SFLOAT) => 2,
                         PackMode::Uvs(_) => 3,
+                        PackMode::Colors(vk::Format::R8G8B8A8_UNORM) => 4,
+                        PackMode::Colors(vk::Format::R16G16B16A16_SFLOAT) => 5,
+                        PackMode::Colors(vk::Format::R32G32B32_SFLOAT) => 6,
+                        PackMode::Colors(_) => 7,
                     },
                 };
                 unsafe {

@@ -10,7 +10,7 @@
 use crate::cache::layout::SurfelLayout;
 use crate::error::{Error, Result};
 use crate::gpu::memory::{Buffer, Memory, MemoryKind};
-use crate::types::{BuildHint, GeometryInput, SurfelType};
+use crate::types::{BuildHint, GeometryInput, SurfelType, VertexBufferInput, MAX_ALBEDO_TEXTURE_SIZE};
 use ash::vk;
 use glam::{Affine3A, Mat4, Vec3};
 use gpu_allocator::MemoryLocation;
@@ -20,13 +20,18 @@ pub(crate) const VERTEX_STRIDE: u64 = 12;
 /// Bytes per triangle in the SDK's copy (three 32-bit indices).
 const TRIANGLE_BYTES: u64 = 12;
 
-/// Bytes per vertex of the texture coordinates an alpha-tested copy keeps (two f32).
+/// Bytes per vertex of the texture coordinates an alpha-tested or albedo-textured copy keeps
+/// (two f32).
 pub(crate) const UV_STRIDE: u64 = 8;
+/// Bytes per vertex of the colours a coloured copy keeps (RGBA8 unorm, linear).
+pub(crate) const COLOR_STRIDE: u64 = 4;
 
 /// The layout of the SDK's copy of a geometry: every part's vertices (12 bytes each), then
-/// every part's triangles (three u32 each), parts in order; alpha-tested geometry then has
-/// every vertex's texture coordinates (two f32) and the alpha texture (one byte per texel,
-/// rows of `alpha_pitch_words` u32).
+/// every part's triangles (three u32 each), parts in order; then, each 16-byte aligned and
+/// only when used: every vertex's texture coordinates (two f32; alpha-tested or
+/// albedo-textured geometry), the alpha texture (one byte per texel, rows of
+/// `alpha_pitch_words` u32), every vertex's colour (RGBA8) and the albedo texture (RGBA8
+/// sRGB, rows of `albedo_width` texels).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct GeometryLayout {
     pub vertex_count: u32,
@@ -39,6 +44,13 @@ pub(crate) struct GeometryLayout {
     pub alpha_height: u32,
     /// `AlphaTestInput::cutoff`'s bits (the layout stays `Eq`).
     pub alpha_cutoff_bits: u32,
+    /// Texture coordinates are kept (alpha test or albedo texture).
+    pub has_uvs: bool,
+    /// Per-vertex colours are kept.
+    pub has_colors: bool,
+    /// The albedo texture's copy (0 x 0: none), at most `MAX_ALBEDO_TEXTURE_SIZE` a side.
+    pub albedo_width: u32,
+    pub albedo_height: u32,
 }
 
 impl GeometryLayout {
@@ -57,9 +69,13 @@ impl GeometryLayout {
         self.alpha_width > 0
     }
 
-    /// Byte offset of the texture coordinates (alpha-tested geometry).
+    /// Byte offset of the texture coordinates (with `has_uvs`).
     pub fn uv_offset(&self) -> u64 {
         (self.index_offset() + self.primitive_count as u64 * TRIANGLE_BYTES).next_multiple_of(16)
+    }
+
+    fn uv_end(&self) -> u64 {
+        self.uv_offset() + if self.has_uvs { self.vertex_count as u64 * UV_STRIDE } else { 0 }
     }
 
     /// u32 words per row of the alpha texture's copy (four texels a word).
@@ -69,13 +85,31 @@ impl GeometryLayout {
 
     /// Byte offset of the alpha texture's copy.
     pub fn alpha_offset(&self) -> u64 {
-        (self.uv_offset() + self.vertex_count as u64 * UV_STRIDE).next_multiple_of(16)
+        self.uv_end().next_multiple_of(16)
+    }
+
+    fn alpha_end(&self) -> u64 {
+        self.alpha_offset() + self.alpha_pitch_words() as u64 * 4 * self.alpha_height as u64
+    }
+
+    /// Byte offset of the per-vertex colours (with `has_colors`).
+    pub fn color_offset(&self) -> u64 {
+        self.alpha_end().next_multiple_of(16)
+    }
+
+    fn color_end(&self) -> u64 {
+        self.color_offset() + if self.has_colors { self.vertex_count as u64 * COLOR_STRIDE } else { 0 }
+    }
+
+    /// Byte offset of the albedo texture's copy.
+    pub fn albedo_offset(&self) -> u64 {
+        self.color_end().next_multiple_of(16)
     }
 
     /// Bytes of the copy (checked when the layout was made).
     pub fn total_bytes(&self) -> u64 {
-        if self.alpha_tested() {
-            self.alpha_offset() + self.alpha_pitch_words() as u64 * 4 * self.alpha_height as u64
+        if self.has_uvs || self.has_colors {
+            self.albedo_offset() + self.albedo_width as u64 * 4 * self.albedo_height as u64
         } else {
             self.index_offset() + self.primitive_count as u64 * TRIANGLE_BYTES
         }
@@ -117,6 +151,13 @@ pub(crate) struct PartCopy {
     pub uv_stride: u32,
     pub uv_format: vk::Format,
     pub staging_uvs: u64,
+    /// Coloured geometry: the part's colours (null buffer: none), staged like the positions.
+    pub color_buffer: vk::Buffer,
+    pub color_src_offset: u64,
+    pub color_bytes: u64,
+    pub color_stride: u32,
+    pub color_format: vk::Format,
+    pub staging_colors: u64,
 }
 
 impl PartCopy {
@@ -177,26 +218,23 @@ impl CopyPlan {
                 .checked_add(index_bytes)
                 .and_then(|b| b.checked_next_multiple_of(16))
                 .ok_or_else(|| overflow("staging"))?;
-            // Alpha-tested geometry: the texture coordinates of the same vertices.
-            let uv = c.uvs.filter(|_| input.alpha_test.is_some());
-            let (mut uv_src_offset, mut uv_bytes, staging_uvs) = (0u64, 0u64, staging);
-            if let Some(u) = uv {
-                let element = if u.format == vk::Format::R32G32_SFLOAT { 8 } else { 4 };
-                uv_bytes = u
-                    .stride
-                    .checked_mul(u64::from(count.max(1)) - 1)
-                    .and_then(|b| b.checked_add(element))
-                    .ok_or_else(|| overflow("a part's texture-coordinate bytes"))?;
-                uv_src_offset = u
-                    .stride
-                    .checked_mul(u64::from(first))
-                    .and_then(|b| b.checked_add(u.offset))
-                    .ok_or_else(|| overflow("a texture-coordinate offset"))?;
-                staging = staging
-                    .checked_add(uv_bytes)
-                    .and_then(|b| b.checked_next_multiple_of(16))
-                    .ok_or_else(|| overflow("staging"))?;
-            }
+            // Alpha-tested or albedo-textured geometry: the texture coordinates of the same
+            // vertices; coloured geometry: their colours. Each staged after the indices.
+            let uv = c.uvs.filter(|_| input.alpha_test.is_some() || input.albedo_texture.is_some());
+            let staging_uvs = staging;
+            let (uv_src_offset, uv_bytes) = match uv {
+                Some(u) => {
+                    attribute_region(&u, first, count, if u.format == vk::Format::R32G32_SFLOAT { 8 } else { 4 }, &mut staging)
+                        .ok_or_else(|| overflow("a part's texture coordinates"))?
+                }
+                None => (0, 0),
+            };
+            let staging_colors = staging;
+            let (color_src_offset, color_bytes) = match c.colors {
+                Some(u) => attribute_region(&u, first, count, color_element_bytes(u.format), &mut staging)
+                    .ok_or_else(|| overflow("a part's colours"))?,
+                None => (0, 0),
+            };
             parts.push(PartCopy {
                 vertex_buffer: v.buffer,
                 vertex_src_offset,
@@ -220,6 +258,12 @@ impl CopyPlan {
                 uv_stride: uv.map_or(Ok(0), |u| u32::try_from(u.stride)).map_err(|_| overflow("a stride"))?,
                 uv_format: uv.map_or(vk::Format::UNDEFINED, |u| u.format),
                 staging_uvs,
+                color_buffer: c.colors.map_or(vk::Buffer::null(), |u| u.buffer),
+                color_src_offset,
+                color_bytes,
+                color_stride: c.colors.map_or(Ok(0), |u| u32::try_from(u.stride)).map_err(|_| overflow("a stride"))?,
+                color_format: c.colors.map_or(vk::Format::UNDEFINED, |u| u.format),
+                staging_colors,
             });
             vertices = vertices.checked_add(count).ok_or_else(|| overflow("the vertex count"))?;
             triangles = triangles.checked_add(triangle_count).ok_or_else(|| overflow("the triangle count"))?;
@@ -234,13 +278,18 @@ impl CopyPlan {
             alpha_width: alpha.map_or(0, |a| a.texture.width),
             alpha_height: alpha.map_or(0, |a| a.texture.height),
             alpha_cutoff_bits: alpha.map_or(0, |a| a.cutoff.to_bits()),
+            has_uvs: parts.first().is_some_and(|p| p.uv_buffer != vk::Buffer::null()),
+            has_colors: parts.first().is_some_and(|p| p.color_buffer != vk::Buffer::null()),
+            albedo_width: input.albedo_texture.map_or(0, |a| a.texture.width.min(MAX_ALBEDO_TEXTURE_SIZE)),
+            albedo_height: input.albedo_texture.map_or(0, |a| a.texture.height.min(MAX_ALBEDO_TEXTURE_SIZE)),
         };
-        // The copy's bytes (u32 counts times 12, a texture of u32 x u32 bytes: cannot overflow
+        // The copy's bytes (u32 counts times 12, textures of u32 x u32 bytes: cannot overflow
         // u64, but say so).
         (vertices as u64 * VERTEX_STRIDE)
             .checked_add(triangles as u64 * TRIANGLE_BYTES)
-            .and_then(|b| b.checked_add(vertices as u64 * UV_STRIDE + 64))
+            .and_then(|b| b.checked_add(vertices as u64 * (UV_STRIDE + COLOR_STRIDE) + 64))
             .and_then(|b| b.checked_add(layout.alpha_pitch_words() as u64 * 4 * layout.alpha_height as u64))
+            .and_then(|b| b.checked_add(layout.albedo_width as u64 * 4 * layout.albedo_height as u64))
             .ok_or_else(|| overflow("the copy"))?;
         Ok(CopyPlan { layout, parts, staging_bytes: staging })
     }
@@ -264,8 +313,33 @@ impl CopyPlan {
                 let u = [vk::BufferCopy { src_offset: p.uv_src_offset, dst_offset: base + p.staging_uvs, size: p.uv_bytes }];
                 unsafe { device.cmd_copy_buffer(cmd, p.uv_buffer, staging, &u) };
             }
+            if p.color_buffer != vk::Buffer::null() {
+                let c =
+                    [vk::BufferCopy { src_offset: p.color_src_offset, dst_offset: base + p.staging_colors, size: p.color_bytes }];
+                unsafe { device.cmd_copy_buffer(cmd, p.color_buffer, staging, &c) };
+            }
         }
     }
+}
+
+/// Bytes of one vertex colour in the engine's buffer (formats checked by validation).
+pub(crate) fn color_element_bytes(f: vk::Format) -> u64 {
+    match f {
+        vk::Format::R8G8B8A8_UNORM => 4,
+        vk::Format::R16G16B16A16_SFLOAT => 8,
+        vk::Format::R32G32B32_SFLOAT => 12,
+        _ => 16,
+    }
+}
+
+/// A per-vertex attribute's region in the engine's buffer (source offset, bytes) for the
+/// part's `count` vertices from `first`, and its staging span, placed at `*staging` (which
+/// moves past it, 16-byte aligned). None on overflow.
+fn attribute_region(a: &VertexBufferInput, first: u32, count: u32, element: u64, staging: &mut u64) -> Option<(u64, u64)> {
+    let bytes = a.stride.checked_mul(u64::from(count.max(1)) - 1)?.checked_add(element)?;
+    let offset = a.stride.checked_mul(u64::from(first))?.checked_add(a.offset)?;
+    *staging = staging.checked_add(bytes)?.checked_next_multiple_of(16)?;
+    Some((offset, bytes))
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -5,7 +5,7 @@
 use super::Scene;
 use bytemuck::{Pod, Zeroable};
 
-/// `InstanceGpu` in shaders/include/cache.glsl (std430, 192 bytes).
+/// `InstanceGpu` in shaders/include/cache.glsl (std430, 224 bytes).
 #[derive(Clone, Copy, Pod, Zeroable, Default)]
 #[repr(C)]
 pub(crate) struct InstanceGpu {
@@ -37,6 +37,13 @@ pub(crate) struct InstanceGpu {
     pub albedo: [f32; 4],
     /// Emission for relighting and hit lighting (rgb, unused).
     pub emission: [f32; 4],
+    /// Coloured geometry: its vertex colours in the copy (RGBA8, 0: none).
+    pub color_addr: u64,
+    /// Albedo-textured geometry: the texture's copy (RGBA8 sRGB, 0: none) and its size.
+    pub albedo_addr: u64,
+    pub albedo_width: u32,
+    pub albedo_height: u32,
+    pub pad2: [u32; 2],
 }
 
 pub(crate) const HAS_CACHE: u32 = 1;
@@ -65,7 +72,7 @@ pub(crate) fn instance_table(scene: &Scene) -> Vec<InstanceGpu> {
             index_size: 4,
             max_resolution: surfel.map_or(1, |s| s.max_resolution),
             pad: 0,
-            uv_addr: g.layout.filter(|l| l.alpha_tested()).map_or(0, |l| copy + l.uv_offset()),
+            uv_addr: g.layout.filter(|l| l.has_uvs).map_or(0, |l| copy + l.uv_offset()),
             alpha_addr: g.layout.filter(|l| l.alpha_tested()).map_or(0, |l| copy + l.alpha_offset()),
             alpha_width: g.layout.map_or(0, |l| l.alpha_width),
             alpha_height: g.layout.map_or(0, |l| l.alpha_height),
@@ -80,6 +87,11 @@ pub(crate) fn instance_table(scene: &Scene) -> Vec<InstanceGpu> {
             sample_count: surfel.map_or(0, |s| s.sample_count),
             albedo: [p.albedo[0], p.albedo[1], p.albedo[2], 0.0],
             emission: [p.emission[0], p.emission[1], p.emission[2], 0.0],
+            color_addr: g.layout.filter(|l| l.has_colors).map_or(0, |l| copy + l.color_offset()),
+            albedo_addr: g.layout.filter(|l| l.albedo_width > 0).map_or(0, |l| copy + l.albedo_offset()),
+            albedo_width: g.layout.map_or(0, |l| l.albedo_width),
+            albedo_height: g.layout.map_or(0, |l| l.albedo_height),
+            pad2: [0; 2],
         };
     }
     table
@@ -108,6 +120,8 @@ mod tests {
         assert_eq!(offset_of!(InstanceGpu, alpha_width), 144);
         assert_eq!(offset_of!(InstanceGpu, albedo), 160);
         assert_eq!(offset_of!(InstanceGpu, emission), 176);
-        assert_eq!(size_of::<InstanceGpu>(), 192);
+        assert_eq!(offset_of!(InstanceGpu, color_addr), 192);
+        assert_eq!(offset_of!(InstanceGpu, albedo_width), 208);
+        assert_eq!(size_of::<InstanceGpu>(), 224);
     }
 }

@@ -125,8 +125,14 @@ pub struct GeometryComponent {
     /// Alpha-tested geometry (`GeometryInput::alpha_test`): the texture coordinates, one per
     /// vertex of `vertices` (same indexing, its own stride and offset; `count` >= the
     /// vertices'): R32G32_SFLOAT, R16G16_SFLOAT or R16G16_UNORM. Copied like the positions.
-    /// Default `None`; required on every part of an alpha-tested geometry.
+    /// Default `None`; required on every part of an alpha-tested geometry, and of one with
+    /// an `albedo_texture`.
     pub uvs: Option<VertexBufferInput>,
+    /// Per-vertex diffuse colours for relighting and hit lighting (`GeometryInput::colors`),
+    /// one per vertex of `vertices` like `uvs`: R8G8B8A8_UNORM, R16G16B16A16_SFLOAT,
+    /// R32G32B32_SFLOAT or R32G32B32A32_SFLOAT (linear; alpha ignored). Default `None`;
+    /// required on every part when the first part has them.
+    pub colors: Option<VertexBufferInput>,
 }
 
 /// An alpha-tested geometry (foliage, fences, grates): rays pass through it where the alpha
@@ -156,6 +162,25 @@ impl Default for AlphaTestInput {
         AlphaTestInput { texture: ImageInput::default(), channel: 3, cutoff: 0.5 }
     }
 }
+
+/// A geometry's diffuse-colour texture, for `RelightCacheTask` and hit lighting: the albedo
+/// of a point is `InstanceInput::albedo` (a tint: 1 for the texture as it is) x the
+/// geometry's per-vertex colour, if any, x this texture at the point's texture coordinates
+/// (nearest texel, wrapping) — glTF's base colour x vertex colour x factor.
+///
+/// The SDK copies the texture at registration into the geometry's copy, box-filtered down to
+/// at most `MAX_ALBEDO_TEXTURE_SIZE` texels a side (the cache is far coarser than that), 4
+/// bytes a texel, sRGB-encoded: the engine may free the texture once the registering ticket is
+/// back, and traces bind no texture per geometry.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AlbedoTextureInput {
+    /// SAMPLED usage, a read-only layout while the registering ticket runs; an unorm, sRGB or
+    /// float colour format (sRGB views decode to linear, as the SDK reads them). RGB is read.
+    pub texture: ImageInput,
+}
+
+/// The most texels a side of a geometry's copy of its albedo texture (`AlbedoTextureInput`).
+pub const MAX_ALBEDO_TEXTURE_SIZE: u32 = 256;
 
 /// How a geometry's BLAS is built (Vulkan's build-preference flags).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
@@ -196,8 +221,15 @@ pub struct GeometryInput {
     pub transform: Option<Affine3A>,
     /// The vertices the first part's indices use. Default `None`: all.
     pub vertex_range: Option<VertexRange>,
-    /// The first part's texture coordinates, for `alpha_test`. Default `None`.
+    /// The first part's texture coordinates, for `alpha_test` and `albedo_texture`. Default
+    /// `None`.
     pub uvs: Option<VertexBufferInput>,
+    /// The first part's per-vertex diffuse colours (see `GeometryComponent::colors`). Default
+    /// `None`.
+    pub colors: Option<VertexBufferInput>,
+    /// A diffuse-colour texture for relighting and hit lighting (see `AlbedoTextureInput`):
+    /// every part needs `uvs`. Default `None`.
+    pub albedo_texture: Option<AlbedoTextureInput>,
     /// Alpha testing (see `AlphaTestInput`): every part needs `uvs`. Default `None`: opaque.
     pub alpha_test: Option<AlphaTestInput>,
     /// Further parts of the same geometry (one BLAS for all). Default empty.
@@ -220,6 +252,7 @@ impl GeometryInput {
             transform: self.transform,
             vertex_range: self.vertex_range,
             uvs: self.uvs,
+            colors: self.colors,
         }
     }
 

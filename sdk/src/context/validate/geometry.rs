@@ -18,10 +18,14 @@ pub(crate) fn geometry_input(device: &Device, input: &GeometryInput) -> Result<(
         };
         let part = if k == 0 { String::new() } else { format!("part {}: ", k - 1) };
         geometry_component(&c, vertices, indices, &part)?;
-        texture_coordinates(&c, input.alpha_test.is_some(), &part)?;
+        texture_coordinates(&c, input.alpha_test.is_some() || input.albedo_texture.is_some(), &part)?;
+        vertex_colors(&c, input.colors.is_some(), &part)?;
     }
     if let Some(a) = &input.alpha_test {
         alpha_test(device, a)?;
+    }
+    if let Some(a) = &input.albedo_texture {
+        albedo_texture(device, a)?;
     }
     let t = &input.surfels;
     if !(t.tile_unit_length.is_finite() && t.tile_unit_length > 0.0) {
@@ -64,6 +68,9 @@ pub(crate) fn geometry_input(device: &Device, input: &GeometryInput) -> Result<(
         }
         if p.uv_buffer != vk::Buffer::null() {
             check_region(&device.raw, "GeometryComponent.uvs", p.uv_buffer, p.uv_src_offset, p.uv_bytes)?;
+        }
+        if p.color_buffer != vk::Buffer::null() {
+            check_region(&device.raw, "GeometryComponent.colors", p.color_buffer, p.color_src_offset, p.color_bytes)?;
         }
     }
     Ok(())
@@ -122,21 +129,73 @@ fn alpha_test(device: &Device, a: &AlphaTestInput) -> Result<()> {
     Ok(())
 }
 
-/// A part's texture coordinates: required (and only read) with alpha testing.
-fn texture_coordinates(c: &GeometryComponent, alpha_tested: bool, part: &str) -> Result<()> {
-    const WHAT: &str = "GeometryComponent.uvs";
-    let Some(u) = &c.uvs else {
-        return if alpha_tested {
-            Err(Error::invalid(WHAT, format!("{part}an alpha-tested geometry needs texture coordinates on every part")))
+/// An albedo texture: any colour format texel fetches read (the alpha test's list).
+fn albedo_texture(device: &Device, a: &AlbedoTextureInput) -> Result<()> {
+    const WHAT: &str = "GeometryInput.albedo_texture.texture";
+    let t = &a.texture;
+    let limit = device.limits.max_image_dimension_2d;
+    if t.width == 0 || t.height == 0 || t.width > limit || t.height > limit {
+        return Err(Error::invalid(WHAT, format!("{}x{} is not within 1..={limit} (maxImageDimension2D)", t.width, t.height)));
+    }
+    super::image(WHAT, t, &Viewport::full(t.width, t.height), super::Use::Sampled)?;
+    if alpha_channels(t.format).is_none() {
+        return Err(Error::UnsupportedFormat {
+            what: WHAT,
+            format: t.format,
+            expected: "an unorm, sRGB, float or BC1/2/3/4/7 colour format",
+        });
+    }
+    Ok(())
+}
+
+/// A part's vertex colours: on every part when the first part has them.
+fn vertex_colors(c: &GeometryComponent, coloured: bool, part: &str) -> Result<()> {
+    const WHAT: &str = "GeometryComponent.colors";
+    let Some(u) = &c.colors else {
+        return if coloured {
+            Err(Error::invalid(WHAT, format!("{part}a geometry with vertex colours needs them on every part")))
         } else {
             Ok(())
         };
     };
-    if !alpha_tested {
-        return Err(Error::invalid(WHAT, format!("{part}texture coordinates are only read for alpha testing: set alpha_test")));
+    if !coloured {
+        return Err(Error::invalid(WHAT, format!("{part}vertex colours on a part but not on the first (GeometryInput.colors)")));
     }
-    if u.buffer == vk::Buffer::null() {
-        return Err(Error::invalid(WHAT, format!("{part}buffer is null")));
+    let element = match u.format {
+        vk::Format::R8G8B8A8_UNORM
+        | vk::Format::R16G16B16A16_SFLOAT
+        | vk::Format::R32G32B32_SFLOAT
+        | vk::Format::R32G32B32A32_SFLOAT => crate::scene::geometry::color_element_bytes(u.format),
+        f => {
+            return Err(Error::UnsupportedFormat {
+                what: WHAT,
+                format: f,
+                expected: "R8G8B8A8_UNORM, R16G16B16A16_SFLOAT, R32G32B32_SFLOAT or R32G32B32A32_SFLOAT",
+            })
+        }
+    };
+    vertex_attribute(WHAT, u, element, c, part, "colours")
+}
+
+/// A part's texture coordinates: required (and only read) with alpha testing or an albedo
+/// texture.
+fn texture_coordinates(c: &GeometryComponent, textured: bool, part: &str) -> Result<()> {
+    const WHAT: &str = "GeometryComponent.uvs";
+    let Some(u) = &c.uvs else {
+        return if textured {
+            Err(Error::invalid(
+                WHAT,
+                format!("{part}an alpha-tested or albedo-textured geometry needs texture coordinates on every part"),
+            ))
+        } else {
+            Ok(())
+        };
+    };
+    if !textured {
+        return Err(Error::invalid(
+            WHAT,
+            format!("{part}texture coordinates are only read for alpha testing or an albedo texture: set alpha_test or albedo_texture"),
+        ));
     }
     let element = match u.format {
         vk::Format::R32G32_SFLOAT => 8,
@@ -149,12 +208,27 @@ fn texture_coordinates(c: &GeometryComponent, alpha_tested: bool, part: &str) ->
             })
         }
     };
+    vertex_attribute(WHAT, u, element, c, part, "texture coordinates")
+}
+
+/// A per-vertex attribute's buffer, stride and count against the part's vertices.
+fn vertex_attribute(
+    what: &'static str,
+    u: &VertexBufferInput,
+    element: u64,
+    c: &GeometryComponent,
+    part: &str,
+    noun: &str,
+) -> Result<()> {
+    if u.buffer == vk::Buffer::null() {
+        return Err(Error::invalid(what, format!("{part}buffer is null")));
+    }
     if u.stride < element || u.stride % 4 != 0 || u.stride > u32::MAX as u64 {
-        return Err(Error::invalid(WHAT, format!("{part}stride {} must be a multiple of 4, at least {element}", u.stride)));
+        return Err(Error::invalid(what, format!("{part}stride {} must be a multiple of 4, at least {element}", u.stride)));
     }
     let needed = c.vertex_range.map_or(c.vertices.count, |r| r.last.saturating_add(1));
     if u.count < needed {
-        return Err(Error::invalid(WHAT, format!("{part}{} texture coordinates for {needed} vertices", u.count)));
+        return Err(Error::invalid(what, format!("{part}{} {noun} for {needed} vertices", u.count)));
     }
     Ok(())
 }
