@@ -17,6 +17,8 @@ pub struct Report {
     pub denoiser_bytes: u64,
     pub blas_bytes: u64,
     pub triangles: usize,
+    /// The caches under `InitSettings::cache_budget_bytes` (`--cache-budget-mib`).
+    pub cache: hybrid_rt::CacheReport,
 }
 
 impl Report {
@@ -35,6 +37,7 @@ impl Report {
             denoiser_bytes: mem.denoiser.bytes,
             blas_bytes: mem.blas.bytes,
             triangles: r.scene.scene.triangle_count(),
+            cache: r.ctx.cache_report(),
         }
     }
 
@@ -71,6 +74,15 @@ impl Report {
             mib(self.cache_bytes),
             mib(self.denoiser_bytes)
         );
+        let c = &self.cache;
+        s += &format!(
+            "Direct-lighting caches: {:.1} MiB resident, budget {}; {} instances waiting for a cache, {} evictions ({:.1} MiB)\n",
+            mib(c.resident_bytes),
+            if c.budget_bytes == 0 { "none".to_string() } else { format!("{:.1} MiB", mib(c.budget_bytes)) },
+            c.waiting_instances,
+            c.evictions,
+            mib(c.evicted_bytes)
+        );
         s
     }
 
@@ -100,6 +112,9 @@ impl Report {
             denoiser_bytes: u64,
             blas_bytes: u64,
             triangles: usize,
+            cache_resident_bytes: u64,
+            cache_budget_bytes: u64,
+            cache_evicted_bytes: u64,
         }
         let j = Json {
             device: &self.device,
@@ -116,6 +131,9 @@ impl Report {
             denoiser_bytes: self.denoiser_bytes,
             blas_bytes: self.blas_bytes,
             triangles: self.triangles,
+            cache_resident_bytes: self.cache.resident_bytes,
+            cache_budget_bytes: self.cache.budget_bytes,
+            cache_evicted_bytes: self.cache.evicted_bytes,
         };
         // Serialising plain numbers and strings cannot fail.
         serde_json::to_string_pretty(&j).unwrap_or_default() + "\n"

@@ -195,3 +195,47 @@ pub fn run_frame(host: &Host, ctx: &ExecuteContext, container: &mut TaskContaine
     host.wait(fence)?;
     ctx.mark_gpu_task_completed(ticket).map_err(|e| e.to_string())
 }
+
+/// Gives `schedule` a fresh `width` x `height` RGBA32F storage image (GENERAL) to write, runs
+/// the container in one frame, and reads the image back: the tests' way to see one task's
+/// output.
+pub fn render_rgba(
+    host: &Host,
+    ctx: &ExecuteContext,
+    container: &mut TaskContainer,
+    (width, height): (u32, u32),
+    schedule: impl FnOnce(&mut TaskContainer, ImageInput) -> Result<(), String>,
+) -> HostResult<Vec<[f32; 4]>> {
+    let out = host.image_cleared(
+        vk::Format::R32G32B32A32_SFLOAT,
+        width,
+        height,
+        vk::ImageUsageFlags::STORAGE,
+        vk::ImageLayout::GENERAL,
+    )?;
+    let ran = schedule(container, out.input(vk::ImageLayout::GENERAL)).and_then(|()| run_frame(host, ctx, container).map(|_| ()));
+    let bytes = ran.and_then(|()| host.read_image(&out, vk::ImageLayout::GENERAL));
+    host.destroy_image(out);
+    Ok(bytemuck::cast_slice::<u8, [f32; 4]>(&bytes?).to_vec())
+}
+
+/// A debug visualisation (`mode`) of `camera`'s view of `images` (through an AO task).
+#[allow(clippy::too_many_arguments)]
+pub fn debug_view(
+    host: &Host,
+    ctx: &ExecuteContext,
+    container: &mut TaskContainer,
+    images: &GBufferImages,
+    camera: &Camera,
+    mode: DebugOutput,
+    bilinear: bool,
+    size: (u32, u32),
+) -> HostResult<Vec<[f32; 4]>> {
+    render_rgba(host, ctx, container, size, |c, output| {
+        let mut task = images.ao_task(camera, 1.0, 1);
+        task.common.debug_output = mode;
+        task.common.enable_bilinear_sampling = bilinear;
+        task.output = output;
+        c.schedule_ambient_occlusion(&task).map_err(|e| e.to_string())
+    })
+}

@@ -84,19 +84,7 @@ impl World {
 
     /// A debug visualisation of `camera`'s view, as RGBA.
     fn debug(&mut self, images: &GBufferImages, camera: &Camera, mode: DebugOutput, bilinear: bool) -> Vec<[f32; 4]> {
-        let out = self
-            .host
-            .image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL)
-            .unwrap();
-        let mut task = images.ao_task(camera, 1.0, 1);
-        task.common.debug_output = mode;
-        task.common.enable_bilinear_sampling = bilinear;
-        task.output = out.input(vk::ImageLayout::GENERAL);
-        self.frame.schedule_ambient_occlusion(&task).unwrap();
-        run_frame(&self.host, &self.ctx, &mut self.frame).unwrap();
-        let bytes = self.host.read_image(&out, vk::ImageLayout::GENERAL).unwrap();
-        self.host.destroy_image(out);
-        bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).to_vec()
+        debug_view(&self.host, &self.ctx, &mut self.frame, images, camera, mode, bilinear, (W, H)).unwrap()
     }
 
     fn finish(self, images: Vec<GBufferImages>, lits: Vec<HostImage>) {

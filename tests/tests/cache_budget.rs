@@ -104,16 +104,8 @@ fn a_budget_of_half_the_caches_keeps_what_the_camera_uses() {
                 .unwrap();
             run_frame(&host, &ctx, &mut frame).unwrap();
         }
-        let out = host
-            .image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL)
-            .unwrap();
-        let mut task = v.images.ao_task(&v.camera, 1.0, 1);
-        task.common.debug_output = DebugOutput::DirectLightingCache;
-        task.output = out.input(vk::ImageLayout::GENERAL);
-        frame.schedule_ambient_occlusion(&task).unwrap();
-        run_frame(&host, &ctx, &mut frame).unwrap();
-        let texels: Vec<[f32; 4]> = bytemuck::cast_slice(&host.read_image(&out, vk::ImageLayout::GENERAL).unwrap()).to_vec();
-        host.destroy_image(out);
+        let mode = DebugOutput::DirectLightingCache;
+        let texels = debug_view(&host, &ctx, &mut frame, &v.images, &v.camera, mode, true, (W, H)).unwrap();
         let hits: Vec<usize> = (0..texels.len()).filter(|&i| v.g.hit[i]).collect();
         let right = hits.iter().filter(|&&i| (Vec3::from_slice(&texels[i][..3]) - Vec3::from(INJECTED)).length() < 1e-3).count();
         right as f32 / hits.len().max(1) as f32

@@ -87,6 +87,10 @@ struct Cli {
     /// the cache (TraceSpecularTask::hit_lighting).
     #[arg(long)]
     hit_lighting: bool,
+    /// Hold the direct-lighting caches under this many MiB (InitSettings::cache_budget_bytes):
+    /// the caches of instances unused longest are evicted and the report counts them. 0: none.
+    #[arg(long, default_value_t = 0)]
+    cache_budget_mib: u64,
     /// Look through the file's camera N (glTF perspective cameras, in node order) instead of
     /// the fitted camera path.
     #[arg(long)]
@@ -115,6 +119,7 @@ fn run() -> Result<(), String> {
         unlit_color: if cli.magenta_unlit { [1.0, 0.0, 1.0] } else { [0.0; 3] },
         relight_samples: cli.relight_samples,
         hit_lighting: cli.hit_lighting,
+        cache_budget_bytes: cli.cache_budget_mib.saturating_mul(1 << 20),
         max_blas_build_count: cli.blas_per_frame,
         rays_per_pixel: cli.rays,
         checkerboard: cli.checkerboard,

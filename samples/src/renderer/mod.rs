@@ -82,6 +82,9 @@ pub struct Settings {
     /// column's back) read one cache sample's residual, unfiltered, so they stay noisier
     /// than the cache's interpolation for the first frames. Default false.
     pub hit_lighting: bool,
+    /// `InitSettings::cache_budget_bytes` (0: none, the default): over it, the caches of the
+    /// instances unused longest are evicted (the report says how many).
+    pub cache_budget_bytes: u64,
 }
 
 impl Default for Settings {
@@ -98,6 +101,7 @@ impl Default for Settings {
             exposure: 1.0,
             relight_samples: 65_536,
             hit_lighting: false,
+            cache_budget_bytes: 0,
         }
     }
 }
@@ -149,8 +153,13 @@ fn sdk_geometry_input(scene: &SampleScene, meshes: &MeshBuffers, i: usize, allow
 impl<'h> Renderer<'h> {
     pub fn new(host: &'h Host, scene: SampleScene, settings: Settings) -> HostResult<Renderer<'h>> {
         let (w, h) = (settings.width, settings.height);
-        let ctx =
-            host.create_context(&InitSettings { supported_working_sets: SLOTS as u32, ..Default::default() }).map_err(sdk_err)?;
+        let ctx = host
+            .create_context(&InitSettings {
+                supported_working_sets: SLOTS as u32,
+                cache_budget_bytes: settings.cache_budget_bytes,
+                ..Default::default()
+            })
+            .map_err(sdk_err)?;
         let mut container = ctx.create_task_container();
         let attributes: Vec<_> = (0..scene.scene.meshes.len()).map(|k| scene.vertex_attributes(k)).collect();
         let meshes = MeshBuffers::upload(host, &scene.scene, &attributes, &scene.textures)?;

@@ -248,39 +248,29 @@ impl Recorder<'_> {
                     rows: p.rows(),
                     mode: PackMode::Positions,
                 });
+                // Per-vertex attributes: one word per vertex from staging into their section.
+                let attribute = |src: u64, dst: u64, stride: u32, mode: PackMode| PackJob {
+                    src_vertices: staging.address + span + src,
+                    dst_vertices: copy.address + dst,
+                    src_indices: 0,
+                    dst_indices: 0,
+                    counter: base + slot as u64 * 4,
+                    stride,
+                    vertex_count: p.vertex_count,
+                    triangle_count: 0,
+                    index_size: 0,
+                    first_vertex: 0,
+                    vertex_base: p.vertex_base,
+                    rows: p.rows(),
+                    mode,
+                };
                 if p.color_buffer != vk::Buffer::null() {
-                    jobs.push(PackJob {
-                        src_vertices: staging.address + span + p.staging_colors,
-                        dst_vertices: copy.address + plan.layout.color_offset() + p.vertex_base as u64 * geometry::COLOR_STRIDE,
-                        src_indices: 0,
-                        dst_indices: 0,
-                        counter: base + slot as u64 * 4,
-                        stride: p.color_stride,
-                        vertex_count: p.vertex_count,
-                        triangle_count: 0,
-                        index_size: 0,
-                        first_vertex: 0,
-                        vertex_base: p.vertex_base,
-                        rows: p.rows(),
-                        mode: PackMode::Colors(p.color_format),
-                    });
+                    let dst = plan.layout.color_offset() + p.vertex_base as u64 * geometry::COLOR_STRIDE;
+                    jobs.push(attribute(p.staging_colors, dst, p.color_stride, PackMode::Colors(p.color_format)));
                 }
                 if p.uv_buffer != vk::Buffer::null() {
-                    jobs.push(PackJob {
-                        src_vertices: staging.address + span + p.staging_uvs,
-                        dst_vertices: copy.address + plan.layout.uv_offset() + p.vertex_base as u64 * geometry::UV_STRIDE,
-                        src_indices: 0,
-                        dst_indices: 0,
-                        counter: base + slot as u64 * 4,
-                        stride: p.uv_stride,
-                        vertex_count: p.vertex_count,
-                        triangle_count: 0,
-                        index_size: 0,
-                        first_vertex: 0,
-                        vertex_base: p.vertex_base,
-                        rows: p.rows(),
-                        mode: PackMode::Uvs(p.uv_format),
-                    });
+                    let dst = plan.layout.uv_offset() + p.vertex_base as u64 * geometry::UV_STRIDE;
+                    jobs.push(attribute(p.staging_uvs, dst, p.uv_stride, PackMode::Uvs(p.uv_format)));
                 }
             }
             if let Some(a) = g.input.alpha_test.as_ref() {

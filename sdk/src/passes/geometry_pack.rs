@@ -68,6 +68,31 @@ struct AlphaPush {
 
 const GROUP: u32 = 256;
 
+/// Texture copies into geometry copies through one of the copy pipelines: each its texture
+/// pushed as the set's one binding, its push constants, its 2D dispatch.
+fn record_texture_copies<'j, P: Pod>(
+    r: &mut Recording<'_>,
+    pipeline: vk::Pipeline,
+    layout: vk::PipelineLayout,
+    copies: impl ExactSizeIterator<Item = (&'j crate::types::ImageInput, P, [u32; 2])>,
+) {
+    if copies.len() == 0 {
+        return;
+    }
+    let stage = vk::PipelineStageFlags2::COMPUTE_SHADER;
+    r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
+    let d = &r.device.raw;
+    let bind = vk::PipelineBindPoint::COMPUTE;
+    unsafe { d.cmd_bind_pipeline(r.cmd, bind, pipeline) };
+    for (texture, push, [x, y]) in copies {
+        descriptors::push(r.device, r.cmd, bind, layout, &[Slot::Sampled(texture)]);
+        unsafe {
+            d.cmd_push_constants(r.cmd, layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&push));
+            d.cmd_dispatch(r.cmd, x, y, 1);
+        }
+    }
+}
+
 pub(crate) struct GeometryPack {
     layout: vk::PipelineLayout,
     pipeline: vk::Pipeline,
@@ -145,16 +170,7 @@ impl GeometryPack {
 
     /// Copies albedo textures into their geometries' copies (with the packs: same hazards).
     pub fn record_albedo(&self, r: &mut Recording<'_>, jobs: &[AlbedoJob]) {
-        if jobs.is_empty() {
-            return;
-        }
-        let stage = vk::PipelineStageFlags2::COMPUTE_SHADER;
-        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
-        let d = &r.device.raw;
-        let bind = vk::PipelineBindPoint::COMPUTE;
-        unsafe { d.cmd_bind_pipeline(r.cmd, bind, self.albedo_pipeline) };
-        for j in jobs {
-            descriptors::push(r.device, r.cmd, bind, self.albedo_layout, &[Slot::Sampled(&j.texture)]);
+        let copies = jobs.iter().map(|j| {
             let push = AlbedoPush {
                 dst: j.dst,
                 width: j.width,
@@ -163,32 +179,19 @@ impl GeometryPack {
                 src_height: j.texture.height,
             };
             // The copy is at most MAX_ALBEDO_TEXTURE_SIZE a side: 32 x 32 groups at most.
-            unsafe {
-                d.cmd_push_constants(r.cmd, self.albedo_layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&push));
-                d.cmd_dispatch(r.cmd, j.width.div_ceil(8), j.height.div_ceil(8), 1);
-            }
-        }
+            (&j.texture, push, [j.width.div_ceil(8), j.height.div_ceil(8)])
+        });
+        record_texture_copies(r, self.albedo_pipeline, self.albedo_layout, copies);
     }
 
     /// Copies alpha textures into their geometries' copies (with the packs: same hazards).
     pub fn record_alpha(&self, r: &mut Recording<'_>, jobs: &[AlphaJob]) {
-        if jobs.is_empty() {
-            return;
-        }
-        let stage = vk::PipelineStageFlags2::COMPUTE_SHADER;
-        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
-        let d = &r.device.raw;
-        let bind = vk::PipelineBindPoint::COMPUTE;
-        unsafe { d.cmd_bind_pipeline(r.cmd, bind, self.alpha_pipeline) };
-        for j in jobs {
-            descriptors::push(r.device, r.cmd, bind, self.alpha_layout, &[Slot::Sampled(&j.texture)]);
+        let copies = jobs.iter().map(|j| {
             let push = AlphaPush { dst: j.dst, width: j.width, height: j.height, pitch: j.pitch_words, channel: j.channel };
             // Validated: width and height within maxImageDimension2D, so the groups fit.
-            unsafe {
-                d.cmd_push_constants(r.cmd, self.alpha_layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&push));
-                d.cmd_dispatch(r.cmd, j.pitch_words.div_ceil(8), j.height.div_ceil(8), 1);
-            }
-        }
+            (&j.texture, push, [j.pitch_words.div_ceil(8), j.height.div_ceil(8)])
+        });
+        record_texture_copies(r, self.alpha_pipeline, self.alpha_layout, copies);
     }
 
     /// Packs every job (after the staging copies and the counters' fill; before BLAS builds

@@ -2,7 +2,6 @@
 //! a floating box under two hard lights, its caches registered with known albedos, and the
 //! CPU reference's direct light.
 use super::{assert_no_validation_errors, host_and_context};
-use ash::vk;
 use glam::{Affine3A, Vec3};
 use hybrid_rt::{
     DebugOutput, InitSettings, InstanceInput, InstanceOperation, InstanceTask, LightInfo, LightType, RelightCacheTask,
@@ -128,33 +127,16 @@ impl Fixture {
     }
 
     pub fn cache_view_from(&mut self, images: &GBufferImages, camera: &Camera) -> Vec<[f32; 4]> {
-        let out = self
-            .host
-            .image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL)
-            .unwrap();
-        let mut task = images.ao_task(camera, 1.0, 1);
-        task.common.debug_output = DebugOutput::DirectLightingCache;
-        task.common.enable_bilinear_sampling = false;
-        task.output = out.input(vk::ImageLayout::GENERAL);
-        self.frame.schedule_ambient_occlusion(&task).unwrap();
-        run_frame(&self.host, &self.ctx, &mut self.frame).unwrap();
-        let bytes = self.host.read_image(&out, vk::ImageLayout::GENERAL).unwrap();
-        self.host.destroy_image(out);
-        bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).to_vec()
+        let mode = DebugOutput::DirectLightingCache;
+        debug_view(&self.host, &self.ctx, &mut self.frame, images, camera, mode, false, (W, H)).unwrap()
     }
 
     /// Runs `task` once, into a fresh RGBA32F output, and reads that back.
-    pub fn trace_specular(&mut self, mut task: TraceSpecularTask) -> Vec<[f32; 4]> {
-        let out = self
-            .host
-            .image_cleared(vk::Format::R32G32B32A32_SFLOAT, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL)
-            .unwrap();
-        task.output = out.input(vk::ImageLayout::GENERAL);
-        self.frame.schedule_specular(&task).unwrap();
-        run_frame(&self.host, &self.ctx, &mut self.frame).unwrap();
-        let bytes = self.host.read_image(&out, vk::ImageLayout::GENERAL).unwrap();
-        self.host.destroy_image(out);
-        bytemuck::cast_slice::<u8, [f32; 4]>(&bytes).to_vec()
+    pub fn trace_specular(&mut self, task: TraceSpecularTask) -> Vec<[f32; 4]> {
+        render_rgba(&self.host, &self.ctx, &mut self.frame, (W, H), |c, output| {
+            c.schedule_specular(&TraceSpecularTask { output, ..task }).map_err(|e| e.to_string())
+        })
+        .unwrap()
     }
 
     pub fn finish(self, images: GBufferImages, lits: Vec<HostImage>) {
