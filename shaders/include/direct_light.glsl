@@ -22,9 +22,10 @@ bool hrt_surface_point(InstanceGpu inst, uint prim, vec3 b, out vec3 p, out vec3
     return true;
 }
 
-// Sum over the first `count` of HRT_LIGHTS of colour x intensity x irradiance x visibility at (p, n): one shadow
-// ray per light (rays masked by `mask`) from `origin` towards a random point of its extent,
-// so sized lights give soft shadows over frames. `h` is the caller's random state.
+// Sum over the first `count` of HRT_LIGHTS of colour x intensity x irradiance x visibility
+// at (p, n): one shadow ray per light (rays masked by `mask`) from `origin` towards a random
+// point of its extent, so sized lights give soft shadows over frames. `h` is the caller's
+// random state.
 vec3 hrt_direct_light(accelerationStructureEXT tlas, uint count, uint mask, vec3 p, vec3 n, vec3 origin, inout uint h) {
     vec3 e = vec3(0.0);
     for (uint l = 0u; l < count; ++l) {
