@@ -912,6 +912,15 @@ int main(void) {
         HrtGeometryTask bad_cut = cut;
         bad_cut.input.alpha_test.cutoff = 2.0f;
         EXPECT(hrt_schedule_geometry(frame, &bad_cut) == HRT_ERROR_INVALID_INPUT, "an alpha cutoff above 1 is refused");
+        /* What each build hint asks of the driver: static geometry of the default hint builds
+         * for fast trace and is compacted; FastThenTrace's first build is a fast one. */
+        uint32_t hint_flags = 0;
+        CHECK_HRT(hrt_build_hint_flags(HRT_BUILD_HINT_AUTO, false, false, &hint_flags));
+        EXPECT(hint_flags == (VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_TRACE_BIT_KHR | VK_BUILD_ACCELERATION_STRUCTURE_ALLOW_COMPACTION_BIT_KHR),
+               "Auto on static geometry: fast trace + compaction (%u)", hint_flags);
+        CHECK_HRT(hrt_build_hint_flags(HRT_BUILD_HINT_FAST_THEN_TRACE, false, true, &hint_flags));
+        EXPECT((hint_flags & VK_BUILD_ACCELERATION_STRUCTURE_PREFER_FAST_BUILD_BIT_KHR) != 0, "FastThenTrace builds fast first");
+        EXPECT(hrt_build_hint_flags(9, false, false, &hint_flags) == HRT_ERROR_INVALID_INPUT, "an unknown hint is refused");
         /* Albedo sources for relighting: an albedo texture needs the texture coordinates; vertex
          * colours need a colour format. */
         HrtGeometryTask tinted = cut;

@@ -13,19 +13,6 @@ use crate::gpu::GpuTimer;
 use ash::vk;
 use hybrid_rt_testkit::host::{Host, HostBuffer, HostResult};
 
-/// The flag sets of the SDK's build hints on static geometry (`blas::flags`): `Auto` builds
-/// for fast trace and compacts; `PreferFastBuild` does not compact; `FastThenTrace`'s first
-/// build is a fast build that may be compacted.
-pub fn sdk_flags(hint: hybrid_rt::BuildHint) -> vk::BuildAccelerationStructureFlagsKHR {
-    use vk::BuildAccelerationStructureFlagsKHR as F;
-    match hint {
-        hybrid_rt::BuildHint::PreferFastBuild => F::PREFER_FAST_BUILD,
-        hybrid_rt::BuildHint::FastThenTrace => F::PREFER_FAST_BUILD | F::ALLOW_COMPACTION,
-        hybrid_rt::BuildHint::LowMemory => F::LOW_MEMORY | F::ALLOW_COMPACTION,
-        _ => F::PREFER_FAST_TRACE | F::ALLOW_COMPACTION,
-    }
-}
-
 struct Target {
     flags: vk::BuildAccelerationStructureFlagsKHR,
     blas: vk::AccelerationStructureKHR,

@@ -1419,6 +1419,19 @@ struct HrtGeometryTask hrt_geometry_task_default(void);
  */
 struct HrtGeometryComponent hrt_geometry_component_default(void);
 
+/**
+ * The VkBuildAccelerationStructureFlagsKHR a BLAS of `build_hint` (an HrtBuildHint) is built
+ * with (see the Rust docs of BuildHint::build_flags): for static or `allow_update` geometry,
+ * and for HRT_BUILD_HINT_FAST_THEN_TRACE's first build.
+ *
+ * # Safety
+ * `flags` points to writable memory.
+ */
+enum HrtStatus hrt_build_hint_flags(uint32_t build_hint,
+                                    bool allow_update,
+                                    bool first_build,
+                                    uint32_t *flags);
+
 enum HrtStatus hrt_schedule_geometry(struct HrtTaskContainer *container,
                                      const struct HrtGeometryTask *task);
 

@@ -467,6 +467,27 @@ pub extern "C" fn hrt_geometry_component_default() -> HrtGeometryComponent {
     types::geometry_component_default()
 }
 
+/// The VkBuildAccelerationStructureFlagsKHR a BLAS of `build_hint` (an HrtBuildHint) is built
+/// with (see the Rust docs of BuildHint::build_flags): for static or `allow_update` geometry,
+/// and for HRT_BUILD_HINT_FAST_THEN_TRACE's first build.
+///
+/// # Safety
+/// `flags` points to writable memory.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_build_hint_flags(
+    build_hint: u32,
+    allow_update: bool,
+    first_build: bool,
+    flags: *mut u32,
+) -> HrtStatus {
+    guard(|| {
+        let out = get_mut(flags, "flags")?;
+        let hint = types::build_hint(build_hint)?;
+        *out = hint.build_flags(allow_update, first_build).as_raw();
+        Ok(())
+    })
+}
+
 #[no_mangle]
 pub unsafe extern "C" fn hrt_schedule_geometry(container: *mut HrtTaskContainer, task: *const HrtGeometryTask) -> HrtStatus {
     guard(|| {

@@ -761,6 +761,21 @@ pub struct HrtResourceAllocations {
 
 use crate::status::Failure;
 
+/// An HrtBuildHint.
+pub(crate) fn build_hint(v: u32) -> Result<rt::BuildHint, Failure> {
+    pick(
+        "HrtBuildHint",
+        v,
+        &[
+            rt::BuildHint::Auto,
+            rt::BuildHint::PreferFastTrace,
+            rt::BuildHint::PreferFastBuild,
+            rt::BuildHint::LowMemory,
+            rt::BuildHint::FastThenTrace,
+        ],
+    )
+}
+
 pub(crate) fn pick<T: Copy>(what: &str, v: u32, table: &[T]) -> Result<T, Failure> {
     table.get(v as usize).copied().ok_or_else(|| {
         Failure(crate::status::HrtStatus::HRT_ERROR_INVALID_INPUT, format!("invalid {what}: {v} is not a valid enum value"))
@@ -867,17 +882,7 @@ pub(crate) unsafe fn geometry_task(t: &HrtGeometryTask) -> Result<rt::GeometryTa
             }),
             extra_components: extra,
             allow_update: i.allow_update,
-            build_hint: pick(
-                "HrtGeometryInput.build_hint",
-                i.build_hint,
-                &[
-                    rt::BuildHint::Auto,
-                    rt::BuildHint::PreferFastTrace,
-                    rt::BuildHint::PreferFastBuild,
-                    rt::BuildHint::LowMemory,
-                    rt::BuildHint::FastThenTrace,
-                ],
-            )?,
+            build_hint: build_hint(i.build_hint)?,
             surfels: rt::SurfelSettings {
                 surfel_type: pick(
                     "HrtSurfelSettings.surfel_type",

@@ -4,6 +4,8 @@
 #define HRT_LIGHT_DIRECTIONAL 0u
 #define HRT_LIGHT_POINT 1u
 #define HRT_LIGHT_SPOT 2u
+// Lights one task takes at most (MAX_SHADOW_LIGHTS).
+#define HRT_MAX_LIGHTS 32
 
 // A light as shaders see it (std140, 64 bytes).
 struct LightGpu {

@@ -15,7 +15,6 @@
 #include "common.glsl"
 #include "light_sampling.glsl"
 
-#define HRT_MAX_LIGHTS 32
 #define HRT_LIGHT_OUTPUTS 4
 
 layout(set = 0, binding = 0) uniform accelerationStructureEXT u_tlas;

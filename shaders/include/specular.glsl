@@ -14,9 +14,6 @@
 #include "trace_push.glsl"
 #include "environment.glsl"
 #include "light_sampling.glsl"
-#ifndef HRT_MAX_LIGHTS
-#define HRT_MAX_LIGHTS 32
-#endif
 
 layout(set = 0, binding = 0) uniform accelerationStructureEXT u_tlas;
 layout(set = 0, binding = 1) uniform sampler2D u_depth;

@@ -246,7 +246,8 @@ fn run() -> Result<(), String> {
         };
         // Warm-up first (clocks ramp up over hundreds of milliseconds of load), then the
         // median of the last 4 of 6 builds, each beside a floor build with the same flags.
-        let flags = hybrid_rt_samples::blas_floor::sdk_flags(build_hint);
+        // The flags the SDK builds this hint's first BLAS of static geometry with.
+        let flags = build_hint.build_flags(false, true);
         let warm_until = Instant::now() + std::time::Duration::from_millis(warmup_ms);
         while Instant::now() < warm_until {
             floor.build(&host, flags)?;
@@ -308,7 +309,7 @@ fn run() -> Result<(), String> {
     // Warm clocks for this frame too (the floor's builds keep the GPU busy until it starts).
     let warm_until = Instant::now() + std::time::Duration::from_millis(warmup_ms);
     while Instant::now() < warm_until {
-        floor.build(&host, hybrid_rt_samples::blas_floor::sdk_flags(BuildHint::Auto))?;
+        floor.build(&host, BuildHint::Auto.build_flags(false, true))?;
     }
     floor.destroy(&host);
     let first_ms = run_frame(&host, &ctx, &mut frame)?.gpu_ms(TaskKind::Bvh);

@@ -20,6 +20,7 @@ use ash::vk;
 use std::collections::{HashSet, VecDeque};
 
 /// Where a replaced GPU object lived.
+#[derive(Clone, Copy)]
 pub(super) enum Slot {
     Copy(GeometryHandle),
     Blas(GeometryHandle),

@@ -1,7 +1,7 @@
 //! A working set: what one ticket in flight owns, so frames in flight never share mutable GPU
 //! memory — its upload ring, timestamp and compaction query pools, build scratch, the geometry
 //! read-backs it carries home, and its own TLAS.
-use super::journal::{Held, Slot};
+use super::journal::{Held, Journal, Slot};
 use super::record::Recorder;
 use crate::error::{Error, Result};
 use crate::gpu::device::Device;
@@ -158,6 +158,24 @@ impl WorkingSet {
     }
 }
 
+/// Grows a working set's buffer to `size` bytes through the journal: a buffer it replaces is
+/// retired after this ticket (the recording may already use it), and a first one is noted so
+/// a failed build gives it back.
+fn ensure_journaled(
+    journal: &mut Journal,
+    slot: Slot,
+    target: &mut Option<Buffer>,
+    size: u64,
+    make: impl FnOnce(u64) -> Result<Buffer>,
+) -> Result<()> {
+    let had = target.is_some();
+    memory::ensure_capacity(target, size, make, |old| journal.replaced(slot, Some(Held::Buffer(old))))?;
+    if !had && target.is_some() {
+        journal.replaced(slot, None);
+    }
+    Ok(())
+}
+
 impl Recorder<'_> {
     /// Build scratch of at least `bytes` (plus alignment slack), returned for binding. Scratch
     /// written earlier in this recording may still be in use by the GPU when a larger one
@@ -166,25 +184,15 @@ impl Recorder<'_> {
     pub fn ensure_scratch(&mut self, bytes: u64) -> Result<vk::DeviceAddress> {
         let memory = self.memory;
         let ws = &mut self.st.working_sets[self.ws];
-        let journal = &mut self.journal;
-        let had = ws.scratch.is_some();
-        memory::ensure_capacity(
-            &mut ws.scratch,
-            bytes + self.device.scratch_alignment,
-            |size| {
-                memory.create_buffer(
-                    "build scratch",
-                    size,
-                    vk::BufferUsageFlags::STORAGE_BUFFER,
-                    MemoryLocation::GpuOnly,
-                    MemoryKind::BuildScratch,
-                )
-            },
-            |old| journal.replaced(Slot::Scratch, Some(Held::Buffer(old))),
-        )?;
-        if !had && ws.scratch.is_some() {
-            journal.replaced(Slot::Scratch, None);
-        }
+        ensure_journaled(&mut self.journal, Slot::Scratch, &mut ws.scratch, bytes + self.device.scratch_alignment, |size| {
+            memory.create_buffer(
+                "build scratch",
+                size,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryLocation::GpuOnly,
+                MemoryKind::BuildScratch,
+            )
+        })?;
         // The slack above lets the base meet minAccelerationStructureScratchOffsetAlignment.
         let align = self.device.scratch_alignment.max(1);
         Ok(ws.scratch.as_ref().map_or(0, |s| s.address.div_ceil(align) * align))
@@ -210,25 +218,15 @@ impl Recorder<'_> {
     pub fn ensure_index_counters(&mut self, n: u32) -> Result<vk::Buffer> {
         let memory = self.memory;
         let ws = &mut self.st.working_sets[self.ws];
-        let journal = &mut self.journal;
-        let had = ws.index_counters.is_some();
-        memory::ensure_capacity(
-            &mut ws.index_counters,
-            n as u64 * 4,
-            |size| {
-                memory.create_buffer(
-                    "index check counters",
-                    size.max(256),
-                    vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-                    MemoryLocation::GpuToCpu,
-                    MemoryKind::Readback,
-                )
-            },
-            |old| journal.replaced(Slot::IndexCounters, Some(Held::Buffer(old))),
-        )?;
-        if !had && ws.index_counters.is_some() {
-            journal.replaced(Slot::IndexCounters, None);
-        }
+        ensure_journaled(&mut self.journal, Slot::IndexCounters, &mut ws.index_counters, n as u64 * 4, |size| {
+            memory.create_buffer(
+                "index check counters",
+                size.max(256),
+                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+                MemoryKind::Readback,
+            )
+        })?;
         Ok(ws.index_counters.as_ref().map_or(vk::Buffer::null(), |b| b.raw))
     }
 
@@ -237,44 +235,25 @@ impl Recorder<'_> {
     pub fn ensure_usage(&mut self, slots: u32) -> Result<(vk::Buffer, u64, vk::Buffer)> {
         let memory = self.memory;
         let ws = &mut self.st.working_sets[self.ws];
-        let journal = &mut self.journal;
         let size = slots as u64 * 4;
-        for (slot, kind) in [(Slot::Usage, 0), (Slot::UsageReadback, 1)] {
-            let target = if kind == 0 { &mut ws.usage } else { &mut ws.usage_readback };
-            let had = target.is_some();
-            let mut replaced = None;
-            memory::ensure_capacity(
-                target,
-                size,
-                |size| {
-                    if kind == 0 {
-                        memory.create_buffer(
-                            "cache usage flags",
-                            size.max(256),
-                            vk::BufferUsageFlags::STORAGE_BUFFER
-                                | vk::BufferUsageFlags::TRANSFER_DST
-                                | vk::BufferUsageFlags::TRANSFER_SRC,
-                            MemoryLocation::GpuOnly,
-                            MemoryKind::Cache,
-                        )
-                    } else {
-                        memory.create_buffer(
-                            "cache usage read-back",
-                            size.max(256),
-                            vk::BufferUsageFlags::TRANSFER_DST,
-                            MemoryLocation::GpuToCpu,
-                            MemoryKind::Readback,
-                        )
-                    }
-                },
-                |old| replaced = Some(old),
-            )?;
-            if let Some(old) = replaced {
-                journal.replaced(slot, Some(Held::Buffer(old)));
-            } else if !had && target.is_some() {
-                journal.replaced(slot, None);
-            }
-        }
+        ensure_journaled(&mut self.journal, Slot::Usage, &mut ws.usage, size, |size| {
+            memory.create_buffer(
+                "cache usage flags",
+                size.max(256),
+                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST | vk::BufferUsageFlags::TRANSFER_SRC,
+                MemoryLocation::GpuOnly,
+                MemoryKind::Cache,
+            )
+        })?;
+        ensure_journaled(&mut self.journal, Slot::UsageReadback, &mut ws.usage_readback, size, |size| {
+            memory.create_buffer(
+                "cache usage read-back",
+                size.max(256),
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+                MemoryKind::Readback,
+            )
+        })?;
         let (Some(flags), Some(readback)) = (ws.usage.as_ref(), ws.usage_readback.as_ref()) else {
             return Err(crate::Error::invalid("InitSettings.cache_budget_bytes", "usage buffers missing: SDK bug"));
         };

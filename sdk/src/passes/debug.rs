@@ -35,14 +35,7 @@ impl DebugPass {
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
             ],
-            Shaders {
-                raygen: shaders::DEBUG_RGEN,
-                misses: &[shaders::HIT_RECORD_RMISS],
-                closest_hits: &[shaders::HIT_RECORD_RCHIT],
-                any_hit: Some(shaders::ALPHA_TEST_RAHIT),
-                inline: None,
-                floor: None,
-            },
+            Shaders::hit_record(shaders::DEBUG_RGEN),
         )?;
         Ok(DebugPass { program })
     }

@@ -2,7 +2,7 @@
 //! cache (shaders/diffuse.rgen).
 use super::constants::{EnvironmentGpu, TraceCommonGpu};
 use super::descriptors::{optional_or, Slot};
-use super::program::{Payload, RtProgram, Shaders, Writes};
+use super::program::{RtProgram, Shaders, Writes};
 use super::{PassTask, Passes, Recording, World};
 use crate::error::Result;
 use crate::gpu::pipeline::{Binding, PipelineBuilder};
@@ -33,14 +33,7 @@ impl DiffusePass {
             b,
             // + roughness, direct lighting, environment
             &super::gbuffer_bindings(sampler, &[sampled(), sampled(), sampled()]),
-            Shaders {
-                raygen: shaders::DIFFUSE_RGEN,
-                misses: &[shaders::HIT_RECORD_RMISS],
-                closest_hits: &[shaders::HIT_RECORD_RCHIT],
-                any_hit: Some(shaders::ALPHA_TEST_RAHIT),
-                inline: Some(shaders::DIFFUSE_COMP),
-                floor: Some(Payload::HitRecord),
-            },
+            Shaders::hit_record_trace(shaders::DIFFUSE_RGEN, shaders::DIFFUSE_COMP),
         )?;
         Ok(DiffusePass { program })
     }

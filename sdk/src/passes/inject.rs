@@ -34,14 +34,7 @@ impl InjectPass {
                 Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
             ],
-            Shaders {
-                raygen: shaders::INJECT_RGEN,
-                misses: &[shaders::HIT_RECORD_RMISS],
-                closest_hits: &[shaders::HIT_RECORD_RCHIT],
-                any_hit: Some(shaders::ALPHA_TEST_RAHIT),
-                inline: None,
-                floor: None,
-            },
+            Shaders::hit_record(shaders::INJECT_RGEN),
         )?;
         Ok(InjectPass { program })
     }

@@ -12,6 +12,7 @@ use super::Recording;
 use crate::error::Result;
 use crate::gpu::pipeline::{Binding, PipelineBuilder, RtPipeline, RtShaders};
 use crate::gpu::sync;
+use crate::shaders;
 use ash::vk;
 
 /// The payload a program's hit and miss shaders write: it picks the empty shaders of the bench
@@ -34,6 +35,26 @@ pub(crate) struct Shaders {
     pub inline: Option<&'static [u8]>,
     /// The payload, when the pass has a bare-ray floor for the bench (None: it has none).
     pub floor: Option<Payload>,
+}
+
+impl Shaders {
+    /// A raygen whose rays report through the HitRecord miss and closest-hit shaders (the
+    /// alpha test's any-hit for alpha-tested geometry), with no inline twin and no floor.
+    pub fn hit_record(raygen: &'static [u8]) -> Shaders {
+        Shaders {
+            raygen,
+            misses: &[shaders::HIT_RECORD_RMISS],
+            closest_hits: &[shaders::HIT_RECORD_RCHIT],
+            any_hit: Some(shaders::ALPHA_TEST_RAHIT),
+            inline: None,
+            floor: None,
+        }
+    }
+
+    /// `hit_record` for a trace task: its ray-query twin, and the bench's bare-ray floor.
+    pub fn hit_record_trace(raygen: &'static [u8], inline: &'static [u8]) -> Shaders {
+        Shaders { inline: Some(inline), floor: Some(Payload::HitRecord), ..Shaders::hit_record(raygen) }
+    }
 }
 
 /// What a program's shaders write besides reading their inputs (for the barrier before them).
@@ -106,7 +127,6 @@ impl RtProgram {
     /// Builds the bench's floor pipeline, if this program has one.
     #[cfg(feature = "bench-floor")]
     pub fn ensure_floor(&mut self, b: &mut PipelineBuilder<'_>) -> Result<()> {
-        use crate::shaders;
         let Some(payload) = self.floor_payload.filter(|_| self.floor.is_none()) else { return Ok(()) };
         let (miss, hit) = match payload {
             Payload::HitT => (shaders::EMPTY_RMISS, shaders::EMPTY_RCHIT),

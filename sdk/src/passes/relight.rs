@@ -130,14 +130,7 @@ impl RelightPass {
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
                 Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None },
             ],
-            Shaders {
-                raygen: shaders::RELIGHT_RGEN,
-                misses: &[shaders::HIT_RECORD_RMISS],
-                closest_hits: &[shaders::HIT_RECORD_RCHIT],
-                any_hit: Some(shaders::ALPHA_TEST_RAHIT),
-                inline: None,
-                floor: None,
-            },
+            Shaders::hit_record(shaders::RELIGHT_RGEN),
         )?;
         Ok(RelightPass { program })
     }

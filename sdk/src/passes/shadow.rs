@@ -2,7 +2,7 @@
 //! points of the light's extent (shaders/shadow.rgen).
 use super::constants::TraceCommonGpu;
 use super::descriptors::{optional_or, Slot};
-use super::program::{Payload, RtProgram, Shaders, Writes};
+use super::program::{RtProgram, Shaders, Writes};
 use super::{PassTask, Passes, Recording, World};
 use crate::error::Result;
 use crate::gpu::pipeline::{Binding, PipelineBuilder};
@@ -58,14 +58,7 @@ impl ShadowPass {
         let program = RtProgram::new(
             b,
             &super::gbuffer_bindings(sampler, &[]),
-            Shaders {
-                raygen: shaders::SHADOW_RGEN,
-                misses: &[shaders::HIT_RECORD_RMISS],
-                closest_hits: &[shaders::HIT_RECORD_RCHIT],
-                any_hit: Some(shaders::ALPHA_TEST_RAHIT),
-                inline: Some(shaders::SHADOW_COMP),
-                floor: Some(Payload::HitRecord),
-            },
+            Shaders::hit_record_trace(shaders::SHADOW_RGEN, shaders::SHADOW_COMP),
         )?;
         Ok(ShadowPass { program })
     }
@@ -118,14 +111,7 @@ impl MultiShadowPass {
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
                 Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None },
             ],
-            Shaders {
-                raygen: shaders::MULTI_SHADOW_RGEN,
-                misses: &[shaders::HIT_RECORD_RMISS],
-                closest_hits: &[shaders::HIT_RECORD_RCHIT],
-                any_hit: Some(shaders::ALPHA_TEST_RAHIT),
-                inline: Some(shaders::MULTI_SHADOW_COMP),
-                floor: Some(Payload::HitRecord),
-            },
+            Shaders::hit_record_trace(shaders::MULTI_SHADOW_RGEN, shaders::MULTI_SHADOW_COMP),
         )?;
         Ok(MultiShadowPass { program })
     }

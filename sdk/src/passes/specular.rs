@@ -2,7 +2,7 @@
 //! or on smooth pixels from the engine's lights (hit lighting) (shaders/specular.rgen).
 use super::constants::{EnvironmentGpu, TraceCommonGpu};
 use super::descriptors::{optional_or, Slot};
-use super::program::{Payload, RtProgram, Shaders, Writes};
+use super::program::{RtProgram, Shaders, Writes};
 use super::shadow::LightGpu;
 use super::{PassTask, Passes, Recording, World};
 use crate::error::Result;
@@ -49,14 +49,7 @@ impl SpecularPass {
                 super::input_mask_binding(sampler),
                 sampled(),
             ],
-            Shaders {
-                raygen: shaders::SPECULAR_RGEN,
-                misses: &[shaders::HIT_RECORD_RMISS],
-                closest_hits: &[shaders::HIT_RECORD_RCHIT],
-                any_hit: Some(shaders::ALPHA_TEST_RAHIT),
-                inline: Some(shaders::SPECULAR_COMP),
-                floor: Some(Payload::HitRecord),
-            },
+            Shaders::hit_record_trace(shaders::SPECULAR_RGEN, shaders::SPECULAR_COMP),
         )?;
         Ok(SpecularPass { program })
     }

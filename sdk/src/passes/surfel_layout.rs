@@ -228,7 +228,20 @@ pub(crate) fn max_triangles(max_groups: u32) -> u64 {
 
 impl SurfelLayoutPass {
     pub fn new(b: &mut PipelineBuilder<'_>) -> Result<SurfelLayoutPass> {
-        let push = std::mem::size_of::<McFinishPush>().max(std::mem::size_of::<McDedupPush>()) as u32;
+        // One layout for every pass: push constants as large as the largest pass's.
+        use std::mem::size_of;
+        let push = [
+            size_of::<TilesPush>(),
+            size_of::<ScanPush>(),
+            size_of::<FinishPush>(),
+            size_of::<McEdgesPush>(),
+            size_of::<McFillPush>(),
+            size_of::<McDedupPush>(),
+            size_of::<McFinishPush>(),
+        ]
+        .into_iter()
+        .max()
+        .unwrap_or(0) as u32;
         let layout = b.layout(None, push, vk::ShaderStageFlags::COMPUTE)?;
         Ok(SurfelLayoutPass {
             layout,

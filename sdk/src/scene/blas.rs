@@ -7,34 +7,17 @@ use super::geometry::{Blas, GeometryLayout, VERTEX_STRIDE};
 use crate::error::{Error, Result};
 use crate::gpu::device::Device;
 use crate::gpu::memory::{Memory, MemoryKind};
-use crate::types::BuildHint;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-/// A BLAS's build flags: the hint's preference (see `BuildHint`), ALLOW_UPDATE for deformable
-/// geometry, ALLOW_COMPACTION where `compacts` says.
+/// A BLAS's build flags: `BuildHint::build_flags` of its layout.
 pub(crate) fn flags(layout: &GeometryLayout, provisional: bool) -> vk::BuildAccelerationStructureFlagsKHR {
-    use vk::BuildAccelerationStructureFlagsKHR as F;
-    let preference = match (layout.build_hint, layout.allow_update) {
-        _ if provisional => F::PREFER_FAST_BUILD,
-        (BuildHint::Auto, true) | (BuildHint::PreferFastBuild, _) | (BuildHint::FastThenTrace, true) => F::PREFER_FAST_BUILD,
-        (BuildHint::Auto, false) | (BuildHint::PreferFastTrace, _) | (BuildHint::FastThenTrace, false) => F::PREFER_FAST_TRACE,
-        (BuildHint::LowMemory, _) => F::LOW_MEMORY,
-    };
-    let mut f = preference;
-    if layout.allow_update {
-        f |= F::ALLOW_UPDATE;
-    }
-    if compacts(layout) {
-        f |= F::ALLOW_COMPACTION;
-    }
-    f
+    layout.build_hint.build_flags(layout.allow_update, provisional)
 }
 
-/// Whether a BLAS is compacted once its compacted size is back: static geometry, unless it
-/// asked for fast builds (compaction is one more copy per build).
+/// Whether a BLAS is compacted once its compacted size is back (see `BuildHint::compacts`).
 pub(crate) fn compacts(layout: &GeometryLayout) -> bool {
-    !layout.allow_update && layout.build_hint != BuildHint::PreferFastBuild
+    layout.build_hint.compacts(layout.allow_update)
 }
 
 pub(crate) fn triangles(

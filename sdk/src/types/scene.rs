@@ -205,6 +205,38 @@ pub enum BuildHint {
     FastThenTrace = 4,
 }
 
+impl BuildHint {
+    /// The Vulkan flags a BLAS of this hint is built with: the hint's preference,
+    /// ALLOW_UPDATE for `allow_update` geometry (then always a fast-build preference, except
+    /// `PreferFastTrace` and `LowMemory`), ALLOW_COMPACTION where `compacts` says. `first_build`:
+    /// `FastThenTrace`'s fast build in the registration frame (its later rebuild: false).
+    pub fn build_flags(self, allow_update: bool, first_build: bool) -> vk::BuildAccelerationStructureFlagsKHR {
+        use vk::BuildAccelerationStructureFlagsKHR as F;
+        let preference = match (self, allow_update) {
+            (BuildHint::FastThenTrace, false) if first_build => F::PREFER_FAST_BUILD,
+            (BuildHint::Auto, true) | (BuildHint::PreferFastBuild, _) | (BuildHint::FastThenTrace, true) => F::PREFER_FAST_BUILD,
+            (BuildHint::Auto, false) | (BuildHint::PreferFastTrace, _) | (BuildHint::FastThenTrace, false) => {
+                F::PREFER_FAST_TRACE
+            }
+            (BuildHint::LowMemory, _) => F::LOW_MEMORY,
+        };
+        let mut f = preference;
+        if allow_update {
+            f |= F::ALLOW_UPDATE;
+        }
+        if self.compacts(allow_update) {
+            f |= F::ALLOW_COMPACTION;
+        }
+        f
+    }
+
+    /// Whether a BLAS of this hint is compacted once its compacted size is back: static
+    /// geometry, unless it asked for fast builds (compaction is one more copy per build).
+    pub fn compacts(self, allow_update: bool) -> bool {
+        !allow_update && self != BuildHint::PreferFastBuild
+    }
+}
+
 /// A mesh: where its positions and indices are, and how it is built and cached.
 ///
 /// The first part is given inline (`vertices`, `indices`, `transform`, `vertex_range`), as most
@@ -371,5 +403,28 @@ pub struct BvhBuildTask {
 impl Default for BvhBuildTask {
     fn default() -> Self {
         BvhBuildTask { max_blas_build_count: 4 }
+    }
+}
+
+#[cfg(test)]
+mod build_flag_tests {
+    use super::BuildHint;
+    use ash::vk::BuildAccelerationStructureFlagsKHR as F;
+
+    #[test]
+    fn every_hint_maps_to_its_documented_flags() {
+        let cases = [
+            (BuildHint::Auto, false, false, F::PREFER_FAST_TRACE | F::ALLOW_COMPACTION),
+            (BuildHint::Auto, true, false, F::PREFER_FAST_BUILD | F::ALLOW_UPDATE),
+            (BuildHint::PreferFastTrace, true, false, F::PREFER_FAST_TRACE | F::ALLOW_UPDATE),
+            (BuildHint::PreferFastBuild, false, false, F::PREFER_FAST_BUILD),
+            (BuildHint::LowMemory, false, false, F::LOW_MEMORY | F::ALLOW_COMPACTION),
+            (BuildHint::FastThenTrace, false, true, F::PREFER_FAST_BUILD | F::ALLOW_COMPACTION),
+            (BuildHint::FastThenTrace, false, false, F::PREFER_FAST_TRACE | F::ALLOW_COMPACTION),
+            (BuildHint::FastThenTrace, true, true, F::PREFER_FAST_BUILD | F::ALLOW_UPDATE),
+        ];
+        for (hint, update, first, want) in cases {
+            assert_eq!(hint.build_flags(update, first), want, "{hint:?}, allow_update {update}, first build {first}");
+        }
     }
 }
