@@ -1221,8 +1221,9 @@ typedef struct HrtDenoiseSpecularAndDiffuseTask {
 
 /**
  * Lights cache samples no camera has injected from the engine's lights, with shadow rays:
- * albedo (HrtInstanceInput.albedo) x the lights' irradiance (intensity x color; directional:
- * irradiance at normal incidence, point/spot: / d²). The lights are copied when the task is
+ * albedo (HrtInstanceInput.albedo x the geometry's colors and albedo_texture, where given) x
+ * the lights' irradiance (intensity x color; directional: irradiance at normal incidence,
+ * point/spot: / d²) + HrtInstanceInput.emission. The lights are copied when the task is
  * scheduled.
  */
 typedef struct HrtRelightCacheTask {

@@ -6,8 +6,9 @@ use crate::{container_mut, context, get, get_mut, slice, HrtContext, HrtTaskCont
 use hybrid_rt as rt;
 
 /// Lights cache samples no camera has injected from the engine's lights, with shadow rays:
-/// albedo (HrtInstanceInput.albedo) x the lights' irradiance (intensity x color; directional:
-/// irradiance at normal incidence, point/spot: / d²). The lights are copied when the task is
+/// albedo (HrtInstanceInput.albedo x the geometry's colors and albedo_texture, where given) x
+/// the lights' irradiance (intensity x color; directional: irradiance at normal incidence,
+/// point/spot: / d²) + HrtInstanceInput.emission. The lights are copied when the task is
 /// scheduled.
 #[repr(C)]
 #[derive(Clone, Copy)]

@@ -1,11 +1,14 @@
-//! The direct-lighting cache's side of recording: read-backs of new geometry for their surfel
-//! layouts, layout uploads, and per-instance cache allocation, fills and clears. (Injection and
-//! its resolve are a render task: `passes::inject`.)
+//! The direct-lighting cache's side of recording: surfel layouts of new geometry, layout
+//! uploads, and per-instance cache allocation (under the budget), fills and clears.
+//! (Injection and its resolve are a render task: `passes::inject`; relighting another:
+//! `passes::relight`.)
 //!
 //! Sizing a cache needs the geometry's edge lengths, which live on the GPU. Like BLAS
-//! compaction, this never stalls: the ticket that copies a geometry also copies it to a
-//! read-back buffer; when that ticket comes back the CPU builds the layout; the next recording
-//! uploads it and gives every instance of the geometry its cache. Until then an instance reads
+//! compaction, this never stalls: the ticket that copies a geometry also builds its layout on
+//! the GPU (`passes::surfel_layout`) and reads back only its sample count — or, for a mesh too
+//! big for one dispatch, copies the geometry to a read-back buffer for the CPU builder; when
+//! that ticket comes back the layout is installed (or built and uploaded by the next
+//! recording), and every instance of the geometry gets its cache. Until then an instance reads
 //! as its `initial_tile_color` and injection skips it.
 use super::budget::{self, Candidate};
 use super::container::Task;

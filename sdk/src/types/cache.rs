@@ -83,9 +83,11 @@ impl Default for DirectLightTransferTask {
 /// only in reflections, or by GI rays, or not yet seen at all, get their direct light instead
 /// of their `initial_tile_color` (Kickstart RT's guide flies a "lidar" camera around for
 /// that). For each sample: one shadow ray per light towards a random point of its extent
-/// (the shadow tasks' sampling), and the sample's colour becomes `InstanceInput::albedo` x the
-/// lights' irradiance there (Lambert, no 1/pi: the convention of a lit image `albedo x
-/// irradiance`), averaged over the frames that relit it (up to `history_frames`).
+/// (the shadow tasks' sampling), and the sample's colour becomes its albedo
+/// (`InstanceInput::albedo` x the geometry's vertex colours and albedo texture, where it has
+/// them) x the lights' irradiance there (Lambert, no 1/pi: the convention of a lit image
+/// `albedo x irradiance`) + `InstanceInput::emission`, averaged over the frames that relit it
+/// (up to `history_frames`).
 ///
 /// Injected camera light wins: a sample a camera has injected is never relit, and a relit
 /// sample's history is dropped the first time a camera sees it. Each build relights up to
