@@ -59,6 +59,7 @@ pub(crate) mod passes;
 pub(crate) mod scene;
 #[doc(hidden)]
 pub mod shaders;
+pub(crate) mod tasks;
 pub mod types;
 
 pub use context::container::TaskContainer;

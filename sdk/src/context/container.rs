@@ -2,7 +2,7 @@
 //! thread; they are `Send`). Scheduling validates each task at once. A built container is
 //! emptied and can be reused next frame; a container whose build failed keeps its tasks, so a
 //! frame refused for lack of a working set can be built again later.
-use super::validate;
+use super::validate::{self, Check, ToPayload};
 use super::Shared;
 use crate::error::Result;
 use crate::passes::RenderTask;
@@ -29,6 +29,8 @@ pub(crate) enum Task {
 pub struct TaskContainer {
     pub(crate) shared: Weak<Shared>,
     pub(crate) tasks: Vec<Task>,
+    /// Labels of scheduled tasks: (task index, label), in ascending index order.
+    pub(crate) labels: Vec<(u32, String)>,
     /// The frame the next build belongs to (see `set_frame_index`).
     pub(crate) frame_index: Option<u64>,
 }
@@ -75,92 +77,6 @@ impl TaskContainer {
         Ok(())
     }
 
-    /// Ambient occlusion from the G-buffer (see `TraceAmbientOcclusionTask`).
-    pub fn schedule_ambient_occlusion(&mut self, task: &TraceAmbientOcclusionTask) -> Result<()> {
-        let shared = self.shared()?;
-        validate::ambient_occlusion(task, &shared.device.limits)?;
-        self.tasks.push(Task::Render(RenderTask::AmbientOcclusion(*task)));
-        Ok(())
-    }
-
-    /// Shadows from one light (see `TraceShadowTask`).
-    pub fn schedule_shadow(&mut self, task: &TraceShadowTask) -> Result<()> {
-        let shared = self.shared()?;
-        validate::shadow(task, &shared.device.limits)?;
-        self.tasks.push(Task::Render(RenderTask::Shadow(*task)));
-        Ok(())
-    }
-
-    /// Shadows from several lights in one pass (see `TraceMultiShadowTask`).
-    pub fn schedule_multi_shadow(&mut self, task: &TraceMultiShadowTask) -> Result<()> {
-        let shared = self.shared()?;
-        validate::multi_shadow(task, &shared.device.limits)?;
-        self.tasks.push(Task::Render(RenderTask::MultiShadow(task.clone())));
-        Ok(())
-    }
-
-    /// Diffuse GI shaded from the cache (see `TraceDiffuseTask`).
-    pub fn schedule_diffuse(&mut self, task: &TraceDiffuseTask) -> Result<()> {
-        let shared = self.shared()?;
-        validate::diffuse(task, &shared.device.limits)?;
-        self.tasks.push(Task::Render(RenderTask::Diffuse(*task)));
-        Ok(())
-    }
-
-    /// Specular reflections shaded from the cache (see `TraceSpecularTask`).
-    pub fn schedule_specular(&mut self, task: &TraceSpecularTask) -> Result<()> {
-        let shared = self.shared()?;
-        validate::specular(task, &shared.device.limits)?;
-        self.tasks.push(Task::Render(RenderTask::Specular(task.clone())));
-        Ok(())
-    }
-
-    fn schedule_denoise(&mut self, job: DenoiseJob) -> Result<()> {
-        let shared = self.shared()?;
-        shared.check_denoising_context_alive(job.context)?;
-        validate::denoise(&job, &shared.device.limits)?;
-        self.tasks.push(Task::Render(RenderTask::Denoise(Box::new(job))));
-        Ok(())
-    }
-
-    /// Denoises a specular trace (see `DenoiseSpecularTask`).
-    pub fn schedule_denoise_specular(&mut self, task: &DenoiseSpecularTask) -> Result<()> {
-        self.schedule_denoise(task.into())
-    }
-
-    /// Denoises a diffuse GI trace (see `DenoiseDiffuseTask`).
-    pub fn schedule_denoise_diffuse(&mut self, task: &DenoiseDiffuseTask) -> Result<()> {
-        self.schedule_denoise(task.into())
-    }
-
-    /// Denoises specular and diffuse traces in one set of passes.
-    pub fn schedule_denoise_specular_and_diffuse(&mut self, task: &DenoiseSpecularAndDiffuseTask) -> Result<()> {
-        self.schedule_denoise(task.into())
-    }
-
-    /// Denoises an ambient-occlusion trace.
-    pub fn schedule_denoise_diffuse_occlusion(&mut self, task: &DenoiseDiffuseOcclusionTask) -> Result<()> {
-        self.schedule_denoise(task.into())
-    }
-
-    /// Denoises a single-light shadow trace.
-    pub fn schedule_denoise_shadow(&mut self, task: &DenoiseShadowTask) -> Result<()> {
-        self.schedule_denoise(task.into())
-    }
-
-    /// Denoises a multi-light shadow trace's packed output.
-    pub fn schedule_denoise_multi_shadow(&mut self, task: &DenoiseMultiShadowTask) -> Result<()> {
-        self.schedule_denoise(task.into())
-    }
-
-    /// Bakes a lit view into the direct-lighting caches (see `DirectLightingInjectionTask`).
-    pub fn schedule_direct_lighting_injection(&mut self, task: &DirectLightingInjectionTask) -> Result<()> {
-        let shared = self.shared()?;
-        validate::injection(task, &shared.device.limits)?;
-        self.tasks.push(Task::Render(RenderTask::DirectLightingInjection(*task)));
-        Ok(())
-    }
-
     /// Resets an instance's cache to its initial colour (before the container's render tasks).
     pub fn schedule_clear_cache(&mut self, task: &ClearCacheTask) -> Result<()> {
         self.shared()?.check_instance_alive(task.instance)?;
@@ -168,27 +84,26 @@ impl TaskContainer {
         Ok(())
     }
 
-    /// Lights cache samples no camera has injected from the engine's lights (see
-    /// `RelightCacheTask`).
-    pub fn schedule_cache_relight(&mut self, task: &RelightCacheTask) -> Result<()> {
-        self.shared()?;
-        validate::relight(task)?;
-        self.tasks.push(Task::Render(RenderTask::CacheRelight(task.clone())));
+    /// Names the task scheduled last: its region in the command buffer (with debug utils on,
+    /// as RenderDoc and Nsight show it) and its timings (`CompletedTask::label`) carry the
+    /// label. A second label for the same task replaces the first.
+    pub fn set_task_label(&mut self, label: &str) -> Result<()> {
+        let Some(last) = self.tasks.len().checked_sub(1) else {
+            return Err(crate::Error::invalid("set_task_label", "the container has no task to label"));
+        };
+        let index = u32::try_from(last).map_err(|_| crate::Error::invalid("set_task_label", "too many tasks"))?;
+        match self.labels.last_mut() {
+            Some((i, l)) if *i == index => *l = label.to_owned(),
+            _ => self.labels.push((index, label.to_owned())),
+        }
         Ok(())
     }
 
-    /// Copies one instance's cached lighting onto another covering the same surface.
-    pub fn schedule_direct_light_transfer(&mut self, task: &DirectLightTransferTask) -> Result<()> {
+    /// Queues a render task: `task` converted into its table row's payload, then validated.
+    fn schedule_render<P: Check>(&mut self, payload: P, wrap: fn(P) -> RenderTask) -> Result<()> {
         let shared = self.shared()?;
-        shared.check_instance_alive(task.source)?;
-        shared.check_instance_alive(task.target)?;
-        if task.source == task.target {
-            return Err(crate::Error::invalid("DirectLightTransferTask", "source and target are the same instance"));
-        }
-        if !(task.max_distance.is_finite() && task.max_distance > 0.0) {
-            return Err(crate::Error::invalid("DirectLightTransferTask.max_distance", "must be finite and > 0"));
-        }
-        self.tasks.push(Task::Render(RenderTask::DirectLightTransfer(*task)));
+        payload.check(&shared)?;
+        self.tasks.push(Task::Render(wrap(payload)));
         Ok(())
     }
 
@@ -212,12 +127,40 @@ impl TaskContainer {
         self.tasks.is_empty()
     }
 
-    /// Drops every scheduled task (and a frame index set for the next build).
+    /// Drops every scheduled task (with its label, and a frame index set for the next build).
     pub fn clear(&mut self) {
         self.tasks.clear();
+        self.labels.clear();
         self.frame_index = None;
     }
 }
+
+/// Makes the public `schedule_*` functions of the render tasks from the task table
+/// (`crate::tasks`): each converts the task into its row's payload, checks it and queues it.
+macro_rules! schedule_functions {
+    (
+        other_kinds { $( $(#[$om:meta])* $OKind:ident = $on:literal, $oname:literal; )* }
+        support_passes { $( $sfield:ident: $SPass:ty = $slabel:literal; )* }
+        render_tasks { $(
+            $Variant:ident($Payload:ty) {
+                pass: $field:ident: $Pass:ty = $label:literal $(, floor $prog:ident)?;
+                kinds: [ $( $(#[$km:meta])* $Kind:ident = $n:literal, $kname:literal; )+ ]
+                schedule: [ $( $(#[$sm:meta])* $sched:ident($STask:ty); )+ ]
+            }
+        )* }
+    ) => {
+        impl TaskContainer {
+            $( $(
+                $(#[$sm])*
+                pub fn $sched(&mut self, task: &$STask) -> Result<()> {
+                    let payload: $Payload = task.to_payload();
+                    self.schedule_render(payload, RenderTask::$Variant)
+                }
+            )+ )*
+        }
+    };
+}
+crate::tasks::task_table!(schedule_functions);
 
 impl std::fmt::Debug for TaskContainer {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {

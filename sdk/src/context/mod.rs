@@ -208,7 +208,7 @@ impl ExecuteContext {
 
     /// A new, empty task container (`Send`: fill it on any thread).
     pub fn create_task_container(&self) -> TaskContainer {
-        TaskContainer { shared: Arc::downgrade(&self.shared), tasks: Vec::new(), frame_index: None }
+        TaskContainer { shared: Arc::downgrade(&self.shared), tasks: Vec::new(), labels: Vec::new(), frame_index: None }
     }
 
     /// Bench only (cargo feature `bench-floor`): trace with empty hit/miss shaders (the

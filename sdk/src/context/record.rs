@@ -56,7 +56,8 @@ impl Recorder<'_> {
     }
 
     /// Records every task of a container (validated: errors here are Vulkan/memory failures).
-    pub fn record(&mut self, tasks: &[Task]) -> Result<()> {
+    /// `labels` (task index, label) name the render tasks' debug-utils regions.
+    pub fn record(&mut self, tasks: &[Task], labels: &[(u32, String)]) -> Result<()> {
         let (d, cmd) = (&self.device.raw, self.cmd);
         let ws = self.working_set();
         ws.ring.reset();
@@ -100,7 +101,7 @@ impl Recorder<'_> {
         }
 
         // ---- Render tasks, in scheduled order.
-        self.record_render(tasks)?;
+        self.record_render(tasks, labels)?;
 
         // ---- What the host reads when the ticket is back (read-backs, index-check counters)
         // must reach the host domain.
@@ -118,7 +119,7 @@ impl Recorder<'_> {
         Ok(())
     }
 
-    fn record_render(&mut self, tasks: &[Task]) -> Result<()> {
+    fn record_render(&mut self, tasks: &[Task], labels: &[(u32, String)]) -> Result<()> {
         let renders: Vec<(u32, &RenderTask)> = tasks
             .iter()
             .enumerate()
@@ -168,8 +169,12 @@ impl Recorder<'_> {
             if wants_inline && !device.ray_query && !self.warned_inline.swap(true, Ordering::Relaxed) {
                 log::warn!("use_inline_rt: the device has no VK_KHR_ray_query enabled; using the ray-tracing pipeline");
             }
-            device.begin_label(cmd, &format!("{:?} (task {index})", describe.kind()));
-            let span = ws.timer.begin(&device.raw, cmd, describe.kind(), index);
+            let kind = describe.kind();
+            match labels.binary_search_by_key(&index, |(i, _)| *i) {
+                Ok(at) => device.begin_label(cmd, &format!("{} ({kind:?}, task {index})", labels[at].1)),
+                Err(_) => device.begin_label(cmd, &format!("{kind:?} (task {index})")),
+            }
+            let span = ws.timer.begin(&device.raw, cmd, kind, index);
             let mut r = Recording {
                 device,
                 cmd,

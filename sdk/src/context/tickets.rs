@@ -51,7 +51,7 @@ impl ExecuteContext {
             warned_inline: &shared.warned_inline,
             journal,
         };
-        let recorded = recorder.record(&container.tasks);
+        let recorded = recorder.record(&container.tasks, &container.labels);
         let Recorder { journal, .. } = recorder;
         if let Err(e) = recorded {
             // Nothing of this build stays: the context is as it was, the container keeps its
@@ -62,6 +62,7 @@ impl ExecuteContext {
         journal.commit(st, serial);
         st.next_serial += 1;
         st.working_sets[ws].in_flight = Some(serial);
+        st.working_sets[ws].labels = std::mem::take(&mut container.labels);
         container.tasks.clear();
         container.frame_index = None;
         Ok(GpuTicket { ctx: shared.id, serial })
@@ -97,7 +98,7 @@ impl ExecuteContext {
         }
         let d = &self.shared.device;
         let ws = &mut st.working_sets[ws_index];
-        let mut done = CompletedTask { serial: ticket.serial, timings: Vec::new() };
+        let mut done = CompletedTask { serial: ticket.serial, timings: Vec::new(), labels: std::mem::take(&mut ws.labels) };
         if let Some(period) = d.timestamp_period_ns {
             match ws.timer.read(&d.raw, period) {
                 Ok(t) => done.timings = t,

@@ -40,6 +40,8 @@ pub(super) struct WorkingSet {
     pub ring: UploadRing,
     pub scratch: Option<Buffer>,
     pub timer: Timer,
+    /// The labels of the ticket's tasks (task index, label), for its `CompletedTask`.
+    pub labels: Vec<(u32, String)>,
     pub compaction_pool: vk::QueryPool,
     pub compaction_slots: u32,
     /// Geometries whose compacted size this ticket queries: (geometry, build id).
@@ -91,6 +93,7 @@ impl WorkingSet {
             ring,
             scratch: None,
             timer,
+            labels: Vec::new(),
             compaction_pool: vk::QueryPool::null(),
             compaction_slots: 0,
             compactions: Vec::new(),

@@ -35,7 +35,8 @@ pub(crate) struct CacheOps {
 const GROUP: u64 = 256;
 
 impl CacheOps {
-    pub fn new(b: &mut PipelineBuilder<'_>) -> Result<CacheOps> {
+    /// Every pass is made with the G-buffer sampler (see `Passes`); this one samples nothing.
+    pub fn new(b: &mut PipelineBuilder<'_>, _sampler: vk::Sampler) -> Result<CacheOps> {
         let layout = b.layout(None, 32, vk::ShaderStageFlags::COMPUTE)?;
         let fill = b.compute(layout, shaders::CACHE_FILL_COMP)?;
         let resolve = b.compute(layout, shaders::CACHE_RESOLVE_COMP)?;

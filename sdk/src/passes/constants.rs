@@ -1,6 +1,6 @@
 //! GPU twins of the std140 blocks in shaders/include/*.glsl. Each struct here has exactly one
 //! GLSL counterpart; the tests at the bottom pin sizes and offsets.
-use crate::types::{DepthType, EnvironmentInput, NormalSpace, RayOffsetType, TraceCommon};
+use crate::types::{DepthType, EnvironmentInput, LightInfo, LightType, NormalSpace, RayOffsetType, TraceCommon};
 use bytemuck::{Pod, Zeroable};
 
 /// `TraceCommon` in shaders/include/common.glsl.
@@ -107,6 +107,32 @@ fn background_depth(view_to_clip: &glam::Mat4, min_d: f32, max_d: f32) -> f32 {
         min_d
     } else {
         max_d
+    }
+}
+
+/// `LightGpu` in shaders/include/light_sampling.glsl.
+#[derive(Clone, Copy, Pod, Zeroable, Default)]
+#[repr(C)]
+pub(crate) struct LightGpu {
+    position: [f32; 4],
+    direction: [f32; 4],
+    shape: [f32; 4],
+    power: [f32; 4],
+}
+
+impl LightGpu {
+    pub fn new(l: &LightInfo) -> LightGpu {
+        LightGpu {
+            position: [l.position.x, l.position.y, l.position.z, l.light_type as u32 as f32],
+            direction: [l.direction.x, l.direction.y, l.direction.z, (l.angular_extent * 0.5).tan()],
+            shape: [
+                if l.light_type == LightType::Directional { 0.0 } else { l.radius },
+                if l.light_type == LightType::Directional { 0.0 } else { l.range },
+                l.inner_cone.cos(),
+                l.outer_cone.cos(),
+            ],
+            power: [l.intensity, l.color[0], l.color[1], l.color[2]],
+        }
     }
 }
 

@@ -27,7 +27,8 @@ pub(crate) struct DebugPass {
 }
 
 impl DebugPass {
-    pub fn new(b: &mut PipelineBuilder<'_>) -> Result<DebugPass> {
+    /// Every pass is made with the G-buffer sampler (see `Passes`); this one samples nothing.
+    pub fn new(b: &mut PipelineBuilder<'_>, _sampler: vk::Sampler) -> Result<DebugPass> {
         let program = RtProgram::new(
             b,
             &[

@@ -4,9 +4,9 @@
 //!
 //! Radiance: temporal → clamp → à-trous × `spatial_passes` (the last writes the output).
 //! Shadows: prep → penumbra blur → temporal (writes the output).
+use super::constants::LightGpu;
 use super::constants::TraceCommonGpu;
 use super::descriptors::{self, Slot};
-use super::shadow::LightGpu;
 use super::{PassTask, Passes, Recording, World};
 use crate::error::{Error, Result};
 use crate::gpu::memory::{Image, Memory, MemoryKind, COLOR_RANGE};

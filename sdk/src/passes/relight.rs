@@ -10,9 +10,9 @@
 //! Cost is bounded per build: a cursor walks the instances' caches round-robin across builds,
 //! `max_samples` samples at a time, in one launch whatever the number of instances (a job
 //! list says which instance and triangles each range of invocations lights).
+use super::constants::LightGpu;
 use super::descriptors::Slot;
 use super::program::{RtProgram, Shaders, Writes};
-use super::shadow::LightGpu;
 use super::{PassTask, Passes, Recording, World};
 use crate::error::Result;
 use crate::gpu::pipeline::{Binding, PipelineBuilder};
@@ -122,7 +122,8 @@ pub(crate) struct RelightPass {
 }
 
 impl RelightPass {
-    pub fn new(b: &mut PipelineBuilder<'_>) -> Result<RelightPass> {
+    /// Every pass is made with the G-buffer sampler (see `Passes`); this one samples nothing.
+    pub fn new(b: &mut PipelineBuilder<'_>, _sampler: vk::Sampler) -> Result<RelightPass> {
         let program = RtProgram::new(
             b,
             &[

@@ -1,6 +1,6 @@
 //! Shadows from one light (`TraceShadowTask`): rays from the G-buffer surface towards random
 //! points of the light's extent (shaders/shadow.rgen).
-use super::constants::TraceCommonGpu;
+use super::constants::{LightGpu, TraceCommonGpu};
 use super::descriptors::{optional_or, Slot};
 use super::program::{RtProgram, Shaders, Writes};
 use super::{PassTask, Passes, Recording, World};
@@ -8,37 +8,11 @@ use crate::error::Result;
 use crate::gpu::pipeline::{Binding, PipelineBuilder};
 use crate::shaders;
 use crate::types::{
-    ImageInput, InstanceInclusionMask, LightInfo, LightType, TaskKind, TraceCommon, TraceMultiShadowTask, TraceShadowTask,
-    MAX_LIGHT_OUTPUTS, MAX_SHADOW_LIGHTS,
+    ImageInput, InstanceInclusionMask, TaskKind, TraceCommon, TraceMultiShadowTask, TraceShadowTask, MAX_LIGHT_OUTPUTS,
+    MAX_SHADOW_LIGHTS,
 };
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
-
-/// `LightGpu` in shaders/include/light_sampling.glsl.
-#[derive(Clone, Copy, Pod, Zeroable, Default)]
-#[repr(C)]
-pub(crate) struct LightGpu {
-    position: [f32; 4],
-    direction: [f32; 4],
-    shape: [f32; 4],
-    power: [f32; 4],
-}
-
-impl LightGpu {
-    pub fn new(l: &LightInfo) -> LightGpu {
-        LightGpu {
-            position: [l.position.x, l.position.y, l.position.z, l.light_type as u32 as f32],
-            direction: [l.direction.x, l.direction.y, l.direction.z, (l.angular_extent * 0.5).tan()],
-            shape: [
-                if l.light_type == LightType::Directional { 0.0 } else { l.radius },
-                if l.light_type == LightType::Directional { 0.0 } else { l.range },
-                l.inner_cone.cos(),
-                l.outer_cone.cos(),
-            ],
-            power: [l.intensity, l.color[0], l.color[1], l.color[2]],
-        }
-    }
-}
 
 /// `ShadowConstants` in shaders/include/shadow.glsl.
 #[derive(Clone, Copy, Pod, Zeroable)]

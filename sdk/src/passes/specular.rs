@@ -1,9 +1,9 @@
 //! Specular reflections (`TraceSpecularTask`): mirror or GGX-VNDF rays shaded from the cache,
 //! or on smooth pixels from the engine's lights (hit lighting) (shaders/specular.rgen).
+use super::constants::LightGpu;
 use super::constants::{EnvironmentGpu, TraceCommonGpu};
 use super::descriptors::{optional_or, Slot};
 use super::program::{RtProgram, Shaders, Writes};
-use super::shadow::LightGpu;
 use super::{PassTask, Passes, Recording, World};
 use crate::error::Result;
 use crate::gpu::pipeline::{Binding, PipelineBuilder};

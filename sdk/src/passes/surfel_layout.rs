@@ -227,7 +227,8 @@ pub(crate) fn max_triangles(max_groups: u32) -> u64 {
 }
 
 impl SurfelLayoutPass {
-    pub fn new(b: &mut PipelineBuilder<'_>) -> Result<SurfelLayoutPass> {
+    /// Every pass is made with the G-buffer sampler (see `Passes`); this one samples nothing.
+    pub fn new(b: &mut PipelineBuilder<'_>, _sampler: vk::Sampler) -> Result<SurfelLayoutPass> {
         // One layout for every pass: push constants as large as the largest pass's.
         use std::mem::size_of;
         let push = [

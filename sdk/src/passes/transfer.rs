@@ -37,7 +37,8 @@ pub(crate) struct TransferPass {
 }
 
 impl TransferPass {
-    pub fn new(b: &mut PipelineBuilder<'_>) -> Result<TransferPass> {
+    /// Every pass is made with the G-buffer sampler (see `Passes`); this one samples nothing.
+    pub fn new(b: &mut PipelineBuilder<'_>, _sampler: vk::Sampler) -> Result<TransferPass> {
         let program = RtProgram::new(
             b,
             &[

@@ -28,47 +28,44 @@ impl GpuTicket {
     }
 }
 
-/// Which kind of work a timing covers.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[repr(u32)]
-pub enum TaskKind {
-    /// All BVH work of the ticket: geometry copies, BLAS builds/refits/compactions, TLAS.
-    Bvh = 0,
-    /// `TraceAmbientOcclusionTask` (or its debug view).
-    AmbientOcclusion = 1,
-    /// Inside `Bvh`: the batched BLAS builds and refits (and compaction copies).
-    BlasBuild = 2,
-    /// Inside `Bvh`: the TLAS build (only when the scene changed since the working set's last).
-    TlasBuild = 3,
-    /// A direct-lighting injection and its cache resolve.
-    DirectLightingInjection = 4,
-    /// Cache maintenance of the ticket: new layouts, new and cleared caches.
-    CacheUpdate = 5,
-    /// A cache transfer between two instances.
-    CacheTransfer = 6,
-    /// `TraceShadowTask`.
-    Shadow = 7,
-    /// `TraceDiffuseTask`.
-    Diffuse = 8,
-    /// `TraceSpecularTask`.
-    Specular = 9,
-    /// `TraceMultiShadowTask`.
-    MultiShadow = 10,
-    /// `DenoiseSpecularTask`.
-    DenoiseSpecular = 11,
-    /// `DenoiseDiffuseTask`.
-    DenoiseDiffuse = 12,
-    /// `DenoiseSpecularAndDiffuseTask`.
-    DenoiseSpecularAndDiffuse = 13,
-    /// `DenoiseDiffuseOcclusionTask`.
-    DenoiseDiffuseOcclusion = 14,
-    /// `DenoiseShadowTask`.
-    DenoiseShadow = 15,
-    /// `DenoiseMultiShadowTask`.
-    DenoiseMultiShadow = 16,
-    /// `RelightCacheTask`.
-    CacheRelight = 17,
+/// Makes `TaskKind` from the task table (`crate::tasks`): the kinds around the render tasks,
+/// then each render task's, with `ALL` and `name`.
+macro_rules! task_kinds {
+    (
+        other_kinds { $( $(#[$om:meta])* $OKind:ident = $on:literal, $oname:literal; )* }
+        support_passes { $( $sfield:ident: $SPass:ty = $slabel:literal; )* }
+        render_tasks { $(
+            $Variant:ident($Payload:ty) {
+                pass: $field:ident: $Pass:ty = $label:literal $(, floor $prog:ident)?;
+                kinds: [ $( $(#[$km:meta])* $Kind:ident = $n:literal, $kname:literal; )+ ]
+                schedule: [ $( $(#[$sm:meta])* $sched:ident($STask:ty); )+ ]
+            }
+        )* }
+    ) => {
+        /// Which kind of work a timing covers.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        #[repr(u32)]
+        pub enum TaskKind {
+            $( $(#[$om])* $OKind = $on, )*
+            $( $( $(#[$km])* $Kind = $n, )+ )*
+        }
+
+        impl TaskKind {
+            /// Every kind, the kinds around the render tasks first.
+            pub const ALL: &'static [TaskKind] = &[$(TaskKind::$OKind,)* $($(TaskKind::$Kind,)+)*];
+
+            /// The kind's name in snake case (`"ambient_occlusion"`): the C ABI's constant is
+            /// `HRT_TASK_` and this in capitals.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $( TaskKind::$OKind => $oname, )*
+                    $( $( TaskKind::$Kind => $kname, )+ )*
+                }
+            }
+        }
+    };
 }
+crate::tasks::task_table!(task_kinds);
 
 /// The GPU time of one task of a ticket, from timestamp queries around it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -91,11 +88,56 @@ pub struct CompletedTask {
     pub serial: u64,
     /// Per-task GPU times. Empty when the device cannot time compute work.
     pub timings: Vec<TaskTiming>,
+    /// The labels the container's tasks were given (`TaskContainer::set_task_label`), by
+    /// task index, in ascending order.
+    pub(crate) labels: Vec<(u32, String)>,
 }
 
 impl CompletedTask {
     /// Sum of the times of the tasks of `kind`.
     pub fn gpu_ms(&self, kind: TaskKind) -> f64 {
         self.timings.iter().filter(|t| t.kind == kind).map(|t| t.gpu_ms).sum()
+    }
+
+    /// The label the timed task was given when it was scheduled
+    /// (`TaskContainer::set_task_label`); for `Bvh`, `BlasBuild` and `TlasBuild`, the label of
+    /// the first BVH task; none for `CacheUpdate`, which serves no one task.
+    pub fn label(&self, timing: &TaskTiming) -> Option<&str> {
+        if timing.kind == TaskKind::CacheUpdate {
+            return None;
+        }
+        let i = self.labels.binary_search_by_key(&timing.task_index, |(i, _)| *i).ok()?;
+        Some(&self.labels[i].1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::TaskKind;
+
+    /// The table gives every kind one value and one name, and the values are dense: C code
+    /// can index an array by kind.
+    #[test]
+    fn every_kind_has_its_own_value_and_name() {
+        let mut values: Vec<u32> = TaskKind::ALL.iter().map(|k| *k as u32).collect();
+        values.sort_unstable();
+        assert_eq!(values, (0..TaskKind::ALL.len() as u32).collect::<Vec<_>>());
+        let mut names: Vec<&str> = TaskKind::ALL.iter().map(|k| k.name()).collect();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), TaskKind::ALL.len());
+        assert_eq!(TaskKind::DenoiseSpecularAndDiffuse.name(), "denoise_specular_and_diffuse");
+        // The name is the variant's in snake case.
+        for k in TaskKind::ALL {
+            let snake: String = format!("{k:?}")
+                .chars()
+                .enumerate()
+                .flat_map(|(i, c)| {
+                    let sep = (c.is_ascii_uppercase() && i > 0).then_some('_');
+                    sep.into_iter().chain(std::iter::once(c.to_ascii_lowercase()))
+                })
+                .collect();
+            assert_eq!(k.name(), snake);
+        }
     }
 }

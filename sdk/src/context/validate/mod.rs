@@ -1,6 +1,7 @@
 //! Input checks run when a task is scheduled, so a mistake is reported at the call that made
 //! it, with the field's name. Handle *states* (registered or not) are checked again when the
 //! container is built, since handles can be destroyed in between.
+use crate::context::Shared;
 use crate::error::{Error, Result};
 use crate::gpu::device::Limits;
 use crate::types::*;
@@ -11,7 +12,47 @@ mod geometry;
 mod lights;
 pub(crate) use geometry::geometry_input;
 use lights::{light, SHADOW_OUTPUT_FORMATS};
-pub(crate) use lights::{multi_shadow, relight, shadow};
+
+/// The checks of a render task's payload when it is scheduled (the task table's
+/// `TaskContainer::schedule_*` functions run them before queueing it).
+pub(crate) trait Check {
+    fn check(&self, shared: &Shared) -> Result<()>;
+}
+
+/// A public task as the payload its task-table row queues: a copy of it, or (denoise tasks)
+/// the normalised job.
+pub(crate) trait ToPayload<P> {
+    fn to_payload(&self) -> P;
+}
+
+impl<T: Clone> ToPayload<T> for T {
+    fn to_payload(&self) -> T {
+        self.clone()
+    }
+}
+
+impl<T> ToPayload<Box<DenoiseJob>> for T
+where
+    for<'a> &'a T: Into<DenoiseJob>,
+{
+    fn to_payload(&self) -> Box<DenoiseJob> {
+        Box::new(self.into())
+    }
+}
+
+impl Check for DirectLightTransferTask {
+    fn check(&self, shared: &Shared) -> Result<()> {
+        shared.check_instance_alive(self.source)?;
+        shared.check_instance_alive(self.target)?;
+        if self.source == self.target {
+            return Err(Error::invalid("DirectLightTransferTask", "source and target are the same instance"));
+        }
+        if !(self.max_distance.is_finite() && self.max_distance > 0.0) {
+            return Err(Error::invalid("DirectLightTransferTask.max_distance", "must be finite and > 0"));
+        }
+        Ok(())
+    }
+}
 
 pub(crate) fn transform(what: &'static str, t: &Affine3A) -> Result<()> {
     if !t.is_finite() || t.matrix3.determinant() == 0.0 {
@@ -246,29 +287,35 @@ pub(crate) fn output_image(what: &'static str, img: &ImageInput, vp: &Viewport, 
 pub(crate) const COLOR_OUTPUT_FORMATS: &[vk::Format] =
     &[vk::Format::R8G8B8A8_UNORM, vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT];
 
-pub(crate) fn ambient_occlusion(t: &TraceAmbientOcclusionTask, limits: &Limits) -> Result<()> {
-    trace_common(&t.common, limits)?;
-    if t.common.debug_output != DebugOutput::Default {
-        image("TraceAmbientOcclusionTask.output", &t.output, &t.common.viewport, Use::Storage)?;
-        format_in(
-            "TraceAmbientOcclusionTask.output (debug output)",
-            t.output.format,
-            COLOR_OUTPUT_FORMATS,
-            "R8G8B8A8_UNORM, R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT for a debug visualisation",
-        )?;
-    } else {
-        output_image("TraceAmbientOcclusionTask.output", &t.output, &t.common.viewport, SCALAR_OUTPUT_FORMATS)?;
+impl Check for TraceAmbientOcclusionTask {
+    fn check(&self, shared: &Shared) -> Result<()> {
+        let (t, limits) = (self, &shared.device.limits);
+        trace_common(&t.common, limits)?;
+        if t.common.debug_output != DebugOutput::Default {
+            image("TraceAmbientOcclusionTask.output", &t.output, &t.common.viewport, Use::Storage)?;
+            format_in(
+                "TraceAmbientOcclusionTask.output (debug output)",
+                t.output.format,
+                COLOR_OUTPUT_FORMATS,
+                "R8G8B8A8_UNORM, R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT for a debug visualisation",
+            )?;
+        } else {
+            output_image("TraceAmbientOcclusionTask.output", &t.output, &t.common.viewport, SCALAR_OUTPUT_FORMATS)?;
+        }
+        if !(t.ray_length.is_finite() && t.ray_length > 0.0) {
+            return Err(Error::invalid("TraceAmbientOcclusionTask.ray_length", "must be finite and > 0"));
+        }
+        if !(1..=64).contains(&t.rays_per_pixel) {
+            return Err(Error::invalid(
+                "TraceAmbientOcclusionTask.rays_per_pixel",
+                format!("{} is not in 1..=64", t.rays_per_pixel),
+            ));
+        }
+        if !(t.falloff_power.is_finite() && t.falloff_power > 0.0) {
+            return Err(Error::invalid("TraceAmbientOcclusionTask.falloff_power", "must be finite and > 0"));
+        }
+        Ok(())
     }
-    if !(t.ray_length.is_finite() && t.ray_length > 0.0) {
-        return Err(Error::invalid("TraceAmbientOcclusionTask.ray_length", "must be finite and > 0"));
-    }
-    if !(1..=64).contains(&t.rays_per_pixel) {
-        return Err(Error::invalid("TraceAmbientOcclusionTask.rays_per_pixel", format!("{} is not in 1..=64", t.rays_per_pixel)));
-    }
-    if !(t.falloff_power.is_finite() && t.falloff_power > 0.0) {
-        return Err(Error::invalid("TraceAmbientOcclusionTask.falloff_power", "must be finite and > 0"));
-    }
-    Ok(())
 }
 
 /// Input masks: sampled as float, R read.
@@ -297,32 +344,35 @@ const LIT_FORMATS: &[vk::Format] = &[
     vk::Format::R32G32B32A32_SFLOAT,
 ];
 
-pub(crate) fn injection(t: &DirectLightingInjectionTask, limits: &Limits) -> Result<()> {
-    let common = TraceCommon { depth: t.depth, viewport: t.viewport, camera: t.camera, ..Default::default() };
-    let vp = &t.viewport;
-    if vp.width == 0 || vp.height == 0 {
-        return Err(Error::invalid("DirectLightingInjectionTask.viewport", "has zero width or height"));
+impl Check for DirectLightingInjectionTask {
+    fn check(&self, shared: &Shared) -> Result<()> {
+        let (t, limits) = (self, &shared.device.limits);
+        let common = TraceCommon { depth: t.depth, viewport: t.viewport, camera: t.camera, ..Default::default() };
+        let vp = &t.viewport;
+        if vp.width == 0 || vp.height == 0 {
+            return Err(Error::invalid("DirectLightingInjectionTask.viewport", "has zero width or height"));
+        }
+        if !(vp.min_depth.is_finite() && vp.max_depth.is_finite()) {
+            return Err(Error::invalid("DirectLightingInjectionTask.viewport", "depth range is not finite"));
+        }
+        dispatch_size("DirectLightingInjectionTask.viewport", vp, limits)?;
+        image("DirectLightingInjectionTask.depth.image", &t.depth.image, vp, Use::Sampled)?;
+        let depth_formats = if t.depth.depth_type == DepthType::ClipSpace { CLIP_DEPTH_FORMATS } else { POSITION_FORMATS };
+        format_in(
+            "DirectLightingInjectionTask.depth.image.format",
+            t.depth.image.format,
+            depth_formats,
+            "a depth format matching depth_type",
+        )?;
+        image("DirectLightingInjectionTask.lit", &t.lit, vp, Use::Sampled)?;
+        format_in("DirectLightingInjectionTask.lit.format", t.lit.format, LIT_FORMATS, "an RGB(A) colour format")?;
+        matrix("DirectLightingInjectionTask.camera.world_to_view", &common.camera.world_to_view)?;
+        matrix("DirectLightingInjectionTask.camera.view_to_clip", &common.camera.view_to_clip)?;
+        if !(t.average_window.is_finite() && t.average_window >= 1.0) {
+            return Err(Error::invalid("DirectLightingInjectionTask.average_window", "must be finite and >= 1"));
+        }
+        Ok(())
     }
-    if !(vp.min_depth.is_finite() && vp.max_depth.is_finite()) {
-        return Err(Error::invalid("DirectLightingInjectionTask.viewport", "depth range is not finite"));
-    }
-    dispatch_size("DirectLightingInjectionTask.viewport", vp, limits)?;
-    image("DirectLightingInjectionTask.depth.image", &t.depth.image, vp, Use::Sampled)?;
-    let depth_formats = if t.depth.depth_type == DepthType::ClipSpace { CLIP_DEPTH_FORMATS } else { POSITION_FORMATS };
-    format_in(
-        "DirectLightingInjectionTask.depth.image.format",
-        t.depth.image.format,
-        depth_formats,
-        "a depth format matching depth_type",
-    )?;
-    image("DirectLightingInjectionTask.lit", &t.lit, vp, Use::Sampled)?;
-    format_in("DirectLightingInjectionTask.lit.format", t.lit.format, LIT_FORMATS, "an RGB(A) colour format")?;
-    matrix("DirectLightingInjectionTask.camera.world_to_view", &common.camera.world_to_view)?;
-    matrix("DirectLightingInjectionTask.camera.view_to_clip", &common.camera.view_to_clip)?;
-    if !(t.average_window.is_finite() && t.average_window >= 1.0) {
-        return Err(Error::invalid("DirectLightingInjectionTask.average_window", "must be finite and >= 1"));
-    }
-    Ok(())
 }
 
 /// Environment maps: formats the shader reads as colour (any size; RGB used).
@@ -360,65 +410,72 @@ fn environment(what: &'static str, e: &EnvironmentInput) -> Result<()> {
     Ok(())
 }
 
-pub(crate) fn diffuse(t: &TraceDiffuseTask, limits: &Limits) -> Result<()> {
-    trace_common(&t.common, limits)?;
-    environment("TraceDiffuseTask.environment", &t.environment)?;
-    image("TraceDiffuseTask.output", &t.output, &t.common.viewport, Use::Storage)?;
-    format_in(
-        "TraceDiffuseTask.output",
-        t.output.format,
-        &[vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT],
-        "R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT",
-    )?;
-    if !(1..=64).contains(&t.rays_per_pixel) {
-        return Err(Error::invalid("TraceDiffuseTask.rays_per_pixel", format!("{} is not in 1..=64", t.rays_per_pixel)));
-    }
-    if !(t.ray_length.is_finite() && t.ray_length > 0.0) {
-        return Err(Error::invalid("TraceDiffuseTask.ray_length", "must be finite and > 0"));
-    }
-    if t.miss_radiance.iter().any(|c| !c.is_finite() || *c < 0.0) {
-        return Err(Error::invalid("TraceDiffuseTask.miss_radiance", "must be finite and >= 0"));
-    }
-    Ok(())
-}
-
-pub(crate) fn specular(t: &TraceSpecularTask, limits: &Limits) -> Result<()> {
-    trace_common(&t.common, limits)?;
-    environment("TraceSpecularTask.environment", &t.environment)?;
-    image("TraceSpecularTask.output", &t.output, &t.common.viewport, Use::Storage)?;
-    let formats = [vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT];
-    if t.common.debug_output == DebugOutput::Default {
-        format_in("TraceSpecularTask.output", t.output.format, &formats, "R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT")?;
-    } else {
-        format_in("TraceSpecularTask.output (debug output)", t.output.format, COLOR_OUTPUT_FORMATS, "an RGBA format")?;
-    }
-    if t.demodulated_output.image != vk::Image::null() {
-        image("TraceSpecularTask.demodulated_output", &t.demodulated_output, &t.common.viewport, Use::Storage)?;
+impl Check for TraceDiffuseTask {
+    fn check(&self, shared: &Shared) -> Result<()> {
+        let (t, limits) = (self, &shared.device.limits);
+        trace_common(&t.common, limits)?;
+        environment("TraceDiffuseTask.environment", &t.environment)?;
+        image("TraceDiffuseTask.output", &t.output, &t.common.viewport, Use::Storage)?;
         format_in(
-            "TraceSpecularTask.demodulated_output",
-            t.demodulated_output.format,
-            &formats,
+            "TraceDiffuseTask.output",
+            t.output.format,
+            &[vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT],
             "R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT",
         )?;
+        if !(1..=64).contains(&t.rays_per_pixel) {
+            return Err(Error::invalid("TraceDiffuseTask.rays_per_pixel", format!("{} is not in 1..=64", t.rays_per_pixel)));
+        }
+        if !(t.ray_length.is_finite() && t.ray_length > 0.0) {
+            return Err(Error::invalid("TraceDiffuseTask.ray_length", "must be finite and > 0"));
+        }
+        if t.miss_radiance.iter().any(|c| !c.is_finite() || *c < 0.0) {
+            return Err(Error::invalid("TraceDiffuseTask.miss_radiance", "must be finite and >= 0"));
+        }
+        Ok(())
     }
-    let s = &t.common.specular;
-    if s.image.image != vk::Image::null() {
-        image("TraceCommon.specular.image", &s.image, &t.common.viewport, Use::Sampled)?;
-        format_in("TraceCommon.specular.image.format", s.image.format, LIT_FORMATS, "an RGB(A) colour format")?;
+}
+
+impl Check for TraceSpecularTask {
+    fn check(&self, shared: &Shared) -> Result<()> {
+        let (t, limits) = (self, &shared.device.limits);
+        trace_common(&t.common, limits)?;
+        environment("TraceSpecularTask.environment", &t.environment)?;
+        image("TraceSpecularTask.output", &t.output, &t.common.viewport, Use::Storage)?;
+        let formats = [vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT];
+        if t.common.debug_output == DebugOutput::Default {
+            format_in("TraceSpecularTask.output", t.output.format, &formats, "R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT")?;
+        } else {
+            format_in("TraceSpecularTask.output (debug output)", t.output.format, COLOR_OUTPUT_FORMATS, "an RGBA format")?;
+        }
+        if t.demodulated_output.image != vk::Image::null() {
+            image("TraceSpecularTask.demodulated_output", &t.demodulated_output, &t.common.viewport, Use::Storage)?;
+            format_in(
+                "TraceSpecularTask.demodulated_output",
+                t.demodulated_output.format,
+                &formats,
+                "R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT",
+            )?;
+        }
+        let s = &t.common.specular;
+        if s.image.image != vk::Image::null() {
+            image("TraceCommon.specular.image", &s.image, &t.common.viewport, Use::Sampled)?;
+            format_in("TraceCommon.specular.image.format", s.image.format, LIT_FORMATS, "an RGB(A) colour format")?;
+        }
+        if !(s.global_metalness.is_finite() && s.global_metalness >= 0.0) {
+            return Err(Error::invalid("TraceCommon.specular.global_metalness", "must be finite and >= 0"));
+        }
+        if !(1..=64).contains(&t.rays_per_pixel) {
+            return Err(Error::invalid("TraceSpecularTask.rays_per_pixel", format!("{} is not in 1..=64", t.rays_per_pixel)));
+        }
+        if !(t.ray_length.is_finite() && t.ray_length > 0.0) {
+            return Err(Error::invalid("TraceSpecularTask.ray_length", "must be finite and > 0"));
+        }
+        if t.miss_radiance.iter().any(|c| !c.is_finite() || *c < 0.0) || !(t.firefly_clamp.is_finite() && t.firefly_clamp >= 0.0)
+        {
+            return Err(Error::invalid("TraceSpecularTask", "miss_radiance and firefly_clamp must be finite and >= 0"));
+        }
+        lights::hit_lighting(&t.hit_lighting)
     }
-    if !(s.global_metalness.is_finite() && s.global_metalness >= 0.0) {
-        return Err(Error::invalid("TraceCommon.specular.global_metalness", "must be finite and >= 0"));
-    }
-    if !(1..=64).contains(&t.rays_per_pixel) {
-        return Err(Error::invalid("TraceSpecularTask.rays_per_pixel", format!("{} is not in 1..=64", t.rays_per_pixel)));
-    }
-    if !(t.ray_length.is_finite() && t.ray_length > 0.0) {
-        return Err(Error::invalid("TraceSpecularTask.ray_length", "must be finite and > 0"));
-    }
-    if t.miss_radiance.iter().any(|c| !c.is_finite() || *c < 0.0) || !(t.firefly_clamp.is_finite() && t.firefly_clamp >= 0.0) {
-        return Err(Error::invalid("TraceSpecularTask", "miss_radiance and firefly_clamp must be finite and >= 0"));
-    }
-    lights::hit_lighting(&t.hit_lighting)
 }
 
 const RADIANCE_FORMATS: &[vk::Format] = &[vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT];
@@ -427,68 +484,72 @@ const MOTION_FORMATS_2: &[vk::Format] =
 
 /// A denoise task, normalised (see `DenoiseJob`): G-buffer, cameras, motion, settings, and the
 /// formats its signal reads and writes.
-pub(crate) fn denoise(j: &DenoiseJob, limits: &Limits) -> Result<()> {
-    let c = &j.common;
-    trace_common(&c.as_trace_common(), limits)?;
-    if let Some(p) = &c.previous_camera {
-        matrix("DenoisingCommon.previous_camera.world_to_view", &p.world_to_view)?;
-        matrix("DenoisingCommon.previous_camera (view_to_clip * world_to_view)", &(p.view_to_clip * p.world_to_view))?;
+impl Check for Box<DenoiseJob> {
+    fn check(&self, shared: &Shared) -> Result<()> {
+        shared.check_denoising_context_alive(self.context)?;
+        let (j, limits) = (&**self, &shared.device.limits);
+        let c = &j.common;
+        trace_common(&c.as_trace_common(), limits)?;
+        if let Some(p) = &c.previous_camera {
+            matrix("DenoisingCommon.previous_camera.world_to_view", &p.world_to_view)?;
+            matrix("DenoisingCommon.previous_camera (view_to_clip * world_to_view)", &(p.view_to_clip * p.world_to_view))?;
+        }
+        if c.camera_jitter.iter().any(|v| !v.is_finite()) {
+            return Err(Error::invalid("DenoisingCommon.camera_jitter", "is not finite"));
+        }
+        let vp = &c.viewport;
+        let m = &c.motion;
+        if m.has_image() {
+            image("DenoisingCommon.motion.image", &m.image, vp, Use::Sampled)?;
+            let formats = if m.motion_type == MotionType::RgbWorldSpace { RADIANCE_FORMATS } else { MOTION_FORMATS_2 };
+            format_in(
+                "DenoisingCommon.motion.image.format",
+                m.image.format,
+                formats,
+                "a float format with the channels the MotionType reads",
+            )?;
+        }
+        if m.scale.iter().any(|v| !v.is_finite()) {
+            return Err(Error::invalid("DenoisingCommon.motion.scale", "is not finite"));
+        }
+        let s = &c.settings;
+        let checks: [(&'static str, bool); 9] = [
+            ("DenoiserSettings.max_history_frames (1..=255)", (1..=255).contains(&s.max_history_frames)),
+            (
+                "DenoiserSettings.fast_history_frames (1..=max_history_frames)",
+                (1..=s.max_history_frames).contains(&s.fast_history_frames),
+            ),
+            ("DenoiserSettings.history_clamp_sigma (> 0)", s.history_clamp_sigma.is_finite() && s.history_clamp_sigma > 0.0),
+            ("DenoiserSettings.spatial_passes (0..=6)", s.spatial_passes <= 6),
+            ("DenoiserSettings.luminance_sigma (> 0)", s.luminance_sigma.is_finite() && s.luminance_sigma > 0.0),
+            ("DenoiserSettings.normal_power (>= 0)", s.normal_power.is_finite() && s.normal_power >= 0.0),
+            ("DenoiserSettings.plane_distance_sigma (> 0)", s.plane_distance_sigma.is_finite() && s.plane_distance_sigma > 0.0),
+            ("DenoiserSettings.max_shadow_blur_radius (0..=64)", (0.0..=64.0).contains(&s.max_shadow_blur_radius)),
+            ("DenoiserSettings", true),
+        ];
+        if let Some((what, _)) = checks.iter().find(|(_, ok)| !ok) {
+            return Err(Error::invalid(what, "is out of range"));
+        }
+        let (inputs, outputs): (&[vk::Format], &[vk::Format]) = match j.signal {
+            SignalType::Specular | SignalType::Diffuse | SignalType::SpecularAndDiffuse => (RADIANCE_FORMATS, RADIANCE_FORMATS),
+            SignalType::DiffuseOcclusion => (SCALAR_OUTPUT_FORMATS, SCALAR_OUTPUT_FORMATS),
+            SignalType::Shadow => (SHADOW_OUTPUT_FORMATS, SCALAR_OUTPUT_FORMATS),
+            SignalType::MultiShadow => (RADIANCE_FORMATS, SCALAR_OUTPUT_FORMATS),
+        };
+        for k in 0..j.count {
+            image("denoise task input", &j.inputs[k], vp, Use::Sampled)?;
+            format_in("denoise task input", j.inputs[k].format, inputs, "the format of the trace task's output for this signal")?;
+            image("denoise task output", &j.outputs[k], vp, Use::Storage)?;
+            format_in(
+                "denoise task output",
+                j.outputs[k].format,
+                outputs,
+                "an RGBA16F/32F (radiance) or scalar/RGBA (visibility) format",
+            )?;
+        }
+        if j.signal == SignalType::Shadow {
+            light("DenoiseShadowTask.light", &j.light)?;
+        }
+        Ok(())
     }
-    if c.camera_jitter.iter().any(|v| !v.is_finite()) {
-        return Err(Error::invalid("DenoisingCommon.camera_jitter", "is not finite"));
-    }
-    let vp = &c.viewport;
-    let m = &c.motion;
-    if m.has_image() {
-        image("DenoisingCommon.motion.image", &m.image, vp, Use::Sampled)?;
-        let formats = if m.motion_type == MotionType::RgbWorldSpace { RADIANCE_FORMATS } else { MOTION_FORMATS_2 };
-        format_in(
-            "DenoisingCommon.motion.image.format",
-            m.image.format,
-            formats,
-            "a float format with the channels the MotionType reads",
-        )?;
-    }
-    if m.scale.iter().any(|v| !v.is_finite()) {
-        return Err(Error::invalid("DenoisingCommon.motion.scale", "is not finite"));
-    }
-    let s = &c.settings;
-    let checks: [(&'static str, bool); 9] = [
-        ("DenoiserSettings.max_history_frames (1..=255)", (1..=255).contains(&s.max_history_frames)),
-        (
-            "DenoiserSettings.fast_history_frames (1..=max_history_frames)",
-            (1..=s.max_history_frames).contains(&s.fast_history_frames),
-        ),
-        ("DenoiserSettings.history_clamp_sigma (> 0)", s.history_clamp_sigma.is_finite() && s.history_clamp_sigma > 0.0),
-        ("DenoiserSettings.spatial_passes (0..=6)", s.spatial_passes <= 6),
-        ("DenoiserSettings.luminance_sigma (> 0)", s.luminance_sigma.is_finite() && s.luminance_sigma > 0.0),
-        ("DenoiserSettings.normal_power (>= 0)", s.normal_power.is_finite() && s.normal_power >= 0.0),
-        ("DenoiserSettings.plane_distance_sigma (> 0)", s.plane_distance_sigma.is_finite() && s.plane_distance_sigma > 0.0),
-        ("DenoiserSettings.max_shadow_blur_radius (0..=64)", (0.0..=64.0).contains(&s.max_shadow_blur_radius)),
-        ("DenoiserSettings", true),
-    ];
-    if let Some((what, _)) = checks.iter().find(|(_, ok)| !ok) {
-        return Err(Error::invalid(what, "is out of range"));
-    }
-    let (inputs, outputs): (&[vk::Format], &[vk::Format]) = match j.signal {
-        SignalType::Specular | SignalType::Diffuse | SignalType::SpecularAndDiffuse => (RADIANCE_FORMATS, RADIANCE_FORMATS),
-        SignalType::DiffuseOcclusion => (SCALAR_OUTPUT_FORMATS, SCALAR_OUTPUT_FORMATS),
-        SignalType::Shadow => (SHADOW_OUTPUT_FORMATS, SCALAR_OUTPUT_FORMATS),
-        SignalType::MultiShadow => (RADIANCE_FORMATS, SCALAR_OUTPUT_FORMATS),
-    };
-    for k in 0..j.count {
-        image("denoise task input", &j.inputs[k], vp, Use::Sampled)?;
-        format_in("denoise task input", j.inputs[k].format, inputs, "the format of the trace task's output for this signal")?;
-        image("denoise task output", &j.outputs[k], vp, Use::Storage)?;
-        format_in(
-            "denoise task output",
-            j.outputs[k].format,
-            outputs,
-            "an RGBA16F/32F (radiance) or scalar/RGBA (visibility) format",
-        )?;
-    }
-    if j.signal == SignalType::Shadow {
-        light("DenoiseShadowTask.light", &j.light)?;
-    }
-    Ok(())
 }
