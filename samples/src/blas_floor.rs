@@ -11,7 +11,7 @@
 //! build), so a BLAS is kept per flag set.
 use crate::gpu::GpuTimer;
 use ash::vk;
-use hybrid_rt_testkit::host::{Host, HostBuffer, HostResult};
+use hybrid_rt_host::{Host, HostBuffer, HostResult};
 
 struct Target {
     flags: vk::BuildAccelerationStructureFlagsKHR,

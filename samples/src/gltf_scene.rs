@@ -18,7 +18,7 @@ use crate::raster::{Material, MaterialTextures};
 use crate::scene::{vertex_normals, CameraPath, Motion, SampleScene};
 use base64::Engine;
 use glam::{Affine3A, Mat4, Vec3, Vec4};
-use hybrid_rt_testkit::reference::{Mesh, Scene};
+use hybrid_rt_host::scene::{Mesh, Scene};
 use std::collections::HashMap;
 use std::path::Path;
 

@@ -1,7 +1,7 @@
 //! Vulkan plumbing the sample's own passes (G-buffer, lighting) share: shader modules,
 //! push-descriptor layouts, and constant buffers reused frame after frame.
 use ash::vk;
-use hybrid_rt_testkit::host::{Host, HostBuffer, HostImage, HostResult};
+use hybrid_rt_host::{Host, HostBuffer, HostImage, HostResult};
 
 /// The sample's SPIR-V, compiled from shaders/sample by samples/build.rs.
 pub(crate) mod spirv {

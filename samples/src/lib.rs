@@ -1,8 +1,7 @@
 //! Shared pieces of the sample, the bench and the quality program: built-in scenes, image
 //! output, progress.
-//! The engine side (device, images, submission) is `hybrid_rt_testkit::host`; the G-buffer
-//! comes from `raster` (a Vulkan graphics pass, as an engine's) or, for comparison, from the
-//! CPU reference renderer.
+//! The engine side (device, images, submission, the triangle scenes) is `hybrid_rt_host`; the
+//! G-buffer comes from `raster` (a Vulkan graphics pass, as an engine's).
 pub mod blas_floor;
 pub mod gltf_scene;
 pub mod gltf_textures;

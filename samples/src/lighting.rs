@@ -6,8 +6,8 @@ use crate::gpu::{spirv, ComputePass};
 use crate::raster::Targets;
 use ash::vk;
 use glam::{Mat4, Vec3};
-use hybrid_rt_testkit::host::{Host, HostImage, HostResult};
-use hybrid_rt_testkit::reference::Camera;
+use hybrid_rt_host::scene::Camera;
+use hybrid_rt_host::{Host, HostImage, HostResult};
 
 pub const LIT_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 

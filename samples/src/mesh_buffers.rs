@@ -5,8 +5,8 @@
 use crate::raster::READ;
 use ash::vk;
 use glam::{Vec3, Vec4};
-use hybrid_rt_testkit::host::{Host, HostBuffer, HostImage, HostResult};
-use hybrid_rt_testkit::reference::Scene;
+use hybrid_rt_host::scene::Scene;
+use hybrid_rt_host::{Host, HostBuffer, HostImage, HostResult};
 
 /// One vertex: a position, a shading normal (RGB32F each), a texture coordinate (RG32F) and a
 /// tangent (RGBA32F: xyz and the bitangent's sign, glTF's convention), interleaved.

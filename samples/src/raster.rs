@@ -10,8 +10,8 @@ pub use crate::mesh_buffers::{interleave, MaterialTextures, MeshBuffers, Texture
 use crate::mesh_buffers::{TANGENT_OFFSET, TEXTURE_SLOTS, UV_OFFSET};
 use ash::vk;
 use glam::{Affine3A, Mat4};
-use hybrid_rt_testkit::host::{Host, HostImage, HostResult};
-use hybrid_rt_testkit::reference::{Camera, Scene};
+use hybrid_rt_host::scene::{Camera, Scene};
+use hybrid_rt_host::{Host, HostImage, HostResult};
 
 pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 pub const NORMAL_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;

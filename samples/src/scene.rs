@@ -4,7 +4,7 @@
 use crate::lighting::Lights;
 use crate::raster::{Material, MaterialTextures, Texture, VertexAttributes};
 use glam::{Affine3A, Quat, Vec3, Vec4};
-use hybrid_rt_testkit::reference::{Camera, Scene};
+use hybrid_rt_host::scene::{Camera, Scene};
 
 /// How an instance moves over time (seconds).
 #[derive(Clone, Copy, Debug, PartialEq)]

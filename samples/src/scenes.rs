@@ -3,7 +3,7 @@ use crate::lighting::Lights;
 use crate::raster::{Material, MaterialTextures, Texture};
 use crate::scene::{vertex_normals, CameraPath, Deformer, Motion, SampleScene};
 use glam::{Affine3A, Quat, Vec3};
-use hybrid_rt_testkit::reference::{Camera, Mesh, Rng, Scene};
+use hybrid_rt_host::scene::{Camera, Mesh, Rng, Scene};
 
 /// The sample's default scene: a Cornell-style room open to the sky (red left wall, green
 /// right wall, white back and front walls) with a glossy floor, a mirror on the back wall, a

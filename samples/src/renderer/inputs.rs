@@ -1,7 +1,7 @@
 //! The SDK inputs a view's G-buffer makes.
 use crate::raster::{self, Targets};
 use hybrid_rt::*;
-use hybrid_rt_testkit::reference::Camera;
+use hybrid_rt_host::scene::Camera;
 
 /// The SDK inputs a view's G-buffer makes: trace and denoise commons.
 pub(super) struct Inputs {

@@ -30,8 +30,8 @@ use crate::scene::SampleScene;
 use ash::vk;
 use glam::Vec3;
 use hybrid_rt::*;
-use hybrid_rt_testkit::host::{Host, HostImage, HostResult};
-use hybrid_rt_testkit::reference::Camera;
+use hybrid_rt_host::scene::Camera;
+use hybrid_rt_host::{Host, HostImage, HostResult};
 
 mod inputs;
 mod resources;

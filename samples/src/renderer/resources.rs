@@ -8,8 +8,8 @@ use crate::modes::Mode;
 use crate::raster::{self, MeshBuffers, Targets};
 use ash::vk;
 use hybrid_rt::{DebugOutput, DenoisingContextHandle, GpuTicket, TaskKind};
-use hybrid_rt_testkit::host::{Host, HostBuffer, HostImage, HostResult};
-use hybrid_rt_testkit::reference::Camera;
+use hybrid_rt_host::scene::Camera;
+use hybrid_rt_host::{Host, HostBuffer, HostImage, HostResult};
 use std::collections::HashMap;
 
 const WORK_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
