@@ -247,6 +247,14 @@ struct Buffer {
     size: u64,
 }
 
+impl Buffer {
+    /// The mapped contents (host-coherent: what the GPU wrote, once its fence has signalled).
+    fn bytes(&self) -> &[u8] {
+        // SAFETY: `ptr` maps all `size` bytes of the buffer's memory until it is freed.
+        unsafe { std::slice::from_raw_parts(self.ptr, self.size as usize) }
+    }
+}
+
 impl Gpu {
     /// The engine's start-up: an instance (with validation when installed) and a device with
     /// what the SDK asks for merged into the engine's own feature chain.
@@ -506,51 +514,102 @@ fn run(out: &str) -> Result<(), Failure> {
     let meshes = scene();
     let camera = camera();
     let frame = rasterize(&meshes, &camera);
-    // The pixels checked at the end: the red box's foot, open floor, the floor in front of the
-    // red box (it reflects the box's front face) and the floor far behind (it reflects the sky).
-    let at = |p: Vec3| -> Result<usize, Failure> {
-        let (x, y) = project(&camera, p).ok_or_else(|| format!("{p} is out of view"))?;
-        Ok((y * W + x) as usize)
-    };
-    let foot = at(Vec3::new(-0.3, 0.0, 0.56))?;
-    let open = at(Vec3::new(1.0, 0.0, 1.2))?;
-    let mirror_red = at(Vec3::new(0.0, 0.0, 0.75))?;
-    let mirror_sky = at(Vec3::new(-1.5, 0.0, -2.0))?;
-    let mut buffers = Vec::new();
-    for m in &meshes {
-        let usage = vk::BufferUsageFlags::TRANSFER_SRC; // the SDK copies what it needs out of them
-        buffers.push((gpu.buffer_with(&m.positions, usage)?, gpu.buffer_with(&m.indices, usage)?));
+    let probes = Probes::new(&camera)?;
+    let res = Resources::upload(&gpu, &meshes, &frame)?;
+
+    // ---- The SDK's tasks: the scene in frame 1, the traces in frame 2.
+    let mut tasks = ctx.create_task_container();
+    register_scene(&ctx, &gpu, &mut tasks, &meshes, &res.buffers)?;
+    let (ao_px, refl_px) = trace_frame(&ctx, &gpu, &mut tasks, &res, camera)?;
+
+    let failures = check(&probes, &ao_px, &refl_px);
+    write_png(out, &meshes, &frame, &ao_px, &refl_px)?;
+    println!("wrote {out}");
+
+    // ---- Shut down: the SDK first (it holds objects of the device), then the engine's objects.
+    drop(tasks);
+    ctx.destroy().map_err(|(_, e)| e)?;
+    res.free(&gpu);
+    if failures.is_empty() {
+        println!("all checks passed");
+        Ok(())
+    } else {
+        Err(failures.join("; ").into())
     }
-    let sampled = vk::ImageUsageFlags::SAMPLED;
-    let depth = gpu.image(vk::Format::R32_SFLOAT, sampled)?;
-    let normals = gpu.image(vk::Format::R32G32B32A32_SFLOAT, sampled)?;
-    let lit = gpu.image(vk::Format::R32G32B32A32_SFLOAT, sampled)?;
-    let ao = gpu.image(vk::Format::R32_SFLOAT, vk::ImageUsageFlags::STORAGE)?;
-    let reflections = gpu.image(vk::Format::R32G32B32A32_SFLOAT, vk::ImageUsageFlags::STORAGE)?;
-    let uploads = [
-        (&depth, gpu.buffer_with(&frame.depth, vk::BufferUsageFlags::TRANSFER_SRC)?),
-        (&normals, gpu.buffer_with(&frame.normals, vk::BufferUsageFlags::TRANSFER_SRC)?),
-        (&lit, gpu.buffer_with(&frame.lit, vk::BufferUsageFlags::TRANSFER_SRC)?),
-    ];
-    let cmd = gpu.begin()?;
-    for (image, staging) in &uploads {
-        gpu.transition(cmd, image, vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
-        gpu.copy(cmd, image, staging, true);
-        gpu.transition(cmd, image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, READ);
-    }
-    for image in [&ao, &reflections] {
-        gpu.transition(cmd, image, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL);
-    }
-    gpu.submit_and_wait(cmd)?;
-    for (_, staging) in uploads {
-        gpu.free_buffer(staging);
+}
+
+/// What the engine hands the SDK: its meshes' vertex and index buffers, the G-buffer and lit
+/// image (uploaded, in SHADER_READ_ONLY_OPTIMAL), and the two output images (in GENERAL).
+struct Resources {
+    buffers: Vec<(Buffer, Buffer)>,
+    depth: Image,
+    normals: Image,
+    lit: Image,
+    ao: Image,
+    reflections: Image,
+}
+
+impl Resources {
+    fn upload(gpu: &Gpu, meshes: &[Mesh], frame: &Frame) -> Result<Resources, Failure> {
+        let mut buffers = Vec::new();
+        for m in meshes {
+            let usage = vk::BufferUsageFlags::TRANSFER_SRC; // the SDK copies what it needs out of them
+            buffers.push((gpu.buffer_with(&m.positions, usage)?, gpu.buffer_with(&m.indices, usage)?));
+        }
+        let sampled = vk::ImageUsageFlags::SAMPLED;
+        let res = Resources {
+            buffers,
+            depth: gpu.image(vk::Format::R32_SFLOAT, sampled)?,
+            normals: gpu.image(vk::Format::R32G32B32A32_SFLOAT, sampled)?,
+            lit: gpu.image(vk::Format::R32G32B32A32_SFLOAT, sampled)?,
+            ao: gpu.image(vk::Format::R32_SFLOAT, vk::ImageUsageFlags::STORAGE)?,
+            reflections: gpu.image(vk::Format::R32G32B32A32_SFLOAT, vk::ImageUsageFlags::STORAGE)?,
+        };
+        let uploads = [
+            (&res.depth, gpu.buffer_with(&frame.depth, vk::BufferUsageFlags::TRANSFER_SRC)?),
+            (&res.normals, gpu.buffer_with(&frame.normals, vk::BufferUsageFlags::TRANSFER_SRC)?),
+            (&res.lit, gpu.buffer_with(&frame.lit, vk::BufferUsageFlags::TRANSFER_SRC)?),
+        ];
+        let cmd = gpu.begin()?;
+        for (image, staging) in &uploads {
+            gpu.transition(cmd, image, vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
+            gpu.copy(cmd, image, staging, true);
+            gpu.transition(cmd, image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, READ);
+        }
+        for image in [&res.ao, &res.reflections] {
+            gpu.transition(cmd, image, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL);
+        }
+        gpu.submit_and_wait(cmd)?;
+        for (_, staging) in uploads {
+            gpu.free_buffer(staging);
+        }
+        Ok(res)
     }
 
-    // ---- The SDK's tasks.
+    fn free(self, gpu: &Gpu) {
+        for (vb, ib) in self.buffers {
+            gpu.free_buffer(vb);
+            gpu.free_buffer(ib);
+        }
+        for image in [self.depth, self.normals, self.lit, self.ao, self.reflections] {
+            gpu.free_image(image);
+        }
+    }
+}
+
+/// Frame 1: the scene goes in (geometry copies, BLAS and TLAS builds). A new geometry's
+/// cache is laid out on the GPU by this ticket and allocated once it is back (nothing
+/// stalls), so light can be injected from the next frame on.
+fn register_scene(
+    ctx: &ExecuteContext,
+    gpu: &Gpu,
+    tasks: &mut TaskContainer,
+    meshes: &[Mesh],
+    buffers: &[(Buffer, Buffer)],
+) -> Result<(), Failure> {
     let geometries = ctx.create_geometry_handles(meshes.len());
     let instances = ctx.create_instance_handles(meshes.len());
-    let mut tasks = ctx.create_task_container();
-    for (k, (m, (vb, ib))) in meshes.iter().zip(&buffers).enumerate() {
+    for (k, (m, (vb, ib))) in meshes.iter().zip(buffers).enumerate() {
         let input = GeometryInput {
             vertices: VertexBufferInput { buffer: vb.buffer, count: m.positions.len() as u32, ..Default::default() },
             indices: IndexBufferInput { buffer: ib.buffer, count: m.indices.len() as u32, ..Default::default() },
@@ -566,18 +625,26 @@ fn run(out: &str) -> Result<(), Failure> {
         tasks.schedule_instance(&InstanceTask { handle: instances[k], input, ..Default::default() })?;
     }
     tasks.schedule_bvh_build(&BvhBuildTask::default())?;
-    // Frame 1: the scene goes in (geometry copies, BLAS and TLAS builds). A new geometry's
-    // cache is sized from its triangles on the CPU once this ticket is back (nothing stalls),
-    // so light can be injected from the next frame on.
     let cmd = gpu.begin()?;
-    let ticket = ctx.build_gpu_task(&mut tasks, cmd)?;
+    let ticket = ctx.build_gpu_task(tasks, cmd)?;
     gpu.submit_and_wait(cmd)?;
     ctx.mark_gpu_task_completed(ticket)?;
+    Ok(())
+}
 
+/// Frame 2: the lit image injected into the caches, AO and glossy reflections traced, and both
+/// outputs read back in the same submission. Returns the AO and reflection pixels.
+fn trace_frame(
+    ctx: &ExecuteContext,
+    gpu: &Gpu,
+    tasks: &mut TaskContainer,
+    res: &Resources,
+    camera: Camera,
+) -> Result<(Vec<f32>, Vec<[f32; 4]>), Failure> {
     // What every trace reads: the G-buffer (floor and boxes: slightly glossy dielectrics).
     let common = TraceCommon {
-        depth: DepthInput { image: depth.input(READ), ..Default::default() },
-        normals: NormalInput { image: normals.input(READ), normal_type: NormalType::RgbVector, ..Default::default() },
+        depth: DepthInput { image: res.depth.input(READ), ..Default::default() },
+        normals: NormalInput { image: res.normals.input(READ), normal_type: NormalType::RgbVector, ..Default::default() },
         viewport: Viewport { width: W, height: H, ..Default::default() },
         camera,
         roughness: RoughnessInput { global_roughness: 0.15, ..Default::default() },
@@ -588,7 +655,7 @@ fn run(out: &str) -> Result<(), Failure> {
     // where the reflected surface is off screen. Tasks run in the order they are scheduled.
     let inject = DirectLightingInjectionTask {
         depth: common.depth,
-        lit: lit.input(READ),
+        lit: res.lit.input(READ),
         viewport: common.viewport,
         camera,
         ..Default::default()
@@ -596,7 +663,7 @@ fn run(out: &str) -> Result<(), Failure> {
     tasks.schedule_direct_lighting_injection(&inject)?;
     let ao_task = TraceAmbientOcclusionTask {
         common,
-        output: ao.input(vk::ImageLayout::GENERAL),
+        output: res.ao.input(vk::ImageLayout::GENERAL),
         ray_length: 0.5,
         rays_per_pixel: 16,
         ..Default::default()
@@ -604,20 +671,19 @@ fn run(out: &str) -> Result<(), Failure> {
     tasks.schedule_ambient_occlusion(&ao_task)?;
     let specular = TraceSpecularTask {
         common,
-        output: reflections.input(vk::ImageLayout::GENERAL),
+        output: res.reflections.input(vk::ImageLayout::GENERAL),
         rays_per_pixel: 8,
         miss_radiance: SKY,
         ..Default::default()
     };
     tasks.schedule_specular(&specular)?;
 
-    // ---- Frame 2: record into our command buffer, then read the outputs back in the same
-    // submission.
+    // Record into our command buffer, then read the outputs back in the same submission.
     let cmd = gpu.begin()?;
-    let ticket = ctx.build_gpu_task(&mut tasks, cmd)?;
+    let ticket = ctx.build_gpu_task(tasks, cmd)?;
     let ao_readback = gpu.buffer((W * H * 4) as u64, vk::BufferUsageFlags::TRANSFER_DST)?;
     let refl_readback = gpu.buffer((W * H * 16) as u64, vk::BufferUsageFlags::TRANSFER_DST)?;
-    for (image, readback) in [(&ao, &ao_readback), (&reflections, &refl_readback)] {
+    for (image, readback) in [(&res.ao, &ao_readback), (&res.reflections, &refl_readback)] {
         gpu.transition(cmd, image, vk::ImageLayout::GENERAL, vk::ImageLayout::TRANSFER_SRC_OPTIMAL);
         gpu.copy(cmd, image, readback, false);
     }
@@ -627,12 +693,40 @@ fn run(out: &str) -> Result<(), Failure> {
     for t in &done.timings {
         println!("  {:?} (task {}): {:.3} ms", t.kind, t.task_index, t.gpu_ms);
     }
-    let ao_px: Vec<f32> =
-        bytemuck::cast_slice(unsafe { std::slice::from_raw_parts(ao_readback.ptr, ao_readback.size as usize) }).to_vec();
-    let refl_px: Vec<[f32; 4]> =
-        bytemuck::cast_slice(unsafe { std::slice::from_raw_parts(refl_readback.ptr, refl_readback.size as usize) }).to_vec();
+    let ao_px: Vec<f32> = bytemuck::cast_slice(ao_readback.bytes()).to_vec();
+    let refl_px: Vec<[f32; 4]> = bytemuck::cast_slice(refl_readback.bytes()).to_vec();
+    gpu.free_buffer(ao_readback);
+    gpu.free_buffer(refl_readback);
+    Ok((ao_px, refl_px))
+}
 
-    // ---- Is it right?
+/// The pixels checked at the end: the red box's foot, open floor, the floor in front of the
+/// red box (it reflects the box's front face) and the floor far behind (it reflects the sky).
+struct Probes {
+    foot: usize,
+    open: usize,
+    mirror_red: usize,
+    mirror_sky: usize,
+}
+
+impl Probes {
+    fn new(camera: &Camera) -> Result<Probes, Failure> {
+        let at = |p: Vec3| -> Result<usize, Failure> {
+            let (x, y) = project(camera, p).ok_or_else(|| format!("{p} is out of view"))?;
+            Ok((y * W + x) as usize)
+        };
+        Ok(Probes {
+            foot: at(Vec3::new(-0.3, 0.0, 0.56))?,
+            open: at(Vec3::new(1.0, 0.0, 1.2))?,
+            mirror_red: at(Vec3::new(0.0, 0.0, 0.75))?,
+            mirror_sky: at(Vec3::new(-1.5, 0.0, -2.0))?,
+        })
+    }
+}
+
+/// Is it right? Contact shadows under the boxes, the red box seen in the floor, sky where
+/// nothing is, and no validation message. Returns what failed.
+fn check(probes: &Probes, ao_px: &[f32], refl_px: &[[f32; 4]]) -> Vec<String> {
     // AO is a 16-ray estimate: judge a 5x5 neighbourhood (400 rays, noise ~0.02).
     let window = |i: usize| {
         let (x, y) = ((i as u32 % W) as i32, (i as u32 / W) as i32);
@@ -643,9 +737,10 @@ fn run(out: &str) -> Result<(), Failure> {
         }
         sum / 25.0
     };
-    let (ao_foot, ao_open) = (window(foot), window(open));
+    let (ao_foot, ao_open) = (window(probes.foot), window(probes.open));
+    let (mirror_red, mirror_sky) = (refl_px[probes.mirror_red], refl_px[probes.mirror_sky]);
     println!("AO at the red box's foot {ao_foot:.3}, on open floor {ao_open:.3}");
-    println!("reflection in front of the red box {:?}, far from it {:?}", &refl_px[mirror_red][..3], &refl_px[mirror_sky][..3]);
+    println!("reflection in front of the red box {:?}, far from it {:?}", &mirror_red[..3], &mirror_sky[..3]);
     let mut failures = Vec::new();
     if ao_foot > 0.85 {
         failures.push(format!("no contact shadow at the box's foot (AO {ao_foot})"));
@@ -653,40 +748,18 @@ fn run(out: &str) -> Result<(), Failure> {
     if ao_open < 0.98 {
         failures.push(format!("open floor is occluded (AO {ao_open})"));
     }
-    let [r, g, b, _] = refl_px[mirror_red];
+    let [r, g, b, _] = mirror_red;
     if !(r > 2.0 * g && r > 2.0 * b && r > 0.05) {
         failures.push(format!("the floor does not reflect the red box: {:?}", [r, g, b]));
     }
-    let sky = refl_px[mirror_sky];
-    if (0..3).any(|c| (sky[c] - SKY[c]).abs() > 0.1) {
-        failures.push(format!("the floor far from the boxes does not reflect the sky: {:?}", &sky[..3]));
+    if (0..3).any(|c| (mirror_sky[c] - SKY[c]).abs() > 0.1) {
+        failures.push(format!("the floor far from the boxes does not reflect the sky: {:?}", &mirror_sky[..3]));
     }
     let messages = VALIDATION_MESSAGES.load(Ordering::Relaxed);
     if messages > 0 {
         failures.push(format!("{messages} validation messages"));
     }
-
-    write_png(out, &meshes, &frame, &ao_px, &refl_px)?;
-    println!("wrote {out}");
-
-    // ---- Shut down: the SDK first (it holds objects of the device), then the engine's objects.
-    drop(tasks);
-    ctx.destroy().map_err(|(_, e)| e)?;
-    for (vb, ib) in buffers {
-        gpu.free_buffer(vb);
-        gpu.free_buffer(ib);
-    }
-    gpu.free_buffer(ao_readback);
-    gpu.free_buffer(refl_readback);
-    for image in [depth, normals, lit, ao, reflections] {
-        gpu.free_image(image);
-    }
-    if failures.is_empty() {
-        println!("all checks passed");
-        Ok(())
-    } else {
-        Err(failures.join("; ").into())
-    }
+    failures
 }
 
 /// `lit | AO | reflections | composite`, side by side. The composite is what an engine would
