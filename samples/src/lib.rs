@@ -2,7 +2,6 @@
 //! output, progress.
 //! The engine side (device, images, submission, the triangle scenes) is `hybrid_rt_host`; the
 //! G-buffer comes from `raster` (a Vulkan graphics pass, as an engine's).
-pub mod blas_floor;
 pub mod gltf_scene;
 pub mod gltf_textures;
 pub mod gpu;

@@ -1,5 +1,4 @@
-//! The bench runs end to end on the test device (small sizes: CI is lavapipe); the sample's
-//! own tests are in sample.rs.
+//! The bench runs end to end on the test device (small sizes: CI is lavapipe).
 use std::process::Command;
 
 #[test]

@@ -11,12 +11,14 @@ use hybrid_rt::{
     BuildHint, BvhBuildTask, ExecuteContext, GeometryInput, GeometryTask, IndexBufferInput, InitSettings, InstanceInput,
     InstanceOperation, InstanceTask, SurfelSettings, SurfelType, TaskKind, TaskOperation, VertexBufferInput,
 };
+use hybrid_rt_host::Host;
 use hybrid_rt_samples::scenes;
-use hybrid_rt_testkit::host::Host;
 use hybrid_rt_testkit::reference::{GBuffer, Mesh, Tracer};
 use hybrid_rt_testkit::sdk_scene::{run_frame, GBufferImages, SceneOnGpu};
 use serde_json::json;
 use std::time::Instant;
+
+mod blas_floor;
 
 /// GPU times of the SDK's tasks on a synthetic field (spheres on a ground plane), from its
 /// timestamp queries: BLAS/TLAS builds, recording, every trace beside its bare-ray floor, the
@@ -227,7 +229,7 @@ fn run() -> Result<(), String> {
     let mut frame = ctx.create_task_container();
     // The driver alone on the same triangles (see blas_floor), interleaved with the SDK's
     // registration frames below: how much of each row is the SDK's.
-    let mut floor = hybrid_rt_samples::blas_floor::BlasFloor::new(&host, &mesh.positions, &mesh.indices)?;
+    let mut floor = blas_floor::BlasFloor::new(&host, &mesh.positions, &mesh.indices)?;
     // The registration frame with each surfel layout (both sized on the GPU), and with the
     // fast-build hints (what a level streaming in would ask for).
     for (surfel_type, build_hint, what, key) in [

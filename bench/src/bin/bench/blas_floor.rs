@@ -9,9 +9,9 @@
 //! between them run at whatever clock the GPU has fallen to). Building into fresh memory
 //! every time measured the same as building one BLAS again on the H200 (2.62 / 2.61 ms fast
 //! build), so a BLAS is kept per flag set.
-use crate::gpu::GpuTimer;
 use ash::vk;
 use hybrid_rt_host::{Host, HostBuffer, HostResult};
+use hybrid_rt_samples::gpu::GpuTimer;
 
 struct Target {
     flags: vk::BuildAccelerationStructureFlagsKHR,
