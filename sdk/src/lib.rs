@@ -42,13 +42,23 @@
 //! }
 //! ```
 //!
-//! ## Layers
-//! Arrows point one way (docs/design-notes.md has the picture):
-//! `context` (the engine that records containers; nothing imports it) → `passes` (one module
-//! per GPU pass) → `scene` (registries, BLAS queue, TLAS) → `cache` (surfel layouts, sample
-//! pages) → `gpu` (ash helpers) → `types` (the public plain data) and `error`.
+//! ## Where to start
 //!
-//! See docs/ for the integration guide and shared/DESIGN.md for the architecture.
+//! - [`ExecuteContext`]: the SDK on the engine's device ([`DeviceDesc`], [`DeviceFeatures`],
+//!   [`query_device_support`]); it creates handles, containers and denoising contexts, records
+//!   containers with [`ExecuteContext::build_gpu_task`] and takes tickets back.
+//! - [`TaskContainer`]: one frame's tasks, each checked when it is scheduled.
+//! - The tasks and their inputs, all plain data with `Default`, grouped in [`types`] and
+//!   re-exported here: scene tasks ([`GeometryTask`], [`InstanceTask`], [`BvhBuildTask`]),
+//!   traces ([`TraceAmbientOcclusionTask`], [`TraceShadowTask`], [`TraceSpecularTask`], ...),
+//!   the direct-lighting cache ([`DirectLightingInjectionTask`], [`RelightCacheTask`], ...) and
+//!   the denoisers ([`DenoiseSpecularAndDiffuseTask`], ...).
+//! - [`Error`]: every way a call can fail, naming the field, handle or limit at fault.
+//!
+//! The [integration guide](https://github.com/hybrid-rt/hybrid-rt/blob/main/docs/integration.md)
+//! follows an engine through a frame (device set-up, inputs, layouts and barriers, lifetimes,
+//! threading, debugging), and `examples/ao_reflections.rs` is the whole integration in one
+//! program.
 #![deny(missing_docs)]
 
 pub(crate) mod cache;

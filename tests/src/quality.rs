@@ -1,5 +1,5 @@
 //! Denoiser image quality, measured against the SDK's own trace averaged over many frames (its
-//! converged reference): the measurements behind issue 12's CI thresholds
+//! converged reference): the measurements behind the denoisers' CI thresholds
 //! (tests/tests/denoise_quality.rs) and the `quality` program's table (docs/benchmarks.md).
 //!
 //! A [`Stage`] is a reference scene registered and built, its G-buffer uploaded, a noisy and a

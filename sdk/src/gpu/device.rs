@@ -104,8 +104,8 @@ pub struct DeviceDesc<'a> {
     /// 1.3 commands; with a 1.2 instance their function pointers may be missing).
     pub instance_api_version: u32,
     /// The `pNext` chain given to `vkCreateDevice` (its feature structs), read during
-    /// `ExecuteContext::new` only: [`crate::DeviceFeatures::chain`] after `push_to`, or the
-    /// engine's own `VkPhysicalDeviceFeatures2` after `merge_into`.
+    /// `ExecuteContext::new` only: [`DeviceFeatures::chain`](crate::DeviceFeatures::chain)
+    /// after `push_to`, or the engine's own `VkPhysicalDeviceFeatures2` after `merge_into`.
     pub enabled_features: *const std::ffi::c_void,
     /// VK_EXT_debug_utils is enabled on the instance: the SDK then names every object it
     /// creates ("hybrid-rt ...") and labels every task in the command buffer, so RenderDoc,

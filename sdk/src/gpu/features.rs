@@ -151,7 +151,7 @@ pub struct DeviceFeatures {
 
 impl DeviceFeatures {
     /// The features to enable. `with_ray_query` adds `rayQuery` (only if the device has
-    /// VK_KHR_ray_query: see [`crate::DeviceSupport`]).
+    /// VK_KHR_ray_query: see [`DeviceSupport`](crate::DeviceSupport)).
     pub fn required(with_ray_query: bool) -> Self {
         DeviceFeatures {
             core: vk::PhysicalDeviceFeatures2::default()

@@ -36,8 +36,8 @@ use ash::vk;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[repr(u32)]
 pub enum DenoisingMethod {
-    /// Temporal accumulation with reprojection, then spatial filtering (see the module doc).
-    /// Default.
+    /// Temporal accumulation with reprojection, then spatial filtering (see the
+    /// [module documentation](crate::types::denoise)). Default.
     #[default]
     Temporal = 0,
     /// This frame only: the spatial filters with no history (debugging, or content whose
