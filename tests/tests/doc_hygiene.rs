@@ -14,6 +14,7 @@ const CRATES: &[(&str, &str)] = &[
     ("hybrid_rt_testkit", "tests/src"),
     ("hybrid_rt_host", "host/src"),
     ("hybrid_rt_samples", "samples/src"),
+    ("hybrid_rt_bench", "bench/src"),
     ("hybrid_rt_c", "sdk-c-api/src"),
 ];
 
