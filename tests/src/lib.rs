@@ -1,6 +1,6 @@
-//! hybrid-rt's test kit: the CPU reference renderer (`reference`), a headless Vulkan host that
-//! plays the engine (`host`), glue that loads reference scenes into the SDK (`sdk_scene`), and the denoiser quality
-//! measurements (`quality`).
+//! hybrid-rt's test kit: the CPU reference renderer (`reference`), the headless Vulkan host
+//! that plays the engine (`host`, re-exported from `hybrid_rt_host`), glue that loads reference
+//! scenes into the SDK (`sdk_scene`), and the denoiser quality measurements (`quality`).
 //! Used by the integration tests in tests/tests, the sample and the bench.
 //!
 //! Its doctests are the Rust snippets of the repository's README and user guides: each guide
