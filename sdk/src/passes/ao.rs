@@ -4,7 +4,7 @@
 //! cosine-distributed rays (so the plain mean estimates the cosine-weighted visibility the
 //! shading model wants, with lower variance than uniform sampling), a per-pixel rotated R2
 //! low-discrepancy sequence (lower variance again at several rays per pixel), and
-//! distance-weighted occlusion with a falloff power (hits count (t/L)^p, shared/seeds/003), so
+//! distance-weighted occlusion with a falloff power (hits count (t/L)^p), so
 //! far occluders fade in instead of popping at the ray's end. The same body
 //! (shaders/include/ao.glsl) runs as a ray-tracing pipeline or as a compute shader with ray
 //! queries; the only difference is the one function that traces a ray.

@@ -1,5 +1,5 @@
 //! The denoisers' GPU side: the history a denoising context owns, and the compute passes that
-//! filter (what they do and why: `api::denoising`). Every pass shares one push-descriptor
+//! filter (what they do and why: `types::denoise`). Every pass shares one push-descriptor
 //! layout (shaders/include/denoise.glsl); a pass's step size travels as a push constant.
 //!
 //! Radiance: temporal → clamp → à-trous × `spatial_passes` (the last writes the output).
