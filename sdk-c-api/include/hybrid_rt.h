@@ -32,44 +32,29 @@
 #include <vulkan/vulkan.h>
 
 /**
- * The API version this header describes: (major << 22) | (minor << 12) | patch.
- */
-#define HRT_API_VERSION (1 << 12)
-
-/**
- * Most lights one HrtTraceMultiShadowTask traces.
- */
-#define HRT_MAX_SHADOW_LIGHTS 32
-
-/**
- * Most per-light outputs of one HrtTraceMultiShadowTask.
- */
-#define HRT_MAX_LIGHT_OUTPUTS 4
-
-/**
- * The most texels a side of a geometry's copy of its albedo texture (HrtGeometryInput.albedo_texture).
- */
-#define HRT_MAX_ALBEDO_TEXTURE_SIZE 256
-
-/**
- * Most gather rays per hit of HrtHitLighting.
- */
-#define HRT_MAX_HIT_GATHER_RAYS 8
-
-/**
- * Most samples one HrtRelightCacheTask may take.
- */
-#define HRT_MAX_RELIGHT_SAMPLES (1 << 24)
-
-/**
  * Largest HrtSurfelSettings.tile_resolution_limit.
  */
 #define HRT_MAX_TILE_RESOLUTION 256
 
 /**
+ * The API version this header describes: (major << 22) | (minor << 12) | patch.
+ */
+#define HRT_API_VERSION (1 << 12)
+
+/**
+ * Bytes of HrtTaskTiming.label, its NUL included.
+ */
+#define HRT_TASK_LABEL_CAPACITY 64
+
+/**
  * Largest HrtDenoisingContextInput.max_width / max_height.
  */
 #define HRT_MAX_DENOISING_EXTENT 16384
+
+/**
+ * Most samples one HrtRelightCacheTask may take.
+ */
+#define HRT_MAX_RELIGHT_SAMPLES (1 << 24)
 
 /**
  * Bits of HrtInstanceInput::mask.
@@ -87,14 +72,24 @@
 #define HRT_MASK_ALL 31
 
 /**
- * Severity of a diagnostic message (higher = more severe).
+ * The most texels a side of a geometry's copy of its albedo texture (HrtGeometryInput.albedo_texture).
  */
-typedef enum HrtLogSeverity {
-  HRT_LOG_DEBUG = 0,
-  HRT_LOG_INFO = 1,
-  HRT_LOG_WARNING = 2,
-  HRT_LOG_ERROR = 3,
-} HrtLogSeverity;
+#define HRT_MAX_ALBEDO_TEXTURE_SIZE 256
+
+/**
+ * Most gather rays per hit of HrtHitLighting.
+ */
+#define HRT_MAX_HIT_GATHER_RAYS 8
+
+/**
+ * Most lights one HrtTraceMultiShadowTask traces.
+ */
+#define HRT_MAX_SHADOW_LIGHTS 32
+
+/**
+ * Most per-light outputs of one HrtTraceMultiShadowTask.
+ */
+#define HRT_MAX_LIGHT_OUTPUTS 4
 
 /**
  * Result of every `hrt_*` call. On anything but `HRT_OK`, `hrt_last_error_message` tells
@@ -138,35 +133,15 @@ typedef enum HrtStatus {
   HRT_ERROR_TICKET_NOT_COMPLETE = 18,
 } HrtStatus;
 
-typedef enum HrtTaskKind {
-  /**
-   * All BVH work of the ticket.
-   */
-  HRT_TASK_BVH = 0,
-  HRT_TASK_AMBIENT_OCCLUSION = 1,
-  /**
-   * Inside HRT_TASK_BVH: batched BLAS builds, refits and compactions.
-   */
-  HRT_TASK_BLAS_BUILD = 2,
-  /**
-   * Inside HRT_TASK_BVH: the TLAS build.
-   */
-  HRT_TASK_TLAS_BUILD = 3,
-  HRT_TASK_DIRECT_LIGHTING_INJECTION = 4,
-  HRT_TASK_CACHE_UPDATE = 5,
-  HRT_TASK_CACHE_TRANSFER = 6,
-  HRT_TASK_SHADOW = 7,
-  HRT_TASK_DIFFUSE = 8,
-  HRT_TASK_SPECULAR = 9,
-  HRT_TASK_MULTI_SHADOW = 10,
-  HRT_TASK_DENOISE_SPECULAR = 11,
-  HRT_TASK_DENOISE_DIFFUSE = 12,
-  HRT_TASK_DENOISE_SPECULAR_AND_DIFFUSE = 13,
-  HRT_TASK_DENOISE_DIFFUSE_OCCLUSION = 14,
-  HRT_TASK_DENOISE_SHADOW = 15,
-  HRT_TASK_DENOISE_MULTI_SHADOW = 16,
-  HRT_TASK_CACHE_RELIGHT = 17,
-} HrtTaskKind;
+/**
+ * Severity of a diagnostic message (higher = more severe).
+ */
+typedef enum HrtLogSeverity {
+  HRT_LOG_DEBUG = 0,
+  HRT_LOG_INFO = 1,
+  HRT_LOG_WARNING = 2,
+  HRT_LOG_ERROR = 3,
+} HrtLogSeverity;
 
 /**
  * How a geometry's BLAS is built (BuildHint).
@@ -338,6 +313,131 @@ typedef struct HrtDeviceFeatures HrtDeviceFeatures;
  */
 typedef struct HrtTaskContainer HrtTaskContainer;
 
+typedef struct HrtImageInput {
+  VkImage image;
+  VkImageView view;
+  VkFormat format;
+  uint32_t width;
+  uint32_t height;
+  /**
+   * Inputs: VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL (default) or another read-only layout;
+   * outputs: VK_IMAGE_LAYOUT_GENERAL.
+   */
+  VkImageLayout layout;
+  /**
+   * The VkImageUsageFlags the image was created with (required: inputs need
+   * VK_IMAGE_USAGE_SAMPLED_BIT, outputs VK_IMAGE_USAGE_STORAGE_BIT; 0 is refused).
+   */
+  uint32_t usage;
+} HrtImageInput;
+
+typedef struct HrtDepthInput {
+  struct HrtImageInput image;
+  /**
+   * An HrtDepthType. Default HRT_DEPTH_CLIP_SPACE.
+   */
+  uint32_t depth_type;
+} HrtDepthInput;
+
+typedef struct HrtViewport {
+  uint32_t x;
+  uint32_t y;
+  uint32_t width;
+  uint32_t height;
+  /**
+   * 0 and 0 mean 0..1.
+   */
+  float min_depth;
+  float max_depth;
+} HrtViewport;
+
+typedef struct HrtCamera {
+  /**
+   * Column-major.
+   */
+  float world_to_view[16];
+  /**
+   * Column-major, Vulkan clip space (y down, depth 0..1, standard or reversed).
+   */
+  float view_to_clip[16];
+} HrtCamera;
+
+/**
+ * Bakes a lit view into the direct-lighting caches (see the Rust docs of
+ * DirectLightingInjectionTask).
+ */
+typedef struct HrtDirectLightingInjectionTask {
+  struct HrtDepthInput depth;
+  /**
+   * The lit frame (RGB radiance), read-only layout, SAMPLED usage.
+   */
+  struct HrtImageInput lit;
+  struct HrtViewport viewport;
+  struct HrtCamera camera;
+  /**
+   * Frames of the running average, >= 1. Default 200.
+   */
+  float average_window;
+  /**
+   * Default false (injection always uses the ray-tracing pipeline).
+   */
+  bool use_inline_rt;
+} HrtDirectLightingInjectionTask;
+
+typedef uint64_t HrtInstanceHandle;
+
+/**
+ * Resets an instance's cache to its initial colour.
+ */
+typedef struct HrtClearCacheTask {
+  HrtInstanceHandle instance;
+} HrtClearCacheTask;
+
+/**
+ * Copies one instance's cached lighting onto another covering the same surface (LODs).
+ */
+typedef struct HrtDirectLightTransferTask {
+  HrtInstanceHandle source;
+  HrtInstanceHandle target;
+  /**
+   * World-space distance the two surfaces may be apart (> 0). Default 0.1.
+   */
+  float max_distance;
+  /**
+   * Default true.
+   */
+  bool enable_bilinear_sampling;
+} HrtDirectLightTransferTask;
+
+/**
+ * The direct-lighting caches' memory under HrtInitSettings.cache_budget_bytes.
+ */
+typedef struct HrtCacheReport {
+  /**
+   * Bytes of the caches held now.
+   */
+  uint64_t resident_bytes;
+  /**
+   * The budget (0: none).
+   */
+  uint64_t budget_bytes;
+  /**
+   * Placed instances without a cache (evicted, or waiting for room): they read as their
+   * initial colour until used.
+   */
+  uint32_t waiting_instances;
+  /**
+   * Caches evicted since the context was made, and their bytes.
+   */
+  uint64_t evictions;
+  uint64_t evicted_bytes;
+  /**
+   * Geometry bytes copied to the host to size surfel layouts (0 unless a mesh was too big
+   * for the GPU layout passes).
+   */
+  uint64_t geometry_readback_bytes;
+} HrtCacheReport;
+
 /**
  * Receives one message (NUL-terminated, valid only during the call).
  */
@@ -412,9 +512,327 @@ typedef struct HrtContextDesc {
   struct HrtInitSettings settings;
 } HrtContextDesc;
 
+typedef uint64_t HrtTicket;
+
+/**
+ * What an HrtTaskTiming measured: one of the HRT_TASK_* values.
+ */
+typedef uint32_t HrtTaskKind;
+
+/**
+ * One timed task of a ticket (hrt_mark_gpu_task_completed).
+ */
+typedef struct HrtTaskTiming {
+  HrtTaskKind kind;
+  uint32_t task_index;
+  double gpu_ms;
+  /**
+   * The label the task was given (hrt_task_container_set_task_label); for HRT_TASK_BVH,
+   * HRT_TASK_BLAS_BUILD and HRT_TASK_TLAS_BUILD the first BVH task's, none for
+   * HRT_TASK_CACHE_UPDATE. NUL-terminated, cut to at most HRT_TASK_LABEL_CAPACITY - 1 bytes
+   * at a UTF-8 character boundary; all zero when the task has no label.
+   */
+  char label[HRT_TASK_LABEL_CAPACITY];
+} HrtTaskTiming;
+
+typedef struct HrtAllocationCount {
+  uint64_t count;
+  uint64_t bytes;
+} HrtAllocationCount;
+
+typedef struct HrtResourceAllocations {
+  struct HrtAllocationCount geometry_copies;
+  struct HrtAllocationCount blas;
+  struct HrtAllocationCount build_scratch;
+  struct HrtAllocationCount tlas;
+  struct HrtAllocationCount upload_rings;
+  struct HrtAllocationCount pipelines;
+  struct HrtAllocationCount cache;
+  struct HrtAllocationCount readback;
+  /**
+   * Denoising contexts' history images.
+   */
+  struct HrtAllocationCount denoiser;
+} HrtResourceAllocations;
+
+typedef struct HrtNormalInput {
+  struct HrtImageInput image;
+  /**
+   * An HrtNormalType. Default HRT_NORMAL_RGB_NORMALIZED_VECTOR.
+   */
+  uint32_t normal_type;
+  /**
+   * An HrtNormalSpace. Default HRT_NORMAL_SPACE_WORLD.
+   */
+  uint32_t space;
+  /**
+   * HRT_NORMAL_SPACE_CUSTOM: column-major 3x3 to world space. Default identity.
+   */
+  float normal_to_world[9];
+} HrtNormalInput;
+
+/**
+ * Roughness: clamp(global_roughness * dot(texel, channel_mask), min_roughness, max_roughness)
+ * with an image (image != 0), clamp(global_roughness, min, max) without.
+ */
+typedef struct HrtRoughnessInput {
+  /**
+   * Optional (image = VK_NULL_HANDLE for none).
+   */
+  struct HrtImageInput image;
+  /**
+   * Default {1, 0, 0, 0}.
+   */
+  float channel_mask[4];
+  /**
+   * The multiplier. Default 1.0.
+   */
+  float global_roughness;
+  /**
+   * Default 0.
+   */
+  float min_roughness;
+  /**
+   * Default 1.
+   */
+  float max_roughness;
+} HrtRoughnessInput;
+
+/**
+ * Motion vectors: after `scale`, previous − current. image = VK_NULL_HANDLE: reproject with
+ * the cameras (static scenes only).
+ */
+typedef struct HrtMotionInput {
+  struct HrtImageInput image;
+  /**
+   * An HrtMotionType.
+   */
+  uint32_t motion_type;
+  /**
+   * Default {1, 1, 1}.
+   */
+  float scale[3];
+} HrtMotionInput;
+
+/**
+ * Tuning (see the Rust docs of DenoiserSettings for each default).
+ */
+typedef struct HrtDenoiserSettings {
+  uint32_t max_history_frames;
+  uint32_t fast_history_frames;
+  float history_clamp_sigma;
+  uint32_t spatial_passes;
+  float luminance_sigma;
+  float normal_power;
+  float plane_distance_sigma;
+  bool anti_firefly;
+  float max_shadow_blur_radius;
+  /**
+   * Default true (see DenoiserSettings::anti_lag).
+   */
+  bool anti_lag;
+} HrtDenoiserSettings;
+
+typedef struct HrtDenoisingCommon {
+  struct HrtDepthInput depth;
+  struct HrtNormalInput normals;
+  struct HrtRoughnessInput roughness;
+  /**
+   * Optional: the traces' input mask (R >= 0.5: left out of filtering and history).
+   */
+  struct HrtImageInput input_mask;
+  struct HrtMotionInput motion;
+  struct HrtViewport viewport;
+  struct HrtCamera camera;
+  /**
+   * false (default): the camera of the context's previous task.
+   */
+  bool has_previous_camera;
+  struct HrtCamera previous_camera;
+  /**
+   * Pixels; default {0, 0}.
+   */
+  float camera_jitter[2];
+  /**
+   * The trace ran in checkerboard mode in the same container. Default false.
+   */
+  bool half_resolution_mode;
+  /**
+   * Default false.
+   */
+  bool reset_history;
+  struct HrtDenoiserSettings settings;
+} HrtDenoisingCommon;
+
+typedef struct HrtDenoisingContextInput {
+  /**
+   * 1..=HRT_MAX_DENOISING_EXTENT each.
+   */
+  uint32_t max_width;
+  uint32_t max_height;
+  /**
+   * An HrtDenoisingMethod. Default HRT_DENOISING_TEMPORAL.
+   */
+  uint32_t method;
+  /**
+   * An HrtSignalType. Default HRT_SIGNAL_DIFFUSE.
+   */
+  uint32_t signal;
+} HrtDenoisingContextInput;
+
+typedef uint64_t HrtDenoisingContextHandle;
+
+/**
+ * DenoiseSpecular / DenoiseDiffuse / DenoiseDiffuseOcclusion / DenoiseMultiShadow.
+ */
+typedef struct HrtDenoiseTask {
+  HrtDenoisingContextHandle context;
+  struct HrtDenoisingCommon common;
+  /**
+   * The trace task's output (GENERAL or read-only layout, SAMPLED usage).
+   */
+  struct HrtImageInput input;
+  /**
+   * GENERAL layout, STORAGE usage; may be the input image.
+   */
+  struct HrtImageInput output;
+} HrtDenoiseTask;
+
+/**
+ * A light (see the Rust docs of LightInfo).
+ */
+typedef struct HrtLightInfo {
+  /**
+   * An HrtLightType. Default HRT_LIGHT_DIRECTIONAL.
+   */
+  uint32_t light_type;
+  float position[3];
+  /**
+   * The direction the light travels. Default (0, -1, 0).
+   */
+  float direction[3];
+  /**
+   * Directional: apparent diameter in radians. Default 0 (hard).
+   */
+  float angular_extent;
+  /**
+   * Point/spot: emitter radius. Default 0 (hard).
+   */
+  float radius;
+  /**
+   * Spot: full strength inside this half-angle (radians). Default 0.5.
+   */
+  float inner_cone;
+  /**
+   * Spot: unlit outside this half-angle (< pi/2). Default 0.6.
+   */
+  float outer_cone;
+  /**
+   * Point/spot: influence ends at this distance; 0 = unlimited (default).
+   */
+  float range;
+  /**
+   * Weight in the multi-light mean (>= 0); HrtRelightCacheTask's brightness. Default 1.
+   */
+  float intensity;
+  /**
+   * Linear RGB (each >= 0), used by HrtRelightCacheTask. Default white.
+   */
+  float color[3];
+} HrtLightInfo;
+
+typedef struct HrtDenoiseShadowTask {
+  HrtDenoisingContextHandle context;
+  struct HrtDenoisingCommon common;
+  /**
+   * The light that was traced.
+   */
+  struct HrtLightInfo light;
+  struct HrtImageInput input;
+  struct HrtImageInput output;
+} HrtDenoiseShadowTask;
+
+typedef struct HrtDenoiseSpecularAndDiffuseTask {
+  HrtDenoisingContextHandle context;
+  struct HrtDenoisingCommon common;
+  struct HrtImageInput input_specular;
+  struct HrtImageInput input_diffuse;
+  struct HrtImageInput output_specular;
+  struct HrtImageInput output_diffuse;
+} HrtDenoiseSpecularAndDiffuseTask;
+
+/**
+ * Lights cache samples no camera has injected from the engine's lights, with shadow rays:
+ * albedo (HrtInstanceInput.albedo x the geometry's colors and albedo_texture, where given) x
+ * the lights' irradiance (intensity x color; directional: irradiance at normal incidence,
+ * point/spot: / d²) + HrtInstanceInput.emission. The lights are copied when the task is
+ * scheduled.
+ */
+typedef struct HrtRelightCacheTask {
+  const struct HrtLightInfo *lights;
+  /**
+   * 1..=HRT_MAX_SHADOW_LIGHTS.
+   */
+  uint32_t light_count;
+  /**
+   * Samples relit per build, at most (1..=HRT_MAX_RELIGHT_SAMPLES). Default 65536.
+   */
+  uint32_t max_samples;
+  /**
+   * Frames a relit sample's average runs over (1..=1024). Default 16.
+   */
+  uint32_t history_frames;
+  /**
+   * Gather one diffuse bounce from the caches (multi-bounce over builds). Default false.
+   */
+  bool bounce;
+  /**
+   * Radiance of bounce rays that leave the scene (each >= 0). Default black.
+   */
+  float sky[3];
+} HrtRelightCacheTask;
+
 typedef uint64_t HrtGeometryHandle;
 
-typedef uint64_t HrtInstanceHandle;
+typedef struct HrtInstanceInput {
+  HrtGeometryHandle geometry;
+  /**
+   * Object to world, row-major 3x4. Default identity.
+   */
+  float transform[12];
+  /**
+   * HRT_MASK_* bits. Default HRT_MASK_ALL.
+   */
+  uint32_t mask;
+  /**
+   * Default black.
+   */
+  float initial_tile_color[3];
+  /**
+   * Diffuse albedo for HrtRelightCacheTask and hit lighting (each 0..=1). Default 0.5 grey.
+   */
+  float albedo[3];
+  /**
+   * Emitted radiance relighting and hit lighting add (each finite, >= 0). Default black.
+   */
+  float emission[3];
+} HrtInstanceInput;
+
+typedef struct HrtInstanceTask {
+  HrtInstanceHandle handle;
+  /**
+   * An HrtInstanceOperation.
+   */
+  uint32_t operation;
+  struct HrtInstanceInput input;
+} HrtInstanceTask;
+
+typedef struct HrtBvhBuildTask {
+  /**
+   * Default 4.
+   */
+  uint32_t max_blas_build_count;
+} HrtBvhBuildTask;
 
 typedef struct HrtVertexBufferInput {
   /**
@@ -445,43 +863,6 @@ typedef struct HrtIndexBufferInput {
    */
   VkFormat format;
 } HrtIndexBufferInput;
-
-typedef struct HrtImageInput {
-  VkImage image;
-  VkImageView view;
-  VkFormat format;
-  uint32_t width;
-  uint32_t height;
-  /**
-   * Inputs: VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL (default) or another read-only layout;
-   * outputs: VK_IMAGE_LAYOUT_GENERAL.
-   */
-  VkImageLayout layout;
-  /**
-   * The VkImageUsageFlags the image was created with (required: inputs need
-   * VK_IMAGE_USAGE_SAMPLED_BIT, outputs VK_IMAGE_USAGE_STORAGE_BIT; 0 is refused).
-   */
-  uint32_t usage;
-} HrtImageInput;
-
-/**
- * Alpha testing of a geometry (see the Rust docs of AlphaTestInput): rays pass where the
- * texture's `channel` at the hit's texture coordinates is below `cutoff`.
- */
-typedef struct HrtAlphaTestInput {
-  /**
-   * SAMPLED usage, read-only layout while the registering ticket runs.
-   */
-  struct HrtImageInput texture;
-  /**
-   * 0..=3. Default 3 (A).
-   */
-  uint32_t channel;
-  /**
-   * Default 0.5.
-   */
-  float cutoff;
-} HrtAlphaTestInput;
 
 /**
  * One part of a geometry (GeometryComponent): a vertex/index buffer pair, an optional
@@ -515,6 +896,25 @@ typedef struct HrtGeometryComponent {
   bool has_colors;
   struct HrtVertexBufferInput colors;
 } HrtGeometryComponent;
+
+/**
+ * Alpha testing of a geometry (see the Rust docs of AlphaTestInput): rays pass where the
+ * texture's `channel` at the hit's texture coordinates is below `cutoff`.
+ */
+typedef struct HrtAlphaTestInput {
+  /**
+   * SAMPLED usage, read-only layout while the registering ticket runs.
+   */
+  struct HrtImageInput texture;
+  /**
+   * 0..=3. Default 3 (A).
+   */
+  uint32_t channel;
+  /**
+   * Default 0.5.
+   */
+  float cutoff;
+} HrtAlphaTestInput;
 
 typedef struct HrtSurfelSettings {
   /**
@@ -601,93 +1001,6 @@ typedef struct HrtGeometryTask {
   struct HrtGeometryInput input;
 } HrtGeometryTask;
 
-typedef struct HrtInstanceInput {
-  HrtGeometryHandle geometry;
-  /**
-   * Object to world, row-major 3x4. Default identity.
-   */
-  float transform[12];
-  /**
-   * HRT_MASK_* bits. Default HRT_MASK_ALL.
-   */
-  uint32_t mask;
-  /**
-   * Default black.
-   */
-  float initial_tile_color[3];
-  /**
-   * Diffuse albedo for HrtRelightCacheTask and hit lighting (each 0..=1). Default 0.5 grey.
-   */
-  float albedo[3];
-  /**
-   * Emitted radiance relighting and hit lighting add (each finite, >= 0). Default black.
-   */
-  float emission[3];
-} HrtInstanceInput;
-
-typedef struct HrtInstanceTask {
-  HrtInstanceHandle handle;
-  /**
-   * An HrtInstanceOperation.
-   */
-  uint32_t operation;
-  struct HrtInstanceInput input;
-} HrtInstanceTask;
-
-typedef struct HrtBvhBuildTask {
-  /**
-   * Default 4.
-   */
-  uint32_t max_blas_build_count;
-} HrtBvhBuildTask;
-
-typedef struct HrtDepthInput {
-  struct HrtImageInput image;
-  /**
-   * An HrtDepthType. Default HRT_DEPTH_CLIP_SPACE.
-   */
-  uint32_t depth_type;
-} HrtDepthInput;
-
-typedef struct HrtNormalInput {
-  struct HrtImageInput image;
-  /**
-   * An HrtNormalType. Default HRT_NORMAL_RGB_NORMALIZED_VECTOR.
-   */
-  uint32_t normal_type;
-  /**
-   * An HrtNormalSpace. Default HRT_NORMAL_SPACE_WORLD.
-   */
-  uint32_t space;
-  /**
-   * HRT_NORMAL_SPACE_CUSTOM: column-major 3x3 to world space. Default identity.
-   */
-  float normal_to_world[9];
-} HrtNormalInput;
-
-typedef struct HrtViewport {
-  uint32_t x;
-  uint32_t y;
-  uint32_t width;
-  uint32_t height;
-  /**
-   * 0 and 0 mean 0..1.
-   */
-  float min_depth;
-  float max_depth;
-} HrtViewport;
-
-typedef struct HrtCamera {
-  /**
-   * Column-major.
-   */
-  float world_to_view[16];
-  /**
-   * Column-major, Vulkan clip space (y down, depth 0..1, standard or reversed).
-   */
-  float view_to_clip[16];
-} HrtCamera;
-
 typedef struct HrtRayOffset {
   /**
    * An HrtRayOffsetType. Default HRT_RAY_OFFSET_CAMERA_DISTANCE.
@@ -700,33 +1013,6 @@ typedef struct HrtRayOffset {
   float cam_linear;
   float cam_quadratic;
 } HrtRayOffset;
-
-/**
- * Roughness: clamp(global_roughness * dot(texel, channel_mask), min_roughness, max_roughness)
- * with an image (image != 0), clamp(global_roughness, min, max) without.
- */
-typedef struct HrtRoughnessInput {
-  /**
-   * Optional (image = VK_NULL_HANDLE for none).
-   */
-  struct HrtImageInput image;
-  /**
-   * Default {1, 0, 0, 0}.
-   */
-  float channel_mask[4];
-  /**
-   * The multiplier. Default 1.0.
-   */
-  float global_roughness;
-  /**
-   * Default 0.
-   */
-  float min_roughness;
-  /**
-   * Default 1.
-   */
-  float max_roughness;
-} HrtRoughnessInput;
 
 /**
  * Specular colour: global_metalness * image.rgb (image != 0), global_metalness without.
@@ -794,144 +1080,6 @@ typedef struct HrtTraceAmbientOcclusionTask {
    */
   float falloff_power;
 } HrtTraceAmbientOcclusionTask;
-
-typedef uint64_t HrtTicket;
-
-typedef struct HrtTaskTiming {
-  enum HrtTaskKind kind;
-  uint32_t task_index;
-  double gpu_ms;
-} HrtTaskTiming;
-
-typedef struct HrtAllocationCount {
-  uint64_t count;
-  uint64_t bytes;
-} HrtAllocationCount;
-
-typedef struct HrtResourceAllocations {
-  struct HrtAllocationCount geometry_copies;
-  struct HrtAllocationCount blas;
-  struct HrtAllocationCount build_scratch;
-  struct HrtAllocationCount tlas;
-  struct HrtAllocationCount upload_rings;
-  struct HrtAllocationCount pipelines;
-  struct HrtAllocationCount cache;
-  struct HrtAllocationCount readback;
-  /**
-   * Denoising contexts' history images.
-   */
-  struct HrtAllocationCount denoiser;
-} HrtResourceAllocations;
-
-/**
- * Bakes a lit view into the direct-lighting caches (see the Rust docs of
- * DirectLightingInjectionTask).
- */
-typedef struct HrtDirectLightingInjectionTask {
-  struct HrtDepthInput depth;
-  /**
-   * The lit frame (RGB radiance), read-only layout, SAMPLED usage.
-   */
-  struct HrtImageInput lit;
-  struct HrtViewport viewport;
-  struct HrtCamera camera;
-  /**
-   * Frames of the running average, >= 1. Default 200.
-   */
-  float average_window;
-  /**
-   * Default false (injection always uses the ray-tracing pipeline).
-   */
-  bool use_inline_rt;
-} HrtDirectLightingInjectionTask;
-
-/**
- * Resets an instance's cache to its initial colour.
- */
-typedef struct HrtClearCacheTask {
-  HrtInstanceHandle instance;
-} HrtClearCacheTask;
-
-/**
- * Copies one instance's cached lighting onto another covering the same surface (LODs).
- */
-typedef struct HrtDirectLightTransferTask {
-  HrtInstanceHandle source;
-  HrtInstanceHandle target;
-  /**
-   * World-space distance the two surfaces may be apart (> 0). Default 0.1.
-   */
-  float max_distance;
-  /**
-   * Default true.
-   */
-  bool enable_bilinear_sampling;
-} HrtDirectLightTransferTask;
-
-/**
- * A light (see the Rust docs of LightInfo).
- */
-typedef struct HrtLightInfo {
-  /**
-   * An HrtLightType. Default HRT_LIGHT_DIRECTIONAL.
-   */
-  uint32_t light_type;
-  float position[3];
-  /**
-   * The direction the light travels. Default (0, -1, 0).
-   */
-  float direction[3];
-  /**
-   * Directional: apparent diameter in radians. Default 0 (hard).
-   */
-  float angular_extent;
-  /**
-   * Point/spot: emitter radius. Default 0 (hard).
-   */
-  float radius;
-  /**
-   * Spot: full strength inside this half-angle (radians). Default 0.5.
-   */
-  float inner_cone;
-  /**
-   * Spot: unlit outside this half-angle (< pi/2). Default 0.6.
-   */
-  float outer_cone;
-  /**
-   * Point/spot: influence ends at this distance; 0 = unlimited (default).
-   */
-  float range;
-  /**
-   * Weight in the multi-light mean (>= 0); HrtRelightCacheTask's brightness. Default 1.
-   */
-  float intensity;
-  /**
-   * Linear RGB (each >= 0), used by HrtRelightCacheTask. Default white.
-   */
-  float color[3];
-} HrtLightInfo;
-
-/**
- * Shadows from one light: R = closest occluder distance, negative where visible; G (if
- * present) = fraction of rays that reached the light.
- */
-typedef struct HrtTraceShadowTask {
-  struct HrtTraceCommon common;
-  struct HrtLightInfo light;
-  /**
-   * GENERAL layout, STORAGE usage, a float format.
-   */
-  struct HrtImageInput output;
-  /**
-   * 1..=64. Default 1.
-   */
-  uint32_t rays_per_pixel;
-  /**
-   * Stop at the first occluder found (R is then an occluder's distance, >= the closest).
-   * Default false.
-   */
-  bool first_hit;
-} HrtTraceShadowTask;
 
 /**
  * A lat-long environment map for rays that miss (see the Rust docs of EnvironmentInput):
@@ -1050,6 +1198,28 @@ typedef struct HrtTraceSpecularTask {
 } HrtTraceSpecularTask;
 
 /**
+ * Shadows from one light: R = closest occluder distance, negative where visible; G (if
+ * present) = fraction of rays that reached the light.
+ */
+typedef struct HrtTraceShadowTask {
+  struct HrtTraceCommon common;
+  struct HrtLightInfo light;
+  /**
+   * GENERAL layout, STORAGE usage, a float format.
+   */
+  struct HrtImageInput output;
+  /**
+   * 1..=64. Default 1.
+   */
+  uint32_t rays_per_pixel;
+  /**
+   * Stop at the first occluder found (R is then an occluder's distance, >= the closest).
+   * Default false.
+   */
+  bool first_hit;
+} HrtTraceShadowTask;
+
+/**
  * One light of an HrtTraceMultiShadowTask written on its own, in HrtTraceShadowTask's output
  * format (for a DenoiseShadow task).
  */
@@ -1099,189 +1269,81 @@ typedef struct HrtTraceMultiShadowTask {
   bool first_hit;
 } HrtTraceMultiShadowTask;
 
-/**
- * Motion vectors: after `scale`, previous − current. image = VK_NULL_HANDLE: reproject with
- * the cameras (static scenes only).
- */
-typedef struct HrtMotionInput {
-  struct HrtImageInput image;
-  /**
-   * An HrtMotionType.
-   */
-  uint32_t motion_type;
-  /**
-   * Default {1, 1, 1}.
-   */
-  float scale[3];
-} HrtMotionInput;
+#define HRT_TASK_DIRECT_LIGHTING_INJECTION 4
+
+#define HRT_TASK_CACHE_UPDATE 5
+
+#define HRT_TASK_CACHE_TRANSFER 6
+
+#define HRT_TASK_DENOISE_SPECULAR 11
+
+#define HRT_TASK_DENOISE_DIFFUSE 12
+
+#define HRT_TASK_DENOISE_SPECULAR_AND_DIFFUSE 13
+
+#define HRT_TASK_DENOISE_DIFFUSE_OCCLUSION 14
+
+#define HRT_TASK_DENOISE_SHADOW 15
+
+#define HRT_TASK_DENOISE_MULTI_SHADOW 16
+
+#define HRT_TASK_CACHE_RELIGHT 17
 
 /**
- * Tuning (see the Rust docs of DenoiserSettings for each default).
+ * All BVH work of the ticket.
  */
-typedef struct HrtDenoiserSettings {
-  uint32_t max_history_frames;
-  uint32_t fast_history_frames;
-  float history_clamp_sigma;
-  uint32_t spatial_passes;
-  float luminance_sigma;
-  float normal_power;
-  float plane_distance_sigma;
-  bool anti_firefly;
-  float max_shadow_blur_radius;
-  /**
-   * Default true (see DenoiserSettings::anti_lag).
-   */
-  bool anti_lag;
-} HrtDenoiserSettings;
-
-typedef struct HrtDenoisingCommon {
-  struct HrtDepthInput depth;
-  struct HrtNormalInput normals;
-  struct HrtRoughnessInput roughness;
-  /**
-   * Optional: the traces' input mask (R >= 0.5: left out of filtering and history).
-   */
-  struct HrtImageInput input_mask;
-  struct HrtMotionInput motion;
-  struct HrtViewport viewport;
-  struct HrtCamera camera;
-  /**
-   * false (default): the camera of the context's previous task.
-   */
-  bool has_previous_camera;
-  struct HrtCamera previous_camera;
-  /**
-   * Pixels; default {0, 0}.
-   */
-  float camera_jitter[2];
-  /**
-   * The trace ran in checkerboard mode in the same container. Default false.
-   */
-  bool half_resolution_mode;
-  /**
-   * Default false.
-   */
-  bool reset_history;
-  struct HrtDenoiserSettings settings;
-} HrtDenoisingCommon;
-
-typedef struct HrtDenoisingContextInput {
-  /**
-   * 1..=HRT_MAX_DENOISING_EXTENT each.
-   */
-  uint32_t max_width;
-  uint32_t max_height;
-  /**
-   * An HrtDenoisingMethod. Default HRT_DENOISING_TEMPORAL.
-   */
-  uint32_t method;
-  /**
-   * An HrtSignalType. Default HRT_SIGNAL_DIFFUSE.
-   */
-  uint32_t signal;
-} HrtDenoisingContextInput;
-
-typedef uint64_t HrtDenoisingContextHandle;
+#define HRT_TASK_BVH 0
 
 /**
- * DenoiseSpecular / DenoiseDiffuse / DenoiseDiffuseOcclusion / DenoiseMultiShadow.
+ * Inside HRT_TASK_BVH: batched BLAS builds, refits and compactions.
  */
-typedef struct HrtDenoiseTask {
-  HrtDenoisingContextHandle context;
-  struct HrtDenoisingCommon common;
-  /**
-   * The trace task's output (GENERAL or read-only layout, SAMPLED usage).
-   */
-  struct HrtImageInput input;
-  /**
-   * GENERAL layout, STORAGE usage; may be the input image.
-   */
-  struct HrtImageInput output;
-} HrtDenoiseTask;
-
-typedef struct HrtDenoiseShadowTask {
-  HrtDenoisingContextHandle context;
-  struct HrtDenoisingCommon common;
-  /**
-   * The light that was traced.
-   */
-  struct HrtLightInfo light;
-  struct HrtImageInput input;
-  struct HrtImageInput output;
-} HrtDenoiseShadowTask;
-
-typedef struct HrtDenoiseSpecularAndDiffuseTask {
-  HrtDenoisingContextHandle context;
-  struct HrtDenoisingCommon common;
-  struct HrtImageInput input_specular;
-  struct HrtImageInput input_diffuse;
-  struct HrtImageInput output_specular;
-  struct HrtImageInput output_diffuse;
-} HrtDenoiseSpecularAndDiffuseTask;
+#define HRT_TASK_BLAS_BUILD 2
 
 /**
- * Lights cache samples no camera has injected from the engine's lights, with shadow rays:
- * albedo (HrtInstanceInput.albedo x the geometry's colors and albedo_texture, where given) x
- * the lights' irradiance (intensity x color; directional: irradiance at normal incidence,
- * point/spot: / d²) + HrtInstanceInput.emission. The lights are copied when the task is
- * scheduled.
+ * Inside HRT_TASK_BVH: the TLAS build.
  */
-typedef struct HrtRelightCacheTask {
-  const struct HrtLightInfo *lights;
-  /**
-   * 1..=HRT_MAX_SHADOW_LIGHTS.
-   */
-  uint32_t light_count;
-  /**
-   * Samples relit per build, at most (1..=HRT_MAX_RELIGHT_SAMPLES). Default 65536.
-   */
-  uint32_t max_samples;
-  /**
-   * Frames a relit sample's average runs over (1..=1024). Default 16.
-   */
-  uint32_t history_frames;
-  /**
-   * Gather one diffuse bounce from the caches (multi-bounce over builds). Default false.
-   */
-  bool bounce;
-  /**
-   * Radiance of bounce rays that leave the scene (each >= 0). Default black.
-   */
-  float sky[3];
-} HrtRelightCacheTask;
+#define HRT_TASK_TLAS_BUILD 3
 
-/**
- * The direct-lighting caches' memory under HrtInitSettings.cache_budget_bytes.
- */
-typedef struct HrtCacheReport {
-  /**
-   * Bytes of the caches held now.
-   */
-  uint64_t resident_bytes;
-  /**
-   * The budget (0: none).
-   */
-  uint64_t budget_bytes;
-  /**
-   * Placed instances without a cache (evicted, or waiting for room): they read as their
-   * initial colour until used.
-   */
-  uint32_t waiting_instances;
-  /**
-   * Caches evicted since the context was made, and their bytes.
-   */
-  uint64_t evictions;
-  uint64_t evicted_bytes;
-  /**
-   * Geometry bytes copied to the host to size surfel layouts (0 unless a mesh was too big
-   * for the GPU layout passes).
-   */
-  uint64_t geometry_readback_bytes;
-} HrtCacheReport;
+#define HRT_TASK_AMBIENT_OCCLUSION 1
+
+#define HRT_TASK_DIFFUSE 8
+
+#define HRT_TASK_SPECULAR 9
+
+#define HRT_TASK_SHADOW 7
+
+#define HRT_TASK_MULTI_SHADOW 10
 
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
+
+struct HrtDirectLightingInjectionTask hrt_direct_lighting_injection_task_default(void);
+
+enum HrtStatus hrt_schedule_direct_lighting_injection(struct HrtTaskContainer *container,
+                                                      const struct HrtDirectLightingInjectionTask *task);
+
+enum HrtStatus hrt_schedule_clear_cache(struct HrtTaskContainer *container,
+                                        const struct HrtClearCacheTask *task);
+
+struct HrtDirectLightTransferTask hrt_direct_light_transfer_task_default(void);
+
+enum HrtStatus hrt_schedule_direct_light_transfer(struct HrtTaskContainer *container,
+                                                  const struct HrtDirectLightTransferTask *task);
+
+/**
+ * Bytes of an instance's direct-lighting cache (0 until allocated, one recording after the
+ * ticket that registered its geometry came back).
+ */
+enum HrtStatus hrt_instance_cache_bytes(const struct HrtContext *ctx,
+                                        HrtInstanceHandle instance,
+                                        uint64_t *bytes);
+
+/**
+ * # Safety
+ * `ctx` from hrt_context_create; `out` writable.
+ */
+enum HrtStatus hrt_cache_report(const struct HrtContext *ctx, struct HrtCacheReport *out);
 
 /**
  * Writes the library version.
@@ -1302,6 +1364,107 @@ uint32_t hrt_last_error_message(char *buffer, uint32_t capacity);
 bool hrt_set_log_callback(HrtLogCallback callback,
                           enum HrtLogSeverity min_severity,
                           void *user_data);
+
+struct HrtInitSettings hrt_init_settings_default(void);
+
+/**
+ * Creates a context from the engine's device. Checks `desc->api_version` against the
+ * library, and the device against the SDK's needs (HRT_ERROR_MISSING_DEVICE_SUPPORT names
+ * what is missing).
+ */
+enum HrtStatus hrt_context_create(const struct HrtContextDesc *desc, struct HrtContext **out);
+
+/**
+ * Destroys a context (NULL is ignored: HRT_OK). While the GPU may still run one of its
+ * tickets' command buffers it refuses with HRT_ERROR_TICKETS_IN_FLIGHT and the context stays
+ * valid: wait for the fences, hand the tickets back, destroy again. Destroy containers first
+ * or after, in any order. Destroying it twice, or any call on it afterwards, is
+ * HRT_ERROR_INVALID_HANDLE.
+ */
+enum HrtStatus hrt_context_destroy(struct HrtContext *ctx);
+
+bool hrt_supports_inline_rt(const struct HrtContext *ctx);
+
+/**
+ * The device's name (NUL-terminated, truncated to `capacity`). Returns its full length.
+ */
+uint32_t hrt_device_name(const struct HrtContext *ctx, char *buffer, uint32_t capacity);
+
+enum HrtStatus hrt_release_device_resources_immediately(struct HrtContext *ctx);
+
+enum HrtStatus hrt_task_container_create(struct HrtContext *ctx, struct HrtTaskContainer **out);
+
+/**
+ * Destroys a container (NULL is ignored: HRT_OK); twice is HRT_ERROR_INVALID_HANDLE.
+ */
+enum HrtStatus hrt_task_container_destroy(struct HrtTaskContainer *container);
+
+/**
+ * Tasks scheduled and not yet built.
+ */
+uint32_t hrt_task_container_len(const struct HrtTaskContainer *container);
+
+void hrt_task_container_clear(struct HrtTaskContainer *container);
+
+/**
+ * The frame number of the next build of `container`: it seeds the random sequences and picks
+ * the checkerboard half (same index + same inputs = same image). Applies to the next
+ * successful build only; without it the ticket serial is used.
+ */
+enum HrtStatus hrt_task_container_set_frame_index(struct HrtTaskContainer *container,
+                                                  uint64_t frame_index);
+
+/**
+ * Names the task scheduled last in `container` (NUL-terminated UTF-8, copied; invalid bytes
+ * become U+FFFD): its region in the command buffer carries the label (with debug_utils on, as
+ * RenderDoc and Nsight show it), and so do its timings (HrtTaskTiming.label). A second label
+ * for the same task replaces the first. An empty container is HRT_ERROR_INVALID_INPUT, a NULL
+ * label HRT_ERROR_NULL_POINTER.
+ */
+enum HrtStatus hrt_task_container_set_task_label(struct HrtTaskContainer *container,
+                                                 const char *label);
+
+/**
+ * Records the container into `command_buffer` (begun by the engine, which also ends, submits
+ * and waits for it) and writes a ticket. On success the container is emptied; on error it
+ * keeps its tasks and nothing usable was recorded.
+ */
+enum HrtStatus hrt_build_gpu_task(struct HrtContext *ctx,
+                                  struct HrtTaskContainer *container,
+                                  VkCommandBuffer command_buffer,
+                                  HrtTicket *ticket);
+
+/**
+ * Hands a ticket back after the GPU finished its command buffer. Writes up to `capacity`
+ * per-task timings and their total number to `timing_count` (both optional). A ticket
+ * returned twice or never issued is HRT_ERROR_UNKNOWN_TICKET.
+ */
+enum HrtStatus hrt_mark_gpu_task_completed(struct HrtContext *ctx,
+                                           HrtTicket ticket,
+                                           struct HrtTaskTiming *timings,
+                                           uint32_t capacity,
+                                           uint32_t *timing_count);
+
+/**
+ * Serials of the tickets built and not yet handed back: writes up to `capacity` and the total
+ * to `count`.
+ */
+enum HrtStatus hrt_tickets_in_flight(const struct HrtContext *ctx,
+                                     uint64_t *serials,
+                                     uint32_t capacity,
+                                     uint32_t *count);
+
+/**
+ * Tickets in flight whose command buffers the GPU has not run to the end (what must finish
+ * before hrt_context_destroy succeeds); same conventions as hrt_tickets_in_flight.
+ */
+enum HrtStatus hrt_unfinished_tickets(const struct HrtContext *ctx,
+                                      uint64_t *serials,
+                                      uint32_t capacity,
+                                      uint32_t *count);
+
+enum HrtStatus hrt_resource_allocations(const struct HrtContext *ctx,
+                                        struct HrtResourceAllocations *out);
 
 /**
  * The SDK's device features (rayQuery too when `ray_query`), to enable with
@@ -1353,229 +1516,6 @@ enum HrtStatus hrt_query_device_support(PFN_vkGetInstanceProcAddr get_instance_p
                                         char *missing,
                                         uint32_t missing_capacity);
 
-struct HrtInitSettings hrt_init_settings_default(void);
-
-/**
- * Creates a context from the engine's device. Checks `desc->api_version` against the
- * library, and the device against the SDK's needs (HRT_ERROR_MISSING_DEVICE_SUPPORT names
- * what is missing).
- */
-enum HrtStatus hrt_context_create(const struct HrtContextDesc *desc, struct HrtContext **out);
-
-/**
- * Destroys a context (NULL is ignored: HRT_OK). While the GPU may still run one of its
- * tickets' command buffers it refuses with HRT_ERROR_TICKETS_IN_FLIGHT and the context stays
- * valid: wait for the fences, hand the tickets back, destroy again. Destroy containers first
- * or after, in any order. Destroying it twice, or any call on it afterwards, is
- * HRT_ERROR_INVALID_HANDLE.
- */
-enum HrtStatus hrt_context_destroy(struct HrtContext *ctx);
-
-bool hrt_supports_inline_rt(const struct HrtContext *ctx);
-
-enum HrtStatus hrt_create_geometry_handles(struct HrtContext *ctx,
-                                           uint32_t count,
-                                           HrtGeometryHandle *out);
-
-enum HrtStatus hrt_destroy_geometry_handles(struct HrtContext *ctx,
-                                            const HrtGeometryHandle *handles,
-                                            uint32_t count);
-
-enum HrtStatus hrt_create_instance_handles(struct HrtContext *ctx,
-                                           uint32_t count,
-                                           HrtInstanceHandle *out);
-
-enum HrtStatus hrt_destroy_instance_handles(struct HrtContext *ctx,
-                                            const HrtInstanceHandle *handles,
-                                            uint32_t count);
-
-enum HrtStatus hrt_destroy_all_instance_handles(struct HrtContext *ctx);
-
-enum HrtStatus hrt_task_container_create(struct HrtContext *ctx, struct HrtTaskContainer **out);
-
-/**
- * Destroys a container (NULL is ignored: HRT_OK); twice is HRT_ERROR_INVALID_HANDLE.
- */
-enum HrtStatus hrt_task_container_destroy(struct HrtTaskContainer *container);
-
-/**
- * Tasks scheduled and not yet built.
- */
-uint32_t hrt_task_container_len(const struct HrtTaskContainer *container);
-
-void hrt_task_container_clear(struct HrtTaskContainer *container);
-
-/**
- * The frame number of the next build of `container`: it seeds the random sequences and picks
- * the checkerboard half (same index + same inputs = same image). Applies to the next
- * successful build only; without it the ticket serial is used.
- */
-enum HrtStatus hrt_task_container_set_frame_index(struct HrtTaskContainer *container,
-                                                  uint64_t frame_index);
-
-struct HrtGeometryTask hrt_geometry_task_default(void);
-
-/**
- * A part for HrtGeometryInput.extra_components with the defaults (identity, all vertices).
- */
-struct HrtGeometryComponent hrt_geometry_component_default(void);
-
-/**
- * The VkBuildAccelerationStructureFlagsKHR a BLAS of `build_hint` (an HrtBuildHint) is built
- * with (see the Rust docs of BuildHint::build_flags): for static or `allow_update` geometry,
- * and for HRT_BUILD_HINT_FAST_THEN_TRACE's first build.
- *
- * # Safety
- * `flags` points to writable memory.
- */
-enum HrtStatus hrt_build_hint_flags(uint32_t build_hint,
-                                    bool allow_update,
-                                    bool first_build,
-                                    uint32_t *flags);
-
-enum HrtStatus hrt_schedule_geometry(struct HrtTaskContainer *container,
-                                     const struct HrtGeometryTask *task);
-
-struct HrtInstanceTask hrt_instance_task_default(void);
-
-enum HrtStatus hrt_schedule_instance(struct HrtTaskContainer *container,
-                                     const struct HrtInstanceTask *task);
-
-struct HrtBvhBuildTask hrt_bvh_build_task_default(void);
-
-enum HrtStatus hrt_schedule_bvh_build(struct HrtTaskContainer *container,
-                                      const struct HrtBvhBuildTask *task);
-
-struct HrtTraceCommon hrt_trace_common_default(void);
-
-struct HrtTraceAmbientOcclusionTask hrt_trace_ambient_occlusion_task_default(void);
-
-enum HrtStatus hrt_schedule_ambient_occlusion(struct HrtTaskContainer *container,
-                                              const struct HrtTraceAmbientOcclusionTask *task);
-
-/**
- * Records the container into `command_buffer` (begun by the engine, which also ends, submits
- * and waits for it) and writes a ticket. On success the container is emptied; on error it
- * keeps its tasks and nothing usable was recorded.
- */
-enum HrtStatus hrt_build_gpu_task(struct HrtContext *ctx,
-                                  struct HrtTaskContainer *container,
-                                  VkCommandBuffer command_buffer,
-                                  HrtTicket *ticket);
-
-/**
- * Hands a ticket back after the GPU finished its command buffer. Writes up to `capacity`
- * per-task timings and their total number to `timing_count` (both optional). A ticket
- * returned twice or never issued is HRT_ERROR_UNKNOWN_TICKET.
- */
-enum HrtStatus hrt_mark_gpu_task_completed(struct HrtContext *ctx,
-                                           HrtTicket ticket,
-                                           struct HrtTaskTiming *timings,
-                                           uint32_t capacity,
-                                           uint32_t *timing_count);
-
-enum HrtStatus hrt_release_device_resources_immediately(struct HrtContext *ctx);
-
-uint32_t hrt_pending_blas_builds(const struct HrtContext *ctx);
-
-uint32_t hrt_tlas_instance_count(const struct HrtContext *ctx);
-
-enum HrtStatus hrt_resource_allocations(const struct HrtContext *ctx,
-                                        struct HrtResourceAllocations *out);
-
-/**
- * Serials of the tickets built and not yet handed back: writes up to `capacity` and the total
- * to `count`.
- */
-enum HrtStatus hrt_tickets_in_flight(const struct HrtContext *ctx,
-                                     uint64_t *serials,
-                                     uint32_t capacity,
-                                     uint32_t *count);
-
-/**
- * Tickets in flight whose command buffers the GPU has not run to the end (what must finish
- * before hrt_context_destroy succeeds); same conventions as hrt_tickets_in_flight.
- */
-enum HrtStatus hrt_unfinished_tickets(const struct HrtContext *ctx,
-                                      uint64_t *serials,
-                                      uint32_t capacity,
-                                      uint32_t *count);
-
-/**
- * The device's name (NUL-terminated, truncated to `capacity`). Returns its full length.
- */
-uint32_t hrt_device_name(const struct HrtContext *ctx, char *buffer, uint32_t capacity);
-
-struct HrtDirectLightingInjectionTask hrt_direct_lighting_injection_task_default(void);
-
-enum HrtStatus hrt_schedule_direct_lighting_injection(struct HrtTaskContainer *container,
-                                                      const struct HrtDirectLightingInjectionTask *task);
-
-enum HrtStatus hrt_schedule_clear_cache(struct HrtTaskContainer *container,
-                                        const struct HrtClearCacheTask *task);
-
-/**
- * Triangles of a geometry's last registered or updated data whose indices reach past its
- * vertex count: the SDK made them degenerate (the driver never sees the bad index) and logged
- * a warning. 0 until the ticket that copied the data has come back.
- */
-enum HrtStatus hrt_geometry_invalid_triangles(const struct HrtContext *ctx,
-                                              HrtGeometryHandle geometry,
-                                              uint32_t *triangles);
-
-/**
- * Gives a geometry a debug name (NUL-terminated, copied): quoted in errors and log messages,
- * and the Vulkan name of its BLAS and copy when debug_utils is on.
- */
-enum HrtStatus hrt_set_geometry_name(const struct HrtContext *ctx,
-                                     HrtGeometryHandle geometry,
-                                     const char *name);
-
-/**
- * Gives an instance a debug name (NUL-terminated, copied), quoted in errors and log messages.
- */
-enum HrtStatus hrt_set_instance_name(const struct HrtContext *ctx,
-                                     HrtInstanceHandle instance,
-                                     const char *name);
-
-/**
- * Bytes of an instance's direct-lighting cache (0 until allocated, one recording after the
- * ticket that registered its geometry came back).
- */
-enum HrtStatus hrt_instance_cache_bytes(const struct HrtContext *ctx,
-                                        HrtInstanceHandle instance,
-                                        uint64_t *bytes);
-
-struct HrtDirectLightTransferTask hrt_direct_light_transfer_task_default(void);
-
-enum HrtStatus hrt_schedule_direct_light_transfer(struct HrtTaskContainer *container,
-                                                  const struct HrtDirectLightTransferTask *task);
-
-struct HrtTraceShadowTask hrt_trace_shadow_task_default(void);
-
-enum HrtStatus hrt_schedule_shadow(struct HrtTaskContainer *container,
-                                   const struct HrtTraceShadowTask *task);
-
-struct HrtTraceDiffuseTask hrt_trace_diffuse_task_default(void);
-
-enum HrtStatus hrt_schedule_diffuse(struct HrtTaskContainer *container,
-                                    const struct HrtTraceDiffuseTask *task);
-
-struct HrtTraceSpecularTask hrt_trace_specular_task_default(void);
-
-/**
- * # Safety
- * `container` from hrt_create_task_container; `task` valid, its `hit_lighting.lights`
- * `hit_lighting.light_count` long (or null with a count of 0).
- */
-enum HrtStatus hrt_schedule_specular(struct HrtTaskContainer *container,
-                                     const struct HrtTraceSpecularTask *task);
-
-struct HrtTraceMultiShadowTask hrt_trace_multi_shadow_task_default(void);
-
-enum HrtStatus hrt_schedule_multi_shadow(struct HrtTaskContainer *container,
-                                         const struct HrtTraceMultiShadowTask *task);
-
 struct HrtDenoisingCommon hrt_denoising_common_default(void);
 
 struct HrtDenoisingContextInput hrt_denoising_context_input_default(void);
@@ -1626,11 +1566,116 @@ struct HrtRelightCacheTask hrt_relight_cache_task_default(void);
 enum HrtStatus hrt_schedule_cache_relight(struct HrtTaskContainer *container,
                                           const struct HrtRelightCacheTask *task);
 
+struct HrtInstanceTask hrt_instance_task_default(void);
+
+enum HrtStatus hrt_schedule_instance(struct HrtTaskContainer *container,
+                                     const struct HrtInstanceTask *task);
+
+struct HrtBvhBuildTask hrt_bvh_build_task_default(void);
+
+enum HrtStatus hrt_schedule_bvh_build(struct HrtTaskContainer *container,
+                                      const struct HrtBvhBuildTask *task);
+
+enum HrtStatus hrt_create_geometry_handles(struct HrtContext *ctx,
+                                           uint32_t count,
+                                           HrtGeometryHandle *out);
+
+enum HrtStatus hrt_destroy_geometry_handles(struct HrtContext *ctx,
+                                            const HrtGeometryHandle *handles,
+                                            uint32_t count);
+
+enum HrtStatus hrt_create_instance_handles(struct HrtContext *ctx,
+                                           uint32_t count,
+                                           HrtInstanceHandle *out);
+
+enum HrtStatus hrt_destroy_instance_handles(struct HrtContext *ctx,
+                                            const HrtInstanceHandle *handles,
+                                            uint32_t count);
+
+enum HrtStatus hrt_destroy_all_instance_handles(struct HrtContext *ctx);
+
+/**
+ * Gives a geometry a debug name (NUL-terminated, copied): quoted in errors and log messages,
+ * and the Vulkan name of its BLAS and copy when debug_utils is on.
+ */
+enum HrtStatus hrt_set_geometry_name(const struct HrtContext *ctx,
+                                     HrtGeometryHandle geometry,
+                                     const char *name);
+
+/**
+ * Gives an instance a debug name (NUL-terminated, copied), quoted in errors and log messages.
+ */
+enum HrtStatus hrt_set_instance_name(const struct HrtContext *ctx,
+                                     HrtInstanceHandle instance,
+                                     const char *name);
+
+uint32_t hrt_pending_blas_builds(const struct HrtContext *ctx);
+
+uint32_t hrt_tlas_instance_count(const struct HrtContext *ctx);
+
+/**
+ * A part for HrtGeometryInput.extra_components with the defaults (identity, all vertices).
+ */
+struct HrtGeometryComponent hrt_geometry_component_default(void);
+
+struct HrtGeometryTask hrt_geometry_task_default(void);
+
+enum HrtStatus hrt_schedule_geometry(struct HrtTaskContainer *container,
+                                     const struct HrtGeometryTask *task);
+
+/**
+ * The VkBuildAccelerationStructureFlagsKHR a BLAS of `build_hint` (an HrtBuildHint) is built
+ * with (see the Rust docs of BuildHint::build_flags): for static or `allow_update` geometry,
+ * and for HRT_BUILD_HINT_FAST_THEN_TRACE's first build.
+ *
+ * # Safety
+ * `flags` points to writable memory.
+ */
+enum HrtStatus hrt_build_hint_flags(uint32_t build_hint,
+                                    bool allow_update,
+                                    bool first_build,
+                                    uint32_t *flags);
+
+/**
+ * Triangles of a geometry's last registered or updated data whose indices reach past its
+ * vertex count: the SDK made them degenerate (the driver never sees the bad index) and logged
+ * a warning. 0 until the ticket that copied the data has come back.
+ */
+enum HrtStatus hrt_geometry_invalid_triangles(const struct HrtContext *ctx,
+                                              HrtGeometryHandle geometry,
+                                              uint32_t *triangles);
+
+struct HrtTraceCommon hrt_trace_common_default(void);
+
+struct HrtTraceAmbientOcclusionTask hrt_trace_ambient_occlusion_task_default(void);
+
+enum HrtStatus hrt_schedule_ambient_occlusion(struct HrtTaskContainer *container,
+                                              const struct HrtTraceAmbientOcclusionTask *task);
+
+struct HrtTraceDiffuseTask hrt_trace_diffuse_task_default(void);
+
+enum HrtStatus hrt_schedule_diffuse(struct HrtTaskContainer *container,
+                                    const struct HrtTraceDiffuseTask *task);
+
+struct HrtTraceSpecularTask hrt_trace_specular_task_default(void);
+
 /**
  * # Safety
- * `ctx` from hrt_context_create; `out` writable.
+ * `container` from hrt_create_task_container; `task` valid, its `hit_lighting.lights`
+ * `hit_lighting.light_count` long (or null with a count of 0).
  */
-enum HrtStatus hrt_cache_report(const struct HrtContext *ctx, struct HrtCacheReport *out);
+enum HrtStatus hrt_schedule_specular(struct HrtTaskContainer *container,
+                                     const struct HrtTraceSpecularTask *task);
+
+struct HrtTraceShadowTask hrt_trace_shadow_task_default(void);
+
+enum HrtStatus hrt_schedule_shadow(struct HrtTaskContainer *container,
+                                   const struct HrtTraceShadowTask *task);
+
+struct HrtTraceMultiShadowTask hrt_trace_multi_shadow_task_default(void);
+
+enum HrtStatus hrt_schedule_multi_shadow(struct HrtTaskContainer *container,
+                                         const struct HrtTraceMultiShadowTask *task);
 
 #ifdef __cplusplus
 }  // extern "C"

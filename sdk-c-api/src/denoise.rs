@@ -1,11 +1,26 @@
-//! Denoising in C: contexts and the six denoise tasks (see the Rust docs of
-//! `hybrid_rt::api::denoising`). Four tasks share one struct, `HrtDenoiseTask` (context,
-//! common, input, output); each has its own schedule function.
-use crate::status::Failure;
-use crate::status::{guard, HrtStatus};
-use crate::types::*;
-use crate::{container_mut, context, get, get_mut, HrtContext, HrtTaskContainer};
+//! Denoising: denoising contexts (the history a signal's denoiser keeps between frames) and
+//! the six denoise tasks (see the Rust docs of `hybrid_rt::api::denoising`). Four tasks share
+//! one struct, `HrtDenoiseTask` (context, common, input, output); each has its own schedule
+//! function.
+use crate::args::{get, get_mut};
+use crate::context::{context, schedule, HrtContext, HrtTaskContainer, HrtTaskKind};
+use crate::image::{image, image_c, HrtImageInput};
+use crate::status::{guard, Failure, HrtStatus};
+use crate::trace::{
+    camera, camera_c, depth, hrt_trace_common_default, hrt_trace_shadow_task_default, light, normals, roughness, viewport,
+    HrtCamera, HrtDepthInput, HrtLightInfo, HrtNormalInput, HrtRoughnessInput, HrtViewport,
+};
 use hybrid_rt as rt;
+
+/// Largest HrtDenoisingContextInput.max_width / max_height.
+pub const HRT_MAX_DENOISING_EXTENT: u32 = 16384;
+
+pub const HRT_TASK_DENOISE_SPECULAR: HrtTaskKind = 11;
+pub const HRT_TASK_DENOISE_DIFFUSE: HrtTaskKind = 12;
+pub const HRT_TASK_DENOISE_SPECULAR_AND_DIFFUSE: HrtTaskKind = 13;
+pub const HRT_TASK_DENOISE_DIFFUSE_OCCLUSION: HrtTaskKind = 14;
+pub const HRT_TASK_DENOISE_SHADOW: HrtTaskKind = 15;
+pub const HRT_TASK_DENOISE_MULTI_SHADOW: HrtTaskKind = 16;
 
 pub type HrtDenoisingContextHandle = u64;
 
@@ -138,28 +153,9 @@ pub struct HrtDenoiseSpecularAndDiffuseTask {
     pub output_diffuse: HrtImageInput,
 }
 
-fn camera(c: &HrtCamera) -> rt::Camera {
-    rt::Camera {
-        world_to_view: glam::Mat4::from_cols_array(&c.world_to_view),
-        view_to_clip: glam::Mat4::from_cols_array(&c.view_to_clip),
-    }
-}
-
-fn camera_c(c: &rt::Camera) -> HrtCamera {
-    HrtCamera { world_to_view: c.world_to_view.to_cols_array(), view_to_clip: c.view_to_clip.to_cols_array() }
-}
-
 fn common(c: &HrtDenoisingCommon) -> Result<rt::DenoisingCommon, Failure> {
-    // The G-buffer fields convert as a trace task's do.
-    let t = trace_common(&HrtTraceCommon {
-        depth: c.depth,
-        normals: c.normals,
-        viewport: c.viewport,
-        camera: c.camera,
-        roughness: c.roughness,
-        input_mask: c.input_mask,
-        ..trace_common_default()
-    })?;
+    // The G-buffer fields convert as a trace task's do (and in its order).
+    let (depth, normals) = (depth(&c.depth)?, normals(&c.normals)?);
     let motion_type = match c.motion.motion_type {
         0 => rt::MotionType::RgViewSpace,
         1 => rt::MotionType::RgClipSpace,
@@ -168,13 +164,13 @@ fn common(c: &HrtDenoisingCommon) -> Result<rt::DenoisingCommon, Failure> {
     };
     let s = &c.settings;
     Ok(rt::DenoisingCommon {
-        depth: t.depth,
-        normals: t.normals,
-        roughness: t.roughness,
-        input_mask: t.input_mask,
+        depth,
+        normals,
+        roughness: roughness(&c.roughness),
+        input_mask: image(&c.input_mask),
         motion: rt::MotionInput { image: image(&c.motion.image), motion_type, scale: c.motion.scale },
-        viewport: t.viewport,
-        camera: t.camera,
+        viewport: viewport(&c.viewport),
+        camera: camera(&c.camera),
         previous_camera: c.has_previous_camera.then(|| camera(&c.previous_camera)),
         camera_jitter: c.camera_jitter,
         half_resolution_mode: c.half_resolution_mode,
@@ -197,7 +193,7 @@ fn common(c: &HrtDenoisingCommon) -> Result<rt::DenoisingCommon, Failure> {
 #[no_mangle]
 pub extern "C" fn hrt_denoising_common_default() -> HrtDenoisingCommon {
     let d = rt::DenoisingCommon::default();
-    let t = trace_common_default();
+    let t = hrt_trace_common_default();
     let s = d.settings;
     HrtDenoisingCommon {
         depth: t.depth,
@@ -292,7 +288,13 @@ pub extern "C" fn hrt_denoise_task_default() -> HrtDenoiseTask {
 #[no_mangle]
 pub extern "C" fn hrt_denoise_shadow_task_default() -> HrtDenoiseShadowTask {
     let t = hrt_denoise_task_default();
-    HrtDenoiseShadowTask { context: 0, common: t.common, light: shadow_task_default().light, input: t.input, output: t.output }
+    HrtDenoiseShadowTask {
+        context: 0,
+        common: t.common,
+        light: hrt_trace_shadow_task_default().light,
+        input: t.input,
+        output: t.output,
+    }
 }
 
 #[no_mangle]
@@ -308,19 +310,19 @@ pub extern "C" fn hrt_denoise_specular_and_diffuse_task_default() -> HrtDenoiseS
     }
 }
 
-/// Converts an HrtDenoiseTask and schedules it with `schedule`.
-unsafe fn schedule_plain<T>(
+/// Converts an HrtDenoiseTask with `make` and schedules it with `schedule`.
+fn schedule_plain<T>(
     container: *mut HrtTaskContainer,
     task: *const HrtDenoiseTask,
     make: impl FnOnce(rt::DenoisingContextHandle, rt::DenoisingCommon, rt::ImageInput, rt::ImageInput) -> T,
-    schedule: impl FnOnce(&mut rt::TaskContainer, &T) -> rt::Result<()>,
+    schedule_task: impl FnOnce(&mut rt::TaskContainer, &T) -> rt::Result<()>,
 ) -> HrtStatus {
-    guard(|| {
-        let c = container_mut(container)?;
-        let t = get(task, "task")?;
-        let task = make(rt::DenoisingContextHandle(t.context), common(&t.common)?, image(&t.input), image(&t.output));
-        Ok(schedule(&mut c.inner, &task)?)
-    })
+    schedule(
+        container,
+        task,
+        |t| Ok(make(rt::DenoisingContextHandle(t.context), common(&t.common)?, image(&t.input), image(&t.output))),
+        schedule_task,
+    )
 }
 
 #[no_mangle]
@@ -380,17 +382,20 @@ pub unsafe extern "C" fn hrt_schedule_denoise_shadow(
     container: *mut HrtTaskContainer,
     task: *const HrtDenoiseShadowTask,
 ) -> HrtStatus {
-    guard(|| {
-        let c = container_mut(container)?;
-        let t = get(task, "task")?;
-        Ok(c.inner.schedule_denoise_shadow(&rt::DenoiseShadowTask {
-            context: rt::DenoisingContextHandle(t.context),
-            common: common(&t.common)?,
-            light: light(&t.light)?,
-            input: image(&t.input),
-            output: image(&t.output),
-        })?)
-    })
+    schedule(
+        container,
+        task,
+        |t| {
+            Ok(rt::DenoiseShadowTask {
+                context: rt::DenoisingContextHandle(t.context),
+                common: common(&t.common)?,
+                light: light(&t.light)?,
+                input: image(&t.input),
+                output: image(&t.output),
+            })
+        },
+        rt::TaskContainer::schedule_denoise_shadow,
+    )
 }
 
 #[no_mangle]
@@ -398,16 +403,27 @@ pub unsafe extern "C" fn hrt_schedule_denoise_specular_and_diffuse(
     container: *mut HrtTaskContainer,
     task: *const HrtDenoiseSpecularAndDiffuseTask,
 ) -> HrtStatus {
-    guard(|| {
-        let c = container_mut(container)?;
-        let t = get(task, "task")?;
-        Ok(c.inner.schedule_denoise_specular_and_diffuse(&rt::DenoiseSpecularAndDiffuseTask {
-            context: rt::DenoisingContextHandle(t.context),
-            common: common(&t.common)?,
-            input_specular: image(&t.input_specular),
-            input_diffuse: image(&t.input_diffuse),
-            output_specular: image(&t.output_specular),
-            output_diffuse: image(&t.output_diffuse),
-        })?)
-    })
+    schedule(
+        container,
+        task,
+        |t| {
+            Ok(rt::DenoiseSpecularAndDiffuseTask {
+                context: rt::DenoisingContextHandle(t.context),
+                common: common(&t.common)?,
+                input_specular: image(&t.input_specular),
+                input_diffuse: image(&t.input_diffuse),
+                output_specular: image(&t.output_specular),
+                output_diffuse: image(&t.output_diffuse),
+            })
+        },
+        rt::TaskContainer::schedule_denoise_specular_and_diffuse,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_limit_is_the_sdk_one() {
+        assert_eq!(super::HRT_MAX_DENOISING_EXTENT, hybrid_rt::MAX_DENOISING_EXTENT);
+    }
 }

@@ -1,13 +1,20 @@
-//! The committed C header must be what cbindgen generates from the current source.
-//! `HRT_BLESS=1 cargo test -p hybrid-rt-c --test header` rewrites it.
-#[test]
-fn header_is_current() {
+//! The committed C header must be what cbindgen generates from the current source, and define
+//! every task kind of the SDK. `HRT_BLESS=1 cargo test -p hybrid-rt-c --test header` rewrites it.
+
+/// The header cbindgen generates from the current source.
+fn generate() -> String {
     let dir = env!("CARGO_MANIFEST_DIR");
     let config = cbindgen::Config::from_file(format!("{dir}/cbindgen.toml")).expect("cbindgen.toml");
     let bindings = cbindgen::generate_with_config(dir, config).expect("cbindgen runs");
     let mut generated = Vec::new();
     bindings.write(&mut generated);
-    let generated = String::from_utf8(generated).unwrap();
+    String::from_utf8(generated).unwrap()
+}
+
+#[test]
+fn header_is_current() {
+    let dir = env!("CARGO_MANIFEST_DIR");
+    let generated = generate();
     let path = format!("{dir}/include/hybrid_rt.h");
     if std::env::var("HRT_BLESS").is_ok_and(|v| v == "1") {
         std::fs::create_dir_all(format!("{dir}/include")).unwrap();
@@ -35,4 +42,17 @@ fn versions_agree() {
     assert_eq!(hybrid_rt_c::HRT_API_VERSION, (major << 22) | (minor << 12) | patch, "HRT_API_VERSION follows it");
     let header = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/include/hybrid_rt.h")).unwrap();
     assert!(header.contains("#define HRT_API_VERSION"), "the header defines HRT_API_VERSION");
+}
+
+/// Every task kind of the SDK has its C constant, `HRT_TASK_` and the kind's name in capitals,
+/// with the SDK's value (each defined next to its task's C struct).
+#[test]
+fn every_task_kind_has_its_constant() {
+    let header = generate();
+    let missing: Vec<String> = hybrid_rt::TaskKind::ALL
+        .iter()
+        .map(|&k| format!("#define HRT_TASK_{} {}", k.name().to_uppercase(), k as u32))
+        .filter(|define| !header.lines().any(|l| l == define))
+        .collect();
+    assert!(missing.is_empty(), "the header lacks {missing:?}");
 }

@@ -1,0 +1,520 @@
+//! The context and what is not one task's: the library version, error messages and logging,
+//! context creation and destruction (the device set-up is in `device`), task containers,
+//! building a container into a command buffer, handing tickets back with the per-task GPU
+//! timings, the tickets in flight and the SDK's device memory.
+//!
+//! `HrtTaskKind` is the type of a timing's task; each task area's file defines the
+//! `HRT_TASK_*` values of its own tasks.
+mod device;
+
+use crate::args::{get, get_mut, slice, string_arg, write_list, write_string};
+use crate::live;
+use crate::log_bridge::{self, HrtLogCallback, HrtLogSeverity};
+use crate::status::{self, guard, null, Failure, HrtStatus};
+use crate::vulkan::{PFN_vkGetInstanceProcAddr, VkCommandBuffer, VkDevice, VkInstance, VkPhysicalDevice};
+use ash::vk;
+use ash::vk::Handle;
+pub use device::*;
+use hybrid_rt as rt;
+use std::ffi::{c_char, c_void, CStr};
+
+/// The API version this header describes: (major << 22) | (minor << 12) | patch.
+pub const HRT_API_VERSION: u32 = 1 << 12; // (major 0 << 22) | (minor 1 << 12) | patch 0
+
+pub type HrtTicket = u64;
+
+/// Opaque context. Thread-safe: any call from any thread, except that hrt_context_destroy
+/// must not race another call on it or its containers.
+pub struct HrtContext {
+    pub(crate) ctx: rt::ExecuteContext,
+    // Keeps the loader library alive when the SDK loaded it itself.
+    _entry: ash::Entry,
+}
+
+/// Opaque task container: used by one thread at a time (fill on one, build on any).
+pub struct HrtTaskContainer {
+    pub(crate) inner: rt::TaskContainer,
+}
+
+/// A live context (see `live`): NULL is HRT_ERROR_NULL_POINTER, a destroyed or foreign pointer
+/// HRT_ERROR_INVALID_HANDLE.
+pub(crate) fn context<'a>(p: *const HrtContext) -> Result<&'a HrtContext, Failure> {
+    live::check(p, live::Kind::Context, "ctx")?;
+    // SAFETY: registered pointers come from Box::into_raw and are live until destroyed.
+    Ok(unsafe { &*p })
+}
+
+/// A live task container (see `context`).
+pub(crate) fn container_mut<'a>(p: *mut HrtTaskContainer) -> Result<&'a mut HrtTaskContainer, Failure> {
+    live::check(p, live::Kind::Container, "container")?;
+    // SAFETY: as for `context`; a container is filled on one thread at a time (the header says).
+    Ok(unsafe { &mut *p })
+}
+
+/// Converts `task` with `convert` and schedules it into `container` with `schedule`: the body
+/// of every `hrt_schedule_*` function.
+pub(crate) fn schedule<C, T>(
+    container: *mut HrtTaskContainer,
+    task: *const C,
+    convert: impl FnOnce(&C) -> Result<T, Failure>,
+    schedule: impl FnOnce(&mut rt::TaskContainer, &T) -> rt::Result<()>,
+) -> HrtStatus {
+    guard(|| {
+        let c = container_mut(container)?;
+        let t = convert(get(task, "task")?)?;
+        Ok(schedule(&mut c.inner, &t)?)
+    })
+}
+
+/// Writes the library version.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_version(major: *mut u32, minor: *mut u32, patch: *mut u32) {
+    let (a, b, c) = rt::VERSION;
+    unsafe {
+        if let Some(m) = major.as_mut() {
+            *m = a;
+        }
+        if let Some(m) = minor.as_mut() {
+            *m = b;
+        }
+        if let Some(m) = patch.as_mut() {
+            *m = c;
+        }
+    }
+}
+
+/// The calling thread's last error message (NUL-terminated, truncated to `capacity`).
+/// Returns the full length in bytes, without the NUL.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_last_error_message(buffer: *mut c_char, capacity: u32) -> u32 {
+    write_string(&status::last_error(), buffer, capacity)
+}
+
+/// Routes the SDK's diagnostics to `callback` for messages at or above `min_severity`
+/// (NULL removes it). Returns false if another logger of the Rust `log` crate already owns
+/// the process.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_set_log_callback(
+    callback: HrtLogCallback,
+    min_severity: HrtLogSeverity,
+    user_data: *mut c_void,
+) -> bool {
+    std::panic::catch_unwind(|| log_bridge::install(callback, min_severity, user_data)).unwrap_or(false)
+}
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtInitSettings {
+    /// Tickets in flight at once. Default 2.
+    pub supported_working_sets: u32,
+    /// Initial upload ring bytes per working set. Default 1 MiB.
+    pub upload_ring_bytes: u64,
+    /// Timed tasks per ticket. Default 64.
+    pub max_timed_tasks: u32,
+    /// An engine-owned VkPipelineCache the SDK creates its pipelines through (0: none).
+    /// Save it with vkGetPipelineCacheData and reload it next run to skip shader compilation.
+    pub pipeline_cache: u64,
+    /// Queue families recording SDK work (first `queue_family_count`; 2+: SDK memory is
+    /// VK_SHARING_MODE_CONCURRENT over them, for BVH work on an async-compute queue).
+    pub queue_family_indices: [u32; 4],
+    pub queue_family_count: u32,
+    /// Most bytes the direct-lighting caches may hold; the least recently used instances'
+    /// caches are evicted past it (0: no limit, the default). See hrt_cache_report.
+    pub cache_budget_bytes: u64,
+}
+
+impl From<rt::InitSettings> for HrtInitSettings {
+    fn from(s: rt::InitSettings) -> Self {
+        HrtInitSettings {
+            supported_working_sets: s.supported_working_sets,
+            upload_ring_bytes: s.upload_ring_bytes,
+            max_timed_tasks: s.max_timed_tasks,
+            pipeline_cache: s.pipeline_cache.as_raw(),
+            queue_family_indices: s.queue_family_indices,
+            queue_family_count: s.queue_family_count,
+            cache_budget_bytes: s.cache_budget_bytes,
+        }
+    }
+}
+impl From<&HrtInitSettings> for rt::InitSettings {
+    fn from(s: &HrtInitSettings) -> Self {
+        rt::InitSettings {
+            supported_working_sets: s.supported_working_sets,
+            upload_ring_bytes: s.upload_ring_bytes,
+            max_timed_tasks: s.max_timed_tasks,
+            pipeline_cache: vk::PipelineCache::from_raw(s.pipeline_cache),
+            queue_family_indices: s.queue_family_indices,
+            queue_family_count: s.queue_family_count,
+            cache_budget_bytes: s.cache_budget_bytes,
+        }
+    }
+}
+
+/// The engine's Vulkan objects. The SDK keeps function tables, not ownership.
+#[repr(C)]
+pub struct HrtContextDesc {
+    /// Must be HRT_API_VERSION (checked: a header/library mismatch is an error).
+    pub api_version: u32,
+    /// The loader's vkGetInstanceProcAddr; NULL loads libvulkan.so.1 itself.
+    pub get_instance_proc_addr: PFN_vkGetInstanceProcAddr,
+    pub instance: VkInstance,
+    pub physical_device: VkPhysicalDevice,
+    pub device: VkDevice,
+    /// The device extensions the engine enabled (see hrt_required_device_extensions).
+    pub enabled_extensions: *const *const std::ffi::c_char,
+    pub enabled_extension_count: u32,
+    /// VkApplicationInfo::apiVersion of the instance: VK_API_VERSION_1_3 or later.
+    pub instance_api_version: u32,
+    /// The pNext chain given to vkCreateDevice (a VkDevice cannot be asked which features it
+    /// has): your VkPhysicalDeviceFeatures2 after hrt_device_features_merge, or
+    /// hrt_device_features_chain. Read during hrt_context_create only.
+    pub enabled_features: *const c_void,
+    /// VK_EXT_debug_utils is enabled on the instance: the SDK names its objects and labels its
+    /// tasks ("hybrid-rt ..."), for RenderDoc, Nsight and validation messages.
+    pub debug_utils: bool,
+    pub settings: HrtInitSettings,
+}
+
+#[no_mangle]
+pub extern "C" fn hrt_init_settings_default() -> HrtInitSettings {
+    rt::InitSettings::default().into()
+}
+
+/// Creates a context from the engine's device. Checks `desc->api_version` against the
+/// library, and the device against the SDK's needs (HRT_ERROR_MISSING_DEVICE_SUPPORT names
+/// what is missing).
+#[no_mangle]
+pub unsafe extern "C" fn hrt_context_create(desc: *const HrtContextDesc, out: *mut *mut HrtContext) -> HrtStatus {
+    guard(|| {
+        let desc = get(desc, "desc")?;
+        let out = get_mut(out, "out")?;
+        *out = std::ptr::null_mut();
+        if desc.api_version != HRT_API_VERSION {
+            return Err(Failure(
+                HrtStatus::HRT_ERROR_VERSION_MISMATCH,
+                format!("header API version {:#x}, library {:#x}", desc.api_version, HRT_API_VERSION),
+            ));
+        }
+        if desc.instance.is_null() || desc.physical_device.is_null() || desc.device.is_null() {
+            return Err(null("desc->instance, physical_device or device"));
+        }
+        let names = slice(desc.enabled_extensions, desc.enabled_extension_count, "desc->enabled_extensions")?;
+        let mut exts: Vec<&CStr> = Vec::with_capacity(names.len());
+        for &n in names {
+            if n.is_null() {
+                return Err(null("an enabled extension name"));
+            }
+            exts.push(CStr::from_ptr(n));
+        }
+        let entry = device::entry_from(desc.get_instance_proc_addr)?;
+        let instance = ash::Instance::load(entry.static_fn(), vk::Instance::from_raw(desc.instance as u64));
+        let device = ash::Device::load(instance.fp_v1_0(), vk::Device::from_raw(desc.device as u64));
+        // SAFETY: the caller promises (header) that the handles are valid and belong together,
+        // and that the device was created with these extensions and this feature chain.
+        let ctx = rt::ExecuteContext::new(
+            &rt::DeviceDesc::new(
+                &entry,
+                &instance,
+                vk::PhysicalDevice::from_raw(desc.physical_device as u64),
+                &device,
+                &exts,
+                desc.instance_api_version,
+                desc.enabled_features,
+            )
+            .with_debug_utils(desc.debug_utils),
+            &(&desc.settings).into(),
+        )?;
+        let p = Box::into_raw(Box::new(HrtContext { ctx, _entry: entry }));
+        live::register(p, live::Kind::Context);
+        *out = p;
+        Ok(())
+    })
+}
+
+/// Destroys a context (NULL is ignored: HRT_OK). While the GPU may still run one of its
+/// tickets' command buffers it refuses with HRT_ERROR_TICKETS_IN_FLIGHT and the context stays
+/// valid: wait for the fences, hand the tickets back, destroy again. Destroy containers first
+/// or after, in any order. Destroying it twice, or any call on it afterwards, is
+/// HRT_ERROR_INVALID_HANDLE.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_context_destroy(ctx: *mut HrtContext) -> HrtStatus {
+    if ctx.is_null() {
+        return HrtStatus::HRT_OK;
+    }
+    guard(|| {
+        // Refused while the GPU may still run a ticket: the context stays valid.
+        let serials = context(ctx)?.ctx.unfinished_tickets();
+        if !serials.is_empty() {
+            return Err(rt::Error::TicketsInFlight { serials }.into());
+        }
+        live::unregister(ctx, live::Kind::Context, "ctx")?;
+        drop(Box::from_raw(ctx));
+        Ok(())
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_supports_inline_rt(ctx: *const HrtContext) -> bool {
+    context(ctx).is_ok_and(|c| c.ctx.supports_inline_rt())
+}
+
+/// The device's name (NUL-terminated, truncated to `capacity`). Returns its full length.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_device_name(ctx: *const HrtContext, buffer: *mut c_char, capacity: u32) -> u32 {
+    let Ok(c) = context(ctx) else { return 0 };
+    write_string(c.ctx.device_name(), buffer, capacity)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_release_device_resources_immediately(ctx: *mut HrtContext) -> HrtStatus {
+    guard(|| Ok(context(ctx)?.ctx.release_device_resources_immediately()?))
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_task_container_create(ctx: *mut HrtContext, out: *mut *mut HrtTaskContainer) -> HrtStatus {
+    guard(|| {
+        let c = context(ctx)?;
+        let out = get_mut(out, "out")?;
+        let p = Box::into_raw(Box::new(HrtTaskContainer { inner: c.ctx.create_task_container() }));
+        live::register(p, live::Kind::Container);
+        *out = p;
+        Ok(())
+    })
+}
+
+/// Destroys a container (NULL is ignored: HRT_OK); twice is HRT_ERROR_INVALID_HANDLE.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_task_container_destroy(container: *mut HrtTaskContainer) -> HrtStatus {
+    if container.is_null() {
+        return HrtStatus::HRT_OK;
+    }
+    guard(|| {
+        live::unregister(container, live::Kind::Container, "container")?;
+        drop(Box::from_raw(container));
+        Ok(())
+    })
+}
+
+/// Tasks scheduled and not yet built.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_task_container_len(container: *const HrtTaskContainer) -> u32 {
+    container_mut(container.cast_mut()).map_or(0, |c| c.inner.len() as u32)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_task_container_clear(container: *mut HrtTaskContainer) {
+    if let Ok(c) = container_mut(container) {
+        c.inner.clear();
+    }
+}
+
+/// The frame number of the next build of `container`: it seeds the random sequences and picks
+/// the checkerboard half (same index + same inputs = same image). Applies to the next
+/// successful build only; without it the ticket serial is used.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_task_container_set_frame_index(container: *mut HrtTaskContainer, frame_index: u64) -> HrtStatus {
+    guard(|| {
+        container_mut(container)?.inner.set_frame_index(frame_index);
+        Ok(())
+    })
+}
+
+/// Names the task scheduled last in `container` (NUL-terminated UTF-8, copied; invalid bytes
+/// become U+FFFD): its region in the command buffer carries the label (with debug_utils on, as
+/// RenderDoc and Nsight show it), and so do its timings (HrtTaskTiming.label). A second label
+/// for the same task replaces the first. An empty container is HRT_ERROR_INVALID_INPUT, a NULL
+/// label HRT_ERROR_NULL_POINTER.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_task_container_set_task_label(container: *mut HrtTaskContainer, label: *const c_char) -> HrtStatus {
+    guard(|| {
+        let c = container_mut(container)?;
+        Ok(c.inner.set_task_label(&string_arg(label, "label")?)?)
+    })
+}
+
+/// Records the container into `command_buffer` (begun by the engine, which also ends, submits
+/// and waits for it) and writes a ticket. On success the container is emptied; on error it
+/// keeps its tasks and nothing usable was recorded.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_build_gpu_task(
+    ctx: *mut HrtContext,
+    container: *mut HrtTaskContainer,
+    command_buffer: VkCommandBuffer,
+    ticket: *mut HrtTicket,
+) -> HrtStatus {
+    guard(|| {
+        let c = context(ctx)?;
+        let k = container_mut(container)?;
+        let out = get_mut(ticket, "ticket")?;
+        let t = c.ctx.build_gpu_task(&mut k.inner, vk::CommandBuffer::from_raw(command_buffer as u64))?;
+        *out = t.into_raw();
+        Ok(())
+    })
+}
+
+/// What an HrtTaskTiming measured: one of the HRT_TASK_* values.
+pub type HrtTaskKind = u32;
+
+/// Bytes of HrtTaskTiming.label, its NUL included.
+pub const HRT_TASK_LABEL_CAPACITY: u32 = 64;
+
+/// One timed task of a ticket (hrt_mark_gpu_task_completed).
+#[repr(C)]
+#[derive(Clone, Copy)]
+pub struct HrtTaskTiming {
+    pub kind: HrtTaskKind,
+    pub task_index: u32,
+    pub gpu_ms: f64,
+    /// The label the task was given (hrt_task_container_set_task_label); for HRT_TASK_BVH,
+    /// HRT_TASK_BLAS_BUILD and HRT_TASK_TLAS_BUILD the first BVH task's, none for
+    /// HRT_TASK_CACHE_UPDATE. NUL-terminated, cut to at most HRT_TASK_LABEL_CAPACITY - 1 bytes
+    /// at a UTF-8 character boundary; all zero when the task has no label.
+    pub label: [c_char; HRT_TASK_LABEL_CAPACITY as usize],
+}
+
+/// `label` as HrtTaskTiming.label holds it (all zero for none).
+fn label_c(label: Option<&str>) -> [c_char; HRT_TASK_LABEL_CAPACITY as usize] {
+    let mut out = [0; HRT_TASK_LABEL_CAPACITY as usize];
+    let s = label.unwrap_or_default();
+    let mut n = s.len().min(out.len() - 1);
+    while !s.is_char_boundary(n) {
+        n -= 1;
+    }
+    for (o, b) in out.iter_mut().zip(&s.as_bytes()[..n]) {
+        *o = *b as c_char;
+    }
+    out
+}
+
+/// Hands a ticket back after the GPU finished its command buffer. Writes up to `capacity`
+/// per-task timings and their total number to `timing_count` (both optional). A ticket
+/// returned twice or never issued is HRT_ERROR_UNKNOWN_TICKET.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_mark_gpu_task_completed(
+    ctx: *mut HrtContext,
+    ticket: HrtTicket,
+    timings: *mut HrtTaskTiming,
+    capacity: u32,
+    timing_count: *mut u32,
+) -> HrtStatus {
+    guard(|| {
+        let c = context(ctx)?;
+        let done = c.ctx.mark_gpu_task_completed(rt::GpuTicket::from_raw(ticket))?;
+        if let Some(n) = timing_count.as_mut() {
+            *n = done.timings.len() as u32;
+        }
+        if !timings.is_null() {
+            for (i, t) in done.timings.iter().take(capacity as usize).enumerate() {
+                *timings.add(i) = HrtTaskTiming {
+                    kind: t.kind as u32,
+                    task_index: t.task_index,
+                    gpu_ms: t.gpu_ms,
+                    label: label_c(done.label(t)),
+                };
+            }
+        }
+        Ok(())
+    })
+}
+
+/// Serials of the tickets built and not yet handed back: writes up to `capacity` and the total
+/// to `count`.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_tickets_in_flight(
+    ctx: *const HrtContext,
+    serials: *mut u64,
+    capacity: u32,
+    count: *mut u32,
+) -> HrtStatus {
+    guard(|| write_list(&context(ctx)?.ctx.tickets_in_flight(), serials, capacity, count))
+}
+
+/// Tickets in flight whose command buffers the GPU has not run to the end (what must finish
+/// before hrt_context_destroy succeeds); same conventions as hrt_tickets_in_flight.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_unfinished_tickets(
+    ctx: *const HrtContext,
+    serials: *mut u64,
+    capacity: u32,
+    count: *mut u32,
+) -> HrtStatus {
+    guard(|| write_list(&context(ctx)?.ctx.unfinished_tickets(), serials, capacity, count))
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Default)]
+pub struct HrtAllocationCount {
+    pub count: u64,
+    pub bytes: u64,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Default)]
+pub struct HrtResourceAllocations {
+    pub geometry_copies: HrtAllocationCount,
+    pub blas: HrtAllocationCount,
+    pub build_scratch: HrtAllocationCount,
+    pub tlas: HrtAllocationCount,
+    pub upload_rings: HrtAllocationCount,
+    pub pipelines: HrtAllocationCount,
+    pub cache: HrtAllocationCount,
+    pub readback: HrtAllocationCount,
+    /// Denoising contexts' history images.
+    pub denoiser: HrtAllocationCount,
+}
+
+impl From<rt::ResourceAllocations> for HrtResourceAllocations {
+    fn from(a: rt::ResourceAllocations) -> Self {
+        let c = |x: rt::AllocationCount| HrtAllocationCount { count: x.count, bytes: x.bytes };
+        HrtResourceAllocations {
+            geometry_copies: c(a.geometry_copies),
+            blas: c(a.blas),
+            build_scratch: c(a.build_scratch),
+            tlas: c(a.tlas),
+            upload_rings: c(a.upload_rings),
+            pipelines: c(a.pipelines),
+            cache: c(a.cache),
+            readback: c(a.readback),
+            denoiser: c(a.denoiser),
+        }
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn hrt_resource_allocations(ctx: *const HrtContext, out: *mut HrtResourceAllocations) -> HrtStatus {
+    guard(|| {
+        let c = context(ctx)?;
+        *get_mut(out, "out")? = c.ctx.resource_allocations().into();
+        Ok(())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{label_c, HRT_TASK_LABEL_CAPACITY};
+
+    fn text(l: &[std::ffi::c_char]) -> String {
+        let bytes: Vec<u8> = l.iter().take_while(|&&c| c != 0).map(|&c| c as u8).collect();
+        String::from_utf8(bytes).expect("a label is UTF-8")
+    }
+
+    /// Labels are NUL-terminated and cut at a character boundary; no label is all zero.
+    #[test]
+    fn labels_are_cut_to_the_capacity_at_a_character_boundary() {
+        let max = HRT_TASK_LABEL_CAPACITY as usize - 1;
+        assert!(label_c(None).iter().all(|&c| c == 0));
+        assert!(label_c(Some("")).iter().all(|&c| c == 0));
+        let short = label_c(Some("shadows: sun"));
+        assert_eq!(text(&short), "shadows: sun");
+        assert!(short[12..].iter().all(|&c| c == 0));
+        assert_eq!(text(&label_c(Some(&"a".repeat(max)))), "a".repeat(max));
+        assert_eq!(text(&label_c(Some(&"a".repeat(max + 10)))), "a".repeat(max));
+        // 62 bytes and a 2-byte 'é' across the 63rd: the 'é' goes whole.
+        let cut = label_c(Some(&format!("{}é", "a".repeat(max - 1))));
+        assert_eq!(text(&cut), "a".repeat(max - 1));
+        assert_eq!(cut[max - 1], 0);
+        // 3-byte characters: 21 of them fill 63 bytes exactly, a 22nd is left out.
+        assert_eq!(text(&label_c(Some(&"€".repeat(22)))), "€".repeat(21));
+        assert_eq!(label_c(Some(&"x".repeat(200)))[max], 0);
+    }
+}
