@@ -262,6 +262,9 @@ static Image filled_image(VkFormat format, float r, float g, float b, float a) {
     return img;
 }
 
+/* The timings of run_frame's last ticket. */
+static HrtTaskTiming timings[8];
+
 /* Records the container between two full barriers (the engine's own work around it), submits,
  * waits, hands the ticket back and returns the number of timed tasks. */
 static uint32_t run_frame(HrtContext *ctx, HrtTaskContainer *frame, Image *out, uint32_t texel_bytes, float *result) {
@@ -284,11 +287,11 @@ static uint32_t run_frame(HrtContext *ctx, HrtTaskContainer *frame, Image *out, 
     transition(cmd, out->image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL);
     submit_and_wait(cmd);
 
-    HrtTaskTiming timings[8];
     uint32_t count = 0;
     CHECK_HRT(hrt_mark_gpu_task_completed(ctx, ticket, timings, 8, &count));
     for (uint32_t i = 0; i < count && i < 8; i++)
-        printf("  task %u (kind %d): %.3f ms\n", timings[i].task_index, (int)timings[i].kind, timings[i].gpu_ms);
+        printf("  task %u (kind %u, \"%s\"): %.3f ms\n", timings[i].task_index, timings[i].kind, timings[i].label,
+               timings[i].gpu_ms);
     /* The same ticket twice is refused. */
     EXPECT(hrt_mark_gpu_task_completed(ctx, ticket, NULL, 0, NULL) == HRT_ERROR_UNKNOWN_TICKET, "second return");
 
@@ -453,6 +456,7 @@ int main(void) {
     CHECK_HRT(hrt_create_instance_handles(ctx, 2, instances));
     HrtTaskContainer *frame = NULL;
     CHECK_HRT(hrt_task_container_create(ctx, &frame));
+    EXPECT(hrt_task_container_set_task_label(frame, "nothing yet") == HRT_ERROR_INVALID_INPUT, "no task to label");
 
     Buffer vbs[2] = {vb_ground, vb_ceiling};
     for (int i = 0; i < 2; i++) {
@@ -548,12 +552,19 @@ int main(void) {
     ao.ray_length = 1.0f;
     ao.rays_per_pixel = 16;
     CHECK_HRT(hrt_schedule_ambient_occlusion(frame, &ao));
+    EXPECT(hrt_task_container_set_task_label(frame, NULL) == HRT_ERROR_NULL_POINTER, "a NULL label");
+    CHECK_HRT(hrt_task_container_set_task_label(frame, "ao: under the ceiling"));
 
     /* ---- Frame 1: everything registered; dark under the ceiling, open at the corners. */
     float result[W * H];
     printf("frame 1:\n");
     uint32_t timed = run_frame(ctx, frame, &out, 4, result);
     EXPECT(timed >= 2, "BVH and AO timings reported (%u)", timed);
+    int labelled = 0;
+    for (uint32_t i = 0; i < timed && i < 8; i++)
+        if (timings[i].kind == HRT_TASK_AMBIENT_OCCLUSION)
+            labelled = strcmp(timings[i].label, "ao: under the ceiling") == 0;
+    EXPECT(labelled, "the AO timing carries the task's label");
     EXPECT(hrt_tlas_instance_count(ctx) == 2, "two instances in the TLAS");
     float centre = result[(H / 2) * W + W / 2], corner = result[0];
     printf("AO under the ceiling %.3f, at the corner %.3f\n", centre, corner);

@@ -1,5 +1,5 @@
 //! Denoising: denoising contexts (the history a signal's denoiser keeps between frames) and
-//! the six denoise tasks (see the Rust docs of `hybrid_rt::api::denoising`). Four tasks share
+//! the six denoise tasks (see the Rust docs of `hybrid_rt::types::denoise`). Four tasks share
 //! one struct, `HrtDenoiseTask` (context, common, input, output); each has its own schedule
 //! function.
 use crate::args::{get, get_mut};
