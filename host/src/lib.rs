@@ -213,6 +213,96 @@ pub fn vkerr(what: &'static str) -> impl Fn(vk::Result) -> String {
     move |e| format!("{what}: {e:?}")
 }
 
+/// The instance and what it was created with.
+struct InstanceParts {
+    instance: ash::Instance,
+    validation_enabled: bool,
+    has_debug: bool,
+}
+
+/// The instance: the validation layer when installed (and wanted), with synchronization
+/// validation and, on request, best practices; debug utils where the loader has them; and the
+/// caller's extensions.
+fn create_instance(entry: &ash::Entry, instance_extensions: &[&CStr]) -> HostResult<InstanceParts> {
+    let layers = unsafe { entry.enumerate_instance_layer_properties() }.unwrap_or_default();
+    let want_validation = env_flag("HRT_VALIDATION", true);
+    let validation_name = c"VK_LAYER_KHRONOS_validation";
+    let validation_enabled = want_validation && layers.iter().any(|l| l.layer_name_as_c_str() == Ok(validation_name));
+    // A run that must be validated (the device machine's, where the layer is carried) says
+    // so: a missing layer is then an error, not a silently unvalidated pass.
+    if env_flag("HRT_REQUIRE_VALIDATION", false) && !validation_enabled {
+        return Err("HRT_REQUIRE_VALIDATION=1 but VK_LAYER_KHRONOS_validation is not available".into());
+    }
+    let exts = unsafe { entry.enumerate_instance_extension_properties(None) }.unwrap_or_default();
+    let has_debug = exts.iter().any(|e| e.extension_name_as_c_str() == Ok(ext::debug_utils::NAME));
+
+    let app = vk::ApplicationInfo::default().application_name(c"hybrid-rt host").api_version(API_VERSION);
+    let layer_names: Vec<*const i8> = if validation_enabled { vec![validation_name.as_ptr()] } else { vec![] };
+    let mut ext_names: Vec<*const i8> = if has_debug { vec![ext::debug_utils::NAME.as_ptr()] } else { vec![] };
+    ext_names.extend(instance_extensions.iter().map(|e| e.as_ptr()));
+    let info = vk::InstanceCreateInfo::default()
+        .application_info(&app)
+        .enabled_layer_names(&layer_names)
+        .enabled_extension_names(&ext_names);
+    // Synchronization validation always (it found real hazards); best practices on request.
+    let mut checks = Vec::new();
+    if env_flag("HRT_SYNC_VALIDATION", true) {
+        checks.push(vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION);
+    }
+    if env_flag("HRT_BEST_PRACTICES", false) {
+        checks.push(vk::ValidationFeatureEnableEXT::BEST_PRACTICES);
+    }
+    let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&checks);
+    let info = if validation_enabled && !checks.is_empty() { info.push_next(&mut features) } else { info };
+    let instance = unsafe { entry.create_instance(&info, None) }.map_err(vkerr("vkCreateInstance"))?;
+    Ok(InstanceParts { instance, validation_enabled, has_debug })
+}
+
+/// A messenger that logs what the validation layer says about `instance` into `log` (which
+/// must outlive it).
+fn create_messenger(
+    entry: &ash::Entry,
+    instance: &ash::Instance,
+    log: &ValidationLog,
+) -> HostResult<(ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)> {
+    let loader = ext::debug_utils::Instance::new(entry, instance);
+    let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+        .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING)
+        .message_type(
+            vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                | vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+        )
+        .pfn_user_callback(Some(debug_callback))
+        .user_data(log as *const ValidationLog as *mut c_void);
+    let m = unsafe { loader.create_debug_utils_messenger(&info, None) }.map_err(vkerr("debug messenger"))?;
+    Ok((loader, m))
+}
+
+/// The first device with everything the SDK needs (and, with HRT_DEVICE, a name containing
+/// it): the device, its name and what it supports.
+fn choose_device(instance: &ash::Instance) -> HostResult<(vk::PhysicalDevice, String, hybrid_rt::DeviceSupport)> {
+    let wanted = std::env::var("HRT_DEVICE").ok();
+    let pdevs = unsafe { instance.enumerate_physical_devices() }.map_err(vkerr("enumerate devices"))?;
+    let mut chosen = None;
+    let mut seen = Vec::new();
+    for pd in pdevs {
+        let props = unsafe { instance.get_physical_device_properties(pd) };
+        let name = props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let support = hybrid_rt::query_device_support(instance, pd);
+        seen.push(format!("{name}: {:?}", support.missing));
+        let name_ok = match &wanted {
+            Some(w) => name.contains(w.as_str()),
+            None => true,
+        };
+        if support.supported && name_ok {
+            chosen = Some((pd, name, support));
+            break;
+        }
+    }
+    chosen.ok_or_else(|| format!("no Vulkan device with ray tracing (run scripts/setup.sh); seen: {seen:?}"))
+}
+
 impl Host {
     pub fn new() -> HostResult<Host> {
         Self::with_extensions(&[], &[])
@@ -223,77 +313,10 @@ impl Host {
     /// checks against its surface.
     pub fn with_extensions(instance_extensions: &[&CStr], device_extensions: &[&'static CStr]) -> HostResult<Host> {
         let entry = unsafe { ash::Entry::load() }.map_err(|e| format!("no Vulkan loader: {e}"))?;
-        let layers = unsafe { entry.enumerate_instance_layer_properties() }.unwrap_or_default();
-        let want_validation = env_flag("HRT_VALIDATION", true);
-        let validation_name = c"VK_LAYER_KHRONOS_validation";
-        let validation_enabled = want_validation && layers.iter().any(|l| l.layer_name_as_c_str() == Ok(validation_name));
-        // A run that must be validated (the device machine's, where the layer is carried) says
-        // so: a missing layer is then an error, not a silently unvalidated pass.
-        if env_flag("HRT_REQUIRE_VALIDATION", false) && !validation_enabled {
-            return Err("HRT_REQUIRE_VALIDATION=1 but VK_LAYER_KHRONOS_validation is not available".into());
-        }
-        let exts = unsafe { entry.enumerate_instance_extension_properties(None) }.unwrap_or_default();
-        let has_debug = exts.iter().any(|e| e.extension_name_as_c_str() == Ok(ext::debug_utils::NAME));
-
-        let app = vk::ApplicationInfo::default().application_name(c"hybrid-rt host").api_version(API_VERSION);
-        let layer_names: Vec<*const i8> = if validation_enabled { vec![validation_name.as_ptr()] } else { vec![] };
-        let mut ext_names: Vec<*const i8> = if has_debug { vec![ext::debug_utils::NAME.as_ptr()] } else { vec![] };
-        ext_names.extend(instance_extensions.iter().map(|e| e.as_ptr()));
-        let info = vk::InstanceCreateInfo::default()
-            .application_info(&app)
-            .enabled_layer_names(&layer_names)
-            .enabled_extension_names(&ext_names);
-        // Synchronization validation always (it found real hazards); best practices on request.
-        let mut checks = Vec::new();
-        if env_flag("HRT_SYNC_VALIDATION", true) {
-            checks.push(vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION);
-        }
-        if env_flag("HRT_BEST_PRACTICES", false) {
-            checks.push(vk::ValidationFeatureEnableEXT::BEST_PRACTICES);
-        }
-        let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&checks);
-        let info = if validation_enabled && !checks.is_empty() { info.push_next(&mut features) } else { info };
-        let instance = unsafe { entry.create_instance(&info, None) }.map_err(vkerr("vkCreateInstance"))?;
-
+        let InstanceParts { instance, validation_enabled, has_debug } = create_instance(&entry, instance_extensions)?;
         let validation_log = Box::<ValidationLog>::default();
-        let debug = if has_debug {
-            let loader = ext::debug_utils::Instance::new(&entry, &instance);
-            let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
-                .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING)
-                .message_type(
-                    vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
-                        | vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
-                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
-                )
-                .pfn_user_callback(Some(debug_callback))
-                .user_data(&*validation_log as *const ValidationLog as *mut c_void);
-            let m = unsafe { loader.create_debug_utils_messenger(&info, None) }.map_err(vkerr("debug messenger"))?;
-            Some((loader, m))
-        } else {
-            None
-        };
-
-        let wanted = std::env::var("HRT_DEVICE").ok();
-        let pdevs = unsafe { instance.enumerate_physical_devices() }.map_err(vkerr("enumerate devices"))?;
-        let mut chosen = None;
-        let mut seen = Vec::new();
-        for pd in pdevs {
-            let props = unsafe { instance.get_physical_device_properties(pd) };
-            let name = props.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-            let support = hybrid_rt::query_device_support(&instance, pd);
-            seen.push(format!("{name}: {:?}", support.missing));
-            let name_ok = match &wanted {
-                Some(w) => name.contains(w.as_str()),
-                None => true,
-            };
-            if support.supported && name_ok {
-                chosen = Some((pd, name, support));
-                break;
-            }
-        }
-        let Some((physical_device, device_name, support)) = chosen else {
-            return Err(format!("no Vulkan device with ray tracing (run scripts/setup.sh); seen: {seen:?}"));
-        };
+        let debug = if has_debug { Some(create_messenger(&entry, &instance, &validation_log)?) } else { None };
+        let (physical_device, device_name, support) = choose_device(&instance)?;
 
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical_device) };
         let queue_family = families
