@@ -13,26 +13,14 @@
 //! meshopt, quantized meshes) are named before validation buries them under its own errors,
 //! and validation errors are summed up to the first three.
 use crate::gltf_textures::TextureCache;
+use crate::gltf_uri::read_uri;
 use crate::lighting::Lights;
 use crate::raster::{Material, MaterialTextures};
 use crate::scene::{vertex_normals, CameraPath, Motion, SampleScene};
-use base64::Engine;
 use glam::{Affine3A, Mat4, Vec3, Vec4};
 use hybrid_rt_host::scene::{Mesh, Scene};
 use std::collections::HashMap;
 use std::path::Path;
-
-/// The bytes a buffer's or an image's URI names: a base64 data URI, or a file beside the glTF.
-pub(crate) fn read_uri(uri: &str, dir: &Path) -> Result<Vec<u8>, String> {
-    if uri.starts_with("data:") {
-        let (_, payload) = uri
-            .split_once(";base64,")
-            .ok_or_else(|| format!("unsupported data URI {}", uri.chars().take(40).collect::<String>()))?;
-        return base64::engine::general_purpose::STANDARD.decode(payload).map_err(|e| format!("data URI: {e}"));
-    }
-    let path = dir.join(uri.replace("%20", " "));
-    std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))
-}
 
 fn buffers(doc: &gltf::Document, blob: Option<Vec<u8>>, dir: &Path) -> Result<Vec<Vec<u8>>, String> {
     let mut blob = blob;

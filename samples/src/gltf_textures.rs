@@ -3,7 +3,7 @@
 //! (a base-colour or emissive texture is sRGB, a metallic-roughness or normal map linear).
 //! Other formats (KTX2, WebP) draw the material's factor alone, with a warning. Only the first
 //! texture coordinate set is read; a texture on another set is drawn as if it were on it.
-use crate::gltf_scene::read_uri;
+use crate::gltf_uri::read_uri;
 use crate::raster::Texture;
 use std::collections::HashMap;
 use std::path::Path;

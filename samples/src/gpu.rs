@@ -8,6 +8,10 @@ pub(crate) mod spirv {
     include!(concat!(env!("OUT_DIR"), "/sample_shaders.rs"));
 }
 
+/// The layout the sample's sampled images are kept in: the G-buffer targets after their pass
+/// (ready for the SDK) and the meshes' textures.
+pub const READ: vk::ImageLayout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+
 fn vkerr(what: &'static str) -> impl Fn(vk::Result) -> String {
     move |e| format!("{what}: {e:?}")
 }

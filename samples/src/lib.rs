@@ -4,6 +4,7 @@
 //! G-buffer comes from `raster` (a Vulkan graphics pass, as an engine's).
 pub mod gltf_scene;
 pub mod gltf_textures;
+mod gltf_uri;
 pub mod gpu;
 pub mod images;
 pub mod lighting;

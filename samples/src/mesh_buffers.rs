@@ -2,7 +2,7 @@
 //! vertices that the raster pass draws and the SDK reads its positions (and, for alpha-tested
 //! geometry, its texture coordinates) out of, u32 indices, and the material textures the
 //! G-buffer pass samples.
-use crate::raster::READ;
+use crate::gpu::READ;
 use ash::vk;
 use glam::{Vec3, Vec4};
 use hybrid_rt_host::scene::Scene;

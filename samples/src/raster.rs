@@ -20,7 +20,7 @@ pub const MOTION_FORMAT: vk::Format = vk::Format::R16G16_SFLOAT;
 /// Emitted radiance (emissive factor x texture x strength): unbounded, so half floats.
 pub const EMISSIVE_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 /// The layout the targets are left in after a pass, ready for the SDK to sample.
-pub const READ: vk::ImageLayout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
+pub use crate::gpu::READ;
 
 /// A surface's material in the G-buffer: glTF's factors (its textures are
 /// [`MaterialTextures`]).
