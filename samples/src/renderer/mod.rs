@@ -35,10 +35,10 @@ use hybrid_rt_host::{Host, HostImage, HostResult};
 
 mod inputs;
 mod resources;
+mod schedule;
 mod stats;
 
-use inputs::Inputs;
-use resources::{source, work_image, Denoisers, Slot, Work};
+use resources::{source, Denoisers, Slot, Work};
 pub use stats::Stats;
 
 const SLOTS: usize = 2;
@@ -46,6 +46,15 @@ const GENERAL: vk::ImageLayout = vk::ImageLayout::GENERAL;
 
 /// Log-average luminance the automatic exposure maps the composite to (`Renderer::auto_expose`).
 const AUTO_EXPOSURE_KEY: f64 = 0.18;
+
+/// The cameras of one frame: the main view's and the lidar's, and last frame's of each.
+#[derive(Clone, Copy)]
+struct FrameCameras {
+    main: Camera,
+    lidar: Camera,
+    prev_main: Camera,
+    prev_lidar: Camera,
+}
 
 /// What the renderer does per frame. Defaults in `Default`.
 #[derive(Clone, Copy, Debug)]
@@ -168,7 +177,8 @@ impl<'h> Renderer<'h> {
         let deformed_mesh = scene.deformer.as_ref().map(|d| scene.scene.instances[d.instance].mesh);
         for (i, &handle) in geometries.iter().enumerate() {
             let input = sdk_geometry_input(&scene, &meshes, i, Some(i) == deformed_mesh);
-            container.schedule_geometry(&GeometryTask { handle, operation: TaskOperation::Register, input }).map_err(sdk_err)?;
+            let task = GeometryTask { handle, operation: TaskOperation::Register, input };
+            schedule::schedule(&mut container, schedule::BVH_LABEL, |c| c.schedule_geometry(&task))?;
         }
         let instances = ctx.create_instance_handles(scene.scene.instances.len());
         for (i, &handle) in instances.iter().enumerate() {
@@ -181,9 +191,8 @@ impl<'h> Renderer<'h> {
                 emission: scene.emission(i),
                 ..Default::default()
             };
-            container
-                .schedule_instance(&InstanceTask { handle, operation: InstanceOperation::Register, input })
-                .map_err(sdk_err)?;
+            let task = InstanceTask { handle, operation: InstanceOperation::Register, input };
+            schedule::schedule(&mut container, schedule::BVH_LABEL, |c| c.schedule_instance(&task))?;
         }
         let mut slots = Vec::new();
         for _ in 0..SLOTS {
@@ -259,18 +268,10 @@ impl<'h> Renderer<'h> {
         unsafe { self.host.device.wait_for_fences(&[s.fence], true, u64::MAX) }.map_err(|e| format!("wait: {e:?}"))?;
         s.recorded = false;
         let mut sdk: Vec<(String, f64)> = Vec::new();
-        let labels = std::mem::take(&mut s.labels);
         if let Some(ticket) = s.ticket.take() {
             let done = self.ctx.mark_gpu_task_completed(ticket).map_err(sdk_err)?;
-            let mut used = vec![false; labels.len()];
             for t in &done.timings {
-                let label = match labels.iter().enumerate().position(|(i, (k, _))| *k == t.kind && !used[i]) {
-                    Some(i) => {
-                        used[i] = true;
-                        labels[i].1.to_string()
-                    }
-                    None => format!("{:?}", t.kind),
-                };
+                let label = schedule::timing_label(&done, t);
                 match sdk.iter_mut().find(|(l, _)| *l == label) {
                     Some((_, ms)) => *ms += t.gpu_ms,
                     None => sdk.push((label, t.gpu_ms)),
@@ -312,12 +313,12 @@ impl<'h> Renderer<'h> {
         view: Option<Mode>,
     ) -> HostResult<()> {
         let host = self.host;
-        let (w, h) = (self.settings.width, self.settings.height);
         let prev = (slot + SLOTS - 1) % SLOTS;
         let frame = self.frame;
-        let lidar_camera = self.lidar_camera(frame);
-        let (prev_camera, prev_lidar) =
-            if frame == 0 { (camera, lidar_camera) } else { (self.slots[prev].camera, self.slots[prev].lidar_camera) };
+        let lidar = self.lidar_camera(frame);
+        let (prev_main, prev_lidar) =
+            if frame == 0 { (camera, lidar) } else { (self.slots[prev].camera, self.slots[prev].lidar_camera) };
+        let cameras = FrameCameras { main: camera, lidar, prev_main, prev_lidar };
         let cmd = self.slots[slot].cmd;
         self.slots[slot].timer.begin(host, cmd);
         // The previous frame's writes (this queue's last submission) before anything of this one.
@@ -325,220 +326,20 @@ impl<'h> Renderer<'h> {
 
         // --- The engine's scene: animate, then rasterize both views.
         let transforms: Vec<_> = (0..self.scene.scene.instances.len()).map(|i| self.scene.transform(i, time)).collect();
-        let mut deformed_buffer = None;
-        if let (Some(d), Some(buffer)) = (&self.scene.deformer, &self.slots[slot].deformed) {
-            host.write_buffer(buffer, bytemuck::cast_slice(&deformed_vertices(&self.scene, d, time)))?;
-            deformed_buffer = Some((self.scene.scene.instances[d.instance].mesh, buffer.buffer));
-        }
-        let draws: Vec<Draw> = (0..transforms.len())
-            .map(|i| Draw {
-                mesh: self.scene.scene.instances[i].mesh,
-                transform: transforms[i],
-                prev_transform: self.prev_transforms[i],
-                material: self.scene.materials[i],
-                vertex_buffer: deformed_buffer.filter(|(m, _)| *m == self.scene.scene.instances[i].mesh).map(|(_, b)| b),
-                textures: self.scene.material_textures.get(i).copied().unwrap_or_default(),
-                alpha_cutoff: match self.scene.alpha_textures.get(self.scene.scene.instances[i].mesh) {
-                    Some(Some(_)) => AlphaTestInput::default().cutoff,
-                    _ => 0.0,
-                },
-            })
-            .collect();
-        {
-            let s = &self.slots[slot];
-            self.gbuffer.record(host, cmd, 2 * slot, &s.main.targets, &self.meshes, &draws, &camera, &prev_camera)?;
-            // The lidar view has no use for motion: its previous camera is its current one.
-            self.gbuffer.record(host, cmd, 2 * slot + 1, &s.lidar.targets, &self.meshes, &draws, &lidar_camera, &lidar_camera)?;
-        }
+        let deformed = self.write_deformed(slot, time)?;
+        self.record_gbuffers(slot, &transforms, deformed, &cameras)?;
         self.slots[slot].timer.mark(host, cmd, "raster G-buffers (main + lidar)");
 
         // --- The SDK: one container for everything of this frame.
-        let mut labels = Vec::new();
-        let (sun, point) = self.lights();
-        let reach = self.reach;
-        let c = &mut self.container;
-        for (i, t) in transforms.iter().enumerate() {
-            if self.scene.is_dynamic(i) {
-                let input = InstanceInput {
-                    geometry: self.geometries[self.scene.scene.instances[i].mesh],
-                    transform: *t,
-                    initial_tile_color: self.settings.unlit_color,
-                    albedo: self.scene.diffuse_albedo(i),
-                    emission: self.scene.emission(i),
-                    ..Default::default()
-                };
-                c.schedule_instance(&InstanceTask { handle: self.instances[i], operation: InstanceOperation::Update, input })
-                    .map_err(sdk_err)?;
-            }
-        }
-        if let Some((mesh, buffer)) = deformed_buffer {
-            let base = sdk_geometry_input(&self.scene, &self.meshes, mesh, true);
-            let input = GeometryInput { vertices: VertexBufferInput { buffer, ..base.vertices }, ..base };
-            c.schedule_geometry(&GeometryTask { handle: self.geometries[mesh], operation: TaskOperation::Update, input })
-                .map_err(sdk_err)?;
-        }
-        c.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: self.settings.max_blas_build_count }).map_err(sdk_err)?;
-        labels.push((TaskKind::Bvh, "BVH (updates, refit, TLAS)"));
-        let main_inputs = Inputs::of(&self.slots[slot].main.targets, &camera);
-        let lidar_inputs = Inputs::of(&self.slots[slot].lidar.targets, &lidar_camera);
-        if frame > 0 {
-            let window = self.settings.injection_window;
-            let p = &self.slots[prev];
-            for (view, cam, label) in
-                [(&p.main, &prev_camera, "inject main (last frame)"), (&p.lidar, &prev_lidar, "inject lidar (last frame)")]
-            {
-                let inputs = Inputs::of(&view.targets, cam);
-                c.schedule_direct_lighting_injection(&DirectLightingInjectionTask {
-                    depth: inputs.common.depth,
-                    lit: view.lit.input(GENERAL),
-                    viewport: inputs.common.viewport,
-                    camera: inputs.common.camera,
-                    average_window: window,
-                    ..Default::default()
-                })
-                .map_err(sdk_err)?;
-                labels.push((TaskKind::DirectLightingInjection, label));
-            }
-        }
-        // Surfaces no camera has injected (the column's back, seen only in the mirror) take
-        // the sun's and the point light's direct light and a bounce of the caches' light (the
-        // walls', the sky's), before anything reads the cache.
-        if self.settings.relight_samples > 0 {
-            c.schedule_cache_relight(&RelightCacheTask {
-                lights: vec![sun, point],
-                max_samples: self.settings.relight_samples,
-                bounce: true,
-                sky: self.scene.sky,
-                ..Default::default()
-            })
-            .map_err(sdk_err)?;
-            labels.push((TaskKind::CacheRelight, "cache relight"));
-        }
-        let wk = &self.work;
-        let rays = self.settings.rays_per_pixel;
-        let mut common = main_inputs.common;
-        common.half_resolution_mode = self.settings.checkerboard;
-        // Shadows: the main view 1 ray + denoiser, the lidar view 4 rays (it is small and
-        // its image only feeds the cache).
-        for (light, noisy, out, ctx, label) in [
-            (sun, &wk.sun_noisy, &wk.sun, self.denoisers.sun, "sun"),
-            (point, &wk.point_noisy, &wk.point, self.denoisers.point, "point"),
-        ] {
-            c.schedule_shadow(&TraceShadowTask {
-                common,
-                light,
-                output: noisy.input(GENERAL),
-                rays_per_pixel: rays,
-                first_hit: false,
-            })
-            .map_err(sdk_err)?;
-            labels.push((TaskKind::Shadow, if label == "sun" { "shadow sun" } else { "shadow point" }));
-            c.schedule_denoise_shadow(&DenoiseShadowTask {
-                context: ctx,
-                common: main_inputs.denoising,
-                light,
-                input: noisy.input(GENERAL),
-                output: out.input(GENERAL),
-            })
-            .map_err(sdk_err)?;
-            labels.push((TaskKind::DenoiseShadow, if label == "sun" { "denoise shadow sun" } else { "denoise shadow point" }));
-        }
-        for (light, out) in [(sun, &wk.lidar_sun), (point, &wk.lidar_point)] {
-            c.schedule_shadow(&TraceShadowTask {
-                common: lidar_inputs.common,
-                light,
-                output: out.input(GENERAL),
-                rays_per_pixel: 4,
-                first_hit: false,
-            })
-            .map_err(sdk_err)?;
-            labels.push((TaskKind::Shadow, "shadow lidar"));
-        }
-        c.schedule_ambient_occlusion(&TraceAmbientOcclusionTask {
-            common,
-            output: wk.ao_noisy.input(GENERAL),
-            ray_length: self.scene.ao_ray_length,
-            rays_per_pixel: rays,
-            ..Default::default()
-        })
-        .map_err(sdk_err)?;
-        labels.push((TaskKind::AmbientOcclusion, "AO"));
-        c.schedule_denoise_diffuse_occlusion(&DenoiseDiffuseOcclusionTask {
-            context: self.denoisers.ao,
-            common: main_inputs.denoising,
-            input: wk.ao_noisy.input(GENERAL),
-            output: wk.ao.input(GENERAL),
-        })
-        .map_err(sdk_err)?;
-        labels.push((TaskKind::DenoiseDiffuseOcclusion, "denoise AO"));
-        let sky = self.scene.sky;
-        c.schedule_diffuse(&TraceDiffuseTask {
-            common,
-            output: wk.diffuse_noisy.input(GENERAL),
-            rays_per_pixel: rays,
-            ray_length: reach,
-            miss_radiance: sky,
-            ..Default::default()
-        })
-        .map_err(sdk_err)?;
-        labels.push((TaskKind::Diffuse, "diffuse GI"));
-        c.schedule_specular(&TraceSpecularTask {
-            common,
-            output: wk.specular_noisy.input(GENERAL),
-            rays_per_pixel: rays,
-            ray_length: reach,
-            miss_radiance: sky,
-            // One sample of a glossy lobe that finds the sun-lit wall can be 50x its
-            // neighbours; the denoiser spreads such a spike into a blotch.
-            firefly_clamp: 8.0,
-            // The mirror shows the column's shadow edges as sharp as the lights make them.
-            hit_lighting: if self.settings.hit_lighting {
-                HitLighting { lights: vec![sun, point], ..Default::default() }
-            } else {
-                HitLighting::default()
-            },
-            ..Default::default()
-        })
-        .map_err(sdk_err)?;
-        labels.push((TaskKind::Specular, "reflections"));
-        c.schedule_denoise_specular_and_diffuse(&DenoiseSpecularAndDiffuseTask {
-            context: self.denoisers.radiance,
-            common: main_inputs.denoising,
-            input_specular: wk.specular_noisy.input(GENERAL),
-            input_diffuse: wk.diffuse_noisy.input(GENERAL),
-            output_specular: wk.specular.input(GENERAL),
-            output_diffuse: wk.diffuse.input(GENERAL),
-        })
-        .map_err(sdk_err)?;
-        labels.push((TaskKind::DenoiseSpecularAndDiffuse, "denoise reflections + GI"));
-        for &mode in debug {
-            let output = match self.work.debug.entry(mode) {
-                std::collections::hash_map::Entry::Occupied(e) => e.get().input(GENERAL),
-                std::collections::hash_map::Entry::Vacant(e) => e.insert(work_image(host, w, h)?).input(GENERAL),
-            };
-            let task = TraceAmbientOcclusionTask {
-                common: TraceCommon { debug_output: mode, ..main_inputs.common },
-                output,
-                ..Default::default()
-            };
-            self.container.schedule_ambient_occlusion(&task).map_err(sdk_err)?;
-            labels.push((TaskKind::AmbientOcclusion, "debug views"));
-        }
+        self.schedule_frame(slot, &transforms, deformed, &cameras, debug)?;
         let ticket = self.ctx.build_gpu_task(&mut self.container, cmd).map_err(sdk_err)?;
         let s = &mut self.slots[slot];
         s.ticket = Some(ticket);
-        s.labels = labels;
         s.timer.mark(host, cmd, "SDK (all tasks)");
         host.full_barrier(cmd);
 
         // --- The engine's lighting and composite.
-        let lights = self.scene.lights;
-        let wk = &self.work;
-        let s = &self.slots[slot];
-        let main_vis = Visibility { sun: &wk.sun, point: &wk.point, layout: GENERAL, raw_trace: false };
-        self.lighting.record(host, cmd, 2 * slot, &s.main.targets, &camera, &lights, main_vis, &s.main.lit)?;
-        let lidar_vis = Visibility { sun: &wk.lidar_sun, point: &wk.lidar_point, layout: GENERAL, raw_trace: true };
-        self.lighting.record(host, cmd, 2 * slot + 1, &s.lidar.targets, &lidar_camera, &lights, lidar_vis, &s.lidar.lit)?;
+        self.record_lighting(slot, &cameras)?;
         self.slots[slot].timer.mark(host, cmd, "direct lighting (main + lidar)");
         host.full_barrier(cmd);
         self.record_composite(slot, &camera)?;
@@ -550,11 +351,60 @@ impl<'h> Renderer<'h> {
         }
         let s = &mut self.slots[slot];
         s.camera = camera;
-        s.lidar_camera = lidar_camera;
+        s.lidar_camera = lidar;
         s.frame = frame;
         self.prev_transforms = transforms;
         self.last_slot = slot;
         Ok(())
+    }
+
+    /// Writes the deforming mesh's vertices at `time` into `slot`'s vertex buffer: the mesh
+    /// and the buffer, where the scene has one.
+    fn write_deformed(&self, slot: usize, time: f32) -> HostResult<Option<(usize, vk::Buffer)>> {
+        let (Some(d), Some(buffer)) = (&self.scene.deformer, &self.slots[slot].deformed) else { return Ok(None) };
+        self.host.write_buffer(buffer, bytemuck::cast_slice(&deformed_vertices(&self.scene, d, time)))?;
+        Ok(Some((self.scene.scene.instances[d.instance].mesh, buffer.buffer)))
+    }
+
+    /// The raster G-buffers of the main view and of the lidar view, every instance at
+    /// `transforms` (the deforming mesh from its vertex buffer of this frame).
+    fn record_gbuffers(
+        &mut self,
+        slot: usize,
+        transforms: &[glam::Affine3A],
+        deformed: Option<(usize, vk::Buffer)>,
+        cameras: &FrameCameras,
+    ) -> HostResult<()> {
+        let scene = &self.scene;
+        let draws: Vec<Draw> = (0..transforms.len())
+            .map(|i| Draw {
+                mesh: scene.scene.instances[i].mesh,
+                transform: transforms[i],
+                prev_transform: self.prev_transforms[i],
+                material: scene.materials[i],
+                vertex_buffer: deformed.filter(|(m, _)| *m == scene.scene.instances[i].mesh).map(|(_, b)| b),
+                textures: scene.material_textures.get(i).copied().unwrap_or_default(),
+                alpha_cutoff: match scene.alpha_textures.get(scene.scene.instances[i].mesh) {
+                    Some(Some(_)) => AlphaTestInput::default().cutoff,
+                    _ => 0.0,
+                },
+            })
+            .collect();
+        let (host, s) = (self.host, &self.slots[slot]);
+        let (main, lidar) = (&cameras.main, &cameras.lidar);
+        self.gbuffer.record(host, s.cmd, 2 * slot, &s.main.targets, &self.meshes, &draws, main, &cameras.prev_main)?;
+        // The lidar view has no use for motion: its previous camera is its current one.
+        self.gbuffer.record(host, s.cmd, 2 * slot + 1, &s.lidar.targets, &self.meshes, &draws, lidar, lidar)
+    }
+
+    /// The engine's deferred direct lighting of both views, from the SDK's shadows (the main
+    /// view's denoised, the lidar view's raw traces).
+    fn record_lighting(&mut self, slot: usize, cameras: &FrameCameras) -> HostResult<()> {
+        let (host, lights, wk, s) = (self.host, self.scene.lights, &self.work, &self.slots[slot]);
+        let main_vis = Visibility { sun: &wk.sun, point: &wk.point, layout: GENERAL, raw_trace: false };
+        self.lighting.record(host, s.cmd, 2 * slot, &s.main.targets, &cameras.main, &lights, main_vis, &s.main.lit)?;
+        let lidar_vis = Visibility { sun: &wk.lidar_sun, point: &wk.lidar_point, layout: GENERAL, raw_trace: true };
+        self.lighting.record(host, s.cmd, 2 * slot + 1, &s.lidar.targets, &cameras.lidar, &lights, lidar_vis, &s.lidar.lit)
     }
 
     /// The sun and the point light as the SDK's shadow and relight tasks take them: their

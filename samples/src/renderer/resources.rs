@@ -7,7 +7,7 @@ use crate::lighting::LightingPass;
 use crate::modes::Mode;
 use crate::raster::{self, MeshBuffers, Targets};
 use ash::vk;
-use hybrid_rt::{DebugOutput, DenoisingContextHandle, GpuTicket, TaskKind};
+use hybrid_rt::{DebugOutput, DenoisingContextHandle, GpuTicket};
 use hybrid_rt_host::scene::Camera;
 use hybrid_rt_host::{Host, HostBuffer, HostImage, HostResult};
 use std::collections::HashMap;
@@ -43,8 +43,6 @@ pub(super) struct Slot {
     pub(super) lidar: View,
     /// The flag's vertices of this slot's frame (host-visible: the CPU writes them).
     pub(super) deformed: Option<HostBuffer>,
-    /// The SDK tasks of the frame, in scheduling order, to name their timings.
-    pub(super) labels: Vec<(TaskKind, &'static str)>,
     pub(super) camera: Camera,
     pub(super) lidar_camera: Camera,
     pub(super) frame: u64,
@@ -98,7 +96,6 @@ impl Slot {
             main: View::new(host, width, height)?,
             lidar: View::new(host, lidar_size, lidar_size)?,
             deformed,
-            labels: Vec::new(),
             camera,
             lidar_camera: camera,
             frame: 0,
