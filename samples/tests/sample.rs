@@ -78,12 +78,23 @@ fn the_sample_renders_the_room_and_every_mode_is_sane() {
     let json = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("sample-room.json");
     let text = run_sample(&["--headless", "--width", &w, "--height", &h, "--frames", &f, "--json", json.to_str().unwrap()], &out);
     assert!(text.contains(&format!("the frame: {}", out.join("composite.png").display())), "{text}");
+    check_report(&text, &json);
+    check_every_mode(&out);
+    check_composite(&out);
+    check_denoisers_smooth(&out);
+    check_smooth_spheres(&out);
+    check_mirror(&out);
+    check_cache_view(&out);
+}
+
+/// The sample's printed report and its JSON twin.
+fn check_report(text: &str, json: &Path) {
     // Automatic exposure: the sun-lit room is brighter than mid-grey, so below 1 (whites no
     // longer clip), and not absurdly (the log-average is within 0.1..1 here).
     let exposure: f32 = text.split("exposure: ").nth(1).and_then(|t| t.split(' ').next()).and_then(|v| v.parse().ok()).unwrap();
     assert!((0.18..1.0).contains(&exposure), "automatic exposure {exposure}");
     // The JSON report: valid, every frame counted, the times over the frames after the first.
-    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
     assert_eq!(report["frames"], FRAMES, "{report}");
     assert_eq!(report["measured_frames"], FRAMES - 1, "{report}");
     assert!(report["frame_gpu_ms"].as_f64().is_some_and(|ms| ms > 0.0), "{report}");
@@ -105,25 +116,32 @@ fn the_sample_renders_the_room_and_every_mode_is_sane() {
     ] {
         assert!(text.contains(label), "{label} missing from the report:\n{text}");
     }
+}
 
-    // Every mode: written, finite, not blank.
+/// Every mode: written, finite, not blank.
+fn check_every_mode(out: &Path) {
     for mode in modes::ALL {
         let name = mode.name();
         assert!(out.join(format!("{name}.png")).metadata().map_or(0, |m| m.len()) > 100, "{name}.png");
-        let img = Image::read(&out, name);
+        let img = Image::read(out, name);
         assert!(img.0.iter().all(|t| t.iter().all(|v| v.is_finite())), "{name}: NaN or infinity");
         let lum = img.luminance();
         let (lo, hi) = lum.iter().fold((f32::MAX, f32::MIN), |(a, b), v| (a.min(*v), b.max(*v)));
         assert!(hi - lo > 0.05, "{name} is blank: luminance {lo}..{hi}");
     }
+}
 
-    // The composite: every pixel lit (the room is open to the sky and lit by two lights plus GI).
-    let composite = Image::read(&out, "composite");
+/// The composite: every pixel lit (the room is open to the sky and lit by two lights plus GI).
+fn check_composite(out: &Path) {
+    let composite = Image::read(out, "composite");
     let lum = composite.luminance();
     let dark = lum.iter().filter(|v| **v < 0.01).count();
     assert!(dark < lum.len() / 50, "{dark} black pixels in the composite");
     assert!((0.1..3.0).contains(&mean(&lum)), "composite mean luminance {}", mean(&lum));
+}
 
+/// Each denoised signal against its 1-ray input.
+fn check_denoisers_smooth(out: &Path) {
     // The denoisers smooth what they are given: neighbour differences of each denoised signal
     // are a fraction of the 1-ray input's. Shadows at this size are mostly hard edges, which
     // a denoiser must keep, so only their penumbra noise can go: a looser bound.
@@ -133,13 +151,14 @@ fn the_sample_renders_the_room_and_every_mode_is_sane() {
         ("diffuse_noisy", "diffuse", 0.5),
         ("specular_noisy", "specular", 0.5),
     ] {
-        let (n, c) = (roughness_of(&Image::read(&out, noisy).luminance()), roughness_of(&Image::read(&out, clean).luminance()));
+        let (n, c) = (roughness_of(&Image::read(out, noisy).luminance()), roughness_of(&Image::read(out, clean).luminance()));
         eprintln!("{noisy} {n:.4} -> {clean} {c:.4}");
         assert!(c < ratio * n, "{clean} ({c}) is not smoother than {noisy} ({n})");
     }
+}
 
-    check_smooth_spheres(&out);
-
+/// The mirror's reflections against the CPU reference.
+fn check_mirror(out: &Path) {
     // The mirror shows the room: for each mirror pixel, the CPU reference traces the
     // reflected ray through the same scene at the last frame's time; the reflection's colour
     // must lean the way the surface it finds does (red wall red, green wall green, white
@@ -149,8 +168,8 @@ fn the_sample_renders_the_room_and_every_mode_is_sane() {
     let scene = room.at(time);
     let tracer = Tracer::new(&scene);
     let camera = room.camera_path.at(1.0);
-    let specular = Image::read(&out, "specular");
-    let (roughness, metalness) = (Image::read(&out, "roughness"), Image::read(&out, "metalness"));
+    let specular = Image::read(out, "specular");
+    let (roughness, metalness) = (Image::read(out, "roughness"), Image::read(out, "metalness"));
     let mirror = room.materials.iter().position(|m| m.roughness == 0.0).unwrap() as u32;
     // The blue column stands before the mirror: no camera sees its back, which the mirror shows.
     let column = room.materials.iter().position(|m| m.albedo == [0.2, 0.35, 0.75]).unwrap() as u32;
@@ -209,12 +228,15 @@ fn the_sample_renders_the_room_and_every_mode_is_sane() {
     );
     assert!(shows_light as f32 > 0.95 * tested as f32, "{shows_light} of {tested} mirror pixels show light");
     assert!(agree as f32 > 0.8 * tested as f32, "{agree} of {tested}");
+}
 
+/// The debug cache view against the direct light.
+fn check_cache_view(out: &Path) {
     // The cache view matches the lit image where the camera's own light went in: the
     // direct-lighting cache (what injection baked, seen through primary rays) against this
     // frame's direct light, on pixels both see as lit. Tiles average a few pixels and the
     // cache runs a frame behind, so per-pixel agreement is loose; most pixels must agree.
-    let (cache, direct) = (Image::read(&out, "debug_cache"), Image::read(&out, "direct"));
+    let (cache, direct) = (Image::read(out, "debug_cache"), Image::read(out, "direct"));
     let (mut seen, mut matched) = (0, 0);
     for i in 0..(W * H) as usize {
         let (c, l) = (Vec3::from_slice(&cache.0[i][..3]), Vec3::from_slice(&direct.0[i][..3]));
