@@ -7,11 +7,11 @@
 //! and the SDK's memory. With a display (or `--window`): a window; keys switch modes and move
 //! the camera, the title shows the GPU times.
 use clap::Parser;
+use hybrid_rt_host::Host;
 use hybrid_rt_samples::modes::{self, Mode};
 use hybrid_rt_samples::progress::Progress;
 use hybrid_rt_samples::renderer::{Renderer, Settings};
 use hybrid_rt_samples::{gltf_scene, images, report, scenes, window};
-use hybrid_rt_host::Host;
 use std::path::PathBuf;
 
 const AFTER_HELP: &str = "modes: composite direct albedo normals roughness metalness motion sun_shadow_noisy sun_shadow
