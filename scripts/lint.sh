@@ -16,4 +16,12 @@ cargo clippy -p hybrid-rt --lib --locked -- -D warnings
 # The API reference: every public item documented (the crate denies missing_docs), no broken
 # intra-doc links.
 RUSTDOCFLAGS="-D warnings" cargo doc -p hybrid-rt -p hybrid-rt-c -p hybrid-rt-wgpu --no-deps --locked
-echo "lint: fmt, clippy and rustdoc clean"
+# Test-only SDK features stay out of the sample's build: Cargo's feature unification would
+# otherwise switch `bench-floor` or `fault-injection` on in an application's build of it.
+features=$(cargo tree --locked -e features -p hybrid-rt-samples --edges normal -i hybrid-rt)
+if grep -Eq 'bench-floor|fault-injection' <<<"$features"; then
+  echo "lint: the sample's build turns on a test-only SDK feature:" >&2
+  echo "$features" >&2
+  exit 1
+fi
+echo "lint: fmt, clippy and rustdoc clean; the sample builds the SDK with its default features"
