@@ -527,9 +527,9 @@ typedef struct HrtTaskTiming {
   uint32_t task_index;
   double gpu_ms;
   /**
-   * The label the task was given (hrt_task_container_set_task_label); for HRT_TASK_BVH,
-   * HRT_TASK_BLAS_BUILD and HRT_TASK_TLAS_BUILD the first BVH task's, none for
-   * HRT_TASK_CACHE_UPDATE. NUL-terminated, cut to at most HRT_TASK_LABEL_CAPACITY - 1 bytes
+   * The label the task was given (hrt_task_container_set_task_label); for HRT_TASK_BVH the
+   * first BVH task's, none for the intervals nested in it (HRT_TASK_BLAS_BUILD,
+   * HRT_TASK_TLAS_BUILD) and HRT_TASK_CACHE_UPDATE, so labelled times add up. NUL-terminated, cut to at most HRT_TASK_LABEL_CAPACITY - 1 bytes
    * at a UTF-8 character boundary; all zero when the task has no label.
    */
   char label[HRT_TASK_LABEL_CAPACITY];

@@ -22,15 +22,10 @@ pub(super) fn schedule(
     container.set_task_label(label).map_err(sdk_err)
 }
 
-/// What the report calls a timing: its task's label, or its kind's name where it has none.
-/// The BLAS and TLAS builds are intervals inside the BVH work, which carries the BVH label:
-/// they keep their kinds' names, so their time is not counted twice under it.
+/// What the report calls a timing: its task's label, or its kind's name where it has none
+/// (the BLAS and TLAS builds nested in the BVH work, the cache update).
 pub(super) fn timing_label(done: &CompletedTask, timing: &TaskTiming) -> String {
-    let label = match timing.kind {
-        TaskKind::BlasBuild | TaskKind::TlasBuild => None,
-        _ => done.label(timing),
-    };
-    label.map_or_else(|| format!("{:?}", timing.kind), str::to_owned)
+    done.label(timing).map_or_else(|| format!("{:?}", timing.kind), str::to_owned)
 }
 
 impl Renderer<'_> {

@@ -100,10 +100,11 @@ impl CompletedTask {
     }
 
     /// The label the timed task was given when it was scheduled
-    /// (`TaskContainer::set_task_label`); for `Bvh`, `BlasBuild` and `TlasBuild`, the label of
-    /// the first BVH task; none for `CacheUpdate`, which serves no one task.
+    /// (`TaskContainer::set_task_label`). `Bvh` carries the label of the container's first BVH
+    /// task; the intervals nested in it (`BlasBuild`, `TlasBuild`) and `CacheUpdate`, which
+    /// serves no one task, have none, so summing labelled timings counts each interval once.
     pub fn label(&self, timing: &TaskTiming) -> Option<&str> {
-        if timing.kind == TaskKind::CacheUpdate {
+        if matches!(timing.kind, TaskKind::BlasBuild | TaskKind::TlasBuild | TaskKind::CacheUpdate) {
             return None;
         }
         let i = self.labels.binary_search_by_key(&timing.task_index, |(i, _)| *i).ok()?;
