@@ -29,6 +29,8 @@ fn timings_carry_the_labels_their_tasks_were_given() {
     frame.schedule_ambient_occlusion(&images.ao_task(&camera, 2.0, 1)).unwrap();
     frame.set_task_label("first name").unwrap();
     frame.set_task_label("AO, main view").unwrap();
+    let e = frame.set_task_label("AO\0main").unwrap_err();
+    assert!(matches!(e, Error::InvalidInput { .. }), "a NUL would cut the C and Vulkan labels: {e}");
     frame.schedule_ambient_occlusion(&images.ao_task(&camera, 2.0, 1)).unwrap();
     let done = run_frame(&host, &ctx, &mut frame).unwrap();
 

@@ -86,12 +86,17 @@ impl TaskContainer {
 
     /// Names the task scheduled last: its region in the command buffer (with debug utils on,
     /// as RenderDoc and Nsight show it) and its timings (`CompletedTask::label`) carry the
-    /// label. A second label for the same task replaces the first.
+    /// label. A second label for the same task replaces the first. An empty container, or a
+    /// label with a NUL character, is `Error::InvalidInput`.
     pub fn set_task_label(&mut self, label: &str) -> Result<()> {
         let Some(last) = self.tasks.len().checked_sub(1) else {
             return Err(crate::Error::invalid("set_task_label", "the container has no task to label"));
         };
         let index = u32::try_from(last).map_err(|_| crate::Error::invalid("set_task_label", "too many tasks"))?;
+        // Vulkan's label and the C ABI's are NUL-terminated: a NUL inside would cut them.
+        if label.contains('\0') {
+            return Err(crate::Error::invalid("set_task_label label", "contains a NUL character"));
+        }
         match self.labels.last_mut() {
             Some((i, l)) if *i == index => *l = label.to_owned(),
             _ => self.labels.push((index, label.to_owned())),
@@ -99,7 +104,7 @@ impl TaskContainer {
         Ok(())
     }
 
-    /// Queues a render task: `task` converted into its table row's payload, then validated.
+    /// Checks a render task's payload (see `Check`) and queues it.
     fn schedule_render<P: Check>(&mut self, payload: P, wrap: fn(P) -> RenderTask) -> Result<()> {
         let shared = self.shared()?;
         payload.check(&shared)?;
