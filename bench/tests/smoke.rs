@@ -28,10 +28,14 @@ fn bench_prints_and_writes_json() {
         "diffuse_gpu_ms",
         "specular_gpu_ms",
         "multi_shadow_4_lights_gpu_ms",
+        "passes_gpu_ms",
+        "atrous_1",
+        "shadow_blur",
     ] {
         assert!(j.contains(key), "{key} missing from {j}");
     }
     assert!(text.contains("AO 64x36, 2 ray(s)/pixel"), "{text}");
+    assert!(text.contains("  pass temporal"), "{text}");
 }
 
 /// The field registered with positions interleaved in 32-byte vertices gets the same compact

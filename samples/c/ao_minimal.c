@@ -262,8 +262,11 @@ static Image filled_image(VkFormat format, float r, float g, float b, float a) {
     return img;
 }
 
-/* The timings of run_frame's last ticket. */
+/* The timings of run_frame's last ticket, and of its tasks' passes (the context times them:
+ * HrtInitSettings.time_passes). */
 static HrtTaskTiming timings[8];
+static HrtPassTiming passes[16];
+static uint32_t pass_count = 0;
 
 /* Records the container between two full barriers (the engine's own work around it), submits,
  * waits, hands the ticket back and returns the number of timed tasks. */
@@ -288,10 +291,12 @@ static uint32_t run_frame(HrtContext *ctx, HrtTaskContainer *frame, Image *out, 
     submit_and_wait(cmd);
 
     uint32_t count = 0;
-    CHECK_HRT(hrt_mark_gpu_task_completed(ctx, ticket, timings, 8, &count));
+    CHECK_HRT(hrt_mark_gpu_task_completed_with_passes(ctx, ticket, timings, 8, &count, passes, 16, &pass_count));
     for (uint32_t i = 0; i < count && i < 8; i++)
         printf("  task %u (kind %u, \"%s\"): %.3f ms\n", timings[i].task_index, timings[i].kind, timings[i].label,
                timings[i].gpu_ms);
+    for (uint32_t i = 0; i < pass_count && i < 16; i++)
+        printf("    pass %s of task %u: %.3f ms\n", passes[i].pass, passes[i].task_index, passes[i].gpu_ms);
     /* The same ticket twice is refused. */
     EXPECT(hrt_mark_gpu_task_completed(ctx, ticket, NULL, 0, NULL) == HRT_ERROR_UNKNOWN_TICKET, "second return");
 
@@ -420,6 +425,8 @@ int main(void) {
     desc.enabled_features = &f2;
     desc.debug_utils = validation; /* the instance enables VK_EXT_debug_utils with validation */
     desc.settings = hrt_init_settings_default();
+    EXPECT(!desc.settings.time_passes, "passes are not timed by default");
+    desc.settings.time_passes = true;
     HrtContext *ctx = NULL;
     desc.api_version = HRT_API_VERSION + 1;
     EXPECT(hrt_context_create(&desc, &ctx) == HRT_ERROR_VERSION_MISMATCH, "a header/library mismatch is refused");
@@ -712,6 +719,13 @@ int main(void) {
         run_frame(ctx, frame, &clean, 4, vis_px);
     }
     printf("denoised visibility: centre %.3f, corner %.3f\n", vis_px[(H / 2) * W + W / 2], vis_px[0]);
+    /* The shadow denoiser's three passes, timed inside its task (task 1, after the trace). */
+    static const char *shadow_passes[3] = {"shadow_prep", "shadow_blur", "shadow_temporal"};
+    EXPECT(pass_count == 3, "the shadow denoiser's passes are timed (%u)", pass_count);
+    for (uint32_t i = 0; i < pass_count && i < 3; i++)
+        EXPECT(passes[i].kind == HRT_TASK_DENOISE_SHADOW && passes[i].task_index == 1 &&
+                   strcmp(passes[i].pass, shadow_passes[i]) == 0 && passes[i].gpu_ms >= 0.0,
+               "pass %u is %s of the denoise task", i, shadow_passes[i]);
     EXPECT(vis_px[(H / 2) * W + W / 2] == 0.0f && vis_px[0] == 1.0f, "a hard light's shadow stays exact");
     HrtDenoiseTask wrong = hrt_denoise_task_default();
     wrong.context = denoiser;

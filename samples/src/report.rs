@@ -11,6 +11,8 @@ pub struct Report {
     pub frames: u64,
     pub first_frame_bvh_ms: f64,
     pub sdk: Vec<(String, f64)>,
+    /// ("task label: pass", mean ms) with `--time-passes`.
+    pub sdk_passes: Vec<(String, f64)>,
     pub passes: Vec<(String, f64)>,
     pub sdk_bytes: u64,
     pub cache_bytes: u64,
@@ -31,6 +33,7 @@ impl Report {
             frames: r.stats.frames,
             first_frame_bvh_ms: r.stats.first_frame_bvh_ms,
             sdk: Stats::means(&r.stats.sdk),
+            sdk_passes: Stats::means(&r.stats.sdk_passes),
             passes: Stats::means(&r.stats.passes),
             sdk_bytes: mem.total_bytes(),
             cache_bytes: r.cache_bytes(),
@@ -62,6 +65,10 @@ impl Report {
             if label.starts_with("SDK") {
                 for (task, ms) in self.sdk_tasks() {
                     s += &format!("    {task:<38} {ms:8.3} ms\n");
+                    let prefix = format!("{task}: ");
+                    for (pass, ms) in self.sdk_passes.iter().filter(|(p, _)| p.starts_with(&prefix)) {
+                        s += &format!("      {:<36} {ms:8.3} ms\n", &pass[prefix.len()..]);
+                    }
                 }
             }
         }
@@ -107,6 +114,7 @@ impl Report {
             frame_gpu_ms: f64,
             passes: Vec<Timing<'a>>,
             sdk_tasks: Vec<Timing<'a>>,
+            sdk_passes: Vec<Timing<'a>>,
             sdk_bytes: u64,
             cache_bytes: u64,
             denoiser_bytes: u64,
@@ -126,6 +134,7 @@ impl Report {
             frame_gpu_ms: self.frame_ms(),
             passes: timings(self.passes.iter()),
             sdk_tasks: timings(self.sdk_tasks()),
+            sdk_passes: timings(self.sdk_passes.iter()),
             sdk_bytes: self.sdk_bytes,
             cache_bytes: self.cache_bytes,
             denoiser_bytes: self.denoiser_bytes,

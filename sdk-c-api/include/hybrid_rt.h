@@ -47,6 +47,11 @@
 #define HRT_TASK_LABEL_CAPACITY 64
 
 /**
+ * Bytes of HrtPassTiming.pass, its NUL included.
+ */
+#define HRT_PASS_NAME_CAPACITY 32
+
+/**
  * Largest HrtDenoisingContextInput.max_width / max_height.
  */
 #define HRT_MAX_DENOISING_EXTENT 16384
@@ -472,6 +477,11 @@ typedef struct HrtInitSettings {
    * caches are evicted past it (0: no limit, the default). See hrt_cache_report.
    */
   uint64_t cache_budget_bytes;
+  /**
+   * Time every pass of the denoisers as well as the task (default false): the passes'
+   * times come back through hrt_mark_gpu_task_completed_with_passes.
+   */
+  bool time_passes;
 } HrtInitSettings;
 
 /**
@@ -514,6 +524,26 @@ typedef struct HrtContextDesc {
 
 typedef uint64_t HrtTicket;
 
+typedef struct HrtAllocationCount {
+  uint64_t count;
+  uint64_t bytes;
+} HrtAllocationCount;
+
+typedef struct HrtResourceAllocations {
+  struct HrtAllocationCount geometry_copies;
+  struct HrtAllocationCount blas;
+  struct HrtAllocationCount build_scratch;
+  struct HrtAllocationCount tlas;
+  struct HrtAllocationCount upload_rings;
+  struct HrtAllocationCount pipelines;
+  struct HrtAllocationCount cache;
+  struct HrtAllocationCount readback;
+  /**
+   * Denoising contexts' history images.
+   */
+  struct HrtAllocationCount denoiser;
+} HrtResourceAllocations;
+
 /**
  * What an HrtTaskTiming measured: one of the HRT_TASK_* values.
  */
@@ -535,25 +565,26 @@ typedef struct HrtTaskTiming {
   char label[HRT_TASK_LABEL_CAPACITY];
 } HrtTaskTiming;
 
-typedef struct HrtAllocationCount {
-  uint64_t count;
-  uint64_t bytes;
-} HrtAllocationCount;
-
-typedef struct HrtResourceAllocations {
-  struct HrtAllocationCount geometry_copies;
-  struct HrtAllocationCount blas;
-  struct HrtAllocationCount build_scratch;
-  struct HrtAllocationCount tlas;
-  struct HrtAllocationCount upload_rings;
-  struct HrtAllocationCount pipelines;
-  struct HrtAllocationCount cache;
-  struct HrtAllocationCount readback;
+/**
+ * One timed pass of a task of a ticket (HrtInitSettings.time_passes): its time is part of
+ * the task's HrtTaskTiming, so do not add the two.
+ */
+typedef struct HrtPassTiming {
   /**
-   * Denoising contexts' history images.
+   * The kind of the task the pass belongs to.
    */
-  struct HrtAllocationCount denoiser;
-} HrtResourceAllocations;
+  HrtTaskKind kind;
+  /**
+   * That task's position in its container.
+   */
+  uint32_t task_index;
+  double gpu_ms;
+  /**
+   * The pass's name ("temporal", "atrous_1", "shadow_blur", ...; the integration guide lists
+   * them), NUL-terminated.
+   */
+  char pass[HRT_PASS_NAME_CAPACITY];
+} HrtPassTiming;
 
 typedef struct HrtNormalInput {
   struct HrtImageInput image;
@@ -1434,35 +1465,6 @@ enum HrtStatus hrt_build_gpu_task(struct HrtContext *ctx,
                                   VkCommandBuffer command_buffer,
                                   HrtTicket *ticket);
 
-/**
- * Hands a ticket back after the GPU finished its command buffer. Writes up to `capacity`
- * per-task timings and their total number to `timing_count` (both optional). A ticket
- * returned twice or never issued is HRT_ERROR_UNKNOWN_TICKET.
- */
-enum HrtStatus hrt_mark_gpu_task_completed(struct HrtContext *ctx,
-                                           HrtTicket ticket,
-                                           struct HrtTaskTiming *timings,
-                                           uint32_t capacity,
-                                           uint32_t *timing_count);
-
-/**
- * Serials of the tickets built and not yet handed back: writes up to `capacity` and the total
- * to `count`.
- */
-enum HrtStatus hrt_tickets_in_flight(const struct HrtContext *ctx,
-                                     uint64_t *serials,
-                                     uint32_t capacity,
-                                     uint32_t *count);
-
-/**
- * Tickets in flight whose command buffers the GPU has not run to the end (what must finish
- * before hrt_context_destroy succeeds); same conventions as hrt_tickets_in_flight.
- */
-enum HrtStatus hrt_unfinished_tickets(const struct HrtContext *ctx,
-                                      uint64_t *serials,
-                                      uint32_t capacity,
-                                      uint32_t *count);
-
 enum HrtStatus hrt_resource_allocations(const struct HrtContext *ctx,
                                         struct HrtResourceAllocations *out);
 
@@ -1515,6 +1517,49 @@ enum HrtStatus hrt_query_device_support(PFN_vkGetInstanceProcAddr get_instance_p
                                         bool *ray_query,
                                         char *missing,
                                         uint32_t missing_capacity);
+
+/**
+ * Hands a ticket back after the GPU finished its command buffer. Writes up to `capacity`
+ * per-task timings and their total number to `timing_count` (both optional). A ticket
+ * returned twice or never issued is HRT_ERROR_UNKNOWN_TICKET.
+ */
+enum HrtStatus hrt_mark_gpu_task_completed(struct HrtContext *ctx,
+                                           HrtTicket ticket,
+                                           struct HrtTaskTiming *timings,
+                                           uint32_t capacity,
+                                           uint32_t *timing_count);
+
+/**
+ * hrt_mark_gpu_task_completed, and also writes up to `pass_capacity` per-pass timings of the
+ * ticket's denoise tasks and their total number to `pass_count` (both optional; none unless
+ * the context was created with HrtInitSettings.time_passes).
+ */
+enum HrtStatus hrt_mark_gpu_task_completed_with_passes(struct HrtContext *ctx,
+                                                       HrtTicket ticket,
+                                                       struct HrtTaskTiming *timings,
+                                                       uint32_t capacity,
+                                                       uint32_t *timing_count,
+                                                       struct HrtPassTiming *passes,
+                                                       uint32_t pass_capacity,
+                                                       uint32_t *pass_count);
+
+/**
+ * Serials of the tickets built and not yet handed back: writes up to `capacity` and the total
+ * to `count`.
+ */
+enum HrtStatus hrt_tickets_in_flight(const struct HrtContext *ctx,
+                                     uint64_t *serials,
+                                     uint32_t capacity,
+                                     uint32_t *count);
+
+/**
+ * Tickets in flight whose command buffers the GPU has not run to the end (what must finish
+ * before hrt_context_destroy succeeds); same conventions as hrt_tickets_in_flight.
+ */
+enum HrtStatus hrt_unfinished_tickets(const struct HrtContext *ctx,
+                                      uint64_t *serials,
+                                      uint32_t capacity,
+                                      uint32_t *count);
 
 struct HrtDenoisingCommon hrt_denoising_common_default(void);
 

@@ -984,3 +984,80 @@ fn every_setting_affects_the_denoisers_that_read_it() {
         f.finish(outs.into_iter().chain([noisy]));
     }
 }
+
+/// One frame of a specular + diffuse denoiser and a shadow denoiser on noise, in a context
+/// with `time_passes` as given: the two outputs' bytes and the ticket's pass timings.
+fn denoise_with_pass_timing(time_passes: bool) -> (Vec<u8>, Vec<u8>, Vec<PassTiming>, Vec<TaskTiming>) {
+    let (host, ctx) = host_and_context(InitSettings { time_passes, ..Default::default() });
+    let (g, camera) = facing_plane();
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let format = vk::Format::R32G32B32A32_SFLOAT;
+    let [spec_in, diff_in, spec_out, diff_out, shadow_in, shadow_out] = [(); 6].map(|_| storage_image(&host, format, S, S));
+    let mut rng = Rng::new(11);
+    for input in [&spec_in, &diff_in, &shadow_in] {
+        let noise: Vec<[f32; 4]> = (0..S * S).map(|_| [rng.next_f32(), rng.next_f32(), rng.next_f32(), 2.0]).collect();
+        host.write_image(input, &rgba_bytes(&noise), GENERAL).unwrap();
+    }
+    let both = context(&ctx, SignalType::SpecularAndDiffuse, S, S);
+    let shadow = context(&ctx, SignalType::Shadow, S, S);
+    let mut common = images.denoising_common(&camera);
+    common.roughness.global_roughness = 0.4;
+    let mut frame = ctx.create_task_container();
+    frame
+        .schedule_denoise_specular_and_diffuse(&DenoiseSpecularAndDiffuseTask {
+            context: both,
+            common,
+            input_specular: spec_in.input(GENERAL),
+            input_diffuse: diff_in.input(GENERAL),
+            output_specular: spec_out.input(GENERAL),
+            output_diffuse: diff_out.input(GENERAL),
+        })
+        .unwrap();
+    frame
+        .schedule_denoise_shadow(&DenoiseShadowTask {
+            context: shadow,
+            common,
+            light: sun(0.05),
+            input: shadow_in.input(GENERAL),
+            output: shadow_out.input(GENERAL),
+        })
+        .unwrap();
+    let done = run_frame(&host, &ctx, &mut frame).unwrap();
+    let (spec, shadow_bytes) = (host.read_image(&spec_out, GENERAL).unwrap(), host.read_image(&shadow_out, GENERAL).unwrap());
+    for dn in [both, shadow] {
+        ctx.destroy_denoising_context(dn).unwrap();
+    }
+    for i in [spec_in, diff_in, spec_out, diff_out, shadow_in, shadow_out] {
+        host.destroy_image(i);
+    }
+    images.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+    (spec, shadow_bytes, done.pass_timings, done.timings)
+}
+
+/// `InitSettings::time_passes` reports every denoiser pass by name, in recording order, nested
+/// in its task's interval, and changes nothing in the images; without it no pass is timed.
+#[test]
+fn pass_timings_name_every_denoiser_pass_and_change_no_pixel() {
+    let (spec_plain, shadow_plain, none, _) = denoise_with_pass_timing(false);
+    assert!(none.is_empty(), "passes timed without time_passes: {none:?}");
+    let (spec, shadow, passes, tasks) = denoise_with_pass_timing(true);
+    assert!(spec == spec_plain && shadow == shadow_plain, "timing the passes changed the denoised images");
+    let names = |kind: TaskKind| passes.iter().filter(|p| p.kind == kind).map(|p| p.pass).collect::<Vec<_>>();
+    let radiance = ["temporal", "clamp", "atrous_1", "atrous_2", "atrous_3", "atrous_4"];
+    assert_eq!(names(TaskKind::DenoiseSpecularAndDiffuse), radiance);
+    assert_eq!(names(TaskKind::DenoiseShadow), ["shadow_prep", "shadow_blur", "shadow_temporal"]);
+    // The render tasks' intervals (the recording's others, `CacheUpdate` say, share index 0).
+    let denoisers: Vec<&TaskTiming> =
+        tasks.iter().filter(|t| matches!(t.kind, TaskKind::DenoiseSpecularAndDiffuse | TaskKind::DenoiseShadow)).collect();
+    assert_eq!(denoisers.len(), 2, "{tasks:?}");
+    for task in denoisers {
+        let parts: Vec<&PassTiming> = passes.iter().filter(|p| p.task_index == task.task_index).collect();
+        assert!(parts.iter().all(|p| p.kind == task.kind && p.gpu_ms.is_finite() && p.gpu_ms >= 0.0), "{parts:?}");
+        // Nested: the passes lie inside the task's interval (timestamp ticks, so no tolerance
+        // beyond rounding).
+        let sum: f64 = parts.iter().map(|p| p.gpu_ms).sum();
+        assert!(sum <= task.gpu_ms * (1.0 + 1e-9) + 1e-9, "{:?}: passes {sum} ms > task {} ms", task.kind, task.gpu_ms);
+    }
+}

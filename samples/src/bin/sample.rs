@@ -91,6 +91,10 @@ struct Cli {
     /// the caches of instances unused longest are evicted and the report counts them. 0: none.
     #[arg(long, default_value_t = 0)]
     cache_budget_mib: u64,
+    /// Time each pass of the denoisers (InitSettings::time_passes): the report lists them
+    /// under their tasks.
+    #[arg(long)]
+    time_passes: bool,
     /// Look through the file's camera N (glTF perspective cameras, in node order) instead of
     /// the fitted camera path.
     #[arg(long)]
@@ -120,6 +124,7 @@ fn run() -> Result<(), String> {
         relight_samples: cli.relight_samples,
         hit_lighting: cli.hit_lighting,
         cache_budget_bytes: cli.cache_budget_mib.saturating_mul(1 << 20),
+        time_passes: cli.time_passes,
         max_blas_build_count: cli.blas_per_frame,
         rays_per_pixel: cli.rays,
         checkerboard: cli.checkerboard,

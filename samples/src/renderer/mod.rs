@@ -94,6 +94,9 @@ pub struct Settings {
     /// `InitSettings::cache_budget_bytes` (0: none, the default): over it, the caches of the
     /// instances unused longest are evicted (the report says how many).
     pub cache_budget_bytes: u64,
+    /// `InitSettings::time_passes`: the report breaks each denoiser's time down by pass.
+    /// Default false.
+    pub time_passes: bool,
 }
 
 impl Default for Settings {
@@ -111,6 +114,7 @@ impl Default for Settings {
             relight_samples: 65_536,
             hit_lighting: false,
             cache_budget_bytes: 0,
+            time_passes: false,
         }
     }
 }
@@ -166,6 +170,7 @@ impl<'h> Renderer<'h> {
             .create_context(&InitSettings {
                 supported_working_sets: SLOTS as u32,
                 cache_budget_bytes: settings.cache_budget_bytes,
+                time_passes: settings.time_passes,
                 ..Default::default()
             })
             .map_err(sdk_err)?;
@@ -267,15 +272,21 @@ impl<'h> Renderer<'h> {
         // SAFETY: the fence belongs to this device.
         unsafe { self.host.device.wait_for_fences(&[s.fence], true, u64::MAX) }.map_err(|e| format!("wait: {e:?}"))?;
         s.recorded = false;
-        let mut sdk: Vec<(String, f64)> = Vec::new();
+        let (mut sdk, mut sdk_passes): (Vec<(String, f64)>, Vec<(String, f64)>) = Default::default();
         if let Some(ticket) = s.ticket.take() {
             let done = self.ctx.mark_gpu_task_completed(ticket).map_err(sdk_err)?;
+            // A label's tasks (and a task label's passes) of one frame are summed.
+            let sum_into =
+                |list: &mut Vec<(String, f64)>, label: String, gpu_ms: f64| match list.iter_mut().find(|(l, _)| *l == label) {
+                    Some((_, ms)) => *ms += gpu_ms,
+                    None => list.push((label, gpu_ms)),
+                };
             for t in &done.timings {
-                let label = schedule::timing_label(&done, t);
-                match sdk.iter_mut().find(|(l, _)| *l == label) {
-                    Some((_, ms)) => *ms += t.gpu_ms,
-                    None => sdk.push((label, t.gpu_ms)),
-                }
+                sum_into(&mut sdk, schedule::timing_label(&done, t), t.gpu_ms);
+            }
+            for p in &done.pass_timings {
+                let Some(task) = done.timings.iter().find(|t| t.task_index == p.task_index) else { continue };
+                sum_into(&mut sdk_passes, format!("{}: {}", schedule::timing_label(&done, task), p.pass), p.gpu_ms);
             }
             if s.frame == 0 {
                 self.stats.first_frame_bvh_ms = done.gpu_ms(TaskKind::Bvh);
@@ -284,6 +295,7 @@ impl<'h> Renderer<'h> {
         let passes: Vec<(String, f64)> = s.timer.read(self.host).into_iter().map(|(l, ms)| (l.to_string(), ms)).collect();
         if s.frame > 0 {
             Stats::add(&mut self.stats.sdk, sdk);
+            Stats::add(&mut self.stats.sdk_passes, sdk_passes);
             Stats::add(&mut self.stats.passes, passes);
             self.stats.frames += 1;
         }

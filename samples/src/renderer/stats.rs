@@ -5,6 +5,8 @@ pub struct Stats {
     /// (label, ms per frame), in scheduling order; a label's tasks of one frame are summed
     /// (the debug views run only in frames that ask for them).
     pub sdk: Vec<(String, Vec<f64>)>,
+    /// ("task label: pass", ms per frame) of the denoisers' passes (`--time-passes`).
+    pub sdk_passes: Vec<(String, Vec<f64>)>,
     pub passes: Vec<(String, Vec<f64>)>,
     pub first_frame_bvh_ms: f64,
     pub frames: u64,

@@ -1,13 +1,14 @@
 //! The context and what is not one task's: the library version, error messages and logging,
 //! context creation and destruction (the device set-up is in `device`), task containers,
-//! building a container into a command buffer, handing tickets back with the per-task GPU
-//! timings, the tickets in flight and the SDK's device memory.
+//! building a container into a command buffer, the SDK's device memory; handing tickets back
+//! with the per-task and per-pass GPU timings, and the tickets in flight, are in `tickets`.
 //!
 //! `HrtTaskKind` is the type of a timing's task; each task area's file defines the
 //! `HRT_TASK_*` values of its own tasks.
 mod device;
+mod tickets;
 
-use crate::args::{get, get_mut, slice, string_arg, write_list, write_string};
+use crate::args::{get, get_mut, slice, string_arg, write_string};
 use crate::live;
 use crate::log_bridge::{self, HrtLogCallback, HrtLogSeverity};
 use crate::status::{self, guard, null, Failure, HrtStatus};
@@ -17,6 +18,7 @@ use ash::vk::Handle;
 pub use device::*;
 use hybrid_rt as rt;
 use std::ffi::{c_char, c_void, CStr};
+pub use tickets::*;
 
 /// The API version this header describes: (major << 22) | (minor << 12) | patch.
 pub const HRT_API_VERSION: u32 = 1 << 12; // (major 0 << 22) | (minor 1 << 12) | patch 0
@@ -121,6 +123,9 @@ pub struct HrtInitSettings {
     /// Most bytes the direct-lighting caches may hold; the least recently used instances'
     /// caches are evicted past it (0: no limit, the default). See hrt_cache_report.
     pub cache_budget_bytes: u64,
+    /// Time every pass of the denoisers as well as the task (default false): the passes'
+    /// times come back through hrt_mark_gpu_task_completed_with_passes.
+    pub time_passes: bool,
 }
 
 impl From<rt::InitSettings> for HrtInitSettings {
@@ -133,6 +138,7 @@ impl From<rt::InitSettings> for HrtInitSettings {
             queue_family_indices: s.queue_family_indices,
             queue_family_count: s.queue_family_count,
             cache_budget_bytes: s.cache_budget_bytes,
+            time_passes: s.time_passes,
         }
     }
 }
@@ -146,6 +152,7 @@ impl From<&HrtInitSettings> for rt::InitSettings {
             queue_family_indices: s.queue_family_indices,
             queue_family_count: s.queue_family_count,
             cache_budget_bytes: s.cache_budget_bytes,
+            time_passes: s.time_passes,
         }
     }
 }
@@ -352,95 +359,6 @@ pub unsafe extern "C" fn hrt_build_gpu_task(
     })
 }
 
-/// What an HrtTaskTiming measured: one of the HRT_TASK_* values.
-pub type HrtTaskKind = u32;
-
-/// Bytes of HrtTaskTiming.label, its NUL included.
-pub const HRT_TASK_LABEL_CAPACITY: u32 = 64;
-
-/// One timed task of a ticket (hrt_mark_gpu_task_completed).
-#[repr(C)]
-#[derive(Clone, Copy)]
-pub struct HrtTaskTiming {
-    pub kind: HrtTaskKind,
-    pub task_index: u32,
-    pub gpu_ms: f64,
-    /// The label the task was given (hrt_task_container_set_task_label); for HRT_TASK_BVH the
-    /// first BVH task's, none for the intervals nested in it (HRT_TASK_BLAS_BUILD,
-    /// HRT_TASK_TLAS_BUILD) and HRT_TASK_CACHE_UPDATE, so labelled times add up. NUL-terminated, cut to at most HRT_TASK_LABEL_CAPACITY - 1 bytes
-    /// at a UTF-8 character boundary; all zero when the task has no label.
-    pub label: [c_char; HRT_TASK_LABEL_CAPACITY as usize],
-}
-
-/// `label` as HrtTaskTiming.label holds it (all zero for none).
-fn label_c(label: Option<&str>) -> [c_char; HRT_TASK_LABEL_CAPACITY as usize] {
-    let mut out = [0; HRT_TASK_LABEL_CAPACITY as usize];
-    let s = label.unwrap_or_default();
-    let mut n = s.len().min(out.len() - 1);
-    while !s.is_char_boundary(n) {
-        n -= 1;
-    }
-    for (o, b) in out.iter_mut().zip(&s.as_bytes()[..n]) {
-        *o = *b as c_char;
-    }
-    out
-}
-
-/// Hands a ticket back after the GPU finished its command buffer. Writes up to `capacity`
-/// per-task timings and their total number to `timing_count` (both optional). A ticket
-/// returned twice or never issued is HRT_ERROR_UNKNOWN_TICKET.
-#[no_mangle]
-pub unsafe extern "C" fn hrt_mark_gpu_task_completed(
-    ctx: *mut HrtContext,
-    ticket: HrtTicket,
-    timings: *mut HrtTaskTiming,
-    capacity: u32,
-    timing_count: *mut u32,
-) -> HrtStatus {
-    guard(|| {
-        let c = context(ctx)?;
-        let done = c.ctx.mark_gpu_task_completed(rt::GpuTicket::from_raw(ticket))?;
-        if let Some(n) = timing_count.as_mut() {
-            *n = done.timings.len() as u32;
-        }
-        if !timings.is_null() {
-            for (i, t) in done.timings.iter().take(capacity as usize).enumerate() {
-                *timings.add(i) = HrtTaskTiming {
-                    kind: t.kind as u32,
-                    task_index: t.task_index,
-                    gpu_ms: t.gpu_ms,
-                    label: label_c(done.label(t)),
-                };
-            }
-        }
-        Ok(())
-    })
-}
-
-/// Serials of the tickets built and not yet handed back: writes up to `capacity` and the total
-/// to `count`.
-#[no_mangle]
-pub unsafe extern "C" fn hrt_tickets_in_flight(
-    ctx: *const HrtContext,
-    serials: *mut u64,
-    capacity: u32,
-    count: *mut u32,
-) -> HrtStatus {
-    guard(|| write_list(&context(ctx)?.ctx.tickets_in_flight(), serials, capacity, count))
-}
-
-/// Tickets in flight whose command buffers the GPU has not run to the end (what must finish
-/// before hrt_context_destroy succeeds); same conventions as hrt_tickets_in_flight.
-#[no_mangle]
-pub unsafe extern "C" fn hrt_unfinished_tickets(
-    ctx: *const HrtContext,
-    serials: *mut u64,
-    capacity: u32,
-    count: *mut u32,
-) -> HrtStatus {
-    guard(|| write_list(&context(ctx)?.ctx.unfinished_tickets(), serials, capacity, count))
-}
-
 #[repr(C)]
 #[derive(Clone, Copy, Default)]
 pub struct HrtAllocationCount {
@@ -487,34 +405,4 @@ pub unsafe extern "C" fn hrt_resource_allocations(ctx: *const HrtContext, out: *
         *get_mut(out, "out")? = c.ctx.resource_allocations().into();
         Ok(())
     })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::{label_c, HRT_TASK_LABEL_CAPACITY};
-
-    fn text(l: &[std::ffi::c_char]) -> String {
-        let bytes: Vec<u8> = l.iter().take_while(|&&c| c != 0).map(|&c| c as u8).collect();
-        String::from_utf8(bytes).expect("a label is UTF-8")
-    }
-
-    /// Labels are NUL-terminated and cut at a character boundary; no label is all zero.
-    #[test]
-    fn labels_are_cut_to_the_capacity_at_a_character_boundary() {
-        let max = HRT_TASK_LABEL_CAPACITY as usize - 1;
-        assert!(label_c(None).iter().all(|&c| c == 0));
-        assert!(label_c(Some("")).iter().all(|&c| c == 0));
-        let short = label_c(Some("shadows: sun"));
-        assert_eq!(text(&short), "shadows: sun");
-        assert!(short[12..].iter().all(|&c| c == 0));
-        assert_eq!(text(&label_c(Some(&"a".repeat(max)))), "a".repeat(max));
-        assert_eq!(text(&label_c(Some(&"a".repeat(max + 10)))), "a".repeat(max));
-        // 62 bytes and a 2-byte 'é' across the 63rd: the 'é' goes whole.
-        let cut = label_c(Some(&format!("{}é", "a".repeat(max - 1))));
-        assert_eq!(text(&cut), "a".repeat(max - 1));
-        assert_eq!(cut[max - 1], 0);
-        // 3-byte characters: 21 of them fill 63 bytes exactly, a 22nd is left out.
-        assert_eq!(text(&label_c(Some(&"€".repeat(22)))), "€".repeat(21));
-        assert_eq!(label_c(Some(&"x".repeat(200)))[max], 0);
-    }
 }

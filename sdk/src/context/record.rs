@@ -186,6 +186,7 @@ impl Recorder<'_> {
                 usage: usage.map_or(0, |u| u.1),
                 inline: wants_inline && device.ray_query,
                 floor: st.passes.floor,
+                task_timer: Some((&mut ws.timer, kind, index)),
             };
             task.record(&mut r, &st.passes, &mut world);
             ws.timer.end(&device.raw, cmd, span);

@@ -98,10 +98,10 @@ impl ExecuteContext {
         }
         let d = &self.shared.device;
         let ws = &mut st.working_sets[ws_index];
-        let mut done = CompletedTask { serial: ticket.serial, timings: Vec::new(), labels: std::mem::take(&mut ws.labels) };
+        let mut done = CompletedTask { serial: ticket.serial, labels: std::mem::take(&mut ws.labels), ..Default::default() };
         if let Some(period) = d.timestamp_period_ns {
             match ws.timer.read(&d.raw, period) {
-                Ok(t) => done.timings = t,
+                Ok((tasks, passes)) => (done.timings, done.pass_timings) = (tasks, passes),
                 Err(e) => log::warn!("ticket {}: timestamps unavailable ({e:?}); was it really complete?", ticket.serial),
             }
         }

@@ -67,8 +67,7 @@ pub(super) struct WorkingSet {
 impl WorkingSet {
     pub fn new(device: &Device, memory: &Memory, settings: &InitSettings) -> Result<WorkingSet> {
         let d = &device.raw;
-        // Two slots per timed task plus the nested BLAS/TLAS intervals of the BVH work.
-        let timer = Timer::new(d, settings.max_timed_tasks * 2 + 4, device.timestamp_period_ns.is_some())?;
+        let timer = Timer::new(d, settings.max_timed_tasks, device.timestamp_period_ns.is_some(), settings.time_passes)?;
         let ring = match UploadRing::new(memory, settings.upload_ring_bytes.max(4096)) {
             Ok(r) => r,
             Err(e) => {

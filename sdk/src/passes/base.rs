@@ -8,6 +8,7 @@ use crate::error::Result;
 use crate::gpu::device::Device;
 use crate::gpu::pipeline::Binding;
 use crate::gpu::sync::Hazards;
+use crate::gpu::timestamps::{Span, Timer};
 use crate::gpu::upload::{Upload, UploadRing};
 use crate::scene::Scene;
 use crate::types::handles::Registry;
@@ -32,6 +33,9 @@ pub(crate) struct Recording<'a> {
     pub inline: bool,
     /// Bench only: trace with the programs' floor pipelines (empty hit and miss shaders).
     pub floor: bool,
+    /// The working set's timer and the task being recorded, for the intervals of its passes
+    /// (None in maintenance recordings, which have no task).
+    pub task_timer: Option<(&'a mut Timer, TaskKind, u32)>,
 }
 
 impl<'a> Recording<'a> {
@@ -55,7 +59,26 @@ impl<'a> Recording<'a> {
             usage: 0,
             inline: false,
             floor: false,
+            task_timer: None,
         }
+    }
+
+    /// Opens one pass of the task: a debug-utils region named for it and, with
+    /// `InitSettings::time_passes`, its timed interval (`CompletedTask::pass_timings`).
+    pub fn begin_pass(&mut self, pass: &'static str) -> Span {
+        self.device.begin_label(self.cmd, pass);
+        match &mut self.task_timer {
+            Some((timer, kind, index)) => timer.begin_pass(&self.device.raw, self.cmd, *kind, *index, pass),
+            None => Span::NONE,
+        }
+    }
+
+    /// Closes the pass `begin_pass` opened.
+    pub fn end_pass(&mut self, span: Span) {
+        if let Some((timer, ..)) = &mut self.task_timer {
+            timer.end(&self.device.raw, self.cmd, span);
+        }
+        self.device.end_label(self.cmd);
     }
 }
 

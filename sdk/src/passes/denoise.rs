@@ -36,6 +36,10 @@ pub(crate) struct DenoiseConstantsGpu {
     light: LightGpu,
 }
 
+/// The à-trous iterations' pass names (`PassTiming::pass`); as many as
+/// `DenoiserSettings::spatial_passes` allows.
+const ATROUS_PASS_NAMES: [&str; 6] = ["atrous_1", "atrous_2", "atrous_3", "atrous_4", "atrous_5", "atrous_6"];
+
 /// Smallest à-trous spacing scale, reached once a pixel has a quarter of the longest history.
 const MIN_RADIUS_SCALE: f32 = 0.25;
 
@@ -293,56 +297,59 @@ impl DenoisePass {
         let motion = descriptors::optional_or(&c.motion.image, &stand_in);
         let mask = descriptors::optional_or(&c.input_mask, &stand_in);
 
-        let dispatch = |r: &mut Recording<'_>, pipeline: vk::Pipeline, src: usize, dst: usize, push: [u32; 4]| {
-            r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
-            let slots = [
-                Slot::Sampled(&c.depth.image),
-                Slot::Sampled(&c.normals.image),
-                Slot::Sampled(roughness),
-                Slot::Sampled(motion),
-                Slot::Sampled(&job.inputs[0]),
-                Slot::Sampled(&job.inputs[1]),
-                Slot::Storage(&job.outputs[0]),
-                Slot::Storage(&job.outputs[1]),
-                Slot::Storage(&gb_prev),
-                Slot::Storage(&gb_cur),
-                Slot::Storage(&hist_prev[0]),
-                Slot::Storage(&hist_prev[1]),
-                Slot::Storage(&hist_cur[0]),
-                Slot::Storage(&hist_cur[1]),
-                Slot::Storage(&fast_prev[0]),
-                Slot::Storage(&fast_prev[1]),
-                Slot::Storage(&fast_cur[0]),
-                Slot::Storage(&fast_cur[1]),
-                Slot::Storage(&temps_in[src][0]),
-                Slot::Storage(&temps_in[src][1]),
-                Slot::Storage(&temps_in[dst][0]),
-                Slot::Storage(&temps_in[dst][1]),
-                Slot::Uniform(ubo),
-                Slot::Sampled(mask),
-            ];
-            let bind = vk::PipelineBindPoint::COMPUTE;
-            let dev = &r.device.raw;
-            // SAFETY: slots match the set layout; inputs were validated when scheduled.
-            unsafe { dev.cmd_bind_pipeline(r.cmd, bind, pipeline) };
-            descriptors::push(r.device, r.cmd, bind, self.layout, &slots);
-            unsafe {
-                dev.cmd_push_constants(r.cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&push));
-                dev.cmd_dispatch(r.cmd, extent.0.div_ceil(8), extent.1.div_ceil(8), 1);
-            }
-        };
+        let dispatch =
+            |r: &mut Recording<'_>, name: &'static str, pipeline: vk::Pipeline, src: usize, dst: usize, push: [u32; 4]| {
+                r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
+                let span = r.begin_pass(name);
+                let slots = [
+                    Slot::Sampled(&c.depth.image),
+                    Slot::Sampled(&c.normals.image),
+                    Slot::Sampled(roughness),
+                    Slot::Sampled(motion),
+                    Slot::Sampled(&job.inputs[0]),
+                    Slot::Sampled(&job.inputs[1]),
+                    Slot::Storage(&job.outputs[0]),
+                    Slot::Storage(&job.outputs[1]),
+                    Slot::Storage(&gb_prev),
+                    Slot::Storage(&gb_cur),
+                    Slot::Storage(&hist_prev[0]),
+                    Slot::Storage(&hist_prev[1]),
+                    Slot::Storage(&hist_cur[0]),
+                    Slot::Storage(&hist_cur[1]),
+                    Slot::Storage(&fast_prev[0]),
+                    Slot::Storage(&fast_prev[1]),
+                    Slot::Storage(&fast_cur[0]),
+                    Slot::Storage(&fast_cur[1]),
+                    Slot::Storage(&temps_in[src][0]),
+                    Slot::Storage(&temps_in[src][1]),
+                    Slot::Storage(&temps_in[dst][0]),
+                    Slot::Storage(&temps_in[dst][1]),
+                    Slot::Uniform(ubo),
+                    Slot::Sampled(mask),
+                ];
+                let bind = vk::PipelineBindPoint::COMPUTE;
+                let dev = &r.device.raw;
+                // SAFETY: slots match the set layout; inputs were validated when scheduled.
+                unsafe { dev.cmd_bind_pipeline(r.cmd, bind, pipeline) };
+                descriptors::push(r.device, r.cmd, bind, self.layout, &slots);
+                unsafe {
+                    dev.cmd_push_constants(r.cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&push));
+                    dev.cmd_dispatch(r.cmd, extent.0.div_ceil(8), extent.1.div_ceil(8), 1);
+                }
+                r.end_pass(span);
+            };
 
         if shadow {
-            dispatch(r, self.shadow_prep, 1, 0, [0; 4]);
-            dispatch(r, self.shadow_blur, 0, 1, [0; 4]);
-            dispatch(r, self.shadow_temporal, 1, 0, [0; 4]);
+            dispatch(r, "shadow_prep", self.shadow_prep, 1, 0, [0; 4]);
+            dispatch(r, "shadow_blur", self.shadow_blur, 0, 1, [0; 4]);
+            dispatch(r, "shadow_temporal", self.shadow_temporal, 1, 0, [0; 4]);
         } else {
             let passes = c.settings.spatial_passes;
-            dispatch(r, self.temporal, 1, 0, [0; 4]);
-            dispatch(r, self.clamp, 0, 1, [0, (passes == 0) as u32, 0, 0]);
-            for i in 0..passes {
+            dispatch(r, "temporal", self.temporal, 1, 0, [0; 4]);
+            dispatch(r, "clamp", self.clamp, 0, 1, [0, (passes == 0) as u32, 0, 0]);
+            for (i, name) in (0..passes).zip(ATROUS_PASS_NAMES) {
                 let src = (1 + i as usize) % 2;
-                dispatch(r, self.atrous, src, 1 - src, [1 << i, (i + 1 == passes) as u32, 0, 0]);
+                dispatch(r, name, self.atrous, src, 1 - src, [1 << i, (i + 1 == passes) as u32, 0, 0]);
             }
         }
         state.newest = cur;

@@ -38,6 +38,10 @@ pub struct InitSettings {
     /// what is resident, waiting and evicted. A single cache larger than the budget never
     /// gets one.
     pub cache_budget_bytes: u64,
+    /// Time every pass of the tasks made of several (the denoisers) as well as the task
+    /// (default false): `CompletedTask::pass_timings`. Costs two timestamps per pass, which
+    /// also order the passes' starts after the previous pass's end, as its barrier does anyway.
+    pub time_passes: bool,
 }
 
 impl Default for InitSettings {
@@ -50,6 +54,7 @@ impl Default for InitSettings {
             queue_family_indices: [0; 4],
             queue_family_count: 0,
             cache_budget_bytes: 0,
+            time_passes: false,
         }
     }
 }

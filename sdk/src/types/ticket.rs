@@ -80,6 +80,23 @@ pub struct TaskTiming {
     pub gpu_ms: f64,
 }
 
+/// The GPU time of one pass of a task (`InitSettings::time_passes`): the dispatches a task is
+/// made of, each between timestamps of its own. A task's passes add up to a little less than
+/// its [`TaskTiming`] (the barriers between them are not in any pass).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub struct PassTiming {
+    /// The kind of the task the pass belongs to.
+    pub kind: TaskKind,
+    /// Position of that task in its container.
+    pub task_index: u32,
+    /// The pass's name, as the task's documentation lists its passes (`"temporal"`,
+    /// `"atrous_1"`, …).
+    pub pass: &'static str,
+    /// GPU time between the timestamps around the pass, in milliseconds.
+    pub gpu_ms: f64,
+}
+
 /// What a completed ticket reports.
 #[derive(Debug, Clone, Default)]
 #[non_exhaustive]
@@ -88,6 +105,10 @@ pub struct CompletedTask {
     pub serial: u64,
     /// Per-task GPU times. Empty when the device cannot time compute work.
     pub timings: Vec<TaskTiming>,
+    /// Per-pass GPU times of the tasks made of several passes (the denoisers), in recording
+    /// order; empty unless `InitSettings::time_passes` is on. Nested in `timings`: do not add
+    /// them to it.
+    pub pass_timings: Vec<PassTiming>,
     /// The labels the container's tasks were given (`TaskContainer::set_task_label`), by
     /// task index, in ascending order.
     pub(crate) labels: Vec<(u32, String)>,
@@ -97,6 +118,11 @@ impl CompletedTask {
     /// Sum of the times of the tasks of `kind`.
     pub fn gpu_ms(&self, kind: TaskKind) -> f64 {
         self.timings.iter().filter(|t| t.kind == kind).map(|t| t.gpu_ms).sum()
+    }
+
+    /// Sum of the times of the passes named `pass` of the tasks of `kind`.
+    pub fn pass_ms(&self, kind: TaskKind, pass: &str) -> f64 {
+        self.pass_timings.iter().filter(|t| t.kind == kind && t.pass == pass).map(|t| t.gpu_ms).sum()
     }
 
     /// The label the timed task was given when it was scheduled

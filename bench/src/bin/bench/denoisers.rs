@@ -33,10 +33,14 @@ impl Bench<'_> {
     ) -> Result<(), String> {
         let (width, height) = (self.settings.width, self.settings.height);
         let dn = self.denoising_context(signal)?;
-        let [trace, denoise] = self.time_pair(kinds, |f| schedule(f, dn))?;
+        let ([trace, denoise], passes) = self.time_pair(kinds, |f| schedule(f, dn))?;
         self.ctx.destroy_denoising_context(dn).map_err(sdk)?;
         self.report.row(format!("Denoise {name} {width}x{height}"), format!("{denoise:.3} ms (its 1-ray trace: {trace:.3} ms)"));
-        json.insert(name.replace(' ', "_"), json!({"denoise_gpu_ms": denoise, "trace_gpu_ms": trace}));
+        for (pass, ms) in &passes {
+            self.report.row(format!("  pass {pass}"), format!("{ms:.3} ms"));
+        }
+        let passes: Map<String, Value> = passes.into_iter().map(|(pass, ms)| (pass.to_string(), json!(ms))).collect();
+        json.insert(name.replace(' ', "_"), json!({"denoise_gpu_ms": denoise, "trace_gpu_ms": trace, "passes_gpu_ms": passes}));
         Ok(())
     }
 

@@ -183,7 +183,11 @@ fn run() -> Result<(), String> {
     let settings = Settings::new(&cli)?;
     let host = Host::new()?;
     let creation = builds::context_creation(&host)?;
-    let ctx = host.create_context(&InitSettings { upload_ring_bytes: 4 << 20, ..Default::default() }).map_err(sdk)?;
+    // Passes timed: the denoise rows print each pass (the stamps sit between passes that a
+    // barrier orders anyway).
+    let ctx = host
+        .create_context(&InitSettings { upload_ring_bytes: 4 << 20, time_passes: true, ..Default::default() })
+        .map_err(sdk)?;
     println!(
         "device: {}{}",
         host.device_name,

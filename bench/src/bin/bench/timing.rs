@@ -68,24 +68,33 @@ impl Bench<'_> {
     }
 
     /// Median GPU times of two task kinds recorded in the same frames (a trace and its
-    /// denoiser).
+    /// denoiser), and the median of each pass of the second (the context times passes), in
+    /// recording order.
     pub fn time_pair(
         &mut self,
         kinds: [TaskKind; 2],
         mut schedule: impl FnMut(&mut TaskContainer) -> Result<(), String>,
-    ) -> Result<[f64; 2], String> {
+    ) -> Result<([f64; 2], Vec<(&'static str, f64)>), String> {
         let mut times = [Vec::new(), Vec::new()];
+        let mut passes: Vec<(&'static str, Vec<f64>)> = Vec::new();
         for i in 0..self.settings.frames + 3 {
             schedule(&mut self.frame)?;
             let done = run_frame(self.host, self.ctx, &mut self.frame)?;
-            if i >= 3 {
-                for k in 0..2 {
-                    times[k].push(done.gpu_ms(kinds[k]));
+            if i < 3 {
+                continue;
+            }
+            for k in 0..2 {
+                times[k].push(done.gpu_ms(kinds[k]));
+            }
+            for p in done.pass_timings.iter().filter(|p| p.kind == kinds[1]) {
+                match passes.iter_mut().find(|(name, _)| *name == p.pass) {
+                    Some((_, v)) => v.push(p.gpu_ms),
+                    None => passes.push((p.pass, vec![p.gpu_ms])),
                 }
             }
         }
         let [a, b] = times;
-        Ok([median(a), median(b)])
+        Ok(([median(a), median(b)], passes.into_iter().map(|(name, v)| (name, median(v))).collect()))
     }
 
     /// Records the scheduled frame into a fresh command buffer, submits it and waits: the
