@@ -5,13 +5,36 @@
 // weighted mean of the occluded samples in a 9x9-tap neighbourhood spanning the largest
 // radius (so lit pixels beside a penumbra find it too). Contact shadows and hard lights give a
 // radius under half a pixel: the visibility passes unchanged. Otherwise 16 taps of a rotated
-// golden-angle disk, Gaussian in the radius, with plane and normal stops.
+// golden-angle disk, Gaussian in the radius, with plane and normal stops. Workgroups with no
+// occluded sample within the search's reach (the prep pass's tile map) skip the search.
 #include "include/denoise.glsl"
 
 // History length (frames) up to which the full penumbra-wide blur is kept.
 const float SHADOW_BLUR_FRAMES = 1.0;
 
+// Whether a tile within this workgroup's search reach holds an occluded sample.
+shared uint s_near;
+
+// Marks s_near from the tile map: the tiles the 9x9 search of any pixel of this workgroup
+// can reach (the group's 8x8 pixels, `reach` pixels around, inside the viewport). Every
+// invocation of the group calls it (it has barriers).
+void find_occluded_tiles(int reach) {
+    if (gl_LocalInvocationIndex == 0u) s_near = 0u;
+    barrier();
+    ivec2 group = ivec2(gl_WorkGroupID.xy) * 8; // relative to the viewport's origin
+    ivec2 lo = max(group - reach, ivec2(0)) / 8;
+    ivec2 hi = min(group + 7 + reach, ivec2(u_d.c.viewport.zw) - 1) / 8;
+    ivec2 span = hi - lo + 1;
+    for (int i = int(gl_LocalInvocationIndex); i < span.x * span.y; i += 64) {
+        if (imageLoad(u_tiles, lo + ivec2(i % span.x, i / span.x)).x != 0u) atomicOr(s_near, 1u);
+    }
+    barrier();
+}
+
 void main() {
+    float max_radius = u_d.stops.w;
+    int spacing = max(1, int(max_radius / 4.0 + 0.5));
+    find_occluded_tiles(4 * spacing);
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
     if (!hrt_in_viewport(pixel)) return;
     vec3 p, n;
@@ -19,14 +42,18 @@ void main() {
         hrt_store_temp(0u, pixel, vec4(1.0, 0.0, 0.0, 0.0));
         return;
     }
-    float dist = distance(p, u_d.eye.xyz);
     vec4 c = hrt_load_temp(0u, pixel);
-    float max_radius = u_d.stops.w;
+    // No occluded sample within reach: the search below would find no penumbra (radius 0),
+    // and the visibility passes unchanged. In a sunlit view most tiles end here.
+    if (s_near == 0u) {
+        hrt_store_temp(0u, pixel, vec4(c.x, 0.0, 0.0, 0.0));
+        return;
+    }
+    float dist = distance(p, u_d.eye.xyz);
     float pixel_world = u_d.eye.w * dist;
 
     float pen = 0.0, pen_w = 0.0, vis_min = c.x;
     if (c.y >= 0.0) { pen = c.y; pen_w = 1.0; }
-    int spacing = max(1, int(max_radius / 4.0 + 0.5));
     for (int yy = -4; yy <= 4; ++yy) {
         for (int xx = -4; xx <= 4; ++xx) {
             ivec2 q = pixel + ivec2(xx, yy) * spacing;

@@ -4,6 +4,8 @@
 // units or -1 where no ray was occluded) and write the denoiser's G-buffer. Single light: the
 // width comes from the occluder distance and the light's size; multi-light: the trace task
 // computed it (packed G). Checkerboard: untraced pixels take their traced neighbours' mean.
+// Each 8x8 workgroup also marks its tile when any of its pixels holds an occluded sample, so
+// the blur can skip its penumbra search where none is within reach.
 #include "include/denoise.glsl"
 
 // (visibility, penumbra width or -1) of a traced texel at surface point p.
@@ -14,14 +16,17 @@ vec2 decode_shadow(ivec2 q, vec3 p) {
     return vec2(vis, v.r >= 0.0 ? hrt_penumbra_width(u_d.light, p, v.r) : -1.0);
 }
 
-void main() {
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
-    if (!hrt_in_viewport(pixel)) return;
+// Whether any pixel of this workgroup's tile holds an occluded sample (its tile texel).
+shared uint s_occluded;
+
+// Decodes one pixel into the intermediate; true where it holds an occluded sample (a penumbra
+// width).
+bool prep(ivec2 pixel) {
     vec3 p, n;
     if (!hrt_engine_surface(pixel, p, n)) {
         imageStore(u_gbuf_cur, pixel, uvec4(hrt_pack_surface(vec3(0.0, 0.0, 1.0), -1.0), 0u, 0u));
         hrt_store_temp(0u, pixel, vec4(1.0, -1.0, 0.0, 0.0));
-        return;
+        return false;
     }
     float dist = distance(p, u_d.eye.xyz);
     imageStore(u_gbuf_cur, pixel, uvec4(hrt_pack_surface(n, dist), 0u, 0u));
@@ -43,4 +48,14 @@ void main() {
         result = vec2(vw > 0.0 ? vis / vw : 1.0, pw > 0.0 ? pen / pw : -1.0);
     }
     hrt_store_temp(0u, pixel, vec4(result, 0.0, 0.0));
+    return result.y >= 0.0;
+}
+
+void main() {
+    if (gl_LocalInvocationIndex == 0u) s_occluded = 0u;
+    barrier();
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
+    if (hrt_in_viewport(pixel) && prep(pixel)) atomicOr(s_occluded, 1u);
+    barrier();
+    if (gl_LocalInvocationIndex == 0u) imageStore(u_tiles, ivec2(gl_WorkGroupID.xy), uvec4(s_occluded));
 }

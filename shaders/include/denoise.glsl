@@ -59,6 +59,10 @@ layout(set = 0, binding = 22, std140) uniform DenoiseConstants {
     LightGpu light;          // single-light shadows
 } u_d;
 layout(set = 0, binding = 23) uniform sampler2D u_input_mask;
+// One texel per 8x8 tile of the viewport (a workgroup of the shadow passes): 1 where the tile
+// holds an occluded shadow sample. Written by the shadow prep pass, read by the blur (radiance
+// passes bind it and ignore it).
+layout(set = 0, binding = 24, r32ui) uniform uimage2D u_tiles;
 
 layout(push_constant) uniform Pass {
     uvec4 u_pass;            // à-trous: step in pixels, last iteration (0/1)

@@ -837,7 +837,7 @@ fn contexts_share_their_intermediates() {
     let count = || ctx.resource_allocations().denoiser.count;
     let a = context(&ctx, SignalType::DiffuseOcclusion, 64, 64);
     let first = count();
-    assert_eq!(first, 8, "G-buffer, history and fast pairs (6) + the shared intermediates (2)");
+    assert_eq!(first, 9, "G-buffer, history and fast pairs (6) + the shared intermediates (2) and tile map (1)");
     let b = context(&ctx, SignalType::DiffuseOcclusion, 64, 64);
     assert_eq!(count(), first + 6, "the second context keeps only its own history");
     let bytes_two = ctx.resource_allocations().denoiser.bytes;
@@ -846,7 +846,7 @@ fn contexts_share_their_intermediates() {
     }
     ctx.release_device_resources_immediately().unwrap();
     assert_eq!(count(), 0, "the last context frees the shared set");
-    eprintln!("two 64x64 AO contexts: {bytes_two} bytes of denoiser images (14 images; 16 before sharing)");
+    eprintln!("two 64x64 AO contexts: {bytes_two} bytes of denoiser images (15 images; 16 before sharing, without the tile map)");
     drop(ctx);
     assert_no_validation_errors();
 }

@@ -44,6 +44,11 @@ const ATROUS_PASS_NAMES: [&str; 6] = ["atrous_1", "atrous_2", "atrous_3", "atrou
 const MIN_RADIUS_SCALE: f32 = 0.25;
 
 const HISTORY_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+/// The shadow passes' tile map: one texel per 8x8 tile (R32_UINT: storage use needs no
+/// extended-format feature).
+const TILE_FORMAT: vk::Format = vk::Format::R32_UINT;
+/// Pixels per tile side (the passes' workgroup size).
+const TILE: u32 = 8;
 /// Packed normal (two halves) + view distance (f32).
 const GBUFFER_FORMAT: vk::Format = vk::Format::R32G32_UINT;
 
@@ -157,6 +162,8 @@ fn signal_count(signal: SignalType) -> usize {
 pub(crate) struct TempPool {
     /// Per signal (two for specular + diffuse), a ping-pong pair.
     pairs: Vec<[Image; 2]>,
+    /// The shadow passes' tile map (see shaders/include/denoise.glsl); made with the pairs.
+    tiles: Option<Image>,
     width: u32,
     height: u32,
     initialized: bool,
@@ -173,15 +180,31 @@ impl TempPool {
             return Ok(Vec::new());
         }
         let formats = std::iter::repeat_n(HISTORY_FORMAT, 2 * signals);
-        let mut images = create_all(memory, "denoiser intermediate", formats, width, height)?.into_iter();
+        let mut images = create_all(memory, "denoiser intermediate", formats, width, height)?;
+        let tile_format = std::iter::once(TILE_FORMAT);
+        let tiles = match create_all(memory, "denoiser tiles", tile_format, width.div_ceil(TILE), height.div_ceil(TILE)) {
+            Ok(mut t) => t.pop(),
+            Err(e) => {
+                for image in images {
+                    memory.destroy_image(image);
+                }
+                return Err(e);
+            }
+        };
+        let mut images = images.drain(..);
         let pairs = (0..signals).map(|_| [images.next().expect("counted"), images.next().expect("counted")]).collect();
         let old = std::mem::replace(&mut self.pairs, pairs);
+        let old_tiles = std::mem::replace(&mut self.tiles, tiles);
         (self.width, self.height, self.initialized) = (width, height, false);
-        Ok(old.into_iter().flatten().collect())
+        Ok(old.into_iter().flatten().chain(old_tiles).collect())
     }
 
     pub fn into_images(self) -> Vec<Image> {
-        self.pairs.into_iter().flatten().collect()
+        self.pairs.into_iter().flatten().chain(self.tiles).collect()
+    }
+
+    fn images(&self) -> impl Iterator<Item = &Image> {
+        self.pairs.iter().flatten().chain(&self.tiles)
     }
 }
 
@@ -196,7 +219,8 @@ pub(crate) struct DenoisePass {
 }
 
 /// Binding order of shaders/include/denoise.glsl: 6 sampled (depth, normals, roughness,
-/// motion, input 0/1), 16 storage, 1 uniform buffer, 1 sampled (the input mask).
+/// motion, input 0/1), 16 storage, 1 uniform buffer, 1 sampled (the input mask), 1 storage
+/// (the tile map).
 const SAMPLED_BINDINGS: usize = 6;
 const STORAGE_BINDINGS: usize = 16;
 
@@ -208,6 +232,7 @@ impl DenoisePass {
         bindings.extend((0..STORAGE_BINDINGS).map(|_| Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None }));
         bindings.push(Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None });
         bindings.push(Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) });
+        bindings.push(Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None });
         let set_layout = b.set_layout(&bindings, vk::ShaderStageFlags::COMPUTE)?;
         let layout = b.layout(Some(set_layout), 16, vk::ShaderStageFlags::COMPUTE)?;
         Ok(DenoisePass {
@@ -227,6 +252,10 @@ impl DenoisePass {
         // The pool grows with every context made (`ExecuteContext::create_denoising_context`),
         // so it always serves a live context's task; recording nothing beats an out-of-bounds
         // index should that ever not hold.
+        let Some(tiles) = temps.tiles.as_ref().map(Image::input) else {
+            log::error!("the denoisers' shared intermediates do not exist: task skipped");
+            return;
+        };
         if temps.pairs.len() < job.count {
             log::error!("the denoisers' shared intermediates do not serve this task: skipped");
             return;
@@ -238,7 +267,7 @@ impl DenoisePass {
             // task resets history, so their contents are never read before written; the
             // intermediates are written before they are read by every task.
             let fresh_state = (!state.initialized).then(|| state.images()).into_iter().flatten();
-            let fresh_temps = (!temps.initialized).then(|| temps.pairs.iter().flatten()).into_iter().flatten();
+            let fresh_temps = (!temps.initialized).then(|| temps.images()).into_iter().flatten();
             let barriers: Vec<_> = fresh_state
                 .chain(fresh_temps)
                 .map(|i| {
@@ -326,6 +355,7 @@ impl DenoisePass {
                     Slot::Storage(&temps_in[dst][1]),
                     Slot::Uniform(ubo),
                     Slot::Sampled(mask),
+                    Slot::Storage(&tiles),
                 ];
                 let bind = vk::PipelineBindPoint::COMPUTE;
                 let dev = &r.device.raw;

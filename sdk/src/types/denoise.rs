@@ -18,8 +18,9 @@
 //!   neighbourhood.
 //! - **Shadows** (one light or many), SIGMA-like: the penumbra's width is derived per pixel
 //!   from the occluder distance and the light's size (hit distance × angular size), spread to
-//!   the lit side of the edge by a neighbourhood search, and the visibility is blurred over a
-//!   disk of that width with plane and normal stops — contact shadows (small occluder
+//!   the lit side of the edge by a neighbourhood search (skipped for the 8x8 tiles with no
+//!   occluded sample within its reach: in a sunlit view, most of them), and the visibility is
+//!   blurred over a disk of that width with plane and normal stops — contact shadows (small occluder
 //!   distance) and hard lights keep hard edges — then stabilised temporally with a
 //!   neighbourhood clamp.
 //!
