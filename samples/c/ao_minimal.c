@@ -694,7 +694,15 @@ int main(void) {
     HrtDenoisingContextHandle denoiser = 0;
     EXPECT(hrt_create_denoising_context(ctx, &dci_in, &denoiser) == HRT_ERROR_INVALID_INPUT, "out-of-range signal type");
     dci_in.signal = HRT_SIGNAL_SHADOW;
+    /* The main camera's view: its contexts share one denoiser guide, and so one size. */
+    EXPECT(dci_in.view_id == 0, "no view by default");
+    dci_in.view_id = 1;
     CHECK_HRT(hrt_create_denoising_context(ctx, &dci_in, &denoiser));
+    HrtDenoisingContextInput other_size = dci_in;
+    other_size.max_width = W / 2;
+    HrtDenoisingContextHandle refused = 0;
+    EXPECT(hrt_create_denoising_context(ctx, &other_size, &refused) == HRT_ERROR_INVALID_INPUT,
+           "a second size in one view");
     Image noisy = make_image(VK_FORMAT_R32G32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT);
     Image clean = make_image(VK_FORMAT_R32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT);
     cmd = begin();

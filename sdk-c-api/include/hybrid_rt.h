@@ -709,6 +709,13 @@ typedef struct HrtDenoisingContextInput {
    * An HrtSignalType. Default HRT_SIGNAL_DIFFUSE.
    */
   uint32_t signal;
+  /**
+   * The camera view it denoises (default 0: none). Contexts created with the same nonzero
+   * view id share the denoiser's guide (this and the last frame's normal and view distance,
+   * 16 bytes a pixel); they must have one size, and one view's denoise tasks in a container
+   * must read one depth, normals, input mask, viewport and camera.
+   */
+  uint32_t view_id;
 } HrtDenoisingContextInput;
 
 typedef uint64_t HrtDenoisingContextHandle;

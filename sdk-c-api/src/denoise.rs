@@ -54,6 +54,11 @@ pub struct HrtDenoisingContextInput {
     pub method: u32,
     /// An HrtSignalType. Default HRT_SIGNAL_DIFFUSE.
     pub signal: u32,
+    /// The camera view it denoises (default 0: none). Contexts created with the same nonzero
+    /// view id share the denoiser's guide (this and the last frame's normal and view distance,
+    /// 16 bytes a pixel); they must have one size, and one view's denoise tasks in a container
+    /// must read one depth, normals, input mask, viewport and camera.
+    pub view_id: u32,
 }
 
 #[repr(C)]
@@ -235,6 +240,7 @@ pub extern "C" fn hrt_denoising_context_input_default() -> HrtDenoisingContextIn
         max_height: d.max_height,
         method: d.method as u32,
         signal: d.signal as u32,
+        view_id: d.view_id,
     }
 }
 
@@ -267,6 +273,7 @@ pub unsafe extern "C" fn hrt_create_denoising_context(
             max_height: i.max_height,
             method,
             signal,
+            view_id: i.view_id,
         })?;
         *out = h.0;
         Ok(())

@@ -79,7 +79,7 @@ impl Stage {
     pub fn use_method(&mut self, method: DenoisingMethod, signal: SignalType) {
         self.ctx.destroy_denoising_context(self.dn).unwrap();
         let (w, h) = (self.g.width, self.g.height);
-        let input = DenoisingContextInput { max_width: w, max_height: h, signal, method };
+        let input = DenoisingContextInput { max_width: w, max_height: h, signal, method, ..Default::default() };
         self.dn = self.ctx.create_denoising_context(&input).unwrap();
     }
 

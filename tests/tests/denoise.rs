@@ -1061,3 +1061,109 @@ fn pass_timings_name_every_denoiser_pass_and_change_no_pixel() {
         assert!(sum <= task.gpu_ms * (1.0 + 1e-9) + 1e-9, "{:?}: passes {sum} ms > task {} ms", task.kind, task.gpu_ms);
     }
 }
+
+/// Four frames of an AO and a shadow denoiser on noise over a plane seen by a camera that
+/// moves, their contexts created with `view_id`: the two outputs' bytes, and the count and
+/// bytes of the denoiser images while the contexts live.
+fn denoise_one_view(view_id: u32) -> (Vec<u8>, Vec<u8>, u64, u64) {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let (g, camera) = facing_plane();
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let format = vk::Format::R32G32B32A32_SFLOAT;
+    let [ao_in, ao_out, shadow_in, shadow_out] = [(); 4].map(|_| storage_image(&host, format, S, S));
+    let make = |signal| {
+        let input = DenoisingContextInput { max_width: S, max_height: S, signal, view_id, ..Default::default() };
+        ctx.create_denoising_context(&input).unwrap()
+    };
+    let (ao, shadow) = (make(SignalType::DiffuseOcclusion), make(SignalType::Shadow));
+    let allocations = ctx.resource_allocations().denoiser;
+    let mut rng = Rng::new(23);
+    let mut frame = ctx.create_task_container();
+    for f in 0..4 {
+        for input in [&ao_in, &shadow_in] {
+            let noise: Vec<[f32; 4]> = (0..S * S).map(|_| [rng.next_f32(), rng.next_f32(), 0.0, 1.0]).collect();
+            host.write_image(input, &rgba_bytes(&noise), GENERAL).unwrap();
+        }
+        // The camera slides a little each frame (the G-buffer stays: reprojection moves).
+        let moved = Camera::look_at(Vec3::new(0.02 * f as f32, 0.0, 2.0), Vec3::new(0.02 * f as f32, 0.0, -3.0));
+        let common = DenoisingCommon { camera: images.denoising_common(&moved).camera, ..images.denoising_common(&camera) };
+        let (input, output) = (ao_in.input(GENERAL), ao_out.input(GENERAL));
+        frame.schedule_denoise_diffuse_occlusion(&DenoiseDiffuseOcclusionTask { context: ao, common, input, output }).unwrap();
+        let (input, output) = (shadow_in.input(GENERAL), shadow_out.input(GENERAL));
+        frame.schedule_denoise_shadow(&DenoiseShadowTask { context: shadow, common, light: sun(0.1), input, output }).unwrap();
+        run_frame(&host, &ctx, &mut frame).unwrap();
+    }
+    let outputs = (host.read_image(&ao_out, GENERAL).unwrap(), host.read_image(&shadow_out, GENERAL).unwrap());
+    for dn in [ao, shadow] {
+        ctx.destroy_denoising_context(dn).unwrap();
+    }
+    for i in [ao_in, ao_out, shadow_in, shadow_out] {
+        host.destroy_image(i);
+    }
+    images.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+    (outputs.0, outputs.1, allocations.count, allocations.bytes)
+}
+
+/// Contexts of one view keep one guide between them (two images of 8 bytes a pixel fewer)
+/// and denoise exactly as with a guide each.
+#[test]
+fn contexts_of_one_view_share_their_guide_and_denoise_the_same() {
+    let (ao_alone, shadow_alone, count_alone, bytes_alone) = denoise_one_view(0);
+    let (ao_shared, shadow_shared, count_shared, bytes_shared) = denoise_one_view(7);
+    assert!(ao_alone == ao_shared, "AO denoised differently with a shared guide");
+    assert!(shadow_alone == shadow_shared, "shadow denoised differently with a shared guide");
+    assert_eq!(count_shared + 2, count_alone, "one guide pair fewer");
+    assert_eq!(bytes_shared + 2 * 8 * (S * S) as u64, bytes_alone, "R32G32_UINT guide images of {S}x{S}");
+}
+
+/// A view's contexts have one size, and one view's tasks in a container one camera: both are
+/// refused with a typed error that leaves the context usable.
+#[test]
+fn a_view_refuses_a_second_size_and_a_second_camera() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let view = |w, signal| DenoisingContextInput { max_width: w, max_height: w, signal, view_id: 3, ..Default::default() };
+    let ao = ctx.create_denoising_context(&view(S, SignalType::DiffuseOcclusion)).unwrap();
+    match ctx.create_denoising_context(&view(S / 2, SignalType::Shadow)) {
+        Err(Error::InvalidInput { what: "DenoisingContextInput.view_id", .. }) => {}
+        other => panic!("a second size in one view: {other:?}"),
+    }
+    let shadow = ctx.create_denoising_context(&view(S, SignalType::Shadow)).unwrap();
+    let (g, camera) = facing_plane();
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let format = vk::Format::R32G32B32A32_SFLOAT;
+    let [input, output] = [(); 2].map(|_| storage_image(&host, format, S, S));
+    let (i, o) = (input.input(GENERAL), output.input(GENERAL));
+    let common = images.denoising_common(&camera);
+    let elsewhere = Camera::look_at(Vec3::new(1.0, 0.0, 2.0), Vec3::new(0.0, 0.0, -3.0));
+    let other = DenoisingCommon { camera: images.denoising_common(&elsewhere).camera, ..common };
+    let mut frame = ctx.create_task_container();
+    let schedule = |frame: &mut TaskContainer, shadow_common: DenoisingCommon| {
+        frame
+            .schedule_denoise_diffuse_occlusion(&DenoiseDiffuseOcclusionTask { context: ao, common, input: i, output: o })
+            .unwrap();
+        let task = DenoiseShadowTask { context: shadow, common: shadow_common, light: sun(0.1), input: i, output: o };
+        frame.schedule_denoise_shadow(&task).unwrap();
+    };
+    schedule(&mut frame, other);
+    let cmd = host.allocate_command_buffer().unwrap();
+    host.begin(cmd).unwrap();
+    match ctx.build_gpu_task(&mut frame, cmd) {
+        Err(Error::InvalidInput { what: "DenoisingContextInput.view_id", .. }) => {}
+        other => panic!("two cameras in one view: {other:?}"),
+    }
+    unsafe { host.device.end_command_buffer(cmd).unwrap() };
+    frame.clear();
+    schedule(&mut frame, common);
+    run_frame(&host, &ctx, &mut frame).expect("the view's contexts work after the refusals");
+    for dn in [ao, shadow] {
+        ctx.destroy_denoising_context(dn).unwrap();
+    }
+    for img in [input, output] {
+        host.destroy_image(img);
+    }
+    images.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+}

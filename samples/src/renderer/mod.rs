@@ -46,6 +46,8 @@ const GENERAL: vk::ImageLayout = vk::ImageLayout::GENERAL;
 
 /// Log-average luminance the automatic exposure maps the composite to (`Renderer::auto_expose`).
 const AUTO_EXPOSURE_KEY: f64 = 0.18;
+/// The view id of the main camera's denoising contexts (`DenoisingContextInput::view_id`).
+const MAIN_VIEW: u32 = 1;
 
 /// The cameras of one frame: the main view's and the lidar's, and last frame's of each.
 #[derive(Clone, Copy)]
@@ -206,7 +208,15 @@ impl<'h> Renderer<'h> {
         }
         let work = Work::new(host, w, h, settings.lidar_size)?;
         let context = |signal| {
-            ctx.create_denoising_context(&DenoisingContextInput { max_width: w, max_height: h, signal, ..Default::default() })
+            // One view: the four contexts of the main camera share one denoiser guide.
+            let view_id = MAIN_VIEW;
+            ctx.create_denoising_context(&DenoisingContextInput {
+                max_width: w,
+                max_height: h,
+                signal,
+                view_id,
+                ..Default::default()
+            })
         };
         let denoisers = Denoisers {
             sun: context(SignalType::Shadow).map_err(sdk_err)?,

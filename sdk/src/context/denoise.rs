@@ -1,9 +1,11 @@
-//! Denoising contexts: created and destroyed by the engine, their history images owned here
-//! and freed only after the tickets that could still use them come back.
+//! Denoising contexts: created and destroyed by the engine, their history images (and their
+//! views' guides) owned here and freed only after the tickets that could still use them come
+//! back.
 use super::{ExecuteContext, Shared};
 use crate::error::{Error, Result};
 use crate::gpu::deferred::Garbage;
 use crate::passes::denoise::DenoiserState;
+use crate::passes::denoise_guide::{Guide, GuideKey};
 use crate::types::{DenoisingContextHandle, DenoisingContextInput, MAX_DENOISING_EXTENT};
 
 impl ExecuteContext {
@@ -21,15 +23,45 @@ impl ExecuteContext {
                 return Err(Error::invalid(what, format!("{v} exceeds the device's maxImageDimension2D {device_max}")));
             }
         }
-        let state = DenoiserState::new(&self.shared.memory, input)?;
+        let memory = &self.shared.memory;
+        let view = (input.view_id != 0).then_some(GuideKey::View(input.view_id));
+        // Allocated before the lock, under a placeholder key (set once the handle exists).
+        let state = DenoiserState::new(memory, input, GuideKey::Context(0))?;
         let mut st = self.shared.state.lock();
+        let free = |state: DenoiserState, guide: Option<Guide>| {
+            for image in state.into_images().into_iter().chain(guide.into_iter().flat_map(Guide::into_images)) {
+                memory.destroy_image(image);
+            }
+        };
+        // A view's contexts share its guide, so its size.
+        let shared = view.and_then(|k| st.denoise_guides.get(&k));
+        if let Some(g) = shared {
+            if (g.width, g.height) != (input.max_width, input.max_height) {
+                free(state, None);
+                return Err(Error::invalid(
+                    "DenoisingContextInput.view_id",
+                    format!(
+                        "view {}'s contexts are {}x{}, this one is {}x{}: one view's contexts have one size",
+                        input.view_id, g.width, g.height, input.max_width, input.max_height
+                    ),
+                ));
+            }
+        }
+        let new_guide = match shared {
+            Some(_) => None,
+            None => match Guide::new(memory, input.max_width, input.max_height) {
+                Ok(g) => Some(g),
+                Err(e) => {
+                    free(state, None);
+                    return Err(e);
+                }
+            },
+        };
         // The shared intermediates grow to this context's size; on failure nothing changes.
-        let replaced = match st.denoise_temps.ensure(&self.shared.memory, input) {
+        let replaced = match st.denoise_temps.ensure(memory, input) {
             Ok(r) => r,
             Err(e) => {
-                for image in state.into_images() {
-                    self.shared.memory.destroy_image(image);
-                }
+                free(state, new_guide);
                 return Err(e);
             }
         };
@@ -38,6 +70,15 @@ impl ExecuteContext {
             st.deferred.retire(serial, Garbage::Image(image));
         }
         let h = st.denoisers.insert(state);
+        let key = GuideKey::of(input.view_id, h);
+        if let Ok(state) = st.denoisers.get_mut(h) {
+            state.guide = key;
+        }
+        let guide = match new_guide {
+            Some(g) => st.denoise_guides.entry(key).or_insert(g),
+            None => st.denoise_guides.get_mut(&key).expect("the view's guide exists"),
+        };
+        guide.users += 1;
         self.shared.live.write().denoisers.insert(h.0);
         Ok(h)
     }
@@ -50,8 +91,18 @@ impl ExecuteContext {
         let state = st.denoisers.remove(handle)?;
         self.shared.live.write().denoisers.remove(&handle.0);
         let serial = st.last_issued();
+        let key = state.guide;
         for image in state.into_images() {
             st.deferred.retire(serial, Garbage::Image(image));
+        }
+        // The last context of a view takes the view's guide with it.
+        if let Some(guide) = st.denoise_guides.get_mut(&key) {
+            guide.users -= 1;
+            if guide.users == 0 {
+                for image in st.denoise_guides.remove(&key).into_iter().flat_map(Guide::into_images) {
+                    st.deferred.retire(serial, Garbage::Image(image));
+                }
+            }
         }
         // The last context takes the shared intermediates with it.
         if st.denoisers.iter().next().is_none() {

@@ -31,6 +31,7 @@ use crate::gpu::deferred::{DeferredFrees, Garbage};
 use crate::gpu::device::{Device, DeviceDesc};
 use crate::gpu::memory::Memory;
 use crate::passes::denoise::{DenoiserState, TempPool};
+use crate::passes::denoise_guide::{Guide, GuideKey};
 use crate::passes::Passes;
 use crate::scene::geometry::GeometryRecord;
 use crate::scene::instance::Placement;
@@ -39,6 +40,7 @@ use crate::types::handles::Registry;
 use crate::types::*;
 pub use container::TaskContainer;
 use parking_lot::{Mutex, RwLock};
+use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, AtomicU16, Ordering};
 use std::sync::Arc;
 use working_set::WorkingSet;
@@ -70,6 +72,8 @@ struct State {
     denoisers: Registry<DenoisingContextHandle, DenoiserState>,
     /// The intermediates every denoising context shares (as large as the largest).
     denoise_temps: TempPool,
+    /// The denoisers' guides: one per view, and one per context without a view.
+    denoise_guides: HashMap<GuideKey, Guide>,
     /// Where `RelightCacheTask`'s walk over the caches goes on next build.
     relight_cursor: crate::passes::relight::RelightCursor,
     /// `InitSettings::cache_budget_bytes` (0: none).
@@ -152,6 +156,7 @@ impl ExecuteContext {
                 cache_pool: CachePool::default(),
                 denoisers: Registry::new(id),
                 denoise_temps: TempPool::default(),
+                denoise_guides: HashMap::new(),
                 relight_cursor: Default::default(),
                 cache_budget: settings.cache_budget_bytes,
                 working_sets: Vec::new(),
@@ -289,6 +294,11 @@ impl ExecuteContext {
         for (h, d) in st.denoisers.iter() {
             let _ = writeln!(out, "denoiser {h:?} {}", d.digest());
         }
+        let mut guides: Vec<_> = st.denoise_guides.iter().map(|(k, g)| format!("guide {k:?} {}", g.digest())).collect();
+        guides.sort();
+        for g in guides {
+            let _ = writeln!(out, "{g}");
+        }
         let _ = writeln!(out, "memory {:?}", self.shared.memory.allocations());
         out
     }
@@ -370,6 +380,11 @@ impl Drop for Shared {
         }
         for image in std::mem::take(&mut st.denoise_temps).into_images() {
             st.deferred.retire(0, Garbage::Image(image));
+        }
+        for (_, guide) in st.denoise_guides.drain() {
+            for image in guide.into_images() {
+                st.deferred.retire(0, Garbage::Image(image));
+            }
         }
         st.deferred.collect(device, memory, None);
         for ws in st.working_sets.drain(..) {

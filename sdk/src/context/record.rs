@@ -158,6 +158,9 @@ impl Recorder<'_> {
             cache_pool: &st.cache_pool,
             denoisers: &mut st.denoisers,
             denoise_temps: &mut st.denoise_temps,
+            denoise_guides: &mut st.denoise_guides,
+            view_inputs: Default::default(),
+            serial: self.serial,
             relight_cursor: &mut st.relight_cursor,
             limits: &device.limits,
         };

@@ -108,6 +108,9 @@ pub(super) fn validate_handles(st: &mut State, tasks: &[Task], limits: &Limits) 
         cache_pool: &st.cache_pool,
         denoisers: &mut st.denoisers,
         denoise_temps: &mut st.denoise_temps,
+        denoise_guides: &mut st.denoise_guides,
+        view_inputs: Default::default(),
+        serial: 0,
         limits,
         relight_cursor: &mut st.relight_cursor,
     };

@@ -89,6 +89,13 @@ pub(crate) struct World<'a> {
     pub denoisers: &'a mut Registry<DenoisingContextHandle, super::denoise::DenoiserState>,
     /// The denoisers' shared intermediates.
     pub denoise_temps: &'a mut super::denoise::TempPool,
+    /// The denoisers' guides, by view (or context).
+    pub denoise_guides: &'a mut std::collections::HashMap<super::denoise_guide::GuideKey, super::denoise_guide::Guide>,
+    /// While a build checks its tasks: the G-buffer inputs of each view's first denoise task,
+    /// which the view's later tasks must match (`ViewInputs::check`).
+    pub view_inputs: std::cell::RefCell<Vec<(u32, super::denoise_guide::ViewInputs)>>,
+    /// The ticket serial of the recording (0 while a build checks its tasks).
+    pub serial: u64,
     pub limits: &'a crate::gpu::device::Limits,
     /// Where the cache relight walk goes on (`RelightCacheTask`).
     pub relight_cursor: &'a mut super::relight::RelightCursor,

@@ -6,6 +6,7 @@
 //! Shadows: prep → penumbra blur → temporal (writes the output).
 use super::constants::LightGpu;
 use super::constants::TraceCommonGpu;
+use super::denoise_guide::{Guide, GuideKey, ViewInputs};
 use super::descriptors::{self, Slot};
 use super::{PassTask, Passes, Recording, World};
 use crate::error::{Error, Result};
@@ -49,16 +50,18 @@ const HISTORY_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 const TILE_FORMAT: vk::Format = vk::Format::R32_UINT;
 /// Pixels per tile side (the passes' workgroup size).
 const TILE: u32 = 8;
-/// Packed normal (two halves) + view distance (f32).
-const GBUFFER_FORMAT: vk::Format = vk::Format::R32G32_UINT;
 
 /// What a denoising context keeps between frames: ping-pong pairs of history images (element
-/// `newest` holds the latest), the denoiser's own G-buffer for disocclusion tests, the
-/// previous camera. The passes' intermediates are not kept: every context shares one
-/// `TempPool`.
+/// `newest` holds the latest), the previous camera. The G-buffer its passes test against is
+/// its view's guide (`denoise_guide`); the passes' intermediates are not kept: every context
+/// shares one `TempPool`.
 pub(crate) struct DenoiserState {
     pub input: DenoisingContextInput,
-    gbuffer: [Image; 2],
+    /// Its guide: its view's, or its own.
+    pub guide: GuideKey,
+    /// The guide frame its history was written against: history continues only from the
+    /// guide's previous frame.
+    guide_frame: u64,
     /// Per signal: slow history (RGB + 2nd moment; shadows: visibility + length).
     history: Vec<[Image; 2]>,
     /// Per radiance signal: fast history (RGB + history length).
@@ -76,22 +79,22 @@ fn is_shadow(signal: SignalType) -> bool {
 }
 
 impl DenoiserState {
-    pub fn new(memory: &Memory, input: &DenoisingContextInput) -> Result<DenoiserState> {
+    /// The history of a context for `input`, reading the guide `guide`.
+    pub fn new(memory: &Memory, input: &DenoisingContextInput, guide: GuideKey) -> Result<DenoiserState> {
         let signals = signal_count(input.signal);
         let fast_pairs = if is_shadow(input.signal) { 0 } else { signals };
-        // G-buffer pair first, then history and fast pairs of HISTORY_FORMAT.
-        let formats =
-            std::iter::repeat_n(GBUFFER_FORMAT, 2).chain(std::iter::repeat_n(HISTORY_FORMAT, 2 * (signals + fast_pairs)));
+        // History pairs, then fast pairs, of HISTORY_FORMAT.
+        let formats = std::iter::repeat_n(HISTORY_FORMAT, 2 * (signals + fast_pairs));
         let mut images = create_all(memory, "denoiser", formats, input.max_width, input.max_height)?.into_iter();
         let mut pairs = |n: usize| -> Vec<[Image; 2]> {
             (0..n).map(|_| [images.next().expect("counted"), images.next().expect("counted")]).collect()
         };
-        let [gbuffer] = <[[Image; 2]; 1]>::try_from(pairs(1)).ok().expect("one pair");
         let history = pairs(signals);
         let fast = pairs(fast_pairs);
         Ok(DenoiserState {
             input: *input,
-            gbuffer,
+            guide,
+            guide_frame: 0,
             history,
             fast,
             newest: 0,
@@ -106,19 +109,19 @@ impl DenoiserState {
     #[cfg(feature = "fault-injection")]
     pub fn digest(&self) -> String {
         format!(
-            "newest {} initialized {} camera {:?} viewport {:?}",
-            self.newest, self.initialized, self.previous_camera, self.previous_viewport
+            "newest {} initialized {} guide {:?} frame {} camera {:?} viewport {:?}",
+            self.newest, self.initialized, self.guide, self.guide_frame, self.previous_camera, self.previous_viewport
         )
     }
 
     /// Every image, for (deferred) destruction.
     pub fn into_images(self) -> Vec<Image> {
-        let DenoiserState { gbuffer, history, fast, .. } = self;
-        gbuffer.into_iter().chain(history.into_iter().chain(fast).flatten()).collect()
+        let DenoiserState { history, fast, .. } = self;
+        history.into_iter().chain(fast).flatten().collect()
     }
 
     fn images(&self) -> impl Iterator<Item = &Image> {
-        self.gbuffer.iter().chain(self.history.iter().chain(&self.fast).flatten())
+        self.history.iter().chain(&self.fast).flatten()
     }
 }
 
@@ -246,9 +249,16 @@ impl DenoisePass {
         })
     }
 
-    /// Records one denoise task against its context's state (and advances that state), with
-    /// the shared intermediates of `temps`.
-    pub fn record(&self, r: &mut Recording<'_>, state: &mut DenoiserState, temps: &mut TempPool, job: &DenoiseJob) {
+    /// Records one denoise task against its context's state and guide (and advances both),
+    /// with the shared intermediates of `temps`; `serial` is the recording's.
+    pub fn record(
+        &self,
+        r: &mut Recording<'_>,
+        (state, guide): (&mut DenoiserState, &mut Guide),
+        temps: &mut TempPool,
+        job: &DenoiseJob,
+        serial: u64,
+    ) {
         // The pool grows with every context made (`ExecuteContext::create_denoising_context`),
         // so it always serves a live context's task; recording nothing beats an out-of-bounds
         // index should that ever not hold.
@@ -260,43 +270,20 @@ impl DenoisePass {
             log::error!("the denoisers' shared intermediates do not serve this task: skipped");
             return;
         }
-        let d = &r.device.raw;
         let stage = vk::PipelineStageFlags2::COMPUTE_SHADER;
-        if !state.initialized || !temps.initialized {
-            // SDK-owned images start UNDEFINED; they live in GENERAL from now on. The first
-            // task resets history, so their contents are never read before written; the
-            // intermediates are written before they are read by every task.
-            let fresh_state = (!state.initialized).then(|| state.images()).into_iter().flatten();
-            let fresh_temps = (!temps.initialized).then(|| temps.images()).into_iter().flatten();
-            let barriers: Vec<_> = fresh_state
-                .chain(fresh_temps)
-                .map(|i| {
-                    vk::ImageMemoryBarrier2::default()
-                        .src_stage_mask(vk::PipelineStageFlags2::NONE)
-                        .dst_stage_mask(stage)
-                        // Sampled too: a history image stands in for a missing roughness or
-                        // motion input, and a bound descriptor counts as read.
-                        .dst_access_mask(
-                            vk::AccessFlags2::SHADER_SAMPLED_READ
-                                | vk::AccessFlags2::SHADER_STORAGE_READ
-                                | vk::AccessFlags2::SHADER_STORAGE_WRITE,
-                        )
-                        .old_layout(vk::ImageLayout::UNDEFINED)
-                        .new_layout(vk::ImageLayout::GENERAL)
-                        .image(i.raw)
-                        .subresource_range(COLOR_RANGE)
-                })
-                .collect();
-            unsafe { d.cmd_pipeline_barrier2(r.cmd, &vk::DependencyInfo::default().image_memory_barriers(&barriers)) };
-        }
+        initialize_images(r, state, guide, temps);
+        let (guide_frame, [guide_prev, guide_cur]) = guide.begin_task(serial, matches!(state.guide, GuideKey::View(_)));
         // History written by earlier command buffers: the recording's hazard tracker starts
         // with their writes pending (Hazards::after_earlier_submissions).
 
         let c = &job.common;
         let extent = (c.viewport.width, c.viewport.height);
         let viewport = [c.viewport.x, c.viewport.y, c.viewport.width, c.viewport.height];
+        // A context that skipped its view's previous frame has history the guide no longer
+        // describes.
         let reset = c.reset_history
             || !state.initialized
+            || state.guide_frame + 1 != guide_frame
             || state.input.method == DenoisingMethod::SpatialOnly
             || state.previous_viewport != viewport;
         let previous = c.previous_camera.or(state.previous_camera).unwrap_or(c.camera);
@@ -319,8 +306,8 @@ impl DenoisePass {
             [temps.pairs[0][k].input(), temps.pairs[job.count.min(temps.pairs.len()) - 1][k].input()]
         };
         let temps_in = [temp_pair(0), temp_pair(1)];
-        let gb_prev = state.gbuffer[prev].input();
-        let gb_cur = state.gbuffer[cur].input();
+        let gb_prev = guide.images()[guide_prev].input();
+        let gb_cur = guide.images()[guide_cur].input();
         let stand_in = temps_in[0][0];
         let roughness = descriptors::optional_or(&c.roughness.image, &stand_in);
         let motion = descriptors::optional_or(&c.motion.image, &stand_in);
@@ -384,11 +371,47 @@ impl DenoisePass {
         }
         state.newest = cur;
         state.initialized = true;
+        state.guide_frame = guide_frame;
         temps.initialized = true;
         state.previous_camera = Some(c.camera);
         state.previous_jitter = c.camera_jitter;
         state.previous_viewport = viewport;
     }
+}
+
+/// SDK-owned images start UNDEFINED; they live in GENERAL from the first task that uses them
+/// on. That task resets history, so their contents are never read before written; the
+/// intermediates are written before they are read by every task.
+fn initialize_images(r: &mut Recording<'_>, state: &DenoiserState, guide: &mut Guide, temps: &TempPool) {
+    if state.initialized && temps.initialized && guide.initialized {
+        return;
+    }
+    let fresh_state = (!state.initialized).then(|| state.images()).into_iter().flatten();
+    let fresh_temps = (!temps.initialized).then(|| temps.images()).into_iter().flatten();
+    let fresh_guide = (!guide.initialized).then(|| guide.images().iter()).into_iter().flatten();
+    let barriers: Vec<_> = fresh_state
+        .chain(fresh_temps)
+        .chain(fresh_guide)
+        .map(|i| {
+            vk::ImageMemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::NONE)
+                .dst_stage_mask(vk::PipelineStageFlags2::COMPUTE_SHADER)
+                // Sampled too: a history image stands in for a missing roughness or motion
+                // input, and a bound descriptor counts as read.
+                .dst_access_mask(
+                    vk::AccessFlags2::SHADER_SAMPLED_READ
+                        | vk::AccessFlags2::SHADER_STORAGE_READ
+                        | vk::AccessFlags2::SHADER_STORAGE_WRITE,
+                )
+                .old_layout(vk::ImageLayout::UNDEFINED)
+                .new_layout(vk::ImageLayout::GENERAL)
+                .image(i.raw)
+                .subresource_range(COLOR_RANGE)
+        })
+        .collect();
+    // SAFETY: the command buffer is recording; the images are the SDK's and alive.
+    unsafe { r.device.raw.cmd_pipeline_barrier2(r.cmd, &vk::DependencyInfo::default().image_memory_barriers(&barriers)) };
+    guide.initialized = true;
 }
 
 fn constants(job: &DenoiseJob, previous: &Camera, previous_jitter: [f32; 2], seed: u32, reset: bool) -> DenoiseConstantsGpu {
@@ -454,7 +477,8 @@ impl PassTask for DenoiseJob {
     fn upload_bytes(&self) -> u64 {
         std::mem::size_of::<DenoiseConstantsGpu>() as u64
     }
-    /// At build: the context still exists, denoises this task's signal and is large enough.
+    /// At build: the context still exists, denoises this task's signal and is large enough,
+    /// and a view's tasks in the container denoise one camera's G-buffer.
     fn check(&self, world: &World<'_>) -> Result<()> {
         let state = world.denoisers.get(self.context)?;
         if state.input.signal != self.signal {
@@ -472,13 +496,16 @@ impl PassTask for DenoiseJob {
                 format!("reaches ({right}, {bottom}), beyond the context's {}x{}", state.input.max_width, state.input.max_height),
             ));
         }
+        if state.input.view_id != 0 {
+            ViewInputs::of(&self.common).check(state.input.view_id, &mut world.view_inputs.borrow_mut())?;
+        }
         Ok(())
     }
     /// Its context was checked at build (`check`).
     fn record(&self, r: &mut Recording<'_>, passes: &Passes, world: &mut World<'_>) {
-        if let Ok(state) = world.denoisers.get_mut(self.context) {
-            passes.denoise.record(r, state, world.denoise_temps, self);
-        }
+        let Ok(state) = world.denoisers.get_mut(self.context) else { return };
+        let Some(guide) = world.denoise_guides.get_mut(&state.guide) else { return };
+        passes.denoise.record(r, (state, guide), world.denoise_temps, self, world.serial);
     }
 }
 

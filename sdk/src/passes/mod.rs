@@ -14,6 +14,7 @@ pub(crate) mod cache_ops;
 pub(crate) mod constants;
 pub(crate) mod debug;
 pub(crate) mod denoise;
+pub(crate) mod denoise_guide;
 pub(crate) mod descriptors;
 pub(crate) mod diffuse;
 pub(crate) mod geometry_pack;

@@ -83,11 +83,27 @@ pub struct DenoisingContextInput {
     pub method: DenoisingMethod,
     /// The signal its tasks denoise.
     pub signal: SignalType,
+    /// The camera view it denoises, to share the denoiser's guide with the view's other
+    /// contexts (default 0: none). Every denoiser keeps a guide — this frame's and the
+    /// previous frame's normal and view distance per pixel, 16 bytes a pixel — to find edges
+    /// and disocclusions; the contexts created with the same nonzero `view_id` (the AO,
+    /// shadow and radiance contexts of one camera, say) keep one between them. They must have
+    /// the same `max_width` and `max_height`, and the denoise tasks of one view in one
+    /// container must read the same depth, normals, input mask, viewport and camera (a build
+    /// that mixes two cameras under one view id fails). With 0 the context keeps a guide of
+    /// its own.
+    pub view_id: u32,
 }
 
 impl Default for DenoisingContextInput {
     fn default() -> Self {
-        DenoisingContextInput { max_width: 0, max_height: 0, method: DenoisingMethod::Temporal, signal: SignalType::Diffuse }
+        DenoisingContextInput {
+            max_width: 0,
+            max_height: 0,
+            method: DenoisingMethod::Temporal,
+            signal: SignalType::Diffuse,
+            view_id: 0,
+        }
     }
 }
 
