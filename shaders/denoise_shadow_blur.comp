@@ -38,15 +38,16 @@ void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
     if (!hrt_in_viewport(pixel)) return;
     vec3 p, n;
+    // z, w: the pixel's history, passed on to the temporal pass.
+    vec4 c = hrt_load_temp(0u, pixel);
     if (!hrt_surface_at(imageLoad(u_gbuf_cur, pixel).xy, u_d.c.clip_to_world, u_d.eye.xyz, pixel, p, n)) {
-        hrt_store_temp(0u, pixel, vec4(1.0, 0.0, 0.0, 0.0));
+        hrt_store_temp(0u, pixel, vec4(1.0, 0.0, c.zw));
         return;
     }
-    vec4 c = hrt_load_temp(0u, pixel);
     // No occluded sample within reach: the search below would find no penumbra (radius 0),
     // and the visibility passes unchanged. In a sunlit view most tiles end here.
     if (s_near == 0u) {
-        hrt_store_temp(0u, pixel, vec4(c.x, 0.0, 0.0, 0.0));
+        hrt_store_temp(0u, pixel, vec4(c.x, 0.0, c.zw));
         return;
     }
     float dist = distance(p, u_d.eye.xyz);
@@ -76,11 +77,11 @@ void main() {
         vec4 w;
         hrt_history_taps(hrt_previous_position(pixel, p), p, n, dist, taps, w);
         float wsum = dot(w, vec4(1.0)), len = 0.0;
-        for (int i = 0; i < 4; ++i) if (w[i] > 0.0) len += w[i] * hrt_load_hist_prev(0u, taps[i]).y;
+        for (int i = 0; i < 4; ++i) if (w[i] > 0.0) len += w[i] * hrt_load_temp(0u, taps[i]).w;
         if (wsum > 1e-3) radius *= clamp(sqrt(SHADOW_BLUR_FRAMES / max(len / wsum, 1.0)), 0.25, 1.0);
     }
     if (vis_min >= 1.0 || radius < 0.5) {
-        hrt_store_temp(0u, pixel, vec4(c.x, radius, 0.0, 0.0));
+        hrt_store_temp(0u, pixel, vec4(c.x, radius, c.zw));
         return;
     }
     float rotation = hrt_u01(hrt_pcg(uint(pixel.x) ^ hrt_pcg(uint(pixel.y) ^ hrt_pcg(u_d.c.frame.x)))) * 2.0 * HRT_PI;
@@ -97,5 +98,5 @@ void main() {
         sum += w * hrt_load_temp(0u, q).x;
         wsum += w;
     }
-    hrt_store_temp(0u, pixel, vec4(sum / wsum, radius, 0.0, 0.0));
+    hrt_store_temp(0u, pixel, vec4(sum / wsum, radius, c.zw));
 }

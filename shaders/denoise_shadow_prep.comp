@@ -19,13 +19,14 @@ vec2 decode_shadow(ivec2 q, vec3 p) {
 // Whether any pixel of this workgroup's tile holds an occluded sample (its tile texel).
 shared uint s_occluded;
 
-// Decodes one pixel into the intermediate; true where it holds an occluded sample (a penumbra
-// width).
+// Decodes one pixel into the intermediate (with the pixel's history texel in z, w); true
+// where it holds an occluded sample (a penumbra width).
 bool prep(ivec2 pixel) {
     vec3 p, n;
+    vec2 history = hrt_load_shadow_history(pixel);
     if (!hrt_engine_surface(pixel, p, n)) {
         imageStore(u_gbuf_cur, pixel, uvec4(hrt_pack_surface(vec3(0.0, 0.0, 1.0), -1.0), 0u, 0u));
-        hrt_store_temp(0u, pixel, vec4(1.0, -1.0, 0.0, 0.0));
+        hrt_store_temp(0u, pixel, vec4(1.0, -1.0, history));
         return false;
     }
     float dist = distance(p, u_d.eye.xyz);
@@ -47,7 +48,7 @@ bool prep(ivec2 pixel) {
         }
         result = vec2(vw > 0.0 ? vis / vw : 1.0, pw > 0.0 ? pen / pw : -1.0);
     }
-    hrt_store_temp(0u, pixel, vec4(result, 0.0, 0.0));
+    hrt_store_temp(0u, pixel, vec4(result, history));
     return result.y >= 0.0;
 }
 

@@ -1,7 +1,8 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // Shadow denoiser, pass 3: temporal stabilisation. The reprojected history (visibility,
-// length) is clamped to the 3x3 range of this frame's blurred visibility, so a moving
+// length; the previous frame's, copied into the intermediate's z, w by the prep pass, so the
+// kept history is overwritten in place here) is clamped to the 3x3 range of this frame's blurred visibility, so a moving
 // shadow does not smear, then blended with weight 1 / length.
 #include "include/denoise.glsl"
 
@@ -15,7 +16,7 @@ void main() {
     if (!hrt_in_viewport(pixel)) return;
     vec3 p, n;
     if (!hrt_surface_at(imageLoad(u_gbuf_cur, pixel).xy, u_d.c.clip_to_world, u_d.eye.xyz, pixel, p, n)) {
-        hrt_store_hist_cur(0u, pixel, vec4(0.0));
+        hrt_store_shadow_history(pixel, vec2(0.0));
         hrt_store_output(0u, pixel, vec4(1.0));
         return;
     }
@@ -29,7 +30,7 @@ void main() {
         hrt_history_taps(previous, p, n, dist, taps, w);
         float wsum = dot(w, vec4(1.0));
         if (wsum > 1e-3) {
-            for (int i = 0; i < 4; ++i) if (w[i] > 0.0) hist += w[i] * hrt_load_hist_prev(0u, taps[i]).xy;
+            for (int i = 0; i < 4; ++i) if (w[i] > 0.0) hist += w[i] * hrt_load_temp(0u, taps[i]).zw;
             hist /= wsum;
         }
     }
@@ -47,7 +48,7 @@ void main() {
             hi = max(hi, t);
             ivec2 r = was + ivec2(dx, dy);
             if (!compare || !hrt_in_viewport(r)) continue;
-            vec2 hq = hrt_load_hist_prev(0u, r).xy;
+            vec2 hq = hrt_load_temp(0u, r).zw;
             if (hq.y <= 0.0) continue;
             float hv = clamp(hq.x, 0.0, 1.0);
             sum += t;
@@ -87,6 +88,6 @@ void main() {
         len = prior;
         result = kept;
     }
-    hrt_store_hist_cur(0u, pixel, vec4(result, len, 0.0, 0.0));
+    hrt_store_shadow_history(pixel, vec2(result, len));
     hrt_store_output(0u, pixel, vec4(result, result, result, 1.0));
 }

@@ -63,6 +63,11 @@ layout(set = 0, binding = 23) uniform sampler2D u_input_mask;
 // holds an occluded shadow sample. Written by the shadow prep pass, read by the blur (radiance
 // passes bind it and ignore it).
 layout(set = 0, binding = 24, r32ui) uniform uimage2D u_tiles;
+// The shadow denoiser's history, kept single: (visibility, history length) as two halves. The
+// prep pass copies each pixel's texel into the intermediates (their z, w), where the later
+// passes read the previous frame's; the temporal pass then overwrites it in place. (Radiance
+// passes bind a stand-in and ignore it.)
+layout(set = 0, binding = 25, r32ui) uniform uimage2D u_shadow_history;
 
 layout(push_constant) uniform Pass {
     uvec4 u_pass;            // à-trous: step in pixels, last iteration (0/1)
@@ -91,6 +96,8 @@ void hrt_store_hist_cur(uint s, ivec2 q, vec4 v) { v = hrt_round_half(v); if (s 
 vec4 hrt_load_fast_prev(uint s, ivec2 q) { return s == 0u ? imageLoad(u_fast_prev0, q) : imageLoad(u_fast_prev1, q); }
 vec4 hrt_load_fast_cur(uint s, ivec2 q) { return s == 0u ? imageLoad(u_fast_cur0, q) : imageLoad(u_fast_cur1, q); }
 void hrt_store_fast_cur(uint s, ivec2 q, vec4 v) { v = hrt_round_half(v); if (s == 0u) imageStore(u_fast_cur0, q, v); else imageStore(u_fast_cur1, q, v); }
+vec2 hrt_load_shadow_history(ivec2 q) { return unpackHalf2x16(imageLoad(u_shadow_history, q).x); }
+void hrt_store_shadow_history(ivec2 q, vec2 v) { imageStore(u_shadow_history, q, uvec4(packHalf2x16(hrt_round_half(vec4(v, 0.0, 0.0)).xy))); }
 vec4 hrt_load_temp(uint s, ivec2 q) { return s == 0u ? imageLoad(u_temp_src0, q) : imageLoad(u_temp_src1, q); }
 void hrt_store_temp(uint s, ivec2 q, vec4 v) { v = hrt_round_half(v); if (s == 0u) imageStore(u_temp_dst0, q, v); else imageStore(u_temp_dst1, q, v); }
 

@@ -1167,3 +1167,27 @@ fn a_view_refuses_a_second_size_and_a_second_camera() {
     drop(ctx);
     assert_no_validation_errors();
 }
+
+/// What one more context of a view keeps, the view's guide and the shared intermediates made:
+/// a shadow context 4 bytes a pixel (its single history: visibility and length as halves),
+/// an AO context 32 (slow and fast history pairs, RGBA16F).
+#[test]
+fn kept_bytes_per_pixel_of_a_view_context() {
+    let (_host, ctx) = host_and_context(InitSettings::default());
+    let input = |signal| DenoisingContextInput { max_width: 64, max_height: 64, signal, view_id: 2, ..Default::default() };
+    let first = ctx.create_denoising_context(&input(SignalType::Shadow)).unwrap();
+    let bytes = || ctx.resource_allocations().denoiser.bytes;
+    let mut kept = Vec::new();
+    let mut made = vec![first];
+    for signal in [SignalType::Shadow, SignalType::DiffuseOcclusion] {
+        let before = bytes();
+        made.push(ctx.create_denoising_context(&input(signal)).unwrap());
+        kept.push((bytes() - before) / (64 * 64));
+    }
+    assert_eq!(kept, [4, 32], "bytes a pixel kept by one more shadow and AO context of the view");
+    for h in made {
+        ctx.destroy_denoising_context(h).unwrap();
+    }
+    drop(ctx);
+    assert_no_validation_errors();
+}

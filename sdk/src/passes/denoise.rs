@@ -45,14 +45,17 @@ const ATROUS_PASS_NAMES: [&str; 6] = ["atrous_1", "atrous_2", "atrous_3", "atrou
 const MIN_RADIUS_SCALE: f32 = 0.25;
 
 const HISTORY_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
+/// The shadow history: visibility and history length as two halves (packHalf2x16).
+const SHADOW_HISTORY_FORMAT: vk::Format = vk::Format::R32_UINT;
 /// The shadow passes' tile map: one texel per 8x8 tile (R32_UINT: storage use needs no
 /// extended-format feature).
 const TILE_FORMAT: vk::Format = vk::Format::R32_UINT;
 /// Pixels per tile side (the passes' workgroup size).
 const TILE: u32 = 8;
 
-/// What a denoising context keeps between frames: ping-pong pairs of history images (element
-/// `newest` holds the latest), the previous camera. The G-buffer its passes test against is
+/// What a denoising context keeps between frames: radiance, ping-pong pairs of history images
+/// (element `newest` holds the latest); shadows, one history image (4 bytes a pixel, as
+/// SIGMA's); the previous camera. The G-buffer its passes test against is
 /// its view's guide (`denoise_guide`); the passes' intermediates are not kept: every context
 /// shares one `TempPool`.
 pub(crate) struct DenoiserState {
@@ -62,10 +65,13 @@ pub(crate) struct DenoiserState {
     /// The guide frame its history was written against: history continues only from the
     /// guide's previous frame.
     guide_frame: u64,
-    /// Per signal: slow history (RGB + 2nd moment; shadows: visibility + length).
+    /// Per radiance signal: slow history (RGB + 2nd moment).
     history: Vec<[Image; 2]>,
     /// Per radiance signal: fast history (RGB + history length).
     fast: Vec<[Image; 2]>,
+    /// Shadows: the one history image (visibility + length), overwritten in place each frame
+    /// (the prep pass copies what the later passes read of it into the intermediates).
+    shadow_history: Option<Image>,
     newest: usize,
     initialized: bool,
     previous_camera: Option<Camera>,
@@ -81,22 +87,25 @@ fn is_shadow(signal: SignalType) -> bool {
 impl DenoiserState {
     /// The history of a context for `input`, reading the guide `guide`.
     pub fn new(memory: &Memory, input: &DenoisingContextInput, guide: GuideKey) -> Result<DenoiserState> {
-        let signals = signal_count(input.signal);
-        let fast_pairs = if is_shadow(input.signal) { 0 } else { signals };
-        // History pairs, then fast pairs, of HISTORY_FORMAT.
-        let formats = std::iter::repeat_n(HISTORY_FORMAT, 2 * (signals + fast_pairs));
+        let shadow = is_shadow(input.signal);
+        let pairs = if shadow { 0 } else { signal_count(input.signal) };
+        // Radiance: history pairs, then fast pairs, of HISTORY_FORMAT. Shadows: one image.
+        let formats =
+            std::iter::repeat_n(HISTORY_FORMAT, 4 * pairs).chain(std::iter::repeat_n(SHADOW_HISTORY_FORMAT, shadow as usize));
         let mut images = create_all(memory, "denoiser", formats, input.max_width, input.max_height)?.into_iter();
-        let mut pairs = |n: usize| -> Vec<[Image; 2]> {
+        let mut take_pairs = |n: usize| -> Vec<[Image; 2]> {
             (0..n).map(|_| [images.next().expect("counted"), images.next().expect("counted")]).collect()
         };
-        let history = pairs(signals);
-        let fast = pairs(fast_pairs);
+        let history = take_pairs(pairs);
+        let fast = take_pairs(pairs);
+        let shadow_history = images.next();
         Ok(DenoiserState {
             input: *input,
             guide,
             guide_frame: 0,
             history,
             fast,
+            shadow_history,
             newest: 0,
             initialized: false,
             previous_camera: None,
@@ -116,12 +125,12 @@ impl DenoiserState {
 
     /// Every image, for (deferred) destruction.
     pub fn into_images(self) -> Vec<Image> {
-        let DenoiserState { history, fast, .. } = self;
-        history.into_iter().chain(fast).flatten().collect()
+        let DenoiserState { history, fast, shadow_history, .. } = self;
+        history.into_iter().chain(fast).flatten().chain(shadow_history).collect()
     }
 
     fn images(&self) -> impl Iterator<Item = &Image> {
-        self.history.iter().chain(&self.fast).flatten()
+        self.history.iter().chain(&self.fast).flatten().chain(&self.shadow_history)
     }
 }
 
@@ -222,8 +231,8 @@ pub(crate) struct DenoisePass {
 }
 
 /// Binding order of shaders/include/denoise.glsl: 6 sampled (depth, normals, roughness,
-/// motion, input 0/1), 16 storage, 1 uniform buffer, 1 sampled (the input mask), 1 storage
-/// (the tile map).
+/// motion, input 0/1), 16 storage, 1 uniform buffer, 1 sampled (the input mask), 2 storage
+/// (the tile map, the shadow history).
 const SAMPLED_BINDINGS: usize = 6;
 const STORAGE_BINDINGS: usize = 16;
 
@@ -235,6 +244,7 @@ impl DenoisePass {
         bindings.extend((0..STORAGE_BINDINGS).map(|_| Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None }));
         bindings.push(Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None });
         bindings.push(Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) });
+        bindings.push(Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None });
         bindings.push(Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None });
         let set_layout = b.set_layout(&bindings, vk::ShaderStageFlags::COMPUTE)?;
         let layout = b.layout(Some(set_layout), 16, vk::ShaderStageFlags::COMPUTE)?;
@@ -296,16 +306,17 @@ impl DenoisePass {
             [v[0][k].input(), v[last.min(1)][k].input()]
         };
         let shadow = is_shadow(job.signal);
-        let hist_prev = pair(&state.history, prev);
-        let hist_cur = pair(&state.history, cur);
-        // Shadows have no fast history: bind the history images (never read by their passes).
-        let (fast_prev, fast_cur) =
-            if shadow { (hist_prev, hist_cur) } else { (pair(&state.fast, prev), pair(&state.fast, cur)) };
         // The pool's first pair, and its second for a two-signal task.
         let temp_pair = |k: usize| -> [ImageInput; 2] {
             [temps.pairs[0][k].input(), temps.pairs[job.count.min(temps.pairs.len()) - 1][k].input()]
         };
         let temps_in = [temp_pair(0), temp_pair(1)];
+        // Shadows keep no radiance histories, radiance no shadow history: their bindings get
+        // stand-ins of the declared formats (never read by those passes).
+        let radiance = |v: &Vec<[Image; 2]>, k: usize| if shadow { temps_in[0] } else { pair(v, k) };
+        let (hist_prev, hist_cur) = (radiance(&state.history, prev), radiance(&state.history, cur));
+        let (fast_prev, fast_cur) = (radiance(&state.fast, prev), radiance(&state.fast, cur));
+        let shadow_history = state.shadow_history.as_ref().map_or(tiles, Image::input);
         let gb_prev = guide.images()[guide_prev].input();
         let gb_cur = guide.images()[guide_cur].input();
         let stand_in = temps_in[0][0];
@@ -343,6 +354,7 @@ impl DenoisePass {
                     Slot::Uniform(ubo),
                     Slot::Sampled(mask),
                     Slot::Storage(&tiles),
+                    Slot::Storage(&shadow_history),
                 ];
                 let bind = vk::PipelineBindPoint::COMPUTE;
                 let dev = &r.device.raw;
