@@ -6,6 +6,7 @@
 // instead of ghosting. The clamped history is kept for the next frame. Variance (for the
 // spatial filter's luminance stop): the temporal moments divided by the history length (the
 // noise left in the mean), blended from the neighbourhood's while history is short.
+// Both histories are kept in place here (the temporal pass has read the previous frame's).
 // u_pass.y = 1: no spatial passes follow, write the output.
 #include "include/denoise.glsl"
 
@@ -18,6 +19,7 @@ void main() {
     float dist;
     hrt_unpack_surface(imageLoad(u_gbuf_cur, pixel).xy, n, dist);
     for (uint s = 0u; s < count; ++s) {
+        hrt_keep_fast(s, pixel, hrt_load_fast_cur(s, pixel));
         if (dist < 0.0) {
             hrt_store_hist_cur(s, pixel, vec4(0.0));
             if (last) hrt_store_output(s, pixel, hrt_as_signal(u_d.kinds[s], hrt_load_input(s, pixel)));

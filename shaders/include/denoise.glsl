@@ -36,8 +36,12 @@ layout(set = 0, binding = 10, rgba16f) uniform readonly image2D u_hist_prev0;
 layout(set = 0, binding = 11, rgba16f) uniform readonly image2D u_hist_prev1;
 layout(set = 0, binding = 12, rgba16f) uniform image2D u_hist_cur0;
 layout(set = 0, binding = 13, rgba16f) uniform image2D u_hist_cur1;
-layout(set = 0, binding = 14, rgba16f) uniform readonly image2D u_fast_prev0;
-layout(set = 0, binding = 15, rgba16f) uniform readonly image2D u_fast_prev1;
+// The kept histories are single images: u_hist_prev and u_hist_cur name the same image, read
+// (reprojected) by the temporal pass and overwritten in place by the clamp pass; the fast
+// history goes through u_fast_cur (an intermediate) from the temporal pass to the clamp pass,
+// which copies it into u_fast_prev (the kept one) in place.
+layout(set = 0, binding = 14, rgba16f) uniform image2D u_fast_prev0;
+layout(set = 0, binding = 15, rgba16f) uniform image2D u_fast_prev1;
 layout(set = 0, binding = 16, rgba16f) uniform image2D u_fast_cur0;
 layout(set = 0, binding = 17, rgba16f) uniform image2D u_fast_cur1;
 layout(set = 0, binding = 18, rgba16f) uniform readonly image2D u_temp_src0;
@@ -94,6 +98,8 @@ vec4 hrt_load_hist_prev(uint s, ivec2 q) { return s == 0u ? imageLoad(u_hist_pre
 vec4 hrt_load_hist_cur(uint s, ivec2 q) { return s == 0u ? imageLoad(u_hist_cur0, q) : imageLoad(u_hist_cur1, q); }
 void hrt_store_hist_cur(uint s, ivec2 q, vec4 v) { v = hrt_round_half(v); if (s == 0u) imageStore(u_hist_cur0, q, v); else imageStore(u_hist_cur1, q, v); }
 vec4 hrt_load_fast_prev(uint s, ivec2 q) { return s == 0u ? imageLoad(u_fast_prev0, q) : imageLoad(u_fast_prev1, q); }
+// Keeps this frame's fast history (already rounded by hrt_store_fast_cur) for the next frame.
+void hrt_keep_fast(uint s, ivec2 q, vec4 v) { if (s == 0u) imageStore(u_fast_prev0, q, v); else imageStore(u_fast_prev1, q, v); }
 vec4 hrt_load_fast_cur(uint s, ivec2 q) { return s == 0u ? imageLoad(u_fast_cur0, q) : imageLoad(u_fast_cur1, q); }
 void hrt_store_fast_cur(uint s, ivec2 q, vec4 v) { v = hrt_round_half(v); if (s == 0u) imageStore(u_fast_cur0, q, v); else imageStore(u_fast_cur1, q, v); }
 vec2 hrt_load_shadow_history(ivec2 q) { return unpackHalf2x16(imageLoad(u_shadow_history, q).x); }

@@ -53,9 +53,10 @@ const TILE_FORMAT: vk::Format = vk::Format::R32_UINT;
 /// Pixels per tile side (the passes' workgroup size).
 const TILE: u32 = 8;
 
-/// What a denoising context keeps between frames: radiance, ping-pong pairs of history images
-/// (element `newest` holds the latest); shadows, one history image (4 bytes a pixel, as
-/// SIGMA's); the previous camera. The G-buffer its passes test against is
+/// What a denoising context keeps between frames: single history images, overwritten in place
+/// once the frame's first pass has read them (radiance: slow and fast RGBA16F per signal, 16
+/// bytes a pixel; shadows: one image of two halves, 4 bytes a pixel, as SIGMA's); the
+/// previous camera. The G-buffer its passes test against is
 /// its view's guide (`denoise_guide`); the passes' intermediates are not kept: every context
 /// shares one `TempPool`.
 pub(crate) struct DenoiserState {
@@ -66,13 +67,12 @@ pub(crate) struct DenoiserState {
     /// guide's previous frame.
     guide_frame: u64,
     /// Per radiance signal: slow history (RGB + 2nd moment).
-    history: Vec<[Image; 2]>,
+    history: Vec<Image>,
     /// Per radiance signal: fast history (RGB + history length).
-    fast: Vec<[Image; 2]>,
+    fast: Vec<Image>,
     /// Shadows: the one history image (visibility + length), overwritten in place each frame
     /// (the prep pass copies what the later passes read of it into the intermediates).
     shadow_history: Option<Image>,
-    newest: usize,
     initialized: bool,
     previous_camera: Option<Camera>,
     previous_jitter: [f32; 2],
@@ -88,16 +88,13 @@ impl DenoiserState {
     /// The history of a context for `input`, reading the guide `guide`.
     pub fn new(memory: &Memory, input: &DenoisingContextInput, guide: GuideKey) -> Result<DenoiserState> {
         let shadow = is_shadow(input.signal);
-        let pairs = if shadow { 0 } else { signal_count(input.signal) };
-        // Radiance: history pairs, then fast pairs, of HISTORY_FORMAT. Shadows: one image.
+        let signals = if shadow { 0 } else { signal_count(input.signal) };
+        // Radiance: the slow histories, then the fast ones, of HISTORY_FORMAT. Shadows: one.
         let formats =
-            std::iter::repeat_n(HISTORY_FORMAT, 4 * pairs).chain(std::iter::repeat_n(SHADOW_HISTORY_FORMAT, shadow as usize));
+            std::iter::repeat_n(HISTORY_FORMAT, 2 * signals).chain(std::iter::repeat_n(SHADOW_HISTORY_FORMAT, shadow as usize));
         let mut images = create_all(memory, "denoiser", formats, input.max_width, input.max_height)?.into_iter();
-        let mut take_pairs = |n: usize| -> Vec<[Image; 2]> {
-            (0..n).map(|_| [images.next().expect("counted"), images.next().expect("counted")]).collect()
-        };
-        let history = take_pairs(pairs);
-        let fast = take_pairs(pairs);
+        let history = images.by_ref().take(signals).collect();
+        let fast = images.by_ref().take(signals).collect();
         let shadow_history = images.next();
         Ok(DenoiserState {
             input: *input,
@@ -106,7 +103,6 @@ impl DenoiserState {
             history,
             fast,
             shadow_history,
-            newest: 0,
             initialized: false,
             previous_camera: None,
             previous_jitter: [0.0; 2],
@@ -118,19 +114,19 @@ impl DenoiserState {
     #[cfg(feature = "fault-injection")]
     pub fn digest(&self) -> String {
         format!(
-            "newest {} initialized {} guide {:?} frame {} camera {:?} viewport {:?}",
-            self.newest, self.initialized, self.guide, self.guide_frame, self.previous_camera, self.previous_viewport
+            "initialized {} guide {:?} frame {} camera {:?} viewport {:?}",
+            self.initialized, self.guide, self.guide_frame, self.previous_camera, self.previous_viewport
         )
     }
 
     /// Every image, for (deferred) destruction.
     pub fn into_images(self) -> Vec<Image> {
         let DenoiserState { history, fast, shadow_history, .. } = self;
-        history.into_iter().chain(fast).flatten().chain(shadow_history).collect()
+        history.into_iter().chain(fast).chain(shadow_history).collect()
     }
 
     fn images(&self) -> impl Iterator<Item = &Image> {
-        self.history.iter().chain(&self.fast).flatten().chain(&self.shadow_history)
+        self.history.iter().chain(&self.fast).chain(&self.shadow_history)
     }
 }
 
@@ -174,6 +170,8 @@ fn signal_count(signal: SignalType) -> usize {
 pub(crate) struct TempPool {
     /// Per signal (two for specular + diffuse), a ping-pong pair.
     pairs: Vec<[Image; 2]>,
+    /// Per signal, this frame's fast history on its way from the temporal to the clamp pass.
+    fast: Vec<Image>,
     /// The shadow passes' tile map (see shaders/include/denoise.glsl); made with the pairs.
     tiles: Option<Image>,
     width: u32,
@@ -191,7 +189,7 @@ impl TempPool {
         if signals == self.pairs.len() && width == self.width && height == self.height {
             return Ok(Vec::new());
         }
-        let formats = std::iter::repeat_n(HISTORY_FORMAT, 2 * signals);
+        let formats = std::iter::repeat_n(HISTORY_FORMAT, 3 * signals);
         let mut images = create_all(memory, "denoiser intermediate", formats, width, height)?;
         let tile_format = std::iter::once(TILE_FORMAT);
         let tiles = match create_all(memory, "denoiser tiles", tile_format, width.div_ceil(TILE), height.div_ceil(TILE)) {
@@ -205,18 +203,20 @@ impl TempPool {
         };
         let mut images = images.drain(..);
         let pairs = (0..signals).map(|_| [images.next().expect("counted"), images.next().expect("counted")]).collect();
+        let fast = images.collect();
         let old = std::mem::replace(&mut self.pairs, pairs);
+        let old_fast = std::mem::replace(&mut self.fast, fast);
         let old_tiles = std::mem::replace(&mut self.tiles, tiles);
         (self.width, self.height, self.initialized) = (width, height, false);
-        Ok(old.into_iter().flatten().chain(old_tiles).collect())
+        Ok(old.into_iter().flatten().chain(old_fast).chain(old_tiles).collect())
     }
 
     pub fn into_images(self) -> Vec<Image> {
-        self.pairs.into_iter().flatten().chain(self.tiles).collect()
+        self.pairs.into_iter().flatten().chain(self.fast).chain(self.tiles).collect()
     }
 
     fn images(&self) -> impl Iterator<Item = &Image> {
-        self.pairs.iter().flatten().chain(&self.tiles)
+        self.pairs.iter().flatten().chain(&self.fast).chain(&self.tiles)
     }
 }
 
@@ -300,22 +300,26 @@ impl DenoisePass {
         let constants = constants(job, &previous, state.previous_jitter, r.seed, reset);
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
 
-        let (prev, cur) = (state.newest, 1 - state.newest);
-        let pair = |v: &Vec<[Image; 2]>, k: usize| -> [ImageInput; 2] {
-            let last = v.len() - 1;
-            [v[0][k].input(), v[last.min(1)][k].input()]
-        };
         let shadow = is_shadow(job.signal);
         // The pool's first pair, and its second for a two-signal task.
-        let temp_pair = |k: usize| -> [ImageInput; 2] {
-            [temps.pairs[0][k].input(), temps.pairs[job.count.min(temps.pairs.len()) - 1][k].input()]
-        };
+        let second = job.count.min(temps.pairs.len()) - 1;
+        let temp_pair = |k: usize| -> [ImageInput; 2] { [temps.pairs[0][k].input(), temps.pairs[second][k].input()] };
         let temps_in = [temp_pair(0), temp_pair(1)];
-        // Shadows keep no radiance histories, radiance no shadow history: their bindings get
-        // stand-ins of the declared formats (never read by those passes).
-        let radiance = |v: &Vec<[Image; 2]>, k: usize| if shadow { temps_in[0] } else { pair(v, k) };
-        let (hist_prev, hist_cur) = (radiance(&state.history, prev), radiance(&state.history, cur));
-        let (fast_prev, fast_cur) = (radiance(&state.fast, prev), radiance(&state.fast, cur));
+        // Per signal (a one-signal task binds its image twice). Shadows keep no radiance
+        // histories: those bindings get stand-ins of the declared format (never read).
+        let per_signal = |v: &[Image]| -> [ImageInput; 2] {
+            match v.first() {
+                Some(first) if !shadow => [first.input(), v[v.len().min(2) - 1].input()],
+                _ => temps_in[0],
+            }
+        };
+        // The kept histories are single: read by the temporal pass, overwritten in place by the
+        // clamp pass (shaders/include/denoise.glsl); this frame's fast history passes between
+        // the two through the pool.
+        let hist_prev = per_signal(&state.history);
+        let hist_cur = hist_prev;
+        let fast_prev = per_signal(&state.fast);
+        let fast_cur = per_signal(&temps.fast[..job.count.min(temps.fast.len())]);
         let shadow_history = state.shadow_history.as_ref().map_or(tiles, Image::input);
         let gb_prev = guide.images()[guide_prev].input();
         let gb_cur = guide.images()[guide_cur].input();
@@ -381,7 +385,6 @@ impl DenoisePass {
                 dispatch(r, name, self.atrous, src, 1 - src, [1 << i, (i + 1 == passes) as u32, 0, 0]);
             }
         }
-        state.newest = cur;
         state.initialized = true;
         state.guide_frame = guide_frame;
         temps.initialized = true;
