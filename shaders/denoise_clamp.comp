@@ -19,15 +19,14 @@ void main() {
     float dist;
     hrt_unpack_surface(imageLoad(u_gbuf_cur, pixel).xy, n, dist);
     for (uint s = 0u; s < count; ++s) {
-        hrt_keep_fast(s, pixel, hrt_load_fast_cur(s, pixel));
+        vec4 fast_c = hrt_load_fast_cur(s, pixel);
         if (dist < 0.0) {
-            hrt_store_hist_cur(s, pixel, vec4(0.0));
+            hrt_keep_histories(s, pixel, vec4(0.0), fast_c);
             if (last) hrt_store_output(s, pixel, hrt_as_signal(u_d.kinds[s], hrt_load_input(s, pixel)));
             else hrt_store_temp(s, pixel, vec4(0.0));
             continue;
         }
         vec4 slow = hrt_load_temp(s, pixel);
-        vec4 fast_c = hrt_load_fast_cur(s, pixel);
         float len = fast_c.a;
         vec3 m1 = vec3(0.0), m2 = vec3(0.0);
         float l1 = 0.0, l2 = 0.0, k = 0.0;
@@ -50,7 +49,7 @@ void main() {
         float var_temporal = max(slow.a - l_slow * l_slow, 0.0) / len;
         float var_spatial = max(l2 - l1 * l1, 0.0);
         float variance = mix(var_spatial, var_temporal, clamp((len - 1.0) / 3.0, 0.0, 1.0));
-        hrt_store_hist_cur(s, pixel, vec4(clamped, slow.a));
+        hrt_keep_histories(s, pixel, vec4(clamped, slow.a), fast_c);
         if (last) hrt_store_output(s, pixel, vec4(clamped, 1.0));
         else hrt_store_temp(s, pixel, vec4(clamped, variance));
     }

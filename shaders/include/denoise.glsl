@@ -94,12 +94,29 @@ vec4 hrt_round_half(vec4 v) {
 
 vec4 hrt_load_input(uint s, ivec2 q) { return s == 0u ? texelFetch(u_input0, q, 0) : texelFetch(u_input1, q, 0); }
 void hrt_store_output(uint s, ivec2 q, vec4 v) { if (s == 0u) imageStore(u_output0, q, v); else imageStore(u_output1, q, v); }
-vec4 hrt_load_hist_prev(uint s, ivec2 q) { return s == 0u ? imageLoad(u_hist_prev0, q) : imageLoad(u_hist_prev1, q); }
+// A scalar signal (AO) keeps both its histories in one texel of its history image: (slow,
+// 2nd moment, fast, length); the loads below spread them back to (rgb, moment) and (rgb,
+// length), and hrt_keep_histories packs them.
+vec4 hrt_load_hist_prev(uint s, ivec2 q) {
+    vec4 v = s == 0u ? imageLoad(u_hist_prev0, q) : imageLoad(u_hist_prev1, q);
+    return u_d.kinds[s] == HRT_SIGNAL_SCALAR ? v.xxxy : v;
+}
 vec4 hrt_load_hist_cur(uint s, ivec2 q) { return s == 0u ? imageLoad(u_hist_cur0, q) : imageLoad(u_hist_cur1, q); }
 void hrt_store_hist_cur(uint s, ivec2 q, vec4 v) { v = hrt_round_half(v); if (s == 0u) imageStore(u_hist_cur0, q, v); else imageStore(u_hist_cur1, q, v); }
-vec4 hrt_load_fast_prev(uint s, ivec2 q) { return s == 0u ? imageLoad(u_fast_prev0, q) : imageLoad(u_fast_prev1, q); }
-// Keeps this frame's fast history (already rounded by hrt_store_fast_cur) for the next frame.
-void hrt_keep_fast(uint s, ivec2 q, vec4 v) { if (s == 0u) imageStore(u_fast_prev0, q, v); else imageStore(u_fast_prev1, q, v); }
+vec4 hrt_load_fast_prev(uint s, ivec2 q) {
+    if (u_d.kinds[s] == HRT_SIGNAL_SCALAR) return (s == 0u ? imageLoad(u_hist_prev0, q) : imageLoad(u_hist_prev1, q)).zzzw;
+    return s == 0u ? imageLoad(u_fast_prev0, q) : imageLoad(u_fast_prev1, q);
+}
+// Keeps this frame's slow history and fast history (`fast` as hrt_store_fast_cur rounded it)
+// for the next frame, in place.
+void hrt_keep_histories(uint s, ivec2 q, vec4 slow, vec4 fast) {
+    if (u_d.kinds[s] == HRT_SIGNAL_SCALAR) {
+        hrt_store_hist_cur(s, q, vec4(slow.x, slow.a, fast.x, fast.a));
+        return;
+    }
+    hrt_store_hist_cur(s, q, slow);
+    if (s == 0u) imageStore(u_fast_prev0, q, fast); else imageStore(u_fast_prev1, q, fast);
+}
 vec4 hrt_load_fast_cur(uint s, ivec2 q) { return s == 0u ? imageLoad(u_fast_cur0, q) : imageLoad(u_fast_cur1, q); }
 void hrt_store_fast_cur(uint s, ivec2 q, vec4 v) { v = hrt_round_half(v); if (s == 0u) imageStore(u_fast_cur0, q, v); else imageStore(u_fast_cur1, q, v); }
 vec2 hrt_load_shadow_history(ivec2 q) { return unpackHalf2x16(imageLoad(u_shadow_history, q).x); }

@@ -837,16 +837,16 @@ fn contexts_share_their_intermediates() {
     let count = || ctx.resource_allocations().denoiser.count;
     let a = context(&ctx, SignalType::DiffuseOcclusion, 64, 64);
     let first = count();
-    assert_eq!(first, 8, "guide pair, history and fast history (4) + the shared pair, fast history and tile map (4)");
+    assert_eq!(first, 7, "guide pair and history (3) + the shared pair, fast history and tile map (4)");
     let b = context(&ctx, SignalType::DiffuseOcclusion, 64, 64);
-    assert_eq!(count(), first + 4, "the second context keeps only its own guide and history");
+    assert_eq!(count(), first + 3, "the second context keeps only its own guide and history");
     let bytes_two = ctx.resource_allocations().denoiser.bytes;
     for h in [a, b] {
         ctx.destroy_denoising_context(h).unwrap();
     }
     ctx.release_device_resources_immediately().unwrap();
     assert_eq!(count(), 0, "the last context frees the shared set");
-    eprintln!("two 64x64 AO contexts: {bytes_two} bytes of denoiser images (12 images)");
+    eprintln!("two 64x64 AO contexts: {bytes_two} bytes of denoiser images (10 images)");
     drop(ctx);
     assert_no_validation_errors();
 }
@@ -1170,7 +1170,7 @@ fn a_view_refuses_a_second_size_and_a_second_camera() {
 
 /// What one more context of a view keeps, the view's guide and the shared intermediates made:
 /// a shadow context 4 bytes a pixel (its single history: visibility and length as halves),
-/// an AO context 16 (its slow and fast history, RGBA16F, each kept once).
+/// an AO context 8 (its slow and fast history, value and moment / length, in one RGBA16F).
 #[test]
 fn kept_bytes_per_pixel_of_a_view_context() {
     let (_host, ctx) = host_and_context(InitSettings::default());
@@ -1184,7 +1184,7 @@ fn kept_bytes_per_pixel_of_a_view_context() {
         made.push(ctx.create_denoising_context(&input(signal)).unwrap());
         kept.push((bytes() - before) / (64 * 64));
     }
-    assert_eq!(kept, [4, 16], "bytes a pixel kept by one more shadow and AO context of the view");
+    assert_eq!(kept, [4, 8], "bytes a pixel kept by one more shadow and AO context of the view");
     for h in made {
         ctx.destroy_denoising_context(h).unwrap();
     }

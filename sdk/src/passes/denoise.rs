@@ -55,8 +55,8 @@ const TILE: u32 = 8;
 
 /// What a denoising context keeps between frames: single history images, overwritten in place
 /// once the frame's first pass has read them (radiance: slow and fast RGBA16F per signal, 16
-/// bytes a pixel; shadows: one image of two halves, 4 bytes a pixel, as SIGMA's); the
-/// previous camera. The G-buffer its passes test against is
+/// bytes a pixel; AO: both in one RGBA16F, 8; shadows: one image of two halves, 4, as
+/// SIGMA's); the previous camera. The G-buffer its passes test against is
 /// its view's guide (`denoise_guide`); the passes' intermediates are not kept: every context
 /// shares one `TempPool`.
 pub(crate) struct DenoiserState {
@@ -68,7 +68,8 @@ pub(crate) struct DenoiserState {
     guide_frame: u64,
     /// Per radiance signal: slow history (RGB + 2nd moment).
     history: Vec<Image>,
-    /// Per radiance signal: fast history (RGB + history length).
+    /// Per radiance signal but AO: fast history (RGB + history length). AO keeps (slow, moment,
+    /// fast, length) in its `history` image.
     fast: Vec<Image>,
     /// Shadows: the one history image (visibility + length), overwritten in place each frame
     /// (the prep pass copies what the later passes read of it into the intermediates).
@@ -89,12 +90,14 @@ impl DenoiserState {
     pub fn new(memory: &Memory, input: &DenoisingContextInput, guide: GuideKey) -> Result<DenoiserState> {
         let shadow = is_shadow(input.signal);
         let signals = if shadow { 0 } else { signal_count(input.signal) };
+        // AO keeps its fast history in its history image's spare channels.
+        let fast_signals = if input.signal == SignalType::DiffuseOcclusion { 0 } else { signals };
         // Radiance: the slow histories, then the fast ones, of HISTORY_FORMAT. Shadows: one.
-        let formats =
-            std::iter::repeat_n(HISTORY_FORMAT, 2 * signals).chain(std::iter::repeat_n(SHADOW_HISTORY_FORMAT, shadow as usize));
+        let formats = std::iter::repeat_n(HISTORY_FORMAT, signals + fast_signals)
+            .chain(std::iter::repeat_n(SHADOW_HISTORY_FORMAT, shadow as usize));
         let mut images = create_all(memory, "denoiser", formats, input.max_width, input.max_height)?.into_iter();
         let history = images.by_ref().take(signals).collect();
-        let fast = images.by_ref().take(signals).collect();
+        let fast = images.by_ref().take(fast_signals).collect();
         let shadow_history = images.next();
         Ok(DenoiserState {
             input: *input,
