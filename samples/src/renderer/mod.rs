@@ -282,7 +282,8 @@ impl<'h> Renderer<'h> {
         // SAFETY: the fence belongs to this device.
         unsafe { self.host.device.wait_for_fences(&[s.fence], true, u64::MAX) }.map_err(|e| format!("wait: {e:?}"))?;
         s.recorded = false;
-        let (mut sdk, mut sdk_passes): (Vec<(String, f64)>, Vec<(String, f64)>) = Default::default();
+        let mut sdk: Vec<(String, f64)> = Vec::new();
+        let mut sdk_passes: Vec<(String, f64)> = Vec::new();
         if let Some(ticket) = s.ticket.take() {
             let done = self.ctx.mark_gpu_task_completed(ticket).map_err(sdk_err)?;
             // A label's tasks (and a task label's passes) of one frame are summed.

@@ -6,6 +6,9 @@ use hybrid_rt::{CompletedTask, TaskContainer, TaskKind};
 use hybrid_rt_testkit::sdk_scene::run_frame;
 use std::time::{Duration, Instant};
 
+/// (pass name, median GPU ms) of a task's passes, in recording order.
+pub type PassMedians = Vec<(&'static str, f64)>;
+
 pub fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(|a, b| a.total_cmp(b));
     if v.is_empty() {
@@ -74,7 +77,7 @@ impl Bench<'_> {
         &mut self,
         kinds: [TaskKind; 2],
         mut schedule: impl FnMut(&mut TaskContainer) -> Result<(), String>,
-    ) -> Result<([f64; 2], Vec<(&'static str, f64)>), String> {
+    ) -> Result<([f64; 2], PassMedians), String> {
         let mut times = [Vec::new(), Vec::new()];
         let mut passes: Vec<(&'static str, Vec<f64>)> = Vec::new();
         for i in 0..self.settings.frames + 3 {
