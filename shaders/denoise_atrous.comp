@@ -31,7 +31,8 @@ void main() {
             else hrt_store_temp(s, pixel, c);
             continue;
         }
-        float len = hrt_load_fast_cur(s, pixel).a;
+        // The history length, from the fast history the clamp pass kept.
+        float len = hrt_load_fast_prev(s, pixel).a;
         float scale = mix(1.0, u_d.history.w, clamp((len - 1.0) / (0.25 * u_d.history.x), 0.0, 1.0));
         bool specular = kind == HRT_SIGNAL_SPECULAR;
         if (specular) scale *= clamp(roughness * 4.0, 0.0, 1.0);

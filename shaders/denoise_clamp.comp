@@ -6,7 +6,8 @@
 // instead of ghosting. The clamped history is kept for the next frame. Variance (for the
 // spatial filter's luminance stop): the temporal moments divided by the history length (the
 // noise left in the mean), blended from the neighbourhood's while history is short.
-// Both histories are kept in place here (the temporal pass has read the previous frame's).
+// Both histories are kept in place here (the temporal pass has read the previous frame's), and
+// the intermediate is filtered in place (the fast history's image is then free for à-trous).
 // u_pass.y = 1: no spatial passes follow, write the output.
 #include "include/denoise.glsl"
 

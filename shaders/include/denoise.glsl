@@ -39,7 +39,8 @@ layout(set = 0, binding = 13, rgba16f) uniform image2D u_hist_cur1;
 // The kept histories are single images: u_hist_prev and u_hist_cur name the same image, read
 // (reprojected) by the temporal pass and overwritten in place by the clamp pass; the fast
 // history goes through u_fast_cur (an intermediate) from the temporal pass to the clamp pass,
-// which copies it into u_fast_prev (the kept one) in place.
+// which copies it into u_fast_prev (the kept one) in place, where the à-trous passes read its
+// history length.
 layout(set = 0, binding = 14, rgba16f) uniform image2D u_fast_prev0;
 layout(set = 0, binding = 15, rgba16f) uniform image2D u_fast_prev1;
 layout(set = 0, binding = 16, rgba16f) uniform image2D u_fast_cur0;

@@ -2,7 +2,8 @@
 //! filter (what they do and why: `types::denoise`). Every pass shares one push-descriptor
 //! layout (shaders/include/denoise.glsl); a pass's step size travels as a push constant.
 //!
-//! Radiance: temporal → clamp → à-trous × `spatial_passes` (the last writes the output).
+//! Radiance: temporal → clamp (in place) → à-trous × `spatial_passes` (the last writes the
+//! output).
 //! Shadows: prep → penumbra blur → temporal (writes the output).
 use super::constants::LightGpu;
 use super::constants::TraceCommonGpu;
@@ -173,8 +174,6 @@ fn signal_count(signal: SignalType) -> usize {
 pub(crate) struct TempPool {
     /// Per signal (two for specular + diffuse), a ping-pong pair.
     pairs: Vec<[Image; 2]>,
-    /// Per signal, this frame's fast history on its way from the temporal to the clamp pass.
-    fast: Vec<Image>,
     /// The shadow passes' tile map (see shaders/include/denoise.glsl); made with the pairs.
     tiles: Option<Image>,
     width: u32,
@@ -192,7 +191,7 @@ impl TempPool {
         if signals == self.pairs.len() && width == self.width && height == self.height {
             return Ok(Vec::new());
         }
-        let formats = std::iter::repeat_n(HISTORY_FORMAT, 3 * signals);
+        let formats = std::iter::repeat_n(HISTORY_FORMAT, 2 * signals);
         let mut images = create_all(memory, "denoiser intermediate", formats, width, height)?;
         let tile_format = std::iter::once(TILE_FORMAT);
         let tiles = match create_all(memory, "denoiser tiles", tile_format, width.div_ceil(TILE), height.div_ceil(TILE)) {
@@ -206,20 +205,18 @@ impl TempPool {
         };
         let mut images = images.drain(..);
         let pairs = (0..signals).map(|_| [images.next().expect("counted"), images.next().expect("counted")]).collect();
-        let fast = images.collect();
         let old = std::mem::replace(&mut self.pairs, pairs);
-        let old_fast = std::mem::replace(&mut self.fast, fast);
         let old_tiles = std::mem::replace(&mut self.tiles, tiles);
         (self.width, self.height, self.initialized) = (width, height, false);
-        Ok(old.into_iter().flatten().chain(old_fast).chain(old_tiles).collect())
+        Ok(old.into_iter().flatten().chain(old_tiles).collect())
     }
 
     pub fn into_images(self) -> Vec<Image> {
-        self.pairs.into_iter().flatten().chain(self.fast).chain(self.tiles).collect()
+        self.pairs.into_iter().flatten().chain(self.tiles).collect()
     }
 
     fn images(&self) -> impl Iterator<Item = &Image> {
-        self.pairs.iter().flatten().chain(&self.fast).chain(&self.tiles)
+        self.pairs.iter().flatten().chain(&self.tiles)
     }
 }
 
@@ -317,12 +314,13 @@ impl DenoisePass {
             }
         };
         // The kept histories are single: read by the temporal pass, overwritten in place by the
-        // clamp pass (shaders/include/denoise.glsl); this frame's fast history passes between
-        // the two through the pool.
+        // clamp pass (shaders/include/denoise.glsl). This frame's fast history passes between
+        // the two through the second image of each signal's pair, which the clamp pass leaves
+        // free (it filters the first in place).
         let hist_prev = per_signal(&state.history);
         let hist_cur = hist_prev;
         let fast_prev = per_signal(&state.fast);
-        let fast_cur = per_signal(&temps.fast[..job.count.min(temps.fast.len())]);
+        let fast_cur = temps_in[1];
         let shadow_history = state.shadow_history.as_ref().map_or(tiles, Image::input);
         let gb_prev = guide.images()[guide_prev].input();
         let gb_cur = guide.images()[guide_cur].input();
@@ -382,9 +380,9 @@ impl DenoisePass {
         } else {
             let passes = c.settings.spatial_passes;
             dispatch(r, "temporal", self.temporal, 1, 0, [0; 4]);
-            dispatch(r, "clamp", self.clamp, 0, 1, [0, (passes == 0) as u32, 0, 0]);
+            dispatch(r, "clamp", self.clamp, 0, 0, [0, (passes == 0) as u32, 0, 0]);
             for (i, name) in (0..passes).zip(ATROUS_PASS_NAMES) {
-                let src = (1 + i as usize) % 2;
+                let src = i as usize % 2;
                 dispatch(r, name, self.atrous, src, 1 - src, [1 << i, (i + 1 == passes) as u32, 0, 0]);
             }
         }

@@ -131,20 +131,41 @@ impl Bench<'_> {
         Ok(())
     }
 
-    /// The device memory of one specular + diffuse context's history, with nothing else of
-    /// the denoisers alive.
+    /// The denoisers' device memory at the bench's size, with nothing else of theirs alive: per
+    /// signal, what one context of a view keeps (a second context of the view, over the first:
+    /// its histories), and what the first context made besides (the view's guide and the
+    /// intermediates every context shares).
     fn denoiser_history(&mut self, json: &mut Map<String, Value>) -> Result<(), String> {
         let (width, height) = (self.settings.width, self.settings.height);
         // Free the measured contexts first (destroyed contexts wait for their tickets).
         self.ctx.release_device_resources_immediately().map_err(sdk)?;
-        let dn = self.denoising_context(S::SpecularAndDiffuse)?;
-        let bytes = self.ctx.resource_allocations().denoiser.bytes;
-        self.ctx.destroy_denoising_context(dn).map_err(sdk)?;
-        self.report.row(
-            format!("Denoiser history, specular + diffuse context {width}x{height}"),
-            format!("{:.1} MiB", bytes as f64 / 1048576.0),
-        );
-        json.insert("specular_and_diffuse_context_bytes".into(), json!(bytes));
+        let mib = |b: u64| b as f64 / 1048576.0;
+        for (name, signal) in [("specular + diffuse", S::SpecularAndDiffuse), ("shadow", S::Shadow), ("AO", S::DiffuseOcclusion)]
+        {
+            let bytes = || self.ctx.resource_allocations().denoiser.bytes;
+            let input = DenoisingContextInput { max_width: width, max_height: height, signal, view_id: 1, ..Default::default() };
+            let first = self.ctx.create_denoising_context(&input).map_err(sdk)?;
+            let with_first = bytes();
+            let second = self.ctx.create_denoising_context(&input).map_err(sdk)?;
+            let kept = bytes() - with_first;
+            for h in [first, second] {
+                self.ctx.destroy_denoising_context(h).map_err(sdk)?;
+            }
+            self.ctx.release_device_resources_immediately().map_err(sdk)?;
+            let shared = with_first - kept;
+            self.report.row(
+                format!("Denoiser memory, {name} context {width}x{height}"),
+                format!(
+                    "{:.1} MiB kept ({:.1} bytes/pixel); the view's guide and the shared intermediates {:.1} MiB",
+                    mib(kept),
+                    kept as f64 / (width as f64 * height as f64),
+                    mib(shared)
+                ),
+            );
+            let key = name.replace(" + ", "_and_").to_lowercase();
+            json.insert(format!("{key}_context_kept_bytes"), json!(kept));
+            json.insert(format!("{key}_guide_and_shared_bytes"), json!(shared));
+        }
         Ok(())
     }
 
