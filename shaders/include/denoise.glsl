@@ -24,9 +24,8 @@ layout(set = 0, binding = 0) uniform sampler2D u_depth;
 layout(set = 0, binding = 1) uniform sampler2D u_normals;
 layout(set = 0, binding = 2) uniform sampler2D u_roughness;
 layout(set = 0, binding = 3) uniform sampler2D u_motion;
-// Two signals could share a dispatch with a binding each; the SDK runs one signal per
-// dispatch (flags.y = 1: a specular + diffuse task runs the chain twice, with one pair of
-// intermediates) and binds its image twice. The accessors take the signal index.
+// Two signals (specular and diffuse in one pass) have a binding each; one-signal tasks bind
+// the same image twice. The accessors below take the signal index (a constant at every call).
 layout(set = 0, binding = 4) uniform sampler2D u_input0;
 layout(set = 0, binding = 5) uniform sampler2D u_input1;
 layout(set = 0, binding = 6) uniform writeonly image2D u_output0;

@@ -168,11 +168,11 @@ fn signal_count(signal: SignalType) -> usize {
 /// The passes' intermediate images, shared by every denoising context of an `ExecuteContext`:
 /// a task writes them before it reads them and leaves nothing in them for the next (tasks are
 /// recorded one after another, with barriers between their passes), so one set the size of
-/// the largest context serves all: one ping-pong pair (a specular + diffuse task runs its two
-/// signals one after the other) and the tile map.
+/// the largest context serves all. A 1080p specular + diffuse context kept four of these
+/// (33 MB each); the sample's four contexts kept ten.
 #[derive(Default)]
 pub(crate) struct TempPool {
-    /// One ping-pong pair (a Vec: empty until the first context is made).
+    /// Per signal (two for specular + diffuse), a ping-pong pair.
     pairs: Vec<[Image; 2]>,
     /// The shadow passes' tile map (see shaders/include/denoise.glsl); made with the pairs.
     tiles: Option<Image>,
@@ -186,7 +186,7 @@ impl TempPool {
     /// possibly in use by issued tickets: the caller retires them); on failure the pool is
     /// unchanged.
     pub fn ensure(&mut self, memory: &Memory, input: &DenoisingContextInput) -> Result<Vec<Image>> {
-        let signals = 1;
+        let signals = signal_count(input.signal).max(self.pairs.len());
         let (width, height) = (input.max_width.max(self.width), input.max_height.max(self.height));
         if signals == self.pairs.len() && width == self.width && height == self.height {
             return Ok(Vec::new());
@@ -276,7 +276,7 @@ impl DenoisePass {
             log::error!("the denoisers' shared intermediates do not exist: task skipped");
             return;
         };
-        if temps.pairs.is_empty() {
+        if temps.pairs.len() < job.count {
             log::error!("the denoisers' shared intermediates do not serve this task: skipped");
             return;
         }
@@ -297,79 +297,87 @@ impl DenoisePass {
             || state.input.method == DenoisingMethod::SpatialOnly
             || state.previous_viewport != viewport;
         let previous = c.previous_camera.or(state.previous_camera).unwrap_or(c.camera);
+        let constants = constants(job, &previous, state.previous_jitter, r.seed, reset);
+        let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
+
         let shadow = is_shadow(job.signal);
-        // One pair of intermediates, shared by every context: a specular + diffuse task runs
-        // its chain once per signal, the specular first.
-        let temps_in = [temps.pairs[0][0].input(), temps.pairs[0][1].input()];
-        let twice = |i: ImageInput| [i, i];
+        // The pool's first pair, and its second for a two-signal task.
+        let second = job.count.min(temps.pairs.len()) - 1;
+        let temp_pair = |k: usize| -> [ImageInput; 2] { [temps.pairs[0][k].input(), temps.pairs[second][k].input()] };
+        let temps_in = [temp_pair(0), temp_pair(1)];
+        // Per signal (a one-signal task binds its image twice). Shadows keep no radiance
+        // histories: those bindings get stand-ins of the declared format (never read).
+        let per_signal = |v: &[Image]| -> [ImageInput; 2] {
+            match v.first() {
+                Some(first) if !shadow => [first.input(), v[v.len().min(2) - 1].input()],
+                _ => temps_in[0],
+            }
+        };
         // The kept histories are single: read by the temporal pass, overwritten in place by the
         // clamp pass (shaders/include/denoise.glsl). This frame's fast history passes between
-        // the two through the pair's second image, which the clamp pass leaves free (it
-        // filters the first in place). Shadows keep no radiance histories (and AO no fast one):
-        // those bindings get stand-ins of the declared format (never read).
-        let kept = |v: &[Image], s: usize| v.get(s).map_or(temps_in[0], Image::input);
+        // the two through the second image of each signal's pair, which the clamp pass leaves
+        // free (it filters the first in place).
+        let hist_prev = per_signal(&state.history);
+        let hist_cur = hist_prev;
+        let fast_prev = per_signal(&state.fast);
+        let fast_cur = temps_in[1];
         let shadow_history = state.shadow_history.as_ref().map_or(tiles, Image::input);
         let gb_prev = guide.images()[guide_prev].input();
         let gb_cur = guide.images()[guide_cur].input();
-        let stand_in = temps_in[0];
+        let stand_in = temps_in[0][0];
         let roughness = descriptors::optional_or(&c.roughness.image, &stand_in);
         let motion = descriptors::optional_or(&c.motion.image, &stand_in);
         let mask = descriptors::optional_or(&c.input_mask, &stand_in);
 
-        for s in 0..job.count.min(2) {
-            let constants = constants(job, s, &previous, state.previous_jitter, r.seed, reset);
-            let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
-            let (input, output) = (twice(job.inputs[s]), twice(job.outputs[s]));
-            let (history, fast) = (twice(kept(&state.history, s)), twice(kept(&state.fast, s)));
-            let dispatch =
-                |r: &mut Recording<'_>, name: &'static str, pipeline: vk::Pipeline, src: usize, dst: usize, push: [u32; 4]| {
-                    r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
-                    let span = r.begin_pass(name);
-                    let slots = [
-                        Slot::Sampled(&c.depth.image),
-                        Slot::Sampled(&c.normals.image),
-                        Slot::Sampled(roughness),
-                        Slot::Sampled(motion),
-                        Slot::Sampled(&input[0]),
-                        Slot::Sampled(&input[1]),
-                        Slot::Storage(&output[0]),
-                        Slot::Storage(&output[1]),
-                        Slot::Storage(&gb_prev),
-                        Slot::Storage(&gb_cur),
-                        Slot::Storage(&history[0]),
-                        Slot::Storage(&history[1]),
-                        Slot::Storage(&history[0]),
-                        Slot::Storage(&history[1]),
-                        Slot::Storage(&fast[0]),
-                        Slot::Storage(&fast[1]),
-                        Slot::Storage(&temps_in[1]),
-                        Slot::Storage(&temps_in[1]),
-                        Slot::Storage(&temps_in[src]),
-                        Slot::Storage(&temps_in[src]),
-                        Slot::Storage(&temps_in[dst]),
-                        Slot::Storage(&temps_in[dst]),
-                        Slot::Uniform(ubo),
-                        Slot::Sampled(mask),
-                        Slot::Storage(&tiles),
-                        Slot::Storage(&shadow_history),
-                    ];
-                    let bind = vk::PipelineBindPoint::COMPUTE;
-                    let dev = &r.device.raw;
-                    // SAFETY: slots match the set layout; inputs were validated when scheduled.
-                    unsafe { dev.cmd_bind_pipeline(r.cmd, bind, pipeline) };
-                    descriptors::push(r.device, r.cmd, bind, self.layout, &slots);
-                    unsafe {
-                        dev.cmd_push_constants(r.cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&push));
-                        dev.cmd_dispatch(r.cmd, extent.0.div_ceil(8), extent.1.div_ceil(8), 1);
-                    }
-                    r.end_pass(span);
-                };
-            if shadow {
-                dispatch(r, "shadow_prep", self.shadow_prep, 1, 0, [0; 4]);
-                dispatch(r, "shadow_blur", self.shadow_blur, 0, 1, [0; 4]);
-                dispatch(r, "shadow_temporal", self.shadow_temporal, 1, 0, [0; 4]);
-                continue;
-            }
+        let dispatch =
+            |r: &mut Recording<'_>, name: &'static str, pipeline: vk::Pipeline, src: usize, dst: usize, push: [u32; 4]| {
+                r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
+                let span = r.begin_pass(name);
+                let slots = [
+                    Slot::Sampled(&c.depth.image),
+                    Slot::Sampled(&c.normals.image),
+                    Slot::Sampled(roughness),
+                    Slot::Sampled(motion),
+                    Slot::Sampled(&job.inputs[0]),
+                    Slot::Sampled(&job.inputs[1]),
+                    Slot::Storage(&job.outputs[0]),
+                    Slot::Storage(&job.outputs[1]),
+                    Slot::Storage(&gb_prev),
+                    Slot::Storage(&gb_cur),
+                    Slot::Storage(&hist_prev[0]),
+                    Slot::Storage(&hist_prev[1]),
+                    Slot::Storage(&hist_cur[0]),
+                    Slot::Storage(&hist_cur[1]),
+                    Slot::Storage(&fast_prev[0]),
+                    Slot::Storage(&fast_prev[1]),
+                    Slot::Storage(&fast_cur[0]),
+                    Slot::Storage(&fast_cur[1]),
+                    Slot::Storage(&temps_in[src][0]),
+                    Slot::Storage(&temps_in[src][1]),
+                    Slot::Storage(&temps_in[dst][0]),
+                    Slot::Storage(&temps_in[dst][1]),
+                    Slot::Uniform(ubo),
+                    Slot::Sampled(mask),
+                    Slot::Storage(&tiles),
+                    Slot::Storage(&shadow_history),
+                ];
+                let bind = vk::PipelineBindPoint::COMPUTE;
+                let dev = &r.device.raw;
+                // SAFETY: slots match the set layout; inputs were validated when scheduled.
+                unsafe { dev.cmd_bind_pipeline(r.cmd, bind, pipeline) };
+                descriptors::push(r.device, r.cmd, bind, self.layout, &slots);
+                unsafe {
+                    dev.cmd_push_constants(r.cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&push));
+                    dev.cmd_dispatch(r.cmd, extent.0.div_ceil(8), extent.1.div_ceil(8), 1);
+                }
+                r.end_pass(span);
+            };
+
+        if shadow {
+            dispatch(r, "shadow_prep", self.shadow_prep, 1, 0, [0; 4]);
+            dispatch(r, "shadow_blur", self.shadow_blur, 0, 1, [0; 4]);
+            dispatch(r, "shadow_temporal", self.shadow_temporal, 1, 0, [0; 4]);
+        } else {
             let passes = c.settings.spatial_passes;
             dispatch(r, "temporal", self.temporal, 1, 0, [0; 4]);
             dispatch(r, "clamp", self.clamp, 0, 0, [0, (passes == 0) as u32, 0, 0]);
@@ -422,16 +430,7 @@ fn initialize_images(r: &mut Recording<'_>, state: &DenoiserState, guide: &mut G
     guide.initialized = true;
 }
 
-/// The constants of signal `s` of `job` (the specular, then the diffuse of a specular + diffuse
-/// task: each runs the chain on its own, as a one-signal task).
-fn constants(
-    job: &DenoiseJob,
-    signal_index: usize,
-    previous: &Camera,
-    previous_jitter: [f32; 2],
-    seed: u32,
-    reset: bool,
-) -> DenoiseConstantsGpu {
+fn constants(job: &DenoiseJob, previous: &Camera, previous_jitter: [f32; 2], seed: u32, reset: bool) -> DenoiseConstantsGpu {
     let c = &job.common;
     let trace = c.as_trace_common();
     let eye = c.camera.world_to_view.inverse().w_axis;
@@ -458,20 +457,19 @@ fn constants(
     };
     let s = &c.settings;
     let anti_lag = s.anti_lag as u32;
-    let signal = match job.signal {
-        SignalType::SpecularAndDiffuse if signal_index == 0 => SignalType::Specular,
-        SignalType::SpecularAndDiffuse => SignalType::Diffuse,
-        k => k,
+    let kinds = match job.signal {
+        SignalType::SpecularAndDiffuse => [1, 0, 0, anti_lag],
+        k => {
+            [kind(k), kind(k), crate::gpu::formats::channel_count(job.inputs[0].format).is_some_and(|n| n >= 2) as u32, anti_lag]
+        }
     };
-    let visibility_channel = crate::gpu::formats::channel_count(job.inputs[0].format).is_some_and(|n| n >= 2) as u32;
-    let kinds = [kind(signal), kind(signal), visibility_channel, anti_lag];
     DenoiseConstantsGpu {
         common: TraceCommonGpu::new(&trace, seed, 0),
         prev_world_to_clip: prev_world_to_clip.to_cols_array(),
         prev_clip_to_world: prev_world_to_clip.inverse().to_cols_array(),
         eye: [eye.x, eye.y, eye.z, pixel_size],
         prev_eye: [prev_eye.x, prev_eye.y, prev_eye.z, 0.0],
-        flags: [motion, 1, reset as u32, s.anti_firefly as u32],
+        flags: [motion, job.count as u32, reset as u32, s.anti_firefly as u32],
         kinds,
         motion_scale: [c.motion.scale[0], c.motion.scale[1], c.motion.scale[2], 0.0],
         jitter_delta: [previous_jitter[0] - c.camera_jitter[0], previous_jitter[1] - c.camera_jitter[1], 0.0, 0.0],

@@ -26,9 +26,8 @@
 //!
 //! The passes, by the names their timings carry (`CompletedTask::pass_timings`, with
 //! `InitSettings::time_passes`): radiance `temporal`, `clamp`, then `atrous_1` …
-//! `atrous_N` for `DenoiserSettings::spatial_passes` = N (a specular + diffuse task runs them
-//! for the specular signal, then for the diffuse one); shadows `shadow_prep` (penumbra width
-//! and its spread), `shadow_blur`, `shadow_temporal`.
+//! `atrous_N` for `DenoiserSettings::spatial_passes` = N; shadows `shadow_prep` (penumbra
+//! width and its spread), `shadow_blur`, `shadow_temporal`.
 //!
 //! `half_resolution_mode` resolves a checkerboard trace to full resolution; with no motion
 //! vectors the camera matrices reproject (static geometry only: the guide's debugging mode);

@@ -89,18 +89,10 @@ impl Bench<'_> {
             for k in 0..2 {
                 times[k].push(done.gpu_ms(kinds[k]));
             }
-            // A pass of this frame (a specular + diffuse task runs each twice: summed).
-            let mut frame: PassMedians = Vec::new();
             for p in done.pass_timings.iter().filter(|p| p.kind == kinds[1]) {
-                match frame.iter_mut().find(|(name, _)| *name == p.pass) {
-                    Some((_, ms)) => *ms += p.gpu_ms,
-                    None => frame.push((p.pass, p.gpu_ms)),
-                }
-            }
-            for (pass, ms) in frame {
-                match passes.iter_mut().find(|(name, _)| *name == pass) {
-                    Some((_, v)) => v.push(ms),
-                    None => passes.push((pass, vec![ms])),
+                match passes.iter_mut().find(|(name, _)| *name == p.pass) {
+                    Some((_, v)) => v.push(p.gpu_ms),
+                    None => passes.push((p.pass, vec![p.gpu_ms])),
                 }
             }
         }
