@@ -15,6 +15,8 @@ pub struct Report {
     pub sdk_passes: Vec<(String, f64)>,
     pub passes: Vec<(String, f64)>,
     pub sdk_bytes: u64,
+    /// The SDK's device memory by kind (`ResourceAllocations`), in bytes.
+    pub sdk_by_kind: Vec<(&'static str, u64)>,
     pub cache_bytes: u64,
     pub denoiser_bytes: u64,
     pub blas_bytes: u64,
@@ -36,6 +38,17 @@ impl Report {
             sdk_passes: Stats::means(&r.stats.sdk_passes),
             passes: Stats::means(&r.stats.passes),
             sdk_bytes: mem.total_bytes(),
+            sdk_by_kind: vec![
+                ("geometry copies", mem.geometry_copies.bytes),
+                ("BLAS", mem.blas.bytes),
+                ("build scratch", mem.build_scratch.bytes),
+                ("TLAS", mem.tlas.bytes),
+                ("upload rings", mem.upload_rings.bytes),
+                ("shader binding tables", mem.pipelines.bytes),
+                ("caches", mem.cache.bytes),
+                ("read-back", mem.readback.bytes),
+                ("denoisers", mem.denoiser.bytes),
+            ],
             cache_bytes: r.cache_bytes(),
             denoiser_bytes: mem.denoiser.bytes,
             blas_bytes: mem.blas.bytes,
@@ -81,6 +94,8 @@ impl Report {
             mib(self.cache_bytes),
             mib(self.denoiser_bytes)
         );
+        let kinds: Vec<String> = self.sdk_by_kind.iter().map(|(k, b)| format!("{k} {:.1}", mib(*b))).collect();
+        s += &format!("SDK memory by kind (MiB): {}\n", kinds.join(", "));
         let c = &self.cache;
         s += &format!(
             "Direct-lighting caches: {:.1} MiB resident, budget {}; {} instances waiting for a cache, {} evictions ({:.1} MiB)\n",
@@ -116,6 +131,7 @@ impl Report {
             sdk_tasks: Vec<Timing<'a>>,
             sdk_passes: Vec<Timing<'a>>,
             sdk_bytes: u64,
+            sdk_bytes_by_kind: std::collections::BTreeMap<&'a str, u64>,
             cache_bytes: u64,
             denoiser_bytes: u64,
             blas_bytes: u64,
@@ -136,6 +152,7 @@ impl Report {
             sdk_tasks: timings(self.sdk_tasks()),
             sdk_passes: timings(self.sdk_passes.iter()),
             sdk_bytes: self.sdk_bytes,
+            sdk_bytes_by_kind: self.sdk_by_kind.iter().copied().collect(),
             cache_bytes: self.cache_bytes,
             denoiser_bytes: self.denoiser_bytes,
             blas_bytes: self.blas_bytes,
