@@ -74,11 +74,13 @@ impl ExecuteContext {
         if let Ok(state) = st.denoisers.get_mut(h) {
             state.guide = key;
         }
-        let guide = match new_guide {
-            Some(g) => st.denoise_guides.entry(key).or_insert(g),
-            None => st.denoise_guides.get_mut(&key).expect("the view's guide exists"),
-        };
-        guide.users += 1;
+        if let Some(g) = new_guide {
+            st.denoise_guides.insert(key, g);
+        }
+        // The view's guide, made above or found under the same lock.
+        if let Some(guide) = st.denoise_guides.get_mut(&key) {
+            guide.users += 1;
+        }
         self.shared.live.write().denoisers.insert(h.0);
         Ok(h)
     }
