@@ -1,5 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 // Radiance denoiser, pass 1: temporal accumulation. Reprojects each pixel's surface (motion
 // vectors or the cameras), keeps the bilinear taps of the previous frame that show the same
 // surface, and blends this frame's sample into a slow history (window up to max frames; RGB +
@@ -130,10 +131,11 @@ void main() {
             // frame's samples and their fast histories (each at its own reprojected position).
             ivec2 local = ivec2(gl_LocalInvocationID.xy) + ANTILAG_RADIUS;
             float sum = 0.0, sum2 = 0.0, fsum = 0.0, k = 0.0;
-            for (int dy = -ANTILAG_RADIUS; dy <= ANTILAG_RADIUS; ++dy) {
-                for (int dx = -ANTILAG_RADIUS; dx <= ANTILAG_RADIUS; ++dx) {
+            [[unroll]] for (int dy = -ANTILAG_RADIUS; dy <= ANTILAG_RADIUS; ++dy) {
+                [[unroll]] for (int dx = -ANTILAG_RADIUS; dx <= ANTILAG_RADIUS; ++dx) {
                     int e = (local.y + dy) * TILE + local.x + dx;
-                    if (s_pos[e].w == 0.0 || hrt_geometry_weight(p, n, dist, s_pos[e].xyz, s_nrm[e]) < 0.5) continue;
+                    // Geometry weight under 0.5 (its logarithm: one transcendental, not three).
+                    if (s_pos[e].w == 0.0 || hrt_geometry_log2_weight(p, n, dist, s_pos[e].xyz, s_nrm[e]) < -1.0) continue;
                     float lq = s_cur[e];
                     sum += lq;
                     sum2 += lq * lq;

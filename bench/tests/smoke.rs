@@ -29,7 +29,7 @@ fn bench_prints_and_writes_json() {
         "specular_gpu_ms",
         "multi_shadow_4_lights_gpu_ms",
         "passes_gpu_ms",
-        "atrous_1",
+        "blur_1",
         "shadow_blur",
     ] {
         assert!(j.contains(key), "{key} missing from {j}");

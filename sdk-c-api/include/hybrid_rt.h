@@ -580,7 +580,7 @@ typedef struct HrtPassTiming {
   uint32_t task_index;
   double gpu_ms;
   /**
-   * The pass's name ("temporal", "atrous_1", "shadow_blur", ...; the integration guide lists
+   * The pass's name ("temporal", "blur_1", "shadow_blur", ...; the integration guide lists
    * them), NUL-terminated.
    */
   char pass[HRT_PASS_NAME_CAPACITY];

@@ -1045,7 +1045,7 @@ fn pass_timings_name_every_denoiser_pass_and_change_no_pixel() {
     let (spec, shadow, passes, tasks) = denoise_with_pass_timing(true);
     assert!(spec == spec_plain && shadow == shadow_plain, "timing the passes changed the denoised images");
     let names = |kind: TaskKind| passes.iter().filter(|p| p.kind == kind).map(|p| p.pass).collect::<Vec<_>>();
-    let radiance = ["temporal", "clamp", "atrous_1", "atrous_2", "atrous_3", "atrous_4"];
+    let radiance = ["temporal", "clamp", "blur_1", "blur_2"];
     assert_eq!(names(TaskKind::DenoiseSpecularAndDiffuse), radiance);
     assert_eq!(names(TaskKind::DenoiseShadow), ["shadow_prep", "shadow_blur", "shadow_temporal"]);
     // The render tasks' intervals (the recording's others, `CacheUpdate` say, share index 0).

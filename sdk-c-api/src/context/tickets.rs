@@ -39,7 +39,7 @@ pub struct HrtPassTiming {
     /// That task's position in its container.
     pub task_index: u32,
     pub gpu_ms: f64,
-    /// The pass's name ("temporal", "atrous_1", "shadow_blur", ...; the integration guide lists
+    /// The pass's name ("temporal", "blur_1", "shadow_blur", ...; the integration guide lists
     /// them), NUL-terminated.
     pub pass: [c_char; HRT_PASS_NAME_CAPACITY as usize],
 }

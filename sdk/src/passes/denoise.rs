@@ -2,8 +2,8 @@
 //! filter (what they do and why: `types::denoise`). Every pass shares one push-descriptor
 //! layout (shaders/include/denoise.glsl); a pass's step size travels as a push constant.
 //!
-//! Radiance: temporal → clamp (in place) → à-trous × `spatial_passes` (the last writes the
-//! output).
+//! Radiance: temporal → clamp (in place) → rotated-disk blur × `spatial_passes` (the last
+//! writes the output).
 //! Shadows: prep → penumbra blur → temporal (writes the output).
 use super::constants::LightGpu;
 use super::constants::TraceCommonGpu;
@@ -38,11 +38,11 @@ pub(crate) struct DenoiseConstantsGpu {
     light: LightGpu,
 }
 
-/// The à-trous iterations' pass names (`PassTiming::pass`); as many as
-/// `DenoiserSettings::spatial_passes` allows.
-const ATROUS_PASS_NAMES: [&str; 6] = ["atrous_1", "atrous_2", "atrous_3", "atrous_4", "atrous_5", "atrous_6"];
+/// The spatial passes' names (`PassTiming::pass`); as many as `DenoiserSettings::spatial_passes`
+/// allows.
+const BLUR_PASS_NAMES: [&str; 6] = ["blur_1", "blur_2", "blur_3", "blur_4", "blur_5", "blur_6"];
 
-/// Smallest à-trous spacing scale, reached once a pixel has a quarter of the longest history.
+/// Smallest blur radius scale, reached once a pixel has a quarter of the longest history.
 const MIN_RADIUS_SCALE: f32 = 0.25;
 
 const HISTORY_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
@@ -224,7 +224,7 @@ pub(crate) struct DenoisePass {
     layout: vk::PipelineLayout,
     temporal: vk::Pipeline,
     clamp: vk::Pipeline,
-    atrous: vk::Pipeline,
+    blur: vk::Pipeline,
     shadow_prep: vk::Pipeline,
     shadow_blur: vk::Pipeline,
     shadow_temporal: vk::Pipeline,
@@ -252,7 +252,7 @@ impl DenoisePass {
             layout,
             temporal: b.compute(layout, shaders::DENOISE_TEMPORAL_COMP)?,
             clamp: b.compute(layout, shaders::DENOISE_CLAMP_COMP)?,
-            atrous: b.compute(layout, shaders::DENOISE_ATROUS_COMP)?,
+            blur: b.compute(layout, shaders::DENOISE_BLUR_COMP)?,
             shadow_prep: b.compute(layout, shaders::DENOISE_SHADOW_PREP_COMP)?,
             shadow_blur: b.compute(layout, shaders::DENOISE_SHADOW_BLUR_COMP)?,
             shadow_temporal: b.compute(layout, shaders::DENOISE_SHADOW_TEMPORAL_COMP)?,
@@ -368,7 +368,7 @@ impl DenoisePass {
                 descriptors::push(r.device, r.cmd, bind, self.layout, &slots);
                 unsafe {
                     dev.cmd_push_constants(r.cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&push));
-                    dev.cmd_dispatch(r.cmd, extent.0.div_ceil(8), extent.1.div_ceil(8), 1);
+                    dev.cmd_dispatch(r.cmd, extent.0.div_ceil(TILE), extent.1.div_ceil(TILE), 1);
                 }
                 r.end_pass(span);
             };
@@ -381,9 +381,10 @@ impl DenoisePass {
             let passes = c.settings.spatial_passes;
             dispatch(r, "temporal", self.temporal, 1, 0, [0; 4]);
             dispatch(r, "clamp", self.clamp, 0, 0, [0, (passes == 0) as u32, 0, 0]);
-            for (i, name) in (0..passes).zip(ATROUS_PASS_NAMES) {
+            for (i, name) in (0..passes).zip(BLUR_PASS_NAMES) {
                 let src = i as usize % 2;
-                dispatch(r, name, self.atrous, src, 1 - src, [1 << i, (i + 1 == passes) as u32, 0, 0]);
+                let push = [i, (i + 1 == passes) as u32, 0, 0];
+                dispatch(r, name, self.blur, src, 1 - src, push);
             }
         }
         state.initialized = true;

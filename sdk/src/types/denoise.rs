@@ -12,10 +12,10 @@
 //!   moving light or object does not ghost; specular history that follows the *reflected*
 //!   point (the virtual position at the hit distance) and accumulates fewer frames the
 //!   smoother the surface (a mirror is passed through, sharp); luminance variance from the
-//!   temporal moments, or from the neighbourhood while history is short; then an edge-aware
-//!   à-trous wavelet filter (plane, normal, luminance-variance and roughness stops) whose radius
-//!   shrinks as a pixel's history grows; and an anti-firefly clamp of each new sample to its
-//!   neighbourhood.
+//!   temporal moments, or from the neighbourhood while history is short; then edge-aware
+//!   blurs of 8 taps on a rotated disk, as NRD's blur and post-blur (plane, normal,
+//!   luminance-variance and roughness stops), whose radius shrinks as a pixel's history grows;
+//!   and an anti-firefly clamp of each new sample to its neighbourhood.
 //! - **Shadows** (one light or many), SIGMA-like: the penumbra's width is derived per pixel
 //!   from the occluder distance and the light's size (hit distance × angular size), spread to
 //!   the lit side of the edge by a neighbourhood search (skipped for the 8x8 tiles with no
@@ -25,8 +25,8 @@
 //!   neighbourhood clamp.
 //!
 //! The passes, by the names their timings carry (`CompletedTask::pass_timings`, with
-//! `InitSettings::time_passes`): radiance `temporal`, `clamp`, then `atrous_1` …
-//! `atrous_N` for `DenoiserSettings::spatial_passes` = N; shadows `shadow_prep` (penumbra
+//! `InitSettings::time_passes`): radiance `temporal`, `clamp`, then `blur_1` …
+//! `blur_N` for `DenoiserSettings::spatial_passes` = N; shadows `shadow_prep` (penumbra
 //! width and its spread), `shadow_blur`, `shadow_temporal`.
 //!
 //! `half_resolution_mode` resolves a checkerboard trace to full resolution; with no motion
@@ -168,11 +168,10 @@ pub struct DenoiserSettings {
     /// reflections by ~0.5%: at 1 ray per pixel the fast history is skewed, and a narrow box
     /// clips the slow mean from above). Radiance, AO.
     pub history_clamp_sigma: f32,
-    /// À-trous iterations (0..=6; the footprint is 2^(n+1) + 1 pixels). Default 4: a 30-pixel
-    /// radius, NRD's default maximum blur radius; a fifth iteration (62 px) cost 0.45 ms per
-    /// signal at 1440p on the H200 and left every measured image as good or worse (glossy
-    /// reflections after 32 frames: 0.040 relative RMSE with five, 0.035 with four). Radiance,
-    /// AO.
+    /// Spatial passes after the temporal ones (0..=6): each an edge-aware blur of 8 taps on a
+    /// disk turned per pixel and frame, the first 16 pixels wide at a pixel without history,
+    /// each next one half as wide, all narrower as the history grows. Default 2 (NRD's blur
+    /// and post-blur). Radiance, AO.
     pub spatial_passes: u32,
     /// Luminance stop in standard deviations of the local variance (> 0). Default 4.0.
     /// Radiance, AO.
@@ -203,7 +202,7 @@ impl Default for DenoiserSettings {
             max_history_frames: 32,
             fast_history_frames: 4,
             history_clamp_sigma: 2.5,
-            spatial_passes: 4,
+            spatial_passes: 2,
             luminance_sigma: 4.0,
             normal_power: 64.0,
             plane_distance_sigma: 0.02,

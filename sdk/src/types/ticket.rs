@@ -91,7 +91,7 @@ pub struct PassTiming {
     /// Position of that task in its container.
     pub task_index: u32,
     /// The pass's name, as the task's documentation lists its passes (`"temporal"`,
-    /// `"atrous_1"`, …).
+    /// `"blur_1"`, …).
     pub pass: &'static str,
     /// GPU time between the timestamps around the pass, in milliseconds.
     pub gpu_ms: f64,

@@ -59,7 +59,7 @@ struct Cli {
     /// compact either way.
     #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u64).range(12..=256))]
     vertex_stride: u64,
-    /// À-trous iterations of the denoise rows (default: DenoiserSettings's).
+    /// Spatial passes of the denoise rows (default: DenoiserSettings's).
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=6))]
     denoise_passes: Option<u32>,
     /// Anti-lag in the denoise rows (1 on, 0 off; default: DenoiserSettings's).
@@ -84,8 +84,8 @@ struct Settings {
     /// The engine's vertex layout (positions interleaved in vertices of this many bytes): the
     /// SDK's copy is compact either way, so trace times must not change with it.
     vertex_stride: u64,
-    /// Denoiser settings of the denoise rows (what each pass costs: rerun with fewer à-trous
-    /// iterations or without the anti-lag test). Defaults: DenoiserSettings's.
+    /// Denoiser settings of the denoise rows (what each pass costs: rerun with fewer spatial
+    /// passes or without the anti-lag test). Defaults: DenoiserSettings's.
     denoise_passes: u32,
     anti_lag: bool,
 }
