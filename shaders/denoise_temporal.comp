@@ -22,7 +22,8 @@ const float FIREFLY_NEIGHBOUR_FACTOR = 8.0;
 
 // The anti-lag test's tile: this group's 8x8 pixels and an ANTILAG_RADIUS apron, each with
 // this frame's luminance, its fast history's (at its own reprojected position), and its
-// surface — loaded once per group (144 loads instead of 64 x 25 neighbour reads).
+// surface — loaded once per group (144 loads instead of 64 x 25 neighbour reads; the group's
+// own 64 from the surfaces its pixels decode anyway).
 const int TILE = 8 + 2 * ANTILAG_RADIUS;
 shared float s_cur[TILE * TILE];
 shared float s_fast[TILE * TILE];
@@ -33,23 +34,41 @@ shared vec3 s_nrm[TILE * TILE];
 // diffuse task, the diffuse one).
 uint antilag_signal() { return u_d.kinds.x != HRT_SIGNAL_SPECULAR ? 0u : 1u; }
 
-void load_antilag_tile() {
+// One texel of the anti-lag tile: the pixel q (its surface p, n when `surface`).
+void store_antilag_texel(int e, ivec2 q, bool surface, vec3 q_p, vec3 q_n) {
     uint ts = antilag_signal();
+    bool ok = surface && hrt_traced_now(q);
+    float fast = 0.0;
+    if (ok) {
+        ivec2 prev = ivec2(floor(hrt_previous_position(q, q_p)));
+        ok = hrt_in_viewport(prev);
+        if (ok) fast = hrt_luminance(hrt_load_fast_prev(ts, prev).rgb);
+    }
+    s_cur[e] = ok ? hrt_luminance(hrt_as_signal(u_d.kinds[ts], hrt_load_input(ts, q)).rgb) : 0.0;
+    s_fast[e] = fast;
+    s_pos[e] = vec4(q_p, ok ? 1.0 : 0.0);
+    s_nrm[e] = q_n;
+}
+
+// The tile's apron (the ANTILAG_RADIUS-wide ring around the group's 8x8 pixels, which store
+// their own texels): 80 texels, two per invocation at most.
+void load_antilag_apron() {
+    const int RING = TILE * TILE - 64;
     ivec2 origin = ivec2(gl_WorkGroupID.xy) * 8 - ANTILAG_RADIUS + ivec2(u_d.c.viewport.xy);
-    for (uint e = gl_LocalInvocationIndex; e < uint(TILE * TILE); e += 64u) {
-        ivec2 q = origin + ivec2(int(e) % TILE, int(e) / TILE);
-        vec3 q_p, q_n;
-        bool ok = hrt_in_viewport(q) && hrt_traced_now(q) && hrt_engine_surface(q, q_p, q_n);
-        float fast = 0.0;
-        if (ok) {
-            ivec2 prev = ivec2(floor(hrt_previous_position(q, q_p)));
-            ok = hrt_in_viewport(prev);
-            if (ok) fast = hrt_luminance(hrt_load_fast_prev(ts, prev).rgb);
+    for (int k = int(gl_LocalInvocationIndex); k < RING; k += 64) {
+        // Rows above, rows below, then the columns beside the group's rows.
+        const int BAND = ANTILAG_RADIUS * TILE;
+        ivec2 t;
+        if (k < BAND) t = ivec2(k % TILE, k / TILE);
+        else if (k < 2 * BAND) t = ivec2((k - BAND) % TILE, TILE - ANTILAG_RADIUS + (k - BAND) / TILE);
+        else {
+            int j = k - 2 * BAND, c = j % (2 * ANTILAG_RADIUS);
+            t = ivec2(c < ANTILAG_RADIUS ? c : 8 + c, ANTILAG_RADIUS + j / (2 * ANTILAG_RADIUS));
         }
-        s_cur[e] = ok ? hrt_luminance(hrt_as_signal(u_d.kinds[ts], hrt_load_input(ts, q)).rgb) : 0.0;
-        s_fast[e] = fast;
-        s_pos[e] = vec4(q_p, ok ? 1.0 : 0.0);
-        s_nrm[e] = q_n;
+        ivec2 q = origin + t;
+        vec3 q_p, q_n;
+        bool surface = hrt_in_viewport(q) && hrt_engine_surface(q, q_p, q_n);
+        store_antilag_texel(t.y * TILE + t.x, q, surface, q_p, q_n);
     }
 }
 
@@ -60,15 +79,21 @@ void main() {
     // a specular-only task has nothing to test (see below).
     bool antilag = u_d.kinds.w != 0u && u_d.flags.z == 0u
                    && (u_d.kinds.x != HRT_SIGNAL_SPECULAR || u_d.flags.y == 2u);
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
+    bool inside = hrt_in_viewport(pixel);
+    vec3 p = vec3(0.0), n = vec3(0.0, 0.0, 1.0);
+    bool surface = inside && hrt_engine_surface(pixel, p, n);
     if (antilag) {
-        load_antilag_tile();
+        // The group's own pixels store their texels from the surface they decoded anyway.
+        ivec2 own = ivec2(gl_LocalInvocationID.xy) + ANTILAG_RADIUS;
+        store_antilag_texel(own.y * TILE + own.x, pixel, surface, p, n);
+        load_antilag_apron();
         barrier();
     }
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
-    if (!hrt_in_viewport(pixel)) return;
+    if (!inside) return;
+
     uint count = u_d.flags.y;
-    vec3 p, n;
-    if (!hrt_engine_surface(pixel, p, n)) {
+    if (!surface) {
         imageStore(u_gbuf_cur, pixel, uvec4(hrt_pack_surface(vec3(0.0, 0.0, 1.0), -1.0), 0u, 0u));
         for (uint s = 0u; s < count; ++s) {
             hrt_store_temp(s, pixel, vec4(0.0));
