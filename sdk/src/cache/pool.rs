@@ -1,7 +1,8 @@
 //! Cache samples live in large shared pages (one buffer each), not a buffer per instance:
 //! an instance's cache is a contiguous range of samples, addressed by device address.
 //! First-fit allocation with coalescing frees; a cache larger than a page gets a page of its
-//! own.
+//! own. Pages grow geometrically, from 2 MiB to 32 MiB, so a small scene reserves little (a
+//! room of 17 instances uses under 3 MiB of samples) and a large one few buffers.
 use crate::error::Result;
 use crate::gpu::memory::{Buffer, Memory, MemoryKind};
 use ash::vk;
@@ -9,8 +10,10 @@ use gpu_allocator::MemoryLocation;
 
 /// Bytes per sample: vec4 cached value (rgb, history length) + vec4 accumulator (rgb, count).
 pub(crate) const SAMPLE_BYTES: u64 = 32;
-/// Samples per page: 1 Mi samples = 32 MiB.
+/// Samples of the largest page: 1 Mi samples = 32 MiB.
 pub(crate) const PAGE_SAMPLES: u64 = 1 << 20;
+/// Samples of the first page (2 MiB); each new page doubles the last, up to `PAGE_SAMPLES`.
+const FIRST_PAGE_SAMPLES: u64 = 1 << 16;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct CacheRange {
@@ -52,7 +55,8 @@ impl CachePool {
                 return Ok(CacheRange { page: p, first, count, address: page.buffer.address + first * SAMPLE_BYTES });
             }
         }
-        let capacity = PAGE_SAMPLES.max(count);
+        let live = self.pages.iter().flatten().count().min(4) as u32;
+        let capacity = (FIRST_PAGE_SAMPLES << live).min(PAGE_SAMPLES).max(count);
         let buffer = memory.create_buffer(
             "direct-lighting cache page",
             capacity * SAMPLE_BYTES,
