@@ -61,7 +61,7 @@ void main() {
 
     // The taps of a disk: a signal's own (the two signals' disks are the same, and share their
     // fetches, when their radii are: a task of both filters each as its own task would).
-    float rotation = hrt_u01(hrt_pcg(uint(pixel.x) ^ hrt_pcg(uint(pixel.y) ^ hrt_pcg(u_d.c.frame.x * 8u + u_pass.x)))) * 2.0 * HRT_PI;
+    float rotation = hrt_u01(hrt_pcg(u_d.c.frame.x * 8u + u_pass.x)) * 2.0 * HRT_PI;
     vec4 t[2][TAPS];
     float lg[TAPS], r2[TAPS], rough[TAPS];
     bool ok[TAPS];
