@@ -350,6 +350,72 @@ pub fn moving_object_residual(signal: Signal, seed: u64) -> Vec<f32> {
     residual
 }
 
+/// An object sliding over a static floor: a 0.4 m cube on the plane of
+/// [`reference::sphere_on_plane`], moving 2.6 pixels a frame (at 64x64) after 16 still
+/// frames. After 12 frames of sliding, for each `lag` frames back: the share of the change
+/// between the converged image `lag` frames ago and now that the denoised image still misses,
+/// over the floor pixels whose converged value changed by more than 0.2 (each pixel's shortfall
+/// counted in the direction of its change) — 1 while the old contact AO or shadow lingers, 0
+/// once the image has caught up.
+pub fn sliding_object_residual(signal: Signal, seed: u64, lags: &[usize]) -> Vec<f32> {
+    const S: u32 = 64;
+    const STILL: usize = 16;
+    const SLIDING: usize = 12;
+    // 2.6 px a frame: the camera sees ~3 m across 64 px at the cube's distance (60° fov).
+    const STEP: f32 = 0.12;
+    let (mut scene, camera) = reference::sphere_on_plane();
+    let cube = scene.add_mesh(reference::Mesh::cuboid(Vec3::splat(0.2)));
+    scene.instances[1].transform = Affine3A::from_translation(Vec3::new(0.0, -10.0, 0.0)); // the sphere, out of sight
+    let at = |k: usize| Affine3A::from_translation(Vec3::new(-0.8 + STEP * k as f32, 0.2, 0.3));
+    scene.add_instance(cube, at(0));
+    let mut st = Stage::new(&scene, None, camera, S, signal.signal_type(), seed);
+    // Moves the cube to its place in frame k: instance, TLAS, G-buffer; returns that G-buffer.
+    let place = |st: &mut Stage, k: usize| -> GBuffer {
+        let mut moved = scene.clone();
+        moved.instances[2].transform = at(k);
+        let gb = GBuffer::render(&Tracer::new(&moved), &camera, S, S);
+        let (handle, geometry) = (st.gpu_scene.instances[2], st.gpu_scene.geometries[2]);
+        let input = InstanceInput { geometry, transform: at(k), ..Default::default() };
+        st.frame.schedule_instance(&InstanceTask { handle, operation: InstanceOperation::Update, input }).unwrap();
+        st.frame.schedule_bvh_build(&Default::default()).unwrap();
+        st.run();
+        st.host.write_image(&st.images.depth, &gb.depth_bytes(), READ).unwrap();
+        st.host.write_image(&st.images.normals, &gb.normal_bytes_rgba32f(), READ).unwrap();
+        st.g = gb.clone();
+        gb
+    };
+    for _ in 0..STILL {
+        signal.frame(&mut st, 1, true);
+    }
+    let mut last = st.g.clone();
+    for k in 1..=SLIDING {
+        last = place(&mut st, k);
+        signal.frame(&mut st, 1, true);
+    }
+    let denoised = signal.denoised(&st);
+    let new = signal.converged(&mut st, 4);
+    let residuals = lags
+        .iter()
+        .map(|&lag| {
+            let then = place(&mut st, SLIDING - lag);
+            let old = signal.converged(&mut st, 4);
+            let (mut num, mut den) = (0.0f32, 0.0f32);
+            for i in 0..old.len() {
+                let change = new[i][0] - old[i][0];
+                let floor = last.hit[i] && then.hit[i] && last.instance[i] == 0 && then.instance[i] == 0;
+                if floor && change.abs() > 0.2 {
+                    num += (new[i][0] - denoised[i][0]) * change.signum();
+                    den += change.abs();
+                }
+            }
+            assert!(den > 0.0, "the sliding cube changes some floor pixels by more than 0.2");
+            num / den
+        })
+        .collect();
+    st.finish();
+    residuals
+}
+
 /// Per frame of 12 denoised 1-ray frames of `signal`, how much of the change from `old` to
 /// `new` (converged images) is still missing over `region`, channel `c`: (new - denoised) /
 /// (new - old), summed over the region — 1 while the old image lingers, 0 once it is gone.
