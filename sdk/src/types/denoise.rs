@@ -169,7 +169,7 @@ pub struct DenoiserSettings {
     /// clips the slow mean from above). Radiance, AO.
     pub history_clamp_sigma: f32,
     /// Spatial passes after the temporal ones (0..=6): each an edge-aware blur of 8 taps on a
-    /// disk turned per frame, the first reaching 16 pixels at a pixel without history,
+    /// disk turned by each pass, the first reaching 16 pixels at a pixel without history,
     /// each next one half as wide, all narrower as the history grows. Default 2 (NRD's blur
     /// and post-blur). Radiance, AO.
     pub spatial_passes: u32,
