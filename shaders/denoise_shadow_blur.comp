@@ -2,7 +2,7 @@
 #extension GL_GOOGLE_include_directive : require
 // Shadow denoiser, pass 2: penumbra-aware blur. The blur radius is half the penumbra width
 // (world) over the world size of a pixel at this depth, where the width is the geometry-
-// weighted mean of the occluded samples in a 9x9-tap neighbourhood spanning the largest
+// weighted mean of the occluded samples in a 32-tap neighbourhood spanning the largest
 // radius (so lit pixels beside a penumbra find it too). Contact shadows and hard lights give a
 // radius under half a pixel: the visibility passes unchanged. Otherwise 16 taps of a rotated
 // golden-angle disk, Gaussian in the radius, with plane and normal stops. Workgroups with no
@@ -55,18 +55,27 @@ void main() {
 
     float pen = 0.0, pen_w = 0.0, vis_min = c.x;
     if (c.y >= 0.0) { pen = c.y; pen_w = 1.0; }
-    for (int yy = -4; yy <= 4; ++yy) {
-        for (int xx = -4; xx <= 4; ++xx) {
-            ivec2 q = pixel + ivec2(xx, yy) * spacing;
-            if ((xx == 0 && yy == 0) || !hrt_in_viewport(q)) continue;
-            vec3 q_p, q_n;
-            if (!hrt_surface_at(imageLoad(u_gbuf_cur, q).xy, u_d.c.clip_to_world, u_d.eye.xyz, q, q_p, q_n)) continue;
-            float w = hrt_geometry_weight(p, n, dist, q_p, q_n);
-            if (w < 0.1) continue;
-            vec4 t = hrt_load_temp(0u, q);
-            vis_min = min(vis_min, t.x);
-            if (t.y >= 0.0) { pen += w * t.y; pen_w += w; }
+    // The search: a ring of 8 taps at the spacing and a 5x5 grid at twice it — 32 taps where a
+    // 9x9 grid at the spacing took 80, as far out, and as dense next to the pixel, where the
+    // occluders that set its penumbra are.
+    HrtPixelRays rays = hrt_pixel_rays(u_d.c.clip_to_world);
+    for (int i = 0; i < 32; ++i) {
+        ivec2 q;
+        if (i < 8) {
+            int j = i + (i >= 4 ? 1 : 0); // 3x3 without its centre
+            q = pixel + ivec2(j % 3 - 1, j / 3 - 1) * spacing;
+        } else {
+            int j = i - 8 + (i - 8 >= 12 ? 1 : 0); // 5x5 without its centre
+            q = pixel + ivec2(j % 5 - 2, j / 5 - 2) * (2 * spacing);
         }
+        if (!hrt_in_viewport(q)) continue;
+        vec3 q_p, q_n;
+        if (!hrt_surface_on(rays, imageLoad(u_gbuf_cur, q).xy, u_d.eye.xyz, q, q_p, q_n)) continue;
+        float w = hrt_geometry_weight(p, n, dist, q_p, q_n);
+        if (w < 0.1) continue;
+        vec4 t = hrt_load_temp(0u, q);
+        vis_min = min(vis_min, t.x);
+        if (t.y >= 0.0) { pen += w * t.y; pen_w += w; }
     }
     float radius = pen_w > 0.0 ? min(0.5 * (pen / pen_w) / pixel_world, max_radius) : 0.0;
     // The temporal pass after this one averages up to max-history frames: as the pixel's
