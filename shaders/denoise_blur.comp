@@ -5,9 +5,10 @@
 // NRD's REBLUR blurs (its blur and post-blur), with SVGF's variance-guided luminance stop
 // (Schied et al. 2017). u_pass = (pass index from 0, last pass 0/1, 0, 0).
 //
-// What a pass costs is its fetches per pixel: 8 taps and the centre, each one fetch of the
-// view's guide and one of each signal (and, for specular, of the roughness), where four 5x5
-// à-trous iterations fetched 25 taps each. Specular and diffuse share the guide's fetches and
+// A pass fetches 8 taps and the centre, each one fetch of the view's guide and one of each
+// signal (and, for specular, of the roughness), where four 5x5 à-trous iterations fetched 25
+// taps each; and it weighs each tap as it arrives, keeping none, so it needs few registers
+// (48-64: more pixels in flight hide the fetches' latency). Specular and diffuse share the guide's fetches and
 // each tap's geometry weight. The disk's radius halves with every pass (the first reaches
 // BLUR_RADIUS pixels) and shrinks as the pixel's history grows (the temporal mean needs less
 // help) and, for specular, as the surface gets smoother (a mirror is not blurred). Each pass
@@ -15,8 +16,7 @@
 // pixel, so neighbouring pixels fetch neighbouring texels, and the same every frame: the blur's
 // output is not accumulated, and a disk turned per frame made the image flicker (0.22% -> 0.48%
 // of the mean a frame for AO, 0.45% -> 1.78% for GI; 0.20% and 0.69% with a fixed disk).
-// Stops: plane distance, normal, luminance against the local variance (the taps' own, weighted
-// by their geometry), and roughness for specular; weights fall off as exp(-r²/R²) over the
+// Stops: plane distance, normal, luminance against the centre's variance, and roughness for specular; weights fall off as exp(-r²/R²) over the
 // disk (a steeper fall-off, exp(-2r²/R²), left GI 10% noisier after 32 frames).
 #include "include/denoise.glsl"
 
@@ -29,9 +29,9 @@ const float CREASE_HISTORY = 8.0;
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
     if (!hrt_in_viewport(pixel)) return;
-    uint count = u_d.flags.y;
+    uint count = HRT_SIGNALS;
     bool last = u_pass.y != 0u;
-    bool any_specular = u_d.kinds.x == HRT_SIGNAL_SPECULAR || (count == 2u && u_d.kinds.y == HRT_SIGNAL_SPECULAR);
+    bool any_specular = HRT_KIND0 == HRT_SIGNAL_SPECULAR || (count == 2u && HRT_KIND1 == HRT_SIGNAL_SPECULAR);
     vec3 p, n;
     HrtPixelRays rays = hrt_pixel_rays(u_d.c.clip_to_world);
     bool surface = hrt_surface_on(rays, imageLoad(u_gbuf_cur, pixel).xy, u_d.eye.xyz, pixel, p, n);
@@ -40,7 +40,7 @@ void main() {
     if (!surface) {
         [[unroll]] for (uint s = 0u; s < 2u; ++s) {
             if (s >= count) break;
-            if (last) hrt_store_output(s, pixel, hrt_as_signal(u_d.kinds[s], hrt_load_input(s, pixel)));
+            if (last) hrt_store_output(s, pixel, hrt_as_signal(hrt_kind(s), hrt_load_input(s, pixel)));
             else hrt_store_temp(s, pixel, c[s]);
         }
         return;
@@ -58,78 +58,74 @@ void main() {
         // The history length, from the fast history the clamp pass kept.
         len[s] = hrt_load_fast_prev(s, pixel).a;
         float scale = mix(1.0, u_d.history.w, clamp((len[s] - 1.0) / (0.25 * u_d.history.x), 0.0, 1.0));
-        if (u_d.kinds[s] == HRT_SIGNAL_SPECULAR) scale *= clamp(roughness * 4.0, 0.0, 1.0);
+        if (hrt_kind(s) == HRT_SIGNAL_SPECULAR) scale *= clamp(roughness * 4.0, 0.0, 1.0);
         float r = pass_radius * scale;
         radius[s] = r >= 0.5 ? r : 0.0;
     }
 
-    // The taps of a disk: a signal's own (the two signals' disks are the same, and share their
-    // fetches, when their radii are: a task of both filters each as its own task would).
+    // Each signal's luminance stop: a tap's deviation from the centre against the centre's
+    // noise — the variance the clamp pass wrote (the history's own over its frames, or its
+    // 3x3 neighbourhood's while the history is short), then each pass's filtered result's.
+    vec3 sum[2];
+    float wsum[2], vsum[2], l_c[2], inv_stop[2], inv_r2[2];
+    [[unroll]] for (uint s = 0u; s < 2u; ++s) {
+        sum[s] = c[s].rgb;
+        wsum[s] = 1.0;
+        vsum[s] = c[s].a;
+        l_c[s] = hrt_luminance(c[s].rgb);
+        inv_stop[s] = 1.0 / (u_d.stops.x * sqrt(max(c[s].a, 0.0)) + 1e-4);
+        inv_r2[s] = radius[s] > 0.0 ? 1.0 / (radius[s] * radius[s]) : 0.0;
+    }
+
+    // The taps of a disk: a signal's own, or both signals' when their radii agree (they then
+    // share the guide's fetches and each tap's geometry weight: a task of both filters each as
+    // its own task would). Each tap is weighted as it arrives — no tap is held for a second
+    // look — so the pass needs few registers, which is what bounds it on a GPU (more pixels in
+    // flight hide the fetches' latency).
     float rotation = hrt_u01(hrt_pcg(u_pass.x + 1u)) * 2.0 * HRT_PI;
-    vec4 t[2][TAPS];
-    float lg[TAPS], r2[TAPS], rough[TAPS];
-    bool ok[TAPS];
-    float taps = 0.0, on_surface = 0.0;
     bool shared_disk = count == 2u && radius[0] == radius[1];
+    float taps = 0.0, on_surface = 0.0;
+    [[unroll]] for (uint d = 0u; d < 2u; ++d) {
+        if (d >= count || (d == 1u && shared_disk)) break;
+        if (radius[d] <= 0.0) continue;
+        [[unroll]] for (int i = 0; i < TAPS; ++i) {
+            float r = sqrt((float(i) + 0.5) / float(TAPS)) * radius[d];
+            float a = float(i) * 2.39996323 + rotation;
+            ivec2 q = pixel + ivec2(round(r * vec2(cos(a), sin(a))));
+            vec3 q_p, q_n;
+            if (q == pixel || !hrt_in_viewport(q) || !hrt_surface_on(rays, imageLoad(u_gbuf_cur, q).xy, u_d.eye.xyz, q, q_p, q_n)) continue;
+            vec2 dq = vec2(q - pixel);
+            float r2 = dot(dq, dq);
+            float lg = hrt_geometry_log2_weight(p, n, dist, q_p, q_n);
+            taps += 1.0;
+            on_surface += lg > -1.0 ? 1.0 : 0.0; // geometry weight > 0.5
+            float rough_w = any_specular ? exp(-abs(hrt_denoise_roughness(q) - roughness) * 10.0) : 1.0;
+            [[unroll]] for (uint s = 0u; s < 2u; ++s) {
+                if (s >= count || (s != d && !shared_disk)) continue;
+                vec4 v = hrt_load_temp(s, q);
+                float lum_stop = abs(hrt_luminance(v.rgb) - l_c[s]) * inv_stop[s];
+                float w = exp2(lg - (lum_stop + r2 * inv_r2[s]) * 1.4426950409);
+                if (hrt_kind(s) == HRT_SIGNAL_SPECULAR) w *= rough_w;
+                sum[s] += w * v.rgb;
+                wsum[s] += w;
+                vsum[s] += w * w * v.a;
+            }
+        }
+    }
+
     [[unroll]] for (uint s = 0u; s < 2u; ++s) {
         if (s >= count) break;
-        uint kind = u_d.kinds[s];
         vec4 filtered = c[s];
         if (radius[s] > 0.0) {
-            if (s == 0u || !shared_disk) {
-                taps = 0.0;
-                on_surface = 0.0;
-                [[unroll]] for (int i = 0; i < TAPS; ++i) {
-                    ok[i] = false;
-                    float r = sqrt((float(i) + 0.5) / float(TAPS)) * radius[s];
-                    float a = float(i) * 2.39996323 + rotation;
-                    ivec2 q = pixel + ivec2(round(r * vec2(cos(a), sin(a))));
-                    vec3 q_p, q_n;
-                    if (q == pixel || !hrt_in_viewport(q) || !hrt_surface_on(rays, imageLoad(u_gbuf_cur, q).xy, u_d.eye.xyz, q, q_p, q_n)) continue;
-                    ok[i] = true;
-                    vec2 d = vec2(q - pixel);
-                    r2[i] = dot(d, d);
-                    lg[i] = hrt_geometry_log2_weight(p, n, dist, q_p, q_n);
-                    taps += 1.0;
-                    on_surface += lg[i] > -1.0 ? 1.0 : 0.0; // geometry weight > 0.5
-                    if (any_specular) rough[i] = hrt_denoise_roughness(q);
-                    t[s][i] = hrt_load_temp(s, q);
-                    if (shared_disk) t[1][i] = hrt_load_temp(1u, q);
-                }
-            }
-            bool specular = kind == HRT_SIGNAL_SPECULAR;
-            float inv_r2 = 1.0 / (radius[s] * radius[s]);
-            // The local variance: the centre's and its same-surface taps', weighted by geometry
-            // (one noisy estimate would make the stop erratic).
-            float variance = c[s].a, vw = 1.0;
-            [[unroll]] for (int i = 0; i < TAPS; ++i) {
-                if (!ok[i]) continue;
-                float g = exp2(lg[i]);
-                variance += g * t[s][i].a;
-                vw += g;
-            }
-            float l_c = hrt_luminance(c[s].rgb);
-            float inv_stop = 1.0 / (u_d.stops.x * sqrt(max(variance / vw, 0.0)) + 1e-4);
-            vec3 sum = c[s].rgb;
-            float wsum = 1.0, vsum = c[s].a;
-            [[unroll]] for (int i = 0; i < TAPS; ++i) {
-                if (!ok[i]) continue;
-                float lum_stop = abs(hrt_luminance(t[s][i].rgb) - l_c) * inv_stop;
-                float w = exp2(lg[i] - (lum_stop + r2[i] * inv_r2) * 1.4426950409);
-                if (specular) w *= exp(-abs(rough[i] - roughness) * 10.0);
-                sum += w * t[s][i].rgb;
-                wsum += w;
-                vsum += w * w * t[s][i].a;
-            }
-            filtered = vec4(sum / wsum, vsum / (wsum * wsum));
+            filtered = vec4(sum[s] / wsum[s], vsum[s] / (wsum[s] * wsum[s]));
             // Beside a crease or an edge (15% of the disk on another surface) a pixel with
             // history sits at an extreme of its signal — the darkest AO in a corner — and every
             // neighbour left on its own surface lies to one side: a filter there only lifts it
             // (+6% in the room's creases without this rule). Such pixels keep their value once
-            // their history is long enough to need no filter. AO only: occlusion has its
-            // extreme in the crease by nature; GI need not (there the rule cost 28% more noise
-            // for no measured bias).
-            if (kind == HRT_SIGNAL_SCALAR && len[s] >= CREASE_HISTORY && taps > 0.0 && on_surface < 0.85 * taps) filtered = c[s];
+            // their history is long enough to need no filter. AO only (a one-signal task, so
+            // the counts are its disk's): occlusion has its extreme in the crease by nature; GI
+            // need not (there the rule cost 28% more noise for no measured bias).
+            if (hrt_kind(s) == HRT_SIGNAL_SCALAR && len[s] >= CREASE_HISTORY && taps > 0.0 && on_surface < 0.85 * taps) filtered = c[s];
         }
         if (last) hrt_store_output(s, pixel, vec4(filtered.rgb, 1.0));
         else hrt_store_temp(s, pixel, filtered);

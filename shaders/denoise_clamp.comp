@@ -14,7 +14,7 @@
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
     if (!hrt_in_viewport(pixel)) return;
-    uint count = u_d.flags.y;
+    uint count = HRT_SIGNALS;
     bool last = u_pass.y != 0u;
     vec3 n;
     float dist;
@@ -23,7 +23,7 @@ void main() {
         vec4 fast_c = hrt_load_fast_cur(s, pixel);
         if (dist < 0.0) {
             hrt_keep_histories(s, pixel, vec4(0.0), fast_c);
-            if (last) hrt_store_output(s, pixel, hrt_as_signal(u_d.kinds[s], hrt_load_input(s, pixel)));
+            if (last) hrt_store_output(s, pixel, hrt_as_signal(hrt_kind(s), hrt_load_input(s, pixel)));
             else hrt_store_temp(s, pixel, vec4(0.0));
             continue;
         }

@@ -20,11 +20,13 @@ const int ANTILAG_RADIUS = 2;
 // Without history: a sample this many times its brightest neighbour is a firefly.
 const float FIREFLY_NEIGHBOUR_FACTOR = 8.0;
 
-// The anti-lag test's tile: this group's 8x8 pixels and an ANTILAG_RADIUS apron, each with
-// this frame's luminance, its fast history's (at its own reprojected position), and its
-// surface — loaded once per group (144 loads instead of 64 x 25 neighbour reads; the group's
-// own 64 from the surfaces its pixels decode anyway).
-const int TILE = 8 + 2 * ANTILAG_RADIUS;
+// The anti-lag test's tile: this group's 8x8 pixels, each with this frame's luminance, its fast
+// history's (at its own reprojected position), and its surface — stored by each pixel from the
+// surface it decodes anyway. A pixel's footprint is the 5x5 window of the tile nearest to it
+// (centred where the group allows, shifted inwards at its border): the same 25 samples as a
+// centred window, up to 2 pixels off centre, for none of the 80 border texels a centred window
+// needs from outside the group (they cost as much as the rest of the pass).
+const int TILE = 8;
 shared float s_cur[TILE * TILE];
 shared float s_fast[TILE * TILE];
 shared vec4 s_pos[TILE * TILE];   // world position, w = 1 on a surface, 0 elsewhere
@@ -32,10 +34,10 @@ shared vec3 s_nrm[TILE * TILE];
 
 // The signal the anti-lag test runs on: the first that is not specular (in a specular +
 // diffuse task, the diffuse one).
-uint antilag_signal() { return u_d.kinds.x != HRT_SIGNAL_SPECULAR ? 0u : 1u; }
+uint antilag_signal() { return HRT_KIND0 != HRT_SIGNAL_SPECULAR ? 0u : 1u; }
 
-// One texel of the anti-lag tile: the pixel q (its surface p, n when `surface`).
-void store_antilag_texel(int e, ivec2 q, bool surface, vec3 q_p, vec3 q_n) {
+// This pixel's texel of the anti-lag tile: the pixel q (its surface p, n when `surface`).
+void store_antilag_texel(ivec2 q, bool surface, vec3 q_p, vec3 q_n) {
     uint ts = antilag_signal();
     bool ok = surface && hrt_traced_now(q);
     float fast = 0.0;
@@ -44,32 +46,11 @@ void store_antilag_texel(int e, ivec2 q, bool surface, vec3 q_p, vec3 q_n) {
         ok = hrt_in_viewport(prev);
         if (ok) fast = hrt_luminance(hrt_load_fast_prev(ts, prev).rgb);
     }
-    s_cur[e] = ok ? hrt_luminance(hrt_as_signal(u_d.kinds[ts], hrt_load_input(ts, q)).rgb) : 0.0;
+    uint e = gl_LocalInvocationIndex;
+    s_cur[e] = ok ? hrt_luminance(hrt_as_signal(hrt_kind(ts), hrt_load_input(ts, q)).rgb) : 0.0;
     s_fast[e] = fast;
     s_pos[e] = vec4(q_p, ok ? 1.0 : 0.0);
     s_nrm[e] = q_n;
-}
-
-// The tile's apron (the ANTILAG_RADIUS-wide ring around the group's 8x8 pixels, which store
-// their own texels): 80 texels, two per invocation at most.
-void load_antilag_apron() {
-    const int RING = TILE * TILE - 64;
-    ivec2 origin = ivec2(gl_WorkGroupID.xy) * 8 - ANTILAG_RADIUS + ivec2(u_d.c.viewport.xy);
-    for (int k = int(gl_LocalInvocationIndex); k < RING; k += 64) {
-        // Rows above, rows below, then the columns beside the group's rows.
-        const int BAND = ANTILAG_RADIUS * TILE;
-        ivec2 t;
-        if (k < BAND) t = ivec2(k % TILE, k / TILE);
-        else if (k < 2 * BAND) t = ivec2((k - BAND) % TILE, TILE - ANTILAG_RADIUS + (k - BAND) / TILE);
-        else {
-            int j = k - 2 * BAND, c = j % (2 * ANTILAG_RADIUS);
-            t = ivec2(c < ANTILAG_RADIUS ? c : 8 + c, ANTILAG_RADIUS + j / (2 * ANTILAG_RADIUS));
-        }
-        ivec2 q = origin + t;
-        vec3 q_p, q_n;
-        bool surface = hrt_in_viewport(q) && hrt_engine_surface(q, q_p, q_n);
-        store_antilag_texel(t.y * TILE + t.x, q, surface, q_p, q_n);
-    }
 }
 
 void main() {
@@ -78,21 +59,18 @@ void main() {
     // DenoiserSettings::anti_lag (kinds.w); the history is reset anyway when flags.z is set;
     // a specular-only task has nothing to test (see below).
     bool antilag = u_d.kinds.w != 0u && u_d.flags.z == 0u
-                   && (u_d.kinds.x != HRT_SIGNAL_SPECULAR || u_d.flags.y == 2u);
+                   && (HRT_KIND0 != HRT_SIGNAL_SPECULAR || HRT_SIGNALS == 2u);
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
     bool inside = hrt_in_viewport(pixel);
     vec3 p = vec3(0.0), n = vec3(0.0, 0.0, 1.0);
     bool surface = inside && hrt_engine_surface(pixel, p, n);
     if (antilag) {
-        // The group's own pixels store their texels from the surface they decoded anyway.
-        ivec2 own = ivec2(gl_LocalInvocationID.xy) + ANTILAG_RADIUS;
-        store_antilag_texel(own.y * TILE + own.x, pixel, surface, p, n);
-        load_antilag_apron();
+        store_antilag_texel(pixel, surface, p, n);
         barrier();
     }
     if (!inside) return;
 
-    uint count = u_d.flags.y;
+    uint count = HRT_SIGNALS;
     if (!surface) {
         imageStore(u_gbuf_cur, pixel, uvec4(hrt_pack_surface(vec3(0.0, 0.0, 1.0), -1.0), 0u, 0u));
         for (uint s = 0u; s < count; ++s) {
@@ -110,7 +88,7 @@ void main() {
     float roughness = hrt_denoise_roughness(pixel);
 
     for (uint s = 0u; s < count; ++s) {
-        uint kind = u_d.kinds[s];
+        uint kind = hrt_kind(s);
         vec4 cur = hrt_as_signal(kind, hrt_noisy_sample(s, pixel, p, n, dist));
         bool specular = kind == HRT_SIGNAL_SPECULAR;
         ivec2 t[4] = taps;
@@ -154,11 +132,12 @@ void main() {
         if (len >= 2.0 && antilag && s == antilag_signal()) {
             // The same-surface pixels of the 5x5 footprint, from the group's tile: this
             // frame's samples and their fast histories (each at its own reprojected position).
-            ivec2 local = ivec2(gl_LocalInvocationID.xy) + ANTILAG_RADIUS;
+            const int SIDE = 2 * ANTILAG_RADIUS + 1;
+            ivec2 corner = clamp(ivec2(gl_LocalInvocationID.xy) - ANTILAG_RADIUS, ivec2(0), ivec2(TILE - SIDE));
             float sum = 0.0, sum2 = 0.0, fsum = 0.0, k = 0.0;
-            [[unroll]] for (int dy = -ANTILAG_RADIUS; dy <= ANTILAG_RADIUS; ++dy) {
-                [[unroll]] for (int dx = -ANTILAG_RADIUS; dx <= ANTILAG_RADIUS; ++dx) {
-                    int e = (local.y + dy) * TILE + local.x + dx;
+            [[unroll]] for (int dy = 0; dy < SIDE; ++dy) {
+                [[unroll]] for (int dx = 0; dx < SIDE; ++dx) {
+                    int e = (corner.y + dy) * TILE + corner.x + dx;
                     // Geometry weight under 0.5 (its logarithm: one transcendental, not three).
                     if (s_pos[e].w == 0.0 || hrt_geometry_log2_weight(p, n, dist, s_pos[e].xyz, s_nrm[e]) < -1.0) continue;
                     float lq = s_cur[e];

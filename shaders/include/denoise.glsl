@@ -74,6 +74,15 @@ layout(set = 0, binding = 24, r32ui) uniform uimage2D u_tiles;
 // passes bind a stand-in and ignore it.)
 layout(set = 0, binding = 25, r32ui) uniform uimage2D u_shadow_history;
 
+// The radiance passes' signal configuration, fixed per pipeline (one pipeline per signal type:
+// specular + diffuse, specular, diffuse, AO) so the compiler drops the code and the registers
+// of the signals a task does not have; DenoiseConstants.flags.y and kinds.xy hold the same.
+// (The shadow passes leave them at their defaults and ignore them.)
+layout(constant_id = 0) const uint HRT_SIGNALS = 2u;
+layout(constant_id = 1) const uint HRT_KIND0 = HRT_SIGNAL_SPECULAR;
+layout(constant_id = 2) const uint HRT_KIND1 = HRT_SIGNAL_DIFFUSE;
+uint hrt_kind(uint s) { return s == 0u ? HRT_KIND0 : HRT_KIND1; }
+
 layout(push_constant) uniform Pass {
     uvec4 u_pass;            // à-trous: step in pixels, last iteration (0/1)
 };
@@ -100,18 +109,18 @@ void hrt_store_output(uint s, ivec2 q, vec4 v) { if (s == 0u) imageStore(u_outpu
 // length), and hrt_keep_histories packs them.
 vec4 hrt_load_hist_prev(uint s, ivec2 q) {
     vec4 v = s == 0u ? imageLoad(u_hist_prev0, q) : imageLoad(u_hist_prev1, q);
-    return u_d.kinds[s] == HRT_SIGNAL_SCALAR ? v.xxxy : v;
+    return hrt_kind(s) == HRT_SIGNAL_SCALAR ? v.xxxy : v;
 }
 vec4 hrt_load_hist_cur(uint s, ivec2 q) { return s == 0u ? imageLoad(u_hist_cur0, q) : imageLoad(u_hist_cur1, q); }
 void hrt_store_hist_cur(uint s, ivec2 q, vec4 v) { v = hrt_round_half(v); if (s == 0u) imageStore(u_hist_cur0, q, v); else imageStore(u_hist_cur1, q, v); }
 vec4 hrt_load_fast_prev(uint s, ivec2 q) {
-    if (u_d.kinds[s] == HRT_SIGNAL_SCALAR) return (s == 0u ? imageLoad(u_hist_prev0, q) : imageLoad(u_hist_prev1, q)).zzzw;
+    if (hrt_kind(s) == HRT_SIGNAL_SCALAR) return (s == 0u ? imageLoad(u_hist_prev0, q) : imageLoad(u_hist_prev1, q)).zzzw;
     return s == 0u ? imageLoad(u_fast_prev0, q) : imageLoad(u_fast_prev1, q);
 }
 // Keeps this frame's slow history and fast history (`fast` as hrt_store_fast_cur rounded it)
 // for the next frame, in place.
 void hrt_keep_histories(uint s, ivec2 q, vec4 slow, vec4 fast) {
-    if (u_d.kinds[s] == HRT_SIGNAL_SCALAR) {
+    if (hrt_kind(s) == HRT_SIGNAL_SCALAR) {
         hrt_store_hist_cur(s, q, vec4(slow.x, slow.a, fast.x, fast.a));
         return;
     }

@@ -225,9 +225,18 @@ fn compute_pipeline(
     cache: vk::PipelineCache,
     layout: vk::PipelineLayout,
     spirv: &[u8],
+    constants: &[u32],
 ) -> Result<vk::Pipeline> {
     let module = shader_module(device, spirv)?;
-    let stage = vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::COMPUTE).module(module).name(c"main");
+    // Specialization constants 0, 1, ... take `constants` in order.
+    let entries: Vec<vk::SpecializationMapEntry> =
+        (0..constants.len() as u32).map(|i| vk::SpecializationMapEntry { constant_id: i, offset: 4 * i, size: 4 }).collect();
+    let specialization = vk::SpecializationInfo::default().map_entries(&entries).data(bytemuck::cast_slice(constants));
+    let mut stage =
+        vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::COMPUTE).module(module).name(c"main");
+    if !constants.is_empty() {
+        stage = stage.specialization_info(&specialization);
+    }
     let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
     let result = unsafe { device.create_compute_pipelines(cache, &[info], None) };
     unsafe { device.destroy_shader_module(module, None) };
@@ -277,7 +286,12 @@ impl PipelineBuilder<'_> {
     }
 
     pub fn compute(&mut self, layout: vk::PipelineLayout, spirv: &[u8]) -> Result<vk::Pipeline> {
-        let p = compute_pipeline(&self.device.raw, self.cache, layout, spirv)?;
+        self.compute_specialized(layout, spirv, &[])
+    }
+
+    /// `compute` with the shader's specialization constants 0, 1, ... set to `constants`.
+    pub fn compute_specialized(&mut self, layout: vk::PipelineLayout, spirv: &[u8], constants: &[u32]) -> Result<vk::Pipeline> {
+        let p = compute_pipeline(&self.device.raw, self.cache, layout, spirv, constants)?;
         self.arena.pipelines.push(p);
         self.device.name(p, &format!("{} pipeline", self.label));
         Ok(p)

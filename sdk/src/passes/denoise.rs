@@ -220,11 +220,26 @@ impl TempPool {
     }
 }
 
-pub(crate) struct DenoisePass {
-    layout: vk::PipelineLayout,
+/// The radiance passes of one signal type: their shaders specialized to its signals (count and
+/// kinds), so a pipeline holds only the code, and the registers, its signals need.
+struct RadiancePipelines {
     temporal: vk::Pipeline,
     clamp: vk::Pipeline,
     blur: vk::Pipeline,
+}
+
+/// The radiance signal types, in `RadiancePipelines` order, with their specialization
+/// constants (HRT_SIGNALS, HRT_KIND0, HRT_KIND1 in shaders/include/denoise.glsl).
+const RADIANCE_SIGNALS: [(SignalType, [u32; 3]); 4] = [
+    (SignalType::SpecularAndDiffuse, [2, 1, 0]),
+    (SignalType::Specular, [1, 1, 1]),
+    (SignalType::Diffuse, [1, 0, 0]),
+    (SignalType::DiffuseOcclusion, [1, 2, 2]),
+];
+
+pub(crate) struct DenoisePass {
+    layout: vk::PipelineLayout,
+    radiance: Vec<RadiancePipelines>,
     shadow_prep: vk::Pipeline,
     shadow_blur: vk::Pipeline,
     shadow_temporal: vk::Pipeline,
@@ -248,11 +263,17 @@ impl DenoisePass {
         bindings.push(Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None });
         let set_layout = b.set_layout(&bindings, vk::ShaderStageFlags::COMPUTE)?;
         let layout = b.layout(Some(set_layout), 16, vk::ShaderStageFlags::COMPUTE)?;
+        let mut radiance = Vec::with_capacity(RADIANCE_SIGNALS.len());
+        for (_, constants) in RADIANCE_SIGNALS {
+            radiance.push(RadiancePipelines {
+                temporal: b.compute_specialized(layout, shaders::DENOISE_TEMPORAL_COMP, &constants)?,
+                clamp: b.compute_specialized(layout, shaders::DENOISE_CLAMP_COMP, &constants)?,
+                blur: b.compute_specialized(layout, shaders::DENOISE_BLUR_COMP, &constants)?,
+            });
+        }
         Ok(DenoisePass {
             layout,
-            temporal: b.compute(layout, shaders::DENOISE_TEMPORAL_COMP)?,
-            clamp: b.compute(layout, shaders::DENOISE_CLAMP_COMP)?,
-            blur: b.compute(layout, shaders::DENOISE_BLUR_COMP)?,
+            radiance,
             shadow_prep: b.compute(layout, shaders::DENOISE_SHADOW_PREP_COMP)?,
             shadow_blur: b.compute(layout, shaders::DENOISE_SHADOW_BLUR_COMP)?,
             shadow_temporal: b.compute(layout, shaders::DENOISE_SHADOW_TEMPORAL_COMP)?,
@@ -378,13 +399,16 @@ impl DenoisePass {
             dispatch(r, "shadow_blur", self.shadow_blur, 0, 1, [0; 4]);
             dispatch(r, "shadow_temporal", self.shadow_temporal, 1, 0, [0; 4]);
         } else {
+            // Every radiance signal type has its pipelines (RADIANCE_SIGNALS).
+            let Some(k) = RADIANCE_SIGNALS.iter().position(|(s, _)| *s == job.signal) else { return };
+            let p = &self.radiance[k];
             let passes = c.settings.spatial_passes;
-            dispatch(r, "temporal", self.temporal, 1, 0, [0; 4]);
-            dispatch(r, "clamp", self.clamp, 0, 0, [0, (passes == 0) as u32, 0, 0]);
+            dispatch(r, "temporal", p.temporal, 1, 0, [0; 4]);
+            dispatch(r, "clamp", p.clamp, 0, 0, [0, (passes == 0) as u32, 0, 0]);
             for (i, name) in (0..passes).zip(BLUR_PASS_NAMES) {
                 let src = i as usize % 2;
                 let push = [i, (i + 1 == passes) as u32, 0, 0];
-                dispatch(r, name, self.blur, src, 1 - src, push);
+                dispatch(r, name, p.blur, src, 1 - src, push);
             }
         }
         state.initialized = true;
