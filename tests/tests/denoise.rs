@@ -1106,7 +1106,7 @@ fn denoise_one_view(view_id: u32) -> (Vec<u8>, Vec<u8>, u64, u64) {
     (outputs.0, outputs.1, allocations.count, allocations.bytes)
 }
 
-/// Contexts of one view keep one guide between them (two images of 8 bytes a pixel fewer)
+/// Contexts of one view keep one guide between them (two images of 4 bytes a pixel fewer)
 /// and denoise exactly as with a guide each.
 #[test]
 fn contexts_of_one_view_share_their_guide_and_denoise_the_same() {
@@ -1115,7 +1115,7 @@ fn contexts_of_one_view_share_their_guide_and_denoise_the_same() {
     assert!(ao_alone == ao_shared, "AO denoised differently with a shared guide");
     assert!(shadow_alone == shadow_shared, "shadow denoised differently with a shared guide");
     assert_eq!(count_shared + 2, count_alone, "one guide pair fewer");
-    assert_eq!(bytes_shared + 2 * 8 * (S * S) as u64, bytes_alone, "R32G32_UINT guide images of {S}x{S}");
+    assert_eq!(bytes_shared + 2 * 4 * (S * S) as u64, bytes_alone, "R32_UINT guide images of {S}x{S}");
 }
 
 /// A view's contexts have one size, and one view's tasks in a container one camera: both are

@@ -5,7 +5,7 @@
 //! NRD keeps the previous frame's depth and normals once per denoiser instance; we keep them
 //! once per camera view. Contexts created with the same `DenoisingContextInput::view_id`
 //! share one guide (the sample's four contexts of the main camera kept four copies of the
-//! same 16 bytes per pixel), so a view's first denoise task of a recording moves the guide to
+//! same 8 bytes per pixel), so a view's first denoise task of a recording moves the guide to
 //! a new frame and its later tasks rewrite the same texels. A context with view id 0 keeps a
 //! guide of its own, which moves with every task, as before views existed.
 use crate::error::{Error, Result};
@@ -13,8 +13,8 @@ use crate::gpu::memory::{Image, Memory, MemoryKind};
 use crate::types::{DenoisingCommon, DenoisingContextHandle};
 use ash::vk;
 
-/// Packed normal (two halves) + view distance (f32).
-const GUIDE_FORMAT: vk::Format = vk::Format::R32G32_UINT;
+/// Packed normal (two signed bytes) + view distance (a half), one 32-bit texel.
+const GUIDE_FORMAT: vk::Format = vk::Format::R32_UINT;
 
 /// Which guide a context reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -85,7 +85,7 @@ pub struct DenoisingContextInput {
     pub signal: SignalType,
     /// The camera view it denoises, to share the denoiser's guide with the view's other
     /// contexts (default 0: none). Every denoiser keeps a guide — this frame's and the
-    /// previous frame's normal and view distance per pixel, 16 bytes a pixel — to find edges
+    /// previous frame's normal and view distance per pixel, 8 bytes a pixel — to find edges
     /// and disocclusions; the contexts created with the same nonzero `view_id` (the AO,
     /// shadow and radiance contexts of one camera, say) keep one between them. They must have
     /// the same `max_width` and `max_height`, and the denoise tasks of one view in one
