@@ -49,7 +49,7 @@ void main() {
         float l_slow = hrt_luminance(slow.rgb);
         float var_temporal = max(slow.a - l_slow * l_slow, 0.0) / len;
         float var_spatial = max(l2 - l1 * l1, 0.0);
-        float variance = mix(var_spatial, var_temporal, clamp((len - 1.0) / 3.0, 0.0, 1.0));
+        float variance = mix(var_spatial, var_temporal, clamp((len - 1.0) / 7.0, 0.0, 1.0));
         hrt_keep_histories(s, pixel, vec4(clamped, slow.a), fast_c);
         if (last) hrt_store_output(s, pixel, vec4(clamped, 1.0));
         else hrt_store_temp(s, pixel, vec4(clamped, variance));

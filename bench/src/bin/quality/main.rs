@@ -220,11 +220,13 @@ fn thin_features() {
 /// A sphere moves away: the old contact AO and shadow left in the denoised image k frames
 /// later (mean over four seeds).
 fn moving_objects() {
-    println!("\n## A moving object (share of the old occlusion kept; mean of 4 seeds)\n");
+    println!("\n## A moving object (share of the old occlusion, or the old reflection, kept; mean of 4 seeds)\n");
     println!("| signal | 1 frame after | 2 | 4 | 8 | 12 |");
     println!("|---|---|---|---|---|---|");
     let sun = LightInfo { direction: Vec3::new(0.4, -1.0, -0.3), angular_extent: 0.1, ..Default::default() };
-    for signal in [Signal::Ao, Signal::Shadow(sun)] {
+    // The glossy floor's reflection of the sphere (unlit: black against the sky) moves away.
+    let glossy = Signal::Specular { sky: [1.0; 3], roughness: 0.3 };
+    for signal in [Signal::Ao, Signal::Shadow(sun), glossy] {
         let r = mean_over_seeds(|seed| moving_object_residual(signal, seed));
         let p = |k: usize| r[k - 1] * 100.0;
         println!("| {} | {:.0}% | {:.0}% | {:.0}% | {:.0}% | {:.0}% |", signal.name(), p(1), p(2), p(4), p(8), p(12));
