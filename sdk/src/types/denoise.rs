@@ -190,9 +190,11 @@ pub struct DenoiserSettings {
     /// Widest penumbra blur radius in pixels (0..=64). Default 24. Shadows.
     pub max_shadow_blur_radius: f32,
     /// Restart a pixel's history where this frame's 5x5 same-surface samples and its fast
-    /// history disagree by more than 3 deviations (and keep at most the fast window past 2):
-    /// a moved object's contact AO, a light switched on. Costs ~0.35 ms at 1080p on an H200.
-    /// Default true. AO, diffuse (and the diffuse half of specular + diffuse).
+    /// history disagree by more than 2.5 deviations (and keep at most the fast window past 2;
+    /// reflections, whose samples are heavier-tailed, one deviation more): a moved object's
+    /// contact AO, a light switched on, an object that left a reflection (the reflection's
+    /// history is compared where the reflected point was). Default true. Every radiance
+    /// signal: AO, diffuse, specular.
     pub anti_lag: bool,
 }
 
