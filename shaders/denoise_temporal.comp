@@ -108,6 +108,29 @@ void main() {
     if (!reset) hrt_history_taps(hrt_previous_position(pixel, p), p, n, dist, taps, weights);
     float roughness = hrt_denoise_roughness(pixel);
 
+    // The anti-lag test's footprint (see below), summed once for both signals: the same-surface
+    // pixels of the 5x5 window, from the group's tile — this frame's samples and their fast
+    // histories (each where its history is read). The geometry test is the signals' one cost.
+    vec4 fp[2];      // per signal: sum, sum of squares, fast sum, pixels
+    fp[0] = vec4(0.0);
+    fp[1] = vec4(0.0);
+    if (antilag) {
+        const int SIDE = 2 * ANTILAG_RADIUS + 1;
+        ivec2 corner = clamp(ivec2(gl_LocalInvocationID.xy) - ANTILAG_RADIUS, ivec2(0), ivec2(TILE - SIDE));
+        [[unroll]] for (int dy = 0; dy < SIDE; ++dy) {
+            [[unroll]] for (int dx = 0; dx < SIDE; ++dx) {
+                int e = (corner.y + dy) * TILE + corner.x + dx;
+                // Geometry weight under 0.5 (its logarithm: one transcendental, not three).
+                if (s_pos[e].w == 0.0 || hrt_geometry_log2_weight(p, n, dist, s_pos[e].xyz, s_nrm[e]) < -1.0) continue;
+                [[unroll]] for (uint s = 0u; s < 2u; ++s) {
+                    if (s >= count) break;
+                    float lq = s_cur[s][e];
+                    if (lq >= 0.0) fp[s] += vec4(lq, lq * lq, s_fast[s][e], 1.0);
+                }
+            }
+        }
+    }
+
     for (uint s = 0u; s < count; ++s) {
         uint kind = hrt_kind(s);
         vec4 cur = hrt_as_signal(kind, hrt_noisy_sample(s, pixel, p, n, dist));
@@ -151,23 +174,8 @@ void main() {
         // 1.4% — chance dark neighbourhoods restarted pixels dark; 25 samples and the history's
         // own variance keep it unbiased: +0.1..-0.3%.)
         if (len >= 2.0 && antilag) {
-            // The same-surface pixels of the 5x5 footprint, from the group's tile: this
-            // frame's samples and their fast histories (each at its own reprojected position).
-            const int SIDE = 2 * ANTILAG_RADIUS + 1;
-            ivec2 corner = clamp(ivec2(gl_LocalInvocationID.xy) - ANTILAG_RADIUS, ivec2(0), ivec2(TILE - SIDE));
-            float sum = 0.0, sum2 = 0.0, fsum = 0.0, k = 0.0;
-            [[unroll]] for (int dy = 0; dy < SIDE; ++dy) {
-                [[unroll]] for (int dx = 0; dx < SIDE; ++dx) {
-                    int e = (corner.y + dy) * TILE + corner.x + dx;
-                    // Geometry weight under 0.5 (its logarithm: one transcendental, not three).
-                    float lq = s_cur[s][e];
-                    if (s_pos[e].w == 0.0 || lq < 0.0 || hrt_geometry_log2_weight(p, n, dist, s_pos[e].xyz, s_nrm[e]) < -1.0) continue;
-                    sum += lq;
-                    sum2 += lq * lq;
-                    fsum += s_fast[s][e];
-                    k += 1.0;
-                }
-            }
+            vec4 f = s == 0u ? fp[0] : fp[1];
+            float sum = f.x, sum2 = f.y, fsum = f.z, k = f.w;
             if (k >= 3.0) {
                 float m = sum / k, mf = fsum / k;
                 // One sample's variance: this frame's 3x3 spread, or the pixel's own over its
