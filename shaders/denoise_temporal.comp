@@ -33,7 +33,8 @@ const float FIREFLY_NEIGHBOUR_FACTOR = 8.0;
 // centred window, up to 2 pixels off centre, for none of the 80 border texels a centred window
 // needs from outside the group (they cost as much as the rest of the pass).
 const int TILE = 8;
-// Per signal: this frame's luminance and its fast history's.
+// Per signal: this frame's luminance and its fast history's (where that signal's history is
+// read: for reflections the reflected point, or the surface where that is off screen).
 shared float s_cur[2][TILE * TILE];
 shared float s_fast[2][TILE * TILE];
 shared vec4 s_pos[TILE * TILE];   // world position, w = 1 on a surface, 0 elsewhere
@@ -57,20 +58,22 @@ vec2 history_position(bool specular, float roughness, ivec2 q, vec3 q_p, float q
 // This pixel's texel of the anti-lag tile: the pixel q (its surface p, n when `surface`).
 void store_antilag_texel(ivec2 q, bool surface, vec3 q_p, vec3 q_n) {
     bool ok = surface && hrt_traced_now(q);
-    float q_dist = distance(q_p, u_d.eye.xyz);
-    float roughness = ok && (HRT_KIND0 == HRT_SIGNAL_SPECULAR || HRT_KIND1 == HRT_SIGNAL_SPECULAR) ? hrt_denoise_roughness(q) : 1.0;
+    vec2 prev_surface = hrt_previous_position(q, q_p);
+    ok = ok && hrt_in_viewport(ivec2(floor(prev_surface)));
     uint e = gl_LocalInvocationIndex;
     [[unroll]] for (uint s = 0u; s < 2u; ++s) {
         if (s >= HRT_SIGNALS) break;
-        vec4 cur = ok ? hrt_as_signal(hrt_kind(s), hrt_load_input(s, q)) : vec4(0.0);
-        float fast = 0.0;
-        bool in_view = false;
+        float cur = 0.0, fast = 0.0;
         if (ok) {
-            ivec2 prev = ivec2(floor(history_position(hrt_kind(s) == HRT_SIGNAL_SPECULAR, roughness, q, q_p, q_dist, cur.a)));
-            in_view = hrt_in_viewport(prev);
-            if (in_view) fast = hrt_luminance(hrt_load_fast_prev(s, prev).rgb);
+            vec4 v = hrt_as_signal(hrt_kind(s), hrt_load_input(s, q));
+            vec2 prev = prev_surface;
+            if (hrt_kind(s) == HRT_SIGNAL_SPECULAR) {
+                prev = history_position(true, hrt_denoise_roughness(q), q, q_p, distance(q_p, u_d.eye.xyz), v.a);
+            }
+            cur = hrt_luminance(v.rgb);
+            fast = hrt_luminance(hrt_load_fast_prev(s, ivec2(floor(prev))).rgb);
         }
-        s_cur[s][e] = in_view ? hrt_luminance(cur.rgb) : -1.0;  // -1: no sample to compare
+        s_cur[s][e] = cur;
         s_fast[s][e] = fast;
     }
     s_pos[e] = vec4(q_p, ok ? 1.0 : 0.0);
@@ -108,28 +111,11 @@ void main() {
     if (!reset) hrt_history_taps(hrt_previous_position(pixel, p), p, n, dist, taps, weights);
     float roughness = hrt_denoise_roughness(pixel);
 
-    // The anti-lag test's footprint (see below), summed once for both signals: the same-surface
-    // pixels of the 5x5 window, from the group's tile — this frame's samples and their fast
-    // histories (each where its history is read). The geometry test is the signals' one cost.
-    vec4 fp[2];      // per signal: sum, sum of squares, fast sum, pixels
+    // The anti-lag test's footprint (see below), per signal: sum, sum of squares, fast sum,
+    // pixels.
+    vec4 fp[2];
     fp[0] = vec4(0.0);
     fp[1] = vec4(0.0);
-    if (antilag) {
-        const int SIDE = 2 * ANTILAG_RADIUS + 1;
-        ivec2 corner = clamp(ivec2(gl_LocalInvocationID.xy) - ANTILAG_RADIUS, ivec2(0), ivec2(TILE - SIDE));
-        [[unroll]] for (int dy = 0; dy < SIDE; ++dy) {
-            [[unroll]] for (int dx = 0; dx < SIDE; ++dx) {
-                int e = (corner.y + dy) * TILE + corner.x + dx;
-                // Geometry weight under 0.5 (its logarithm: one transcendental, not three).
-                if (s_pos[e].w == 0.0 || hrt_geometry_log2_weight(p, n, dist, s_pos[e].xyz, s_nrm[e]) < -1.0) continue;
-                [[unroll]] for (uint s = 0u; s < 2u; ++s) {
-                    if (s >= count) break;
-                    float lq = s_cur[s][e];
-                    if (lq >= 0.0) fp[s] += vec4(lq, lq * lq, s_fast[s][e], 1.0);
-                }
-            }
-        }
-    }
 
     for (uint s = 0u; s < count; ++s) {
         uint kind = hrt_kind(s);
@@ -173,6 +159,26 @@ void main() {
         // reflected point was). (A 3x3 test with this frame's spread alone biased 1-ray GI by
         // 1.4% — chance dark neighbourhoods restarted pixels dark; 25 samples and the history's
         // own variance keep it unbiased: +0.1..-0.3%.)
+        if (antilag && s == 0u) {
+            // The same-surface pixels of the 5x5 window, from the group's tile — this frame's
+            // samples and their fast histories (each where its history is read) — summed once
+            // for both signals (the geometry test is the one cost); here, after the first
+            // signal's history fetches are issued, so their latency hides behind it.
+            const int SIDE = 2 * ANTILAG_RADIUS + 1;
+            ivec2 corner = clamp(ivec2(gl_LocalInvocationID.xy) - ANTILAG_RADIUS, ivec2(0), ivec2(TILE - SIDE));
+            [[unroll]] for (int dy = 0; dy < SIDE; ++dy) {
+                [[unroll]] for (int dx = 0; dx < SIDE; ++dx) {
+                    int e = (corner.y + dy) * TILE + corner.x + dx;
+                    // Geometry weight under 0.5 (its logarithm: one transcendental, not three).
+                    if (s_pos[e].w == 0.0 || hrt_geometry_log2_weight(p, n, dist, s_pos[e].xyz, s_nrm[e]) < -1.0) continue;
+                    [[unroll]] for (uint t = 0u; t < 2u; ++t) {
+                        if (t >= count) break;
+                        float lq = s_cur[t][e];
+                        fp[t] += vec4(lq, lq * lq, s_fast[t][e], 1.0);
+                    }
+                }
+            }
+        }
         if (len >= 2.0 && antilag) {
             vec4 f = s == 0u ? fp[0] : fp[1];
             float sum = f.x, sum2 = f.y, fsum = f.z, k = f.w;
