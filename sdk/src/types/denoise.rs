@@ -193,8 +193,9 @@ pub struct DenoiserSettings {
     /// history disagree by more than 2.5 deviations (and keep at most the fast window past 2;
     /// reflections, whose samples are heavier-tailed, one deviation more): a moved object's
     /// contact AO, a light switched on, an object that left a reflection (the reflection's
-    /// history is compared where the reflected point was). Default true. Every radiance
-    /// signal: AO, diffuse, specular.
+    /// history is compared where the reflected point was). Diffuse GI also compares its 8x8
+    /// workgroup's mean (a light switched on: a change smaller than 1-ray noise over 25 pixels).
+    /// Default true. Every radiance signal: AO, diffuse, specular.
     pub anti_lag: bool,
 }
 
