@@ -8,17 +8,18 @@
 // A pass fetches 8 taps and the centre, each one fetch of the view's guide and one of each
 // signal (and, for specular, of the roughness), where four 5x5 à-trous iterations fetched 25
 // taps each; and it weighs each tap as it arrives, keeping none, so it needs few registers
-// (48-64: more pixels in flight hide the fetches' latency). Specular and diffuse share the guide's fetches and
-// each tap's geometry weight. The disk's radius halves with every pass (the first reaches
-// BLUR_RADIUS pixels) and shrinks as the pixel's history grows (the temporal mean needs less
-// help) and, for specular, as the surface gets smoother (a mirror is not blurred). Each pass
-// turns the disk by its own angle, so what one pass misses the next covers; the same for every
-// pixel, so neighbouring pixels fetch neighbouring texels, and the same every frame: the blur's
-// output is not accumulated, and a disk turned per frame made the image flicker (0.22% -> 0.48%
-// of the mean a frame for AO, 0.45% -> 1.78% for GI; 0.20% and 0.69% with a fixed disk).
-// Stops: plane distance, normal, luminance against the local variance (the centre's and the
-// taps' before each tap, weighted by geometry: the disk runs outwards), and roughness for specular; weights fall off as exp(-r²/R²) over the
-// disk (a steeper fall-off, exp(-2r²/R²), left GI 10% noisier after 32 frames).
+// (48-64: more pixels in flight hide the fetches' latency). Specular and diffuse share the
+// guide's fetches and each tap's geometry weight. The disk's radius halves with every pass
+// (the first reaches BLUR_RADIUS pixels) and shrinks as the pixel's history grows (the
+// temporal mean needs less help) and, for specular, as the surface gets smoother (a mirror is
+// not blurred). Each pass turns the disk by its own angle, so what one pass misses the next
+// covers; the same for every pixel, so neighbouring pixels fetch neighbouring texels, and the
+// same every frame: the blur's output is not accumulated, and a disk turned per frame made the
+// image flicker (0.22% -> 0.48% of the mean a frame for AO, 0.45% -> 1.78% for GI; 0.20% and
+// 0.69% with a fixed disk). Stops: plane distance, normal, luminance against the local
+// variance (the centre's and the taps' before each tap, weighted by geometry: the disk runs
+// outwards), and roughness for specular; weights fall off as exp(-r²/R²) over the disk (a
+// steeper fall-off, exp(-2r²/R²), left GI 10% noisier after 32 frames).
 #include "include/denoise.glsl"
 
 // Radius of the first pass's disk, in pixels, for a pixel without history.
@@ -83,9 +84,7 @@ void main() {
 
     // The taps of a disk: a signal's own, or both signals' when their radii agree (they then
     // share the guide's fetches and each tap's geometry weight: a task of both filters each as
-    // its own task would). Each tap is weighted as it arrives — no tap is held for a second
-    // look — so the pass needs few registers, which is what bounds it on a GPU (more pixels in
-    // flight hide the fetches' latency).
+    // its own task would). Each tap is weighted as it arrives (see above).
     float rotation = hrt_u01(hrt_pcg(u_pass.x + 1u)) * 2.0 * HRT_PI;
     bool shared_disk = count == 2u && radius[0] == radius[1];
     float taps = 0.0, on_surface = 0.0;

@@ -27,38 +27,45 @@ const int ANTILAG_RADIUS = 2;
 const float FIREFLY_NEIGHBOUR_FACTOR = 8.0;
 
 // The anti-lag test's tile: this group's 8x8 pixels, each with this frame's luminance of each
-// signal, its fast history's (where that signal's history is read), and its surface — stored by each pixel from the
-// surface it decodes anyway. A pixel's footprint is the 5x5 window of the tile nearest to it
-// (centred where the group allows, shifted inwards at its border): the same 25 samples as a
-// centred window, up to 2 pixels off centre, for none of the 80 border texels a centred window
-// needs from outside the group (they cost as much as the rest of the pass).
+// signal, its fast history's (where that signal's history is read), and its surface — stored
+// by each pixel from the surface it decodes anyway. A pixel's footprint is the 5x5 window of
+// the tile nearest to it (centred where the group allows, shifted inwards at its border): the
+// same 25 samples as a centred window, up to 2 pixels off centre, for none of the 80 border
+// texels a centred window needs from outside the group (they cost as much as the rest of the
+// pass).
 const int TILE = 8;
 // Per signal: this frame's luminance and its fast history's (where that signal's history is
 // read: for reflections the reflected point, or the surface where that is off screen).
 shared float s_cur[2][TILE * TILE];
 shared float s_fast[2][TILE * TILE];
 shared vec4 s_pos[TILE * TILE];   // world position, w = 1 on a surface, 0 elsewhere
+shared vec3 s_nrm[TILE * TILE];
 // Diffuse GI's group-wide test (see below): per tile row, (sum, sum of squares, fast sum,
 // pixels) of the diffuse signal.
 shared vec4 s_rows[TILE];
-// (Functions of the specialization constants: a driver folds them; glslang cannot make a
-// short-circuit constant of them.)
+
+// Whether the task has a diffuse signal, and which. (Functions of the specialization
+// constants: a driver folds them; glslang cannot make a short-circuit constant of them.)
 bool has_diffuse() { return HRT_KIND0 == HRT_SIGNAL_DIFFUSE || (HRT_SIGNALS == 2u && HRT_KIND1 == HRT_SIGNAL_DIFFUSE); }
 uint diffuse_signal() { return HRT_KIND0 == HRT_SIGNAL_DIFFUSE ? 0u : 1u; }
-shared vec3 s_nrm[TILE * TILE];
 
-// Where a signal's history of the surface q_p (at distance q_dist) was: the surface's own
-// previous position, or for smooth specular the reflected point's (the hit distance behind the
-// surface along the view ray: exact for planar reflectors), as the history itself is read.
-vec2 history_position(bool specular, float roughness, ivec2 q, vec3 q_p, float q_dist, float hit_dist) {
-    if (specular && roughness < 0.5) {
-        vec3 virtual_p = u_d.eye.xyz + (q_p - u_d.eye.xyz) / q_dist * (q_dist + max(hit_dist, 0.0));
-        vec4 clip = u_d.prev_world_to_clip * vec4(virtual_p, 1.0);
-        vec2 pos = (clip.xy / clip.w * 0.5 + 0.5) * u_d.c.viewport.zw + u_d.c.viewport.xy;
-        // Not where the reflected point is off screen or at infinity (the sky, whose hit
-        // distance is unbounded): there the history is read at the surface, as below.
-        if (clip.w > 0.0 && all(lessThan(abs(pos), vec2(1e7))) && hrt_in_viewport(ivec2(floor(pos)))) return pos;
-    }
+// Virtual motion: where the reflected point of the surface q_p (at distance q_dist, the
+// reflection's hit distance behind it along the view ray: exact for planar reflectors) was in
+// the previous frame, in pixels; false where it was behind the camera.
+bool reflected_point_position(vec3 q_p, float q_dist, float hit_dist, out vec2 pos) {
+    vec3 virtual_p = u_d.eye.xyz + (q_p - u_d.eye.xyz) / q_dist * (q_dist + max(hit_dist, 0.0));
+    vec4 clip = u_d.prev_world_to_clip * vec4(virtual_p, 1.0);
+    pos = (clip.xy / clip.w * 0.5 + 0.5) * u_d.c.viewport.zw + u_d.c.viewport.xy;
+    return clip.w > 0.0;
+}
+
+// Where a specular signal's history of the surface q_p was, as the history itself is read:
+// for smooth surfaces the reflected point's position, else (or where that is off screen or at
+// infinity — the sky, whose hit distance is unbounded) the surface's own.
+vec2 specular_history_position(float roughness, ivec2 q, vec3 q_p, float q_dist, float hit_dist) {
+    vec2 pos;
+    if (roughness < 0.5 && reflected_point_position(q_p, q_dist, hit_dist, pos)
+        && all(lessThan(abs(pos), vec2(1e7))) && hrt_in_viewport(ivec2(floor(pos)))) return pos;
     return hrt_previous_position(q, q_p);
 }
 
@@ -75,7 +82,7 @@ void store_antilag_texel(ivec2 q, bool surface, vec3 q_p, vec3 q_n) {
             vec4 v = hrt_as_signal(hrt_kind(s), hrt_load_input(s, q));
             vec2 prev = prev_surface;
             if (hrt_kind(s) == HRT_SIGNAL_SPECULAR) {
-                prev = history_position(true, hrt_denoise_roughness(q), q, q_p, distance(q_p, u_d.eye.xyz), v.a);
+                prev = specular_history_position(hrt_denoise_roughness(q), q, q_p, distance(q_p, u_d.eye.xyz), v.a);
             }
             cur = hrt_luminance(v.rgb);
             fast = hrt_luminance(hrt_load_fast_prev(s, ivec2(floor(prev))).rgb);
@@ -151,12 +158,9 @@ void main() {
         ivec2 t[4] = taps;
         vec4 w = weights;
         if (specular && !reset && roughness < 0.5) {
-            // Virtual motion: the reflection moves with the reflected point, hit distance
-            // behind the surface along the view ray (exact for planar reflectors).
-            vec3 virtual_p = u_d.eye.xyz + (p - u_d.eye.xyz) / dist * (dist + max(cur.a, 0.0));
-            vec4 clip = u_d.prev_world_to_clip * vec4(virtual_p, 1.0);
-            if (clip.w > 0.0) {
-                vec2 pos = (clip.xy / clip.w * 0.5 + 0.5) * u_d.c.viewport.zw + u_d.c.viewport.xy;
+            // Virtual motion: the reflection moves with the reflected point.
+            vec2 pos;
+            if (reflected_point_position(p, dist, cur.a, pos)) {
                 ivec2 vt[4];
                 vec4 vw;
                 hrt_history_taps(pos, p, n, dist, vt, vw);
