@@ -1,95 +1,131 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
-// Shadow denoiser, pass 2: penumbra-aware blur. The blur radius is half the penumbra width
-// (world) over the world size of a pixel at this depth, where the width is the geometry-
-// weighted mean of the occluded samples in a 24-tap neighbourhood spanning the largest
-// radius (so lit pixels beside a penumbra find it too). Contact shadows and hard lights give a
-// radius under half a pixel: the visibility passes unchanged. Otherwise 8 taps of a rotated
-// golden-angle disk (turned per pixel and per frame: the temporal pass after this one
-// averages the turns; 16 taps measured the same penumbra error), Gaussian in the radius, with
-// plane and normal stops. Workgroups with no occluded sample within the search's reach (the
-// prep pass's tile map) skip the search.
+// Shadow denoiser, pass 2: penumbra-aware blur, shaped like SIGMA's. The blur radius is half
+// the penumbra width (world) over the world size of a pixel at this depth. The width comes
+// from what is already at hand rather than from a search: the pixel's own occluded sample and
+// its 3x3 neighbours (geometry-weighted, from a 10x10 tile the workgroup loads into shared
+// memory once, about three fetches a pixel), and the prep pass's tile summaries within the
+// largest radius (each 8x8 tile's mean width and count, summed once per workgroup), so lit
+// pixels beside a penumbra find it too. (The 24-tap search this replaces fetched 48 texels a
+// pixel and set the pass's time.) Contact shadows and hard lights give a radius under half a
+// pixel: the visibility passes unchanged. Otherwise 8 taps of a rotated golden-angle disk
+// (turned per pixel and per frame: the temporal pass after this one averages the turns),
+// Gaussian in the radius, with plane and normal stops. Workgroups with no occluded sample
+// within reach do nothing but copy.
 #include "include/denoise.glsl"
 
 // History length (frames) up to which the full penumbra-wide blur is kept.
 const float SHADOW_BLUR_FRAMES = 1.0;
+// Weight of the tiles' estimate beside the 3x3's occluded samples (each weighs up to 1):
+// where the 3x3 holds occluded samples they decide the width; where it holds none (a lit
+// pixel beside a penumbra) the tiles do.
+const float TILE_WEIGHT = 0.5;
 
-// Whether a tile within this workgroup's search reach holds an occluded sample.
-shared uint s_near;
+// Per invocation, then summed: (sum of count x mean width, count) over the tiles in reach.
+shared vec2 s_tiles[64];
+// The intermediate and the denoiser's G-buffer around the workgroup (one texel of border).
+const int APRON = 10;
+shared vec4 s_temp[APRON * APRON];
+shared uint s_gbuf[APRON * APRON];
 
-// Marks s_near from the tile map: the tiles the search of any pixel of this workgroup
-// can reach (the group's 8x8 pixels, `reach` pixels around, inside the viewport). Every
-// invocation of the group calls it (it has barriers).
-void find_occluded_tiles(int reach) {
-    if (gl_LocalInvocationIndex == 0u) s_near = 0u;
-    barrier();
+// Sums the tile summaries within `reach` pixels of this workgroup's 8x8 pixels into
+// s_tiles[0]. Every invocation calls it (it has barriers).
+void sum_tiles(int reach) {
+    uint me = gl_LocalInvocationIndex;
     ivec2 group = ivec2(gl_WorkGroupID.xy) * 8; // relative to the viewport's origin
     ivec2 lo = max(group - reach, ivec2(0)) / 8;
     ivec2 hi = min(group + 7 + reach, ivec2(u_d.c.viewport.zw) - 1) / 8;
     ivec2 span = hi - lo + 1;
-    for (int i = int(gl_LocalInvocationIndex); i < span.x * span.y; i += 64) {
-        if (imageLoad(u_tiles, lo + ivec2(i % span.x, i / span.x)).x != 0u) atomicOr(s_near, 1u);
+    vec2 sum = vec2(0.0);
+    for (int i = int(me); i < span.x * span.y; i += 64) {
+        vec2 t = unpackHalf2x16(imageLoad(u_tiles, lo + ivec2(i % span.x, i / span.x)).x);
+        sum += vec2(t.x * t.y, t.y);
+    }
+    s_tiles[me] = sum;
+    barrier();
+    for (uint half_count = 32u; half_count > 0u; half_count >>= 1) {
+        if (me < half_count) s_tiles[me] += s_tiles[me + half_count];
+        barrier();
+    }
+}
+
+// Fills the 10x10 apron: texels outside the viewport read as background.
+void load_apron(ivec2 origin) {
+    for (int i = int(gl_LocalInvocationIndex); i < APRON * APRON; i += 64) {
+        ivec2 q = origin + ivec2(i % APRON, i / APRON);
+        bool inside = hrt_in_viewport(q);
+        s_gbuf[i] = inside ? imageLoad(u_gbuf_cur, q).x : hrt_pack_surface(vec3(0.0, 0.0, 1.0), -1.0).x;
+        s_temp[i] = inside ? hrt_load_temp(0u, q) : vec4(1.0, -1.0, 0.0, 0.0);
     }
     barrier();
 }
 
+// Index of pixel q in the apron, or -1 outside it.
+int apron_index(ivec2 q, ivec2 origin) {
+    ivec2 l = q - origin;
+    return all(greaterThanEqual(l, ivec2(0))) && all(lessThan(l, ivec2(APRON))) ? l.y * APRON + l.x : -1;
+}
+
 void main() {
     float max_radius = u_d.stops.w;
-    int spacing = max(1, int(max_radius / 4.0 + 0.5));
-    find_occluded_tiles(4 * spacing);
+    sum_tiles(int(ceil(max_radius)));
+    vec2 tiles = s_tiles[0];
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
-    if (!hrt_in_viewport(pixel)) return;
-    vec3 p, n;
-    // z, w: the pixel's history, passed on to the temporal pass.
-    vec4 c = hrt_load_temp(0u, pixel);
-    if (!hrt_surface_at(imageLoad(u_gbuf_cur, pixel).xy, u_d.c.clip_to_world, u_d.eye.xyz, pixel, p, n)) {
-        hrt_store_temp(0u, pixel, vec4(1.0, 0.0, c.zw));
+    // No occluded sample within reach: the width would be unknown (radius 0) and the
+    // visibility passes unchanged. In a sunlit view most tiles end here.
+    if (tiles.y <= 0.0) {
+        if (!hrt_in_viewport(pixel)) return;
+        vec4 c = hrt_load_temp(0u, pixel);
+        hrt_store_temp(0u, pixel, vec4(c.x, 0.0, c.zw));
         return;
     }
-    // No occluded sample within reach: the search below would find no penumbra (radius 0),
-    // and the visibility passes unchanged. In a sunlit view most tiles end here.
-    if (s_near == 0u) {
-        hrt_store_temp(0u, pixel, vec4(c.x, 0.0, c.zw));
+    ivec2 origin = ivec2(gl_WorkGroupID.xy) * 8 + ivec2(u_d.c.viewport.xy) - 1;
+    load_apron(origin);
+    if (!hrt_in_viewport(pixel)) return;
+    int centre = apron_index(pixel, origin);
+    // z, w: the pixel's history, passed on to the temporal pass.
+    vec4 c = s_temp[centre];
+    HrtPixelRays rays = hrt_pixel_rays(u_d.c.clip_to_world);
+    vec3 p, n;
+    if (!hrt_surface_on(rays, uvec2(s_gbuf[centre], 0u), u_d.eye.xyz, pixel, p, n)) {
+        hrt_store_temp(0u, pixel, vec4(1.0, 0.0, c.zw));
         return;
     }
     float dist = distance(p, u_d.eye.xyz);
     float pixel_world = u_d.eye.w * dist;
 
-    float pen = 0.0, pen_w = 0.0, vis_min = c.x;
+    float pen = 0.0, pen_w = 0.0;
     if (c.y >= 0.0) { pen = c.y; pen_w = 1.0; }
-    // The search: three rings of 8 taps (3x3 without its centre) at 1, 2 and 4 spacings — 24
-    // taps where a 9x9 grid at the spacing took 80, as far out, and as dense next to the pixel,
-    // where the occluders that set its penumbra are. Unrolled, each tap's two fetches issued
-    // before its weight is known: a loop that waited on each tap in turn took 0.43 ms at 1440p.
-    HrtPixelRays rays = hrt_pixel_rays(u_d.c.clip_to_world);
-    [[unroll]] for (int i = 0; i < 24; ++i) {
-        int j = (i % 8) + ((i % 8) >= 4 ? 1 : 0); // 3x3 without its centre
-        int k = i / 8; // rings at 1, 2 and 4 spacings
-        ivec2 q = pixel + ivec2(j % 3 - 1, j / 3 - 1) * (spacing << (k == 2 ? 2 : k));
-        if (!hrt_in_viewport(q)) continue;
+    [[unroll]] for (int j = 0; j < 9; ++j) {
+        if (j == 4) continue;
+        ivec2 q = pixel + ivec2(j % 3 - 1, j / 3 - 1);
+        int k = centre + (j / 3 - 1) * APRON + (j % 3 - 1);
         vec3 q_p, q_n;
-        if (!hrt_surface_on(rays, imageLoad(u_gbuf_cur, q).xy, u_d.eye.xyz, q, q_p, q_n)) continue;
-        // Fetched before the weight decides: the taps' fetches then overlap.
-        vec4 t = hrt_load_temp(0u, q);
+        if (!hrt_surface_on(rays, uvec2(s_gbuf[k], 0u), u_d.eye.xyz, q, q_p, q_n)) continue;
+        float t = s_temp[k].y;
         float w = hrt_geometry_weight(p, n, dist, q_p, q_n);
-        if (w < 0.1) continue;
-        vis_min = min(vis_min, t.x);
-        if (t.y >= 0.0) { pen += w * t.y; pen_w += w; }
+        if (w >= 0.1 && t >= 0.0) { pen += w * t; pen_w += w; }
     }
-    float radius = pen_w > 0.0 ? min(0.5 * (pen / pen_w) / pixel_world, max_radius) : 0.0;
+    float width = (pen + TILE_WEIGHT * tiles.x / tiles.y) / (pen_w + TILE_WEIGHT);
+    float radius = min(0.5 * width / pixel_world, max_radius);
     // The temporal pass after this one averages up to max-history frames: as the pixel's
     // history grows, each frame needs less blur (the blur's own error, a flattened penumbra,
     // then stops dominating). Radius x sqrt(SHADOW_BLUR_FRAMES / length), down to a quarter.
+    // The length is the previous frame's at the nearest texel where the surface was, when it
+    // is the same surface.
     if (u_d.flags.z == 0u && radius >= 0.5) {
-        ivec2 taps[4];
-        vec4 w;
-        hrt_history_taps(hrt_previous_position(pixel, p), p, n, dist, taps, w);
-        float wsum = dot(w, vec4(1.0)), len = 0.0;
-        for (int i = 0; i < 4; ++i) if (w[i] > 0.0) len += w[i] * hrt_load_temp(0u, taps[i]).w;
-        if (wsum > 1e-3) radius *= clamp(sqrt(SHADOW_BLUR_FRAMES / max(len / wsum, 1.0)), 0.25, 1.0);
+        ivec2 was = ivec2(floor(hrt_previous_position(pixel, p)));
+        vec3 q_p, q_n;
+        if (hrt_in_viewport(was)
+            && hrt_surface_at(imageLoad(u_gbuf_prev, was).xy, u_d.prev_clip_to_world, u_d.prev_eye.xyz, was, q_p, q_n)
+            && abs(dot(n, q_p - p)) <= u_d.stops.z * dist && dot(n, q_n) >= 0.8) {
+            int k = apron_index(was, origin);
+            float len = k >= 0 ? s_temp[k].w : hrt_load_temp(0u, was).w;
+            radius *= clamp(sqrt(SHADOW_BLUR_FRAMES / max(len, 1.0)), 0.25, 1.0);
+        }
     }
-    if (vis_min >= 1.0 || radius < 0.5) {
+    if (radius < 0.5) {
         hrt_store_temp(0u, pixel, vec4(c.x, radius, c.zw));
         return;
     }
@@ -101,10 +137,12 @@ void main() {
         float a = float(i) * 2.39996323 + rotation;
         ivec2 q = pixel + ivec2(round(r * vec2(cos(a), sin(a))));
         if (q == pixel || !hrt_in_viewport(q)) continue;
+        int k = apron_index(q, origin);
         vec3 q_p, q_n;
-        if (!hrt_surface_at(imageLoad(u_gbuf_cur, q).xy, u_d.c.clip_to_world, u_d.eye.xyz, q, q_p, q_n)) continue;
+        uint g = k >= 0 ? s_gbuf[k] : imageLoad(u_gbuf_cur, q).x;
+        if (!hrt_surface_on(rays, uvec2(g, 0u), u_d.eye.xyz, q, q_p, q_n)) continue;
         float w = exp(-2.0 * (r * r) / (radius * radius)) * hrt_geometry_weight(p, n, dist, q_p, q_n);
-        sum += w * hrt_load_temp(0u, q).x;
+        sum += w * (k >= 0 ? s_temp[k].x : hrt_load_temp(0u, q).x);
         wsum += w;
     }
     hrt_store_temp(0u, pixel, vec4(sum / wsum, radius, c.zw));

@@ -918,10 +918,12 @@ fn every_setting_affects_the_denoisers_that_read_it() {
         let outs: Vec<HostImage> =
             (0..=changes.len()).map(|_| storage_image(&f.host, vk::Format::R32G32B32A32_SFLOAT, W, W)).collect();
         let contexts: Vec<DenoisingContextHandle> = (0..=changes.len()).map(|_| context(&f.ctx, signal, W, W)).collect();
+        // A wide sun (1 rad): penumbrae wide enough at 48x48 that the shadow blur crosses the
+        // sphere's curve, where normal_power acts.
         let sun = LightInfo {
             light_type: LightType::Directional,
             direction: Vec3::new(0.6, -0.6, -0.5),
-            angular_extent: 0.2,
+            angular_extent: 1.0,
             ..Default::default()
         };
         let common = f.images.trace_common(&camera);
