@@ -3,9 +3,7 @@
 // Shadow denoiser, pass 3: temporal stabilisation. The reprojected history (visibility,
 // length; the previous frame's, copied into the intermediate's z, w by the prep pass, so the
 // kept history is overwritten in place here) is clamped to the 3x3 range of this frame's blurred visibility, so a moving
-// shadow does not smear, then blended with weight 1 / length. The intermediate around the
-// workgroup is loaded into shared memory once: the 3x3 and, while the view holds still, the
-// history's taps read it there (about 1.6 fetches a pixel instead of up to 22).
+// shadow does not smear, then blended with weight 1 / length.
 #include "include/denoise.glsl"
 
 // Anti-lag thresholds (deviations) and the history kept past the soft one (frames).
@@ -13,25 +11,7 @@ const float ANTILAG_SIGMA = 4.0;
 const float ANTILAG_SOFT = 3.0;
 const float SOFT_FRAMES = 4.0;
 
-// The intermediate (blurred visibility, radius, history) around the workgroup, one texel of
-// border; texels outside the viewport are never read.
-const int APRON = 10;
-shared vec4 s_temp[APRON * APRON];
-
-// The intermediate at q: from the apron when q is inside it.
-vec4 temp_at(ivec2 q, ivec2 origin) {
-    ivec2 l = q - origin;
-    if (all(greaterThanEqual(l, ivec2(0))) && all(lessThan(l, ivec2(APRON)))) return s_temp[l.y * APRON + l.x];
-    return hrt_load_temp(0u, q);
-}
-
 void main() {
-    ivec2 origin = ivec2(gl_WorkGroupID.xy) * 8 + ivec2(u_d.c.viewport.xy) - 1;
-    for (int i = int(gl_LocalInvocationIndex); i < APRON * APRON; i += 64) {
-        ivec2 q = origin + ivec2(i % APRON, i / APRON);
-        if (hrt_in_viewport(q)) s_temp[i] = hrt_load_temp(0u, q);
-    }
-    barrier();
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
     if (!hrt_in_viewport(pixel)) return;
     vec3 p, n;
@@ -41,7 +21,7 @@ void main() {
         return;
     }
     float dist = distance(p, u_d.eye.xyz);
-    float v = temp_at(pixel, origin).x;
+    float v = hrt_load_temp(0u, pixel).x;
     vec2 hist = vec2(0.0);
     vec2 previous = hrt_previous_position(pixel, p);
     if (u_d.flags.z == 0u) {
@@ -50,7 +30,7 @@ void main() {
         hrt_history_taps(previous, p, n, dist, taps, w);
         float wsum = dot(w, vec4(1.0));
         if (wsum > 1e-3) {
-            for (int i = 0; i < 4; ++i) if (w[i] > 0.0) hist += w[i] * temp_at(taps[i], origin).zw;
+            for (int i = 0; i < 4; ++i) if (w[i] > 0.0) hist += w[i] * hrt_load_temp(0u, taps[i]).zw;
             hist /= wsum;
         }
     }
@@ -63,12 +43,12 @@ void main() {
         for (int dx = -1; dx <= 1; ++dx) {
             ivec2 q = pixel + ivec2(dx, dy);
             if (!hrt_in_viewport(q)) continue;
-            float t = temp_at(q, origin).x;
+            float t = hrt_load_temp(0u, q).x;
             lo = min(lo, t);
             hi = max(hi, t);
             ivec2 r = was + ivec2(dx, dy);
             if (!compare || !hrt_in_viewport(r)) continue;
-            vec2 hq = temp_at(r, origin).zw;
+            vec2 hq = hrt_load_temp(0u, r).zw;
             if (hq.y <= 0.0) continue;
             float hv = clamp(hq.x, 0.0, 1.0);
             sum += t;

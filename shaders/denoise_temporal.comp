@@ -27,19 +27,28 @@ const int ANTILAG_RADIUS = 2;
 const float FIREFLY_NEIGHBOUR_FACTOR = 8.0;
 
 // The anti-lag test's tile: this group's 8x8 pixels, each with this frame's luminance of each
-// signal, its fast history's (where that signal's history is read), and its surface — stored
-// by each pixel from the surface it decodes anyway. A pixel's footprint is the 5x5 window of
-// the tile nearest to it (centred where the group allows, shifted inwards at its border): the
-// same 25 samples as a centred window, up to 2 pixels off centre, for none of the 80 border
-// texels a centred window needs from outside the group (they cost as much as the rest of the
-// pass).
+// signal and its fast history's (where that signal's history is read), stored by each pixel.
+// A pixel's footprint is the 5x5 window of the tile nearest to it (centred where the group
+// allows, shifted inwards at its border): the same 25 samples as a centred window, up to 2
+// pixels off centre, for none of the 80 border texels a centred window needs from outside the
+// group. An 8x8 tile has only 16 such windows: their sums are made once per group, separably
+// (rows of 5, then columns of 5), and each pixel reads its window's — 25 taps a pixel with a
+// geometry test each cost a quarter of the pass. The window holds every surface pixel in it,
+// not only the pixel's own surface: both means the test compares cover the same pixels, so
+// another surface in the window changes neither unless its signal changed too (then the
+// pixel restarts with it — at a moving object's border, where its contact shadow changes).
 const int TILE = 8;
+const int SIDE = 2 * ANTILAG_RADIUS + 1;
+const int WINDOWS = TILE - SIDE + 1; // window corners per axis
 // Per signal: this frame's luminance and its fast history's (where that signal's history is
 // read: for reflections the reflected point, or the surface where that is off screen).
 shared float s_cur[2][TILE * TILE];
 shared float s_fast[2][TILE * TILE];
-shared vec4 s_pos[TILE * TILE];   // world position, w = 1 on a surface, 0 elsewhere
-shared vec3 s_nrm[TILE * TILE];
+shared float s_ok[TILE * TILE];   // 1 on a surface traced this frame whose history is on screen
+// Per signal: (sum, sum of squares, fast sum, pixels) of each row's 5-wide windows, then of
+// each 5x5 window.
+shared vec4 s_row_win[2][TILE * WINDOWS];
+shared vec4 s_win[2][WINDOWS * WINDOWS];
 // Diffuse GI's group-wide test (see below): per tile row, (sum, sum of squares, fast sum,
 // pixels) of the diffuse signal.
 shared vec4 s_rows[TILE];
@@ -69,8 +78,8 @@ vec2 specular_history_position(float roughness, ivec2 q, vec3 q_p, float q_dist,
     return hrt_previous_position(q, q_p);
 }
 
-// This pixel's texel of the anti-lag tile: the pixel q (its surface p, n when `surface`).
-void store_antilag_texel(ivec2 q, bool surface, vec3 q_p, vec3 q_n) {
+// This pixel's texel of the anti-lag tile: the pixel q (its surface point q_p when `surface`).
+void store_antilag_texel(ivec2 q, bool surface, vec3 q_p) {
     bool ok = surface && hrt_traced_now(q);
     vec2 prev_surface = hrt_previous_position(q, q_p);
     ok = ok && hrt_in_viewport(ivec2(floor(prev_surface)));
@@ -90,8 +99,36 @@ void store_antilag_texel(ivec2 q, bool surface, vec3 q_p, vec3 q_n) {
         s_cur[s][e] = cur;
         s_fast[s][e] = fast;
     }
-    s_pos[e] = vec4(q_p, ok ? 1.0 : 0.0);
-    s_nrm[e] = q_n;
+    s_ok[e] = ok ? 1.0 : 0.0;
+}
+
+// Sums the 5x5 windows of the tile into s_win (every invocation calls it: it has barriers).
+void sum_antilag_windows() {
+    uint me = gl_LocalInvocationIndex;
+    if (me < uint(TILE * WINDOWS)) {
+        int row = int(me) / WINDOWS, x0 = int(me) % WINDOWS;
+        [[unroll]] for (uint s = 0u; s < 2u; ++s) {
+            if (s >= HRT_SIGNALS) break;
+            vec4 sum = vec4(0.0);
+            [[unroll]] for (int dx = 0; dx < SIDE; ++dx) {
+                int e = row * TILE + x0 + dx;
+                float lq = s_cur[s][e];
+                sum += s_ok[e] * vec4(lq, lq * lq, s_fast[s][e], 1.0);
+            }
+            s_row_win[s][me] = sum;
+        }
+    }
+    barrier();
+    if (me < uint(WINDOWS * WINDOWS)) {
+        int y0 = int(me) / WINDOWS, x0 = int(me) % WINDOWS;
+        [[unroll]] for (uint s = 0u; s < 2u; ++s) {
+            if (s >= HRT_SIGNALS) break;
+            vec4 sum = vec4(0.0);
+            [[unroll]] for (int dy = 0; dy < SIDE; ++dy) sum += s_row_win[s][(y0 + dy) * WINDOWS + x0];
+            s_win[s][me] = sum;
+        }
+    }
+    barrier();
 }
 
 void main() {
@@ -104,8 +141,9 @@ void main() {
     bool surface = inside && hrt_engine_surface(pixel, p, n);
     vec4 group = vec4(0.0);
     if (antilag) {
-        store_antilag_texel(pixel, surface, p, n);
+        store_antilag_texel(pixel, surface, p);
         barrier();
+        sum_antilag_windows();
         // Diffuse GI also compares the whole group's mean with its fast history's: a light
         // switched on changes GI by less than its 1-ray noise over 25 pixels, but not over 64
         // (the group's surfaces differ, which only widens the spread the test allows). The
@@ -118,7 +156,7 @@ void main() {
                 for (int x = 0; x < TILE; ++x) {
                     int e = int(row) * TILE + x;
                     float lq = s_cur[diffuse_signal()][e];
-                    if (s_pos[e].w != 0.0) r += vec4(lq, lq * lq, s_fast[diffuse_signal()][e], 1.0);
+                    r += s_ok[e] * vec4(lq, lq * lq, s_fast[diffuse_signal()][e], 1.0);
                 }
                 s_rows[row] = r;
             }
@@ -180,9 +218,8 @@ void main() {
             fast /= wsum;
             len = fast.a;
         }
-        // Anti-lag (history confidence): this frame's samples on the same surface in the 5x5
-        // neighbourhood and the fast history estimate the same thing while the signal holds
-        // still. When their means differ by more than ANTILAG_SIGMA of their combined noise,
+        // Anti-lag (history confidence): this frame's samples in the 5x5 window and their
+        // fast histories estimate the same thing while the signal holds still. When their means differ by more than ANTILAG_SIGMA of their combined noise,
         // the signal changed under a history that the geometry tests kept (a moved object's
         // contact AO, a light switched on, an object that left a reflection): the pixel starts
         // over from this frame, and the spatial passes, seeing a short history, filter it wide.
@@ -191,24 +228,11 @@ void main() {
         // 1.4% — chance dark neighbourhoods restarted pixels dark; 25 samples and the history's
         // own variance keep it unbiased: +0.1..-0.3%.)
         if (antilag && s == 0u) {
-            // The same-surface pixels of the 5x5 window, from the group's tile — this frame's
-            // samples and their fast histories (each where its history is read) — summed once
-            // for both signals (the geometry test is the one cost); here, after the first
-            // signal's history fetches are issued, so their latency hides behind it.
-            const int SIDE = 2 * ANTILAG_RADIUS + 1;
-            ivec2 corner = clamp(ivec2(gl_LocalInvocationID.xy) - ANTILAG_RADIUS, ivec2(0), ivec2(TILE - SIDE));
-            [[unroll]] for (int dy = 0; dy < SIDE; ++dy) {
-                [[unroll]] for (int dx = 0; dx < SIDE; ++dx) {
-                    int e = (corner.y + dy) * TILE + corner.x + dx;
-                    // Geometry weight under 0.5 (its logarithm: one transcendental, not three).
-                    if (s_pos[e].w == 0.0 || hrt_geometry_log2_weight(p, n, dist, s_pos[e].xyz, s_nrm[e]) < -1.0) continue;
-                    [[unroll]] for (uint t = 0u; t < 2u; ++t) {
-                        if (t >= count) break;
-                        float lq = s_cur[t][e];
-                        fp[t] += vec4(lq, lq * lq, s_fast[t][e], 1.0);
-                    }
-                }
-            }
+            // This pixel's window of the tile (its sums made once per group, above).
+            ivec2 corner = clamp(ivec2(gl_LocalInvocationID.xy) - ANTILAG_RADIUS, ivec2(0), ivec2(WINDOWS - 1));
+            int win = corner.y * WINDOWS + corner.x;
+            fp[0] = s_win[0][win];
+            if (count > 1u) fp[1] = s_win[1][win];
         }
         if (len >= 2.0 && antilag) {
             vec4 f = s == 0u ? fp[0] : fp[1];
