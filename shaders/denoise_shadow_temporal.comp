@@ -10,6 +10,8 @@
 const float ANTILAG_SIGMA = 4.0;
 const float ANTILAG_SOFT = 3.0;
 const float SOFT_FRAMES = 4.0;
+// Mean change of the 3x3's visibility past which more than a column of it changed (see below).
+const float WHOLE_CHANGE = 0.4;
 
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
@@ -63,11 +65,18 @@ void main() {
     // visibilities the history holds there: their means agree within sqrt(sum h(1 - h)) / k
     // (less after the blur; both footprints have the same gradient, so a penumbra's slope
     // cancels). Past ANTILAG_SIGMA of that the shadow moved: the pixel keeps two frames of
-    // history; past ANTILAG_SOFT, at most SOFT_FRAMES. (A penumbra that moved away leaves
-    // mid-range histories the clamp below cannot catch: its box must be wide there.)
+    // history, or none where much of the 3x3 changed (a surface that went from lit to umbra
+    // or back: an occluder or a sun patch that moved on, an object that entered the scene);
+    // past ANTILAG_SOFT, at most SOFT_FRAMES. (A hard edge's 3x3 about where the pixel was
+    // differs from this frame's by a column whenever the view moves by part of a pixel:
+    // restarting on any change made a 0.03 rad sun's penumbrae 3x noisier. Two frames kept
+    // everywhere left a tenth of the old light for a dozen frames, 10x its 1-ray noise, in
+    // the sample's umbrae. A penumbra that moved away leaves mid-range histories the clamp
+    // below cannot catch: its box must be wide there.)
     if (k >= 3.0) {
-        float z = abs(sum - hsum) / k / (sqrt(hvar) / k + 0.02);
-        if (z > ANTILAG_SIGMA) prior = min(prior, 2.0);
+        float change = abs(sum - hsum);
+        float z = change / k / (sqrt(hvar) / k + 0.02);
+        if (z > ANTILAG_SIGMA) prior = change > WHOLE_CHANGE * k ? 0.0 : min(prior, 2.0);
         else if (z > ANTILAG_SOFT) prior = min(prior, SOFT_FRAMES);
     }
     float len = min(prior + 1.0, u_d.history.x);
