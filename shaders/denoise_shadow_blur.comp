@@ -12,7 +12,8 @@
 // pixel: the visibility passes unchanged. Otherwise 8 taps of a rotated golden-angle disk
 // (turned per pixel and per frame: the temporal pass after this one averages the turns),
 // Gaussian in the radius, with plane and normal stops. Workgroups with no occluded sample
-// within reach do nothing but copy.
+// within reach, and those deep in an umbra (no pixel within reach sees any light), do nothing
+// but copy.
 #include "include/denoise.glsl"
 
 // History length (frames) up to which the full penumbra-wide blur is kept.
@@ -22,8 +23,9 @@ const float SHADOW_BLUR_FRAMES = 1.0;
 // pixel beside a penumbra) the tiles do.
 const float TILE_WEIGHT = 0.5;
 
-// Per invocation, then summed: (sum of count x mean width, count) over the tiles in reach.
-shared vec2 s_tiles[64];
+// Per invocation, then summed: (sum of count x mean width, count, tiles where some pixel sees
+// light) over the tiles in reach.
+shared vec3 s_tiles[64];
 // The intermediate and the denoiser's G-buffer around the workgroup (one texel of border).
 const int APRON = 10;
 shared vec4 s_temp[APRON * APRON];
@@ -37,10 +39,11 @@ void sum_tiles(int reach) {
     ivec2 lo = max(group - reach, ivec2(0)) / 8;
     ivec2 hi = min(group + 7 + reach, ivec2(u_d.c.viewport.zw) - 1) / 8;
     ivec2 span = hi - lo + 1;
-    vec2 sum = vec2(0.0);
+    vec3 sum = vec3(0.0);
     for (int i = int(me); i < span.x * span.y; i += 64) {
         vec2 t = unpackHalf2x16(imageLoad(u_tiles, lo + ivec2(i % span.x, i / span.x)).x);
-        sum += vec2(t.x * t.y, t.y);
+        float count = abs(t.y);
+        sum += vec3(t.x * count, count, t.y >= 0.0 ? 1.0 : 0.0);
     }
     s_tiles[me] = sum;
     barrier();
@@ -70,11 +73,12 @@ int apron_index(ivec2 q, ivec2 origin) {
 void main() {
     float max_radius = u_d.stops.w;
     sum_tiles(int(ceil(max_radius)));
-    vec2 tiles = s_tiles[0];
+    vec3 tiles = s_tiles[0];
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
     // No occluded sample within reach: the width would be unknown (radius 0) and the
-    // visibility passes unchanged. In a sunlit view most tiles end here.
-    if (tiles.y <= 0.0) {
+    // visibility passes unchanged. In a sunlit view most tiles end here. No pixel within reach
+    // sees any light: every tap would read 0, and so does the pixel — an umbra's interior.
+    if (tiles.y <= 0.0 || tiles.z <= 0.0) {
         if (!hrt_in_viewport(pixel)) return;
         vec4 c = hrt_load_temp(0u, pixel);
         hrt_store_temp(0u, pixel, vec4(c.x, 0.0, c.zw));

@@ -5,7 +5,8 @@
 // width comes from the occluder distance and the light's size; multi-light: the trace task
 // computed it (packed G). Checkerboard: untraced pixels take their traced neighbours' mean.
 // Each 8x8 workgroup also summarises its tile for the blur: the mean penumbra width of its
-// occluded samples and how many it holds (0: none, so the blur skips tiles out of reach).
+// occluded samples, how many it holds (0: none, so the blur skips tiles out of reach), and
+// whether any of its pixels sees some of the light (none: the blur skips umbra interiors).
 #include "include/denoise.glsl"
 
 // (visibility, penumbra width or -1) of a traced texel at surface point p.
@@ -16,19 +17,20 @@ vec2 decode_shadow(ivec2 q, vec3 p) {
     return vec2(vis, v.r >= 0.0 ? hrt_penumbra_width(u_d.light, p, v.r) : -1.0);
 }
 
-// Per invocation (penumbra width, 1) where its pixel holds an occluded sample, then summed
-// over the workgroup (a tree in shared memory: no float atomics needed).
-shared vec2 s_sum[64];
+// Per invocation (penumbra width, 1, 0) where its pixel holds an occluded sample, z = 1 where
+// it sees some of the light; then summed over the workgroup (a tree in shared memory: no float
+// atomics needed).
+shared vec3 s_sum[64];
 
 // Decodes one pixel into the intermediate (with the pixel's history texel in z, w); returns
-// its penumbra width, or -1 where it holds no occluded sample.
-float prep(ivec2 pixel) {
+// (visibility, penumbra width or -1 where it holds no occluded sample).
+vec2 prep(ivec2 pixel) {
     vec3 p, n;
     vec2 history = hrt_load_shadow_history(pixel);
     if (!hrt_engine_surface(pixel, p, n)) {
         imageStore(u_gbuf_cur, pixel, uvec4(hrt_pack_surface(vec3(0.0, 0.0, 1.0), -1.0), 0u, 0u));
         hrt_store_temp(0u, pixel, vec4(1.0, -1.0, history));
-        return -1.0;
+        return vec2(1.0, -1.0);
     }
     float dist = distance(p, u_d.eye.xyz);
     imageStore(u_gbuf_cur, pixel, uvec4(hrt_pack_surface(n, dist), 0u, 0u));
@@ -50,23 +52,24 @@ float prep(ivec2 pixel) {
         result = vec2(vw > 0.0 ? vis / vw : 1.0, pw > 0.0 ? pen / pw : -1.0);
     }
     hrt_store_temp(0u, pixel, vec4(result, history));
-    return result.y;
+    return result;
 }
 
 void main() {
     uint me = gl_LocalInvocationIndex;
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
-    float width = hrt_in_viewport(pixel) ? prep(pixel) : -1.0;
-    s_sum[me] = width >= 0.0 ? vec2(min(width, 60000.0), 1.0) : vec2(0.0);
+    vec2 v = hrt_in_viewport(pixel) ? prep(pixel) : vec2(1.0, -1.0);
+    s_sum[me] = vec3(v.y >= 0.0 ? vec2(min(v.y, 60000.0), 1.0) : vec2(0.0), v.x > 0.0 ? 1.0 : 0.0);
     barrier();
     for (uint half_count = 32u; half_count > 0u; half_count >>= 1) {
         if (me < half_count) s_sum[me] += s_sum[me + half_count];
         barrier();
     }
-    // (mean width, count) as halves: 0 where the tile holds no occluded sample.
-    vec2 sum = s_sum[0];
+    // (mean width, count) as halves, the count negative where no pixel sees any light (pixels
+    // outside the viewport count as lit); 0 where the tile holds no occluded sample.
+    vec3 sum = s_sum[0];
     if (me == 0u) {
-        uint texel = sum.y > 0.0 ? packHalf2x16(vec2(sum.x / sum.y, sum.y)) : 0u;
+        uint texel = sum.y > 0.0 ? packHalf2x16(vec2(sum.x / sum.y, sum.z > 0.0 ? sum.y : -sum.y)) : 0u;
         imageStore(u_tiles, ivec2(gl_WorkGroupID.xy), uvec4(texel));
     }
 }

@@ -66,8 +66,9 @@ layout(set = 0, binding = 22, std140) uniform DenoiseConstants {
 layout(set = 0, binding = 23) uniform sampler2D u_input_mask;
 // One texel per 8x8 tile of the viewport (a workgroup of the shadow passes): the mean
 // penumbra width (world units) of the tile's occluded shadow samples and their count, as two
-// halves; 0 where the tile holds none. Written by the shadow prep pass, read by the blur
-// (radiance passes bind it and ignore it).
+// halves (the count negative where none of the tile's pixels sees any light); 0 where the tile
+// holds no occluded sample. Written by the shadow prep pass, read by the blur (radiance passes
+// bind it and ignore it).
 layout(set = 0, binding = 24, r32ui) uniform uimage2D u_tiles;
 // The shadow denoiser's history, kept single: (visibility, history length) as two halves. The
 // prep pass copies each pixel's texel into the intermediates (their z, w), where the later
