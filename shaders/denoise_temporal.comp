@@ -68,36 +68,14 @@ bool reflected_point_position(vec3 q_p, float q_dist, float hit_dist, out vec2 p
     return clip.w > 0.0;
 }
 
-// Where a specular signal's history of the surface q_p was, as the history itself is read:
-// for smooth surfaces the reflected point's position, else (or where that is off screen or at
-// infinity — the sky, whose hit distance is unbounded) the surface's own.
-vec2 specular_history_position(float roughness, ivec2 q, vec3 q_p, float q_dist, float hit_dist) {
-    vec2 pos;
-    if (roughness < 0.5 && reflected_point_position(q_p, q_dist, hit_dist, pos)
-        && all(lessThan(abs(pos), vec2(1e7))) && hrt_in_viewport(ivec2(floor(pos)))) return pos;
-    return hrt_previous_position(q, q_p);
-}
-
-// This pixel's texel of the anti-lag tile: the pixel q (its surface point q_p when `surface`).
-void store_antilag_texel(ivec2 q, bool surface, vec3 q_p) {
-    bool ok = surface && hrt_traced_now(q);
-    vec2 prev_surface = hrt_previous_position(q, q_p);
-    ok = ok && hrt_in_viewport(ivec2(floor(prev_surface)));
+// This pixel's texel of the anti-lag tile: this frame's sample (luminance) of each signal and
+// its fast history's, where the pixel is a surface traced this frame with a history (`ok`).
+void store_antilag_texel(bool ok, float cur[2], float fast[2]) {
     uint e = gl_LocalInvocationIndex;
     [[unroll]] for (uint s = 0u; s < 2u; ++s) {
         if (s >= HRT_SIGNALS) break;
-        float cur = 0.0, fast = 0.0;
-        if (ok) {
-            vec4 v = hrt_as_signal(hrt_kind(s), hrt_load_input(s, q));
-            vec2 prev = prev_surface;
-            if (hrt_kind(s) == HRT_SIGNAL_SPECULAR) {
-                prev = specular_history_position(hrt_denoise_roughness(q), q, q_p, distance(q_p, u_d.eye.xyz), v.a);
-            }
-            cur = hrt_luminance(v.rgb);
-            fast = hrt_luminance(hrt_load_fast_prev(s, ivec2(floor(prev))).rgb);
-        }
-        s_cur[s][e] = cur;
-        s_fast[s][e] = fast;
+        s_cur[s][e] = ok ? cur[s] : 0.0;
+        s_fast[s][e] = ok ? fast[s] : 0.0;
     }
     s_ok[e] = ok ? 1.0 : 0.0;
 }
@@ -135,13 +113,69 @@ void main() {
     // DenoiserSettings::anti_lag (kinds.w); the history is reset anyway when flags.z is set.
     // Uniform over the dispatch, so every invocation reaches the barrier before any returns.
     bool antilag = u_d.kinds.w != 0u && u_d.flags.z == 0u;
+    bool reset = u_d.flags.z != 0u;
+    uint count = HRT_SIGNALS;
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
     bool inside = hrt_in_viewport(pixel);
     vec3 p = vec3(0.0), n = vec3(0.0, 0.0, 1.0);
     bool surface = inside && hrt_engine_surface(pixel, p, n);
+    float dist = distance(p, u_d.eye.xyz);
+    float roughness = surface ? hrt_denoise_roughness(pixel) : 1.0;
+
+    // Each signal's sample and its reprojected histories, read before the anti-lag tile's
+    // barrier: the tile holds their luminances (a pixel's history where the pixel reads it),
+    // and their fetches' latency hides behind the barrier.
+    vec4 cur[2], hist[2], fast[2];
+    float lum_cur[2], lum_fast[2];
+    bool found[2];
+    if (surface) {
+        ivec2 taps[4];
+        vec4 weights = vec4(0.0);
+        if (!reset) hrt_history_taps(hrt_previous_position(pixel, p), p, n, dist, taps, weights);
+        [[unroll]] for (uint s = 0u; s < 2u; ++s) {
+            cur[s] = hist[s] = fast[s] = vec4(0.0);
+            lum_cur[s] = lum_fast[s] = 0.0;
+            found[s] = false;
+            if (s >= count) break;
+            uint kind = hrt_kind(s);
+            cur[s] = hrt_as_signal(kind, hrt_noisy_sample(s, pixel, p, n, dist));
+            ivec2 t[4] = taps;
+            vec4 w = weights;
+            if (kind == HRT_SIGNAL_SPECULAR && !reset && roughness < 0.5) {
+                // Virtual motion: the reflection moves with the reflected point.
+                vec2 pos;
+                if (reflected_point_position(p, dist, cur[s].a, pos)) {
+                    ivec2 vt[4];
+                    vec4 vw;
+                    hrt_history_taps(pos, p, n, dist, vt, vw);
+                    if (dot(vw, vec4(1.0)) > 0.5) { t = vt; w = vw; }
+                }
+            }
+            float wsum = dot(w, vec4(1.0));
+            if (wsum > 1e-3) {
+                for (int i = 0; i < 4; ++i) {
+                    if (w[i] <= 0.0) continue;
+                    hist[s] += w[i] * hrt_load_hist_prev(s, t[i]);
+                    fast[s] += w[i] * hrt_load_fast_prev(s, t[i]);
+                }
+                hist[s] /= wsum;
+                fast[s] /= wsum;
+                found[s] = true;
+            }
+            lum_cur[s] = hrt_luminance(cur[s].rgb);
+            lum_fast[s] = hrt_luminance(fast[s].rgb);
+        }
+    } else {
+        [[unroll]] for (uint s = 0u; s < 2u; ++s) {
+            cur[s] = hist[s] = fast[s] = vec4(0.0);
+            lum_cur[s] = lum_fast[s] = 0.0;
+            found[s] = false;
+        }
+    }
+
     vec4 group = vec4(0.0);
     if (antilag) {
-        store_antilag_texel(pixel, surface, p);
+        store_antilag_texel(surface && hrt_traced_now(pixel) && found[0] && (count < 2u || found[1]), lum_cur, lum_fast);
         barrier();
         sum_antilag_windows();
         // Diffuse GI also compares the whole group's mean with its fast history's: a light
@@ -166,7 +200,6 @@ void main() {
     }
     if (!inside) return;
 
-    uint count = HRT_SIGNALS;
     if (!surface) {
         imageStore(u_gbuf_cur, pixel, uvec4(hrt_pack_surface(vec3(0.0, 0.0, 1.0), -1.0), 0u, 0u));
         for (uint s = 0u; s < count; ++s) {
@@ -175,13 +208,7 @@ void main() {
         }
         return;
     }
-    float dist = distance(p, u_d.eye.xyz);
     imageStore(u_gbuf_cur, pixel, uvec4(hrt_pack_surface(n, dist), 0u, 0u));
-    bool reset = u_d.flags.z != 0u;
-    ivec2 taps[4];
-    vec4 weights = vec4(0.0);
-    if (!reset) hrt_history_taps(hrt_previous_position(pixel, p), p, n, dist, taps, weights);
-    float roughness = hrt_denoise_roughness(pixel);
 
     // The anti-lag test's footprint (see below), per signal: sum, sum of squares, fast sum,
     // pixels.
@@ -189,40 +216,17 @@ void main() {
     fp[0] = vec4(0.0);
     fp[1] = vec4(0.0);
 
-    for (uint s = 0u; s < count; ++s) {
+    [[unroll]] for (uint s = 0u; s < 2u; ++s) {
+        if (s >= count) break;
         uint kind = hrt_kind(s);
-        vec4 cur = hrt_as_signal(kind, hrt_noisy_sample(s, pixel, p, n, dist));
         bool specular = kind == HRT_SIGNAL_SPECULAR;
-        ivec2 t[4] = taps;
-        vec4 w = weights;
-        if (specular && !reset && roughness < 0.5) {
-            // Virtual motion: the reflection moves with the reflected point.
-            vec2 pos;
-            if (reflected_point_position(p, dist, cur.a, pos)) {
-                ivec2 vt[4];
-                vec4 vw;
-                hrt_history_taps(pos, p, n, dist, vt, vw);
-                if (dot(vw, vec4(1.0)) > 0.5) { t = vt; w = vw; }
-            }
-        }
-        float wsum = dot(w, vec4(1.0));
-        vec4 hist = vec4(0.0), fast = vec4(0.0);
-        float len = 0.0;
-        if (wsum > 1e-3) {
-            for (int i = 0; i < 4; ++i) {
-                if (w[i] <= 0.0) continue;
-                hist += w[i] * hrt_load_hist_prev(s, t[i]);
-                fast += w[i] * hrt_load_fast_prev(s, t[i]);
-            }
-            hist /= wsum;
-            fast /= wsum;
-            len = fast.a;
-        }
+        float len = found[s] ? fast[s].a : 0.0;
         // Anti-lag (history confidence): this frame's samples in the 5x5 window and their
-        // fast histories estimate the same thing while the signal holds still. When their means differ by more than ANTILAG_SIGMA of their combined noise,
-        // the signal changed under a history that the geometry tests kept (a moved object's
-        // contact AO, a light switched on, an object that left a reflection): the pixel starts
-        // over from this frame, and the spatial passes, seeing a short history, filter it wide.
+        // fast histories estimate the same thing while the signal holds still. When their
+        // means differ by more than ANTILAG_SIGMA of their combined noise, the signal changed
+        // under a history that the geometry tests kept (a moved object's contact AO, a light
+        // switched on, an object that left a reflection): the pixel starts over from this
+        // frame, and the spatial passes, seeing a short history, filter it wide.
         // Every signal, each against its own history where it reads it (reflections: where the
         // reflected point was). (A 3x3 test with this frame's spread alone biased 1-ray GI by
         // 1.4% — chance dark neighbourhoods restarted pixels dark; 25 samples and the history's
@@ -243,8 +247,8 @@ void main() {
                 // history (slow moments) when larger — nine 1-ray samples of a two-valued
                 // signal (miss or hit) are often all alike, and a spread of 0 would call any
                 // difference a change.
-                float lh = hrt_luminance(hist.rgb);
-                float var = max(max(sum2 / k - m * m, 0.0), max(hist.a - lh * lh, 0.0));
+                float lh = hrt_luminance(hist[s].rgb);
+                float var = max(max(sum2 / k - m * m, 0.0), max(hist[s].a - lh * lh, 0.0));
                 // Both means cover the same k pixels: this frame's (k samples) and the fast
                 // history's (k x its frames).
                 float sigma = sqrt(var / k * (1.0 + 1.0 / min(len, u_d.history.y))) + 0.02 * max(m, mf) + 1e-3;
@@ -254,7 +258,7 @@ void main() {
                 float z = abs(m - mf) / sigma - (specular ? SPECULAR_EXTRA : 0.0);
                 if (has_diffuse() && s == diffuse_signal() && group.w >= 16.0) {
                     float gm = group.x / group.w, gf = group.z / group.w;
-                    float gvar = max(max(group.y / group.w - gm * gm, 0.0), max(hist.a - lh * lh, 0.0));
+                    float gvar = max(max(group.y / group.w - gm * gm, 0.0), max(hist[s].a - lh * lh, 0.0));
                     float gsigma = sqrt(gvar / group.w * (1.0 + 1.0 / min(len, u_d.history.y))) + 0.02 * max(gm, gf) + 1e-3;
                     z = max(z, abs(gm - gf) / gsigma);
                 }
@@ -273,11 +277,11 @@ void main() {
         if (u_d.flags.w != 0u && kind != HRT_SIGNAL_SCALAR && !(specular && roughness < 0.05)) {
             float limit;
             if (len >= 4.0) {
-                float m1 = hrt_luminance(hist.rgb);
+                float m1 = hrt_luminance(hist[s].rgb);
                 // A few frames' variance is often near 0 for a signal of a few discrete values
                 // (sky or wall): the deviation never counts below the mean itself, so a
                 // sample must also be (1 + FIREFLY_SIGMA) times the mean to be cut.
-                limit = m1 + FIREFLY_SIGMA * max(sqrt(max(hist.a - m1 * m1, 0.0)), m1) + 1e-4;
+                limit = m1 + FIREFLY_SIGMA * max(sqrt(max(hist[s].a - m1 * m1, 0.0)), m1) + 1e-4;
             } else {
                 float lmax = -1.0;
                 for (int dy = -1; dy <= 1; ++dy) {
@@ -289,8 +293,8 @@ void main() {
                 }
                 limit = lmax >= 0.0 ? FIREFLY_NEIGHBOUR_FACTOR * lmax : 1e30;
             }
-            float l = hrt_luminance(cur.rgb);
-            if (l > limit) cur.rgb *= limit / l;
+            float l = hrt_luminance(cur[s].rgb);
+            if (l > limit) cur[s].rgb *= limit / l;
         }
         // Smoother specular accumulates fewer frames (its signal changes with the view); a
         // mirror keeps only this frame.
@@ -299,8 +303,8 @@ void main() {
         len = min(floor(len + 0.5) + 1.0, max_len);
         float a = 1.0 / len;
         float a_fast = max(a, 1.0 / u_d.history.y);
-        float l = hrt_luminance(cur.rgb);
-        hrt_store_temp(s, pixel, vec4(mix(hist.rgb, cur.rgb, a), mix(hist.a, l * l, a)));
-        hrt_store_fast_cur(s, pixel, vec4(mix(fast.rgb, cur.rgb, a_fast), len));
+        float l = hrt_luminance(cur[s].rgb);
+        hrt_store_temp(s, pixel, vec4(mix(hist[s].rgb, cur[s].rgb, a), mix(hist[s].a, l * l, a)));
+        hrt_store_fast_cur(s, pixel, vec4(mix(fast[s].rgb, cur[s].rgb, a_fast), len));
     }
 }
