@@ -24,7 +24,7 @@
 
 // Radius of the first pass's disk, in pixels, for a pixel without history.
 const float BLUR_RADIUS = 16.0;
-// Taps a disk: 6 for AO alone (its blur passes were over the frame's budget on screens of
+// Taps per disk: 6 for AO alone (its blur passes were over the frame's budget on screens of
 // surfaces: 19 fetches a pixel a pass with 8 taps, 15 with 6; the quality program's AO error
 // 0.044 -> 0.047 at 8 frames, 0.021 -> 0.022 at 32), 8 for radiance.
 const int TAPS = (HRT_SIGNALS == 1u && HRT_KIND0 == HRT_SIGNAL_SCALAR) ? 6 : 8;
