@@ -1,6 +1,5 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-#extension GL_EXT_control_flow_attributes : require
 // Shadow denoiser, pass 3: temporal stabilisation. The reprojected history (visibility,
 // length; the previous frame's, copied into the intermediate's z, w by the prep pass, so the
 // kept history is overwritten in place here) is clamped to the 3x3 range of this frame's blurred visibility, so a moving
@@ -24,40 +23,41 @@ void main() {
         return;
     }
     float dist = distance(p, u_d.eye.xyz);
-    vec2 previous = hrt_previous_position(pixel, p);
-    ivec2 was = ivec2(floor(previous));
-    bool reprojected = u_d.flags.z == 0u;
-    ivec2 taps[4] = ivec2[4](ivec2(-1), ivec2(-1), ivec2(-1), ivec2(-1));
-    vec4 w = vec4(0.0);
-    if (reprojected) hrt_history_taps(previous, p, n, dist, taps, w);
-    // The history's 3x3 about where the pixel was (nearest texels: the anti-lag test below
-    // compares means, not pixels). The bilinear taps are four of its texels (floor(previous -
-    // 0.5) is was - 1 or was on each axis): one fetch serves both.
-    vec2 hq[9];
+    float v = hrt_load_temp(0u, pixel).x;
     vec2 hist = vec2(0.0);
-    [[unroll]] for (int j = 0; j < 9; ++j) {
-        ivec2 r = was + ivec2(j % 3 - 1, j / 3 - 1);
-        hq[j] = reprojected && hrt_in_viewport(r) ? hrt_load_temp(0u, r).zw : vec2(0.0);
-        [[unroll]] for (int i = 0; i < 4; ++i) if (taps[i] == r) hist += w[i] * hq[j];
+    vec2 previous = hrt_previous_position(pixel, p);
+    if (u_d.flags.z == 0u) {
+        ivec2 taps[4];
+        vec4 w;
+        hrt_history_taps(previous, p, n, dist, taps, w);
+        float wsum = dot(w, vec4(1.0));
+        if (wsum > 1e-3) {
+            for (int i = 0; i < 4; ++i) if (w[i] > 0.0) hist += w[i] * hrt_load_temp(0u, taps[i]).zw;
+            hist /= wsum;
+        }
     }
-    float wsum = dot(w, vec4(1.0));
-    hist = wsum > 1e-3 ? hist / wsum : vec2(0.0);
-    // This frame's 3x3: its range for the clamp, its mean for anti-lag.
-    float v = 0.0, lo = 1e30, hi = -1e30, sum = 0.0, hsum = 0.0, hvar = 0.0, k = 0.0;
-    bool compare = reprojected && hist.y > 0.0;
-    [[unroll]] for (int j = 0; j < 9; ++j) {
-        ivec2 q = pixel + ivec2(j % 3 - 1, j / 3 - 1);
-        if (!hrt_in_viewport(q)) continue;
-        float t = hrt_load_temp(0u, q).x;
-        if (j == 4) v = t;
-        lo = min(lo, t);
-        hi = max(hi, t);
-        if (!compare || hq[j].y <= 0.0) continue;
-        float hv = clamp(hq[j].x, 0.0, 1.0);
-        sum += t;
-        hsum += hv;
-        hvar += hv * (1.0 - hv);
-        k += 1.0;
+    // This frame's 3x3 (its range for the clamp, its mean for anti-lag) and the history's
+    // 3x3 about where the pixel was (nearest texels: the test compares means, not pixels).
+    float lo = v, hi = v, sum = 0.0, hsum = 0.0, hvar = 0.0, k = 0.0;
+    ivec2 was = ivec2(floor(previous));
+    bool compare = u_d.flags.z == 0u && hist.y > 0.0;
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            ivec2 q = pixel + ivec2(dx, dy);
+            if (!hrt_in_viewport(q)) continue;
+            float t = hrt_load_temp(0u, q).x;
+            lo = min(lo, t);
+            hi = max(hi, t);
+            ivec2 r = was + ivec2(dx, dy);
+            if (!compare || !hrt_in_viewport(r)) continue;
+            vec2 hq = hrt_load_temp(0u, r).zw;
+            if (hq.y <= 0.0) continue;
+            float hv = clamp(hq.x, 0.0, 1.0);
+            sum += t;
+            hsum += hv;
+            hvar += hv * (1.0 - hv);
+            k += 1.0;
+        }
     }
     float h = clamp(hist.x, 0.0, 1.0);
     float prior = floor(hist.y + 0.5);
