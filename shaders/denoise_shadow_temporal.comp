@@ -23,7 +23,6 @@ void main() {
         return;
     }
     float dist = distance(p, u_d.eye.xyz);
-    float v = hrt_load_temp(0u, pixel).x;
     vec2 hist = vec2(0.0);
     vec2 previous = hrt_previous_position(pixel, p);
     if (u_d.flags.z == 0u) {
@@ -38,7 +37,8 @@ void main() {
     }
     // This frame's 3x3 (its range for the clamp, its mean for anti-lag) and the history's
     // 3x3 about where the pixel was (nearest texels: the test compares means, not pixels).
-    float lo = v, hi = v, sum = 0.0, hsum = 0.0, hvar = 0.0, k = 0.0;
+    // (The pixel's own visibility comes out of it: one fetch fewer.)
+    float v = 0.0, lo = 1e30, hi = -1e30, sum = 0.0, hsum = 0.0, hvar = 0.0, k = 0.0;
     ivec2 was = ivec2(floor(previous));
     bool compare = u_d.flags.z == 0u && hist.y > 0.0;
     for (int dy = -1; dy <= 1; ++dy) {
@@ -46,6 +46,7 @@ void main() {
             ivec2 q = pixel + ivec2(dx, dy);
             if (!hrt_in_viewport(q)) continue;
             float t = hrt_load_temp(0u, q).x;
+            if (dx == 0 && dy == 0) v = t;
             lo = min(lo, t);
             hi = max(hi, t);
             ivec2 r = was + ivec2(dx, dy);
