@@ -144,10 +144,13 @@ fn check_composite(out: &Path) {
 fn check_denoisers_smooth(out: &Path) {
     // The denoisers smooth what they are given: neighbour differences of each denoised signal
     // are a fraction of the 1-ray input's. Shadows at this size are mostly hard edges, which
-    // a denoiser must keep, so only their penumbra noise can go: a looser bound.
+    // a denoiser must keep, so only their penumbra noise can go: a looser bound. (The shadow
+    // denoiser restarts pixels whose 3x3 changed for the most part — no old light lingers in
+    // an umbra — and with the camera moving every frame at 128x72 those pixels carry a frame
+    // or two of 1-ray noise: 0.82 of the input's differences, 0.80 without restarts.)
     for (noisy, clean, ratio) in [
         ("ao_noisy", "ao", 0.5),
-        ("point_shadow_noisy", "point_shadow", 0.8),
+        ("point_shadow_noisy", "point_shadow", 0.85),
         ("diffuse_noisy", "diffuse", 0.5),
         ("specular_noisy", "specular", 0.5),
     ] {
