@@ -120,10 +120,7 @@ void main() {
     // is the same surface.
     if (u_d.flags.z == 0u && radius >= 0.5) {
         ivec2 was = ivec2(floor(hrt_previous_position(pixel, p)));
-        vec3 q_p, q_n;
-        if (hrt_in_viewport(was)
-            && hrt_surface_at(imageLoad(u_gbuf_prev, was).xy, u_d.prev_clip_to_world, u_d.prev_eye.xyz, was, q_p, q_n)
-            && abs(dot(n, q_p - p)) <= u_d.stops.z * dist && dot(n, q_n) >= 0.8) {
+        if (hrt_in_viewport(was) && hrt_was_same_surface(was, p, n, dist)) {
             int k = apron_index(was, origin);
             float len = k >= 0 ? s_temp[k].w : hrt_load_temp(0u, was).w;
             radius *= clamp(sqrt(SHADOW_BLUR_FRAMES / max(len, 1.0)), 0.25, 1.0);

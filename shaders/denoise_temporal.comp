@@ -210,11 +210,10 @@ void main() {
     }
     imageStore(u_gbuf_cur, pixel, uvec4(hrt_pack_surface(n, dist), 0u, 0u));
 
-    // The anti-lag test's footprint (see below), per signal: sum, sum of squares, fast sum,
-    // pixels.
-    vec4 fp[2];
-    fp[0] = vec4(0.0);
-    fp[1] = vec4(0.0);
+    // The anti-lag test's footprint (see below): this pixel's 5x5 window of the tile, whose
+    // sums (sum, sum of squares, fast sum, pixels) were made once per group.
+    ivec2 corner = clamp(ivec2(gl_LocalInvocationID.xy) - ANTILAG_RADIUS, ivec2(0), ivec2(WINDOWS - 1));
+    int win = corner.y * WINDOWS + corner.x;
 
     [[unroll]] for (uint s = 0u; s < 2u; ++s) {
         if (s >= count) break;
@@ -231,15 +230,8 @@ void main() {
         // reflected point was). (A 3x3 test with this frame's spread alone biased 1-ray GI by
         // 1.4% — chance dark neighbourhoods restarted pixels dark; 25 samples and the history's
         // own variance keep it unbiased: +0.1..-0.3%.)
-        if (antilag && s == 0u) {
-            // This pixel's window of the tile (its sums made once per group, above).
-            ivec2 corner = clamp(ivec2(gl_LocalInvocationID.xy) - ANTILAG_RADIUS, ivec2(0), ivec2(WINDOWS - 1));
-            int win = corner.y * WINDOWS + corner.x;
-            fp[0] = s_win[0][win];
-            if (count > 1u) fp[1] = s_win[1][win];
-        }
         if (len >= 2.0 && antilag) {
-            vec4 f = s == 0u ? fp[0] : fp[1];
+            vec4 f = s_win[s][win];
             float sum = f.x, sum2 = f.y, fsum = f.z, k = f.w;
             if (k >= 3.0) {
                 float m = sum / k, mf = fsum / k;

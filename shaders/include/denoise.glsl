@@ -228,6 +228,15 @@ vec2 hrt_previous_position(ivec2 pixel, vec3 p) {
     return (ndc * 0.5 + 0.5) * u_d.c.viewport.zw + u_d.c.viewport.xy;
 }
 
+// Whether the previous frame's texel q (in the viewport) showed the surface (p, n) seen at
+// distance `dist`: not background, not another surface (off the plane) or orientation
+// (disocclusion).
+bool hrt_was_same_surface(ivec2 q, vec3 p, vec3 n, float dist) {
+    vec3 q_p, q_n;
+    if (!hrt_surface_at(imageLoad(u_gbuf_prev, q).xy, u_d.prev_clip_to_world, u_d.prev_eye.xyz, q, q_p, q_n)) return false;
+    return abs(dot(n, q_p - p)) <= u_d.stops.z * dist && dot(n, q_n) >= 0.8;
+}
+
 // Bilinear taps of the previous frame around `prev_pos` that show the same surface as (p, n):
 // weights are zero for taps off screen, on background or on another surface (disocclusion).
 void hrt_history_taps(vec2 prev_pos, vec3 p, vec3 n, float dist, out ivec2 taps[4], out vec4 weights) {
@@ -239,12 +248,7 @@ void hrt_history_taps(vec2 prev_pos, vec3 p, vec3 n, float dist, out ivec2 taps[
     for (int i = 0; i < 4; ++i) {
         weights[i] = 0.0;
         if (!hrt_in_viewport(taps[i]) || bilinear[i] <= 0.0) continue;
-        vec3 q_p, q_n;
-        if (!hrt_surface_at(imageLoad(u_gbuf_prev, taps[i]).xy, u_d.prev_clip_to_world, u_d.prev_eye.xyz, taps[i], q_p, q_n)) continue;
-        float plane = abs(dot(n, q_p - p)) / dist;
-        // Disocclusion: another surface (off the plane) or a different orientation.
-        if (plane > u_d.stops.z || dot(n, q_n) < 0.8) continue;
-        weights[i] = bilinear[i];
+        if (hrt_was_same_surface(taps[i], p, n, dist)) weights[i] = bilinear[i];
     }
 }
 
