@@ -1023,6 +1023,10 @@ int main(void) {
     inject.viewport = ao.common.viewport;
     inject.camera = camera;
     inject.average_window = 1.0f;
+    /* One pixel of every NxN block per frame (1..=16; 1, the default, injects every pixel). */
+    inject.injection_resolution_stride = 0;
+    EXPECT(hrt_schedule_direct_lighting_injection(frame, &inject) == HRT_ERROR_INVALID_INPUT, "injection stride 0");
+    inject.injection_resolution_stride = 1;
     CHECK_HRT(hrt_schedule_direct_lighting_injection(frame, &inject));
     HrtTraceAmbientOcclusionTask debug_view = ao;
     debug_view.common.debug_output = HRT_DEBUG_DIRECT_LIGHTING_CACHE;

@@ -384,6 +384,11 @@ typedef struct HrtDirectLightingInjectionTask {
    */
   float average_window;
   /**
+   * Inject one pixel of every stride x stride block, a different one each frame (1..=16).
+   * Default 1: every pixel.
+   */
+  uint32_t injection_resolution_stride;
+  /**
    * Default false (injection always uses the ray-tracing pipeline).
    */
   bool use_inline_rt;

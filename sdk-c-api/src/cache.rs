@@ -47,6 +47,9 @@ pub struct HrtDirectLightingInjectionTask {
     pub camera: HrtCamera,
     /// Frames of the running average, >= 1. Default 200.
     pub average_window: f32,
+    /// Inject one pixel of every stride x stride block, a different one each frame (1..=16).
+    /// Default 1: every pixel.
+    pub injection_resolution_stride: u32,
     /// Default false (injection always uses the ray-tracing pipeline).
     pub use_inline_rt: bool,
 }
@@ -112,6 +115,7 @@ fn injection_task(t: &HrtDirectLightingInjectionTask) -> Result<rt::DirectLighti
         viewport: viewport(&t.viewport),
         camera: camera(&t.camera),
         average_window: t.average_window,
+        injection_resolution_stride: t.injection_resolution_stride,
         use_inline_rt: t.use_inline_rt,
     })
 }
@@ -126,6 +130,7 @@ pub extern "C" fn hrt_direct_lighting_injection_task_default() -> HrtDirectLight
         viewport: c.viewport,
         camera: c.camera,
         average_window: d.average_window,
+        injection_resolution_stride: d.injection_resolution_stride,
         use_inline_rt: d.use_inline_rt,
     }
 }

@@ -69,14 +69,11 @@ impl World {
     }
 
     fn inject(&mut self, images: &GBufferImages, lit: &HostImage, camera: &Camera, average_window: f32) {
-        let task = DirectLightingInjectionTask {
-            depth: DepthInput { image: images.depth.input(READ), depth_type: DepthType::ClipSpace },
-            lit: lit.input(READ),
-            viewport: Viewport::full(W, H),
-            camera: camera.sdk_camera(W, H),
-            average_window,
-            ..Default::default()
-        };
+        self.inject_strided(images, lit, camera, average_window, 1);
+    }
+
+    fn inject_strided(&mut self, images: &GBufferImages, lit: &HostImage, camera: &Camera, average_window: f32, stride: u32) {
+        let task = injection(images, lit, camera, average_window, stride);
         self.frame.schedule_direct_lighting_injection(&task).unwrap();
         let done = run_frame(&self.host, &self.ctx, &mut self.frame).unwrap();
         assert!(done.timings.iter().any(|t| t.kind == hybrid_rt::TaskKind::DirectLightingInjection));
@@ -97,6 +94,24 @@ impl World {
         self.gpu_scene.destroy(&self.host);
         drop(self.ctx);
         assert_no_validation_errors();
+    }
+}
+
+fn injection(
+    images: &GBufferImages,
+    lit: &HostImage,
+    camera: &Camera,
+    average_window: f32,
+    stride: u32,
+) -> DirectLightingInjectionTask {
+    DirectLightingInjectionTask {
+        depth: DepthInput { image: images.depth.input(READ), depth_type: DepthType::ClipSpace },
+        lit: lit.input(READ),
+        viewport: Viewport::full(W, H),
+        camera: camera.sdk_camera(W, H),
+        average_window,
+        injection_resolution_stride: stride,
+        ..Default::default()
     }
 }
 
@@ -165,6 +180,39 @@ fn injected_pattern_comes_back_from_the_cache() {
         assert!(mean < 0.03, "{surfel_type:?}: mean error {mean}");
         w.finish(vec![images], vec![lit]);
     }
+}
+
+/// An injection stride of 4 feeds one pixel of every 4x4 block a frame: with samples closer
+/// than 4 pixels some get nothing in the first frame, and the moving offset reaches them all
+/// within 16 frames, as accurately as injecting every pixel.
+#[test]
+fn strided_injection_covers_every_sample_in_stride_squared_frames() {
+    // Samples 0.15 apart; pixels 0.054 apart, so 0.216 apart at stride 4.
+    let mut w = world(ground(3.0, 3), settings(SurfelType::MeshColors, 0.15));
+    let camera = top_camera();
+    let (g, images) = w.gbuffer(&camera);
+    let lit = w.lit_image(&g, pattern);
+    let unlit = |view: &[[f32; 4]]| view.iter().zip(&g.hit).filter(|(c, h)| **h && c[..3] == MAGENTA).count();
+    w.inject_strided(&images, &lit, &camera, 200.0, 4);
+    let first = unlit(&w.debug(&images, &camera, DebugOutput::DirectLightingCache, false));
+    let surface = g.hit.iter().filter(|h| **h).count();
+    eprintln!("stride 4, one frame: {first} of {surface} surface pixels still show an unlit sample");
+    assert!(first > surface / 20, "one strided frame lit nearly every sample ({first} of {surface} unlit)");
+    for _ in 1..16 {
+        w.inject_strided(&images, &lit, &camera, 200.0, 4);
+    }
+    let cached = w.debug(&images, &camera, DebugOutput::DirectLightingCache, true);
+    assert_eq!(unlit(&cached), 0, "16 frames at stride 4 left samples unlit");
+    // The bounds of injecting every pixel once (injected_pattern_comes_back_from_the_cache).
+    let (mean, max_err) = error_vs_pattern(&cached, &g);
+    eprintln!("stride 4, 16 frames: mean |err| {mean:.4}, max {max_err:.4}");
+    assert!(max_err < 0.11 && mean < 0.03, "mean {mean}, max {max_err}");
+    // A stride the SDK does not take is refused.
+    for stride in [0, 17] {
+        let err = w.frame.schedule_direct_lighting_injection(&injection(&images, &lit, &camera, 200.0, stride)).unwrap_err();
+        assert!(err.to_string().contains("injection_resolution_stride"), "{err}");
+    }
+    w.finish(vec![images], vec![lit]);
 }
 
 /// Seen surfaces keep their colours from a new camera; unseen ones show the initial colour.

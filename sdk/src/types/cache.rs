@@ -25,6 +25,12 @@ pub struct DirectLightingInjectionTask {
     /// Frames of the running average (>= 1). Default 200, as in the guide: stable, slow to
     /// react; lower it for fast-changing lights.
     pub average_window: f32,
+    /// Inject one pixel of every `stride x stride` block (1..=16). Default 1: every pixel.
+    /// The pixel taken within the block moves every frame (frame index of the container) and
+    /// visits every position of the block in `stride²` frames, so a view at 2 costs a quarter
+    /// and still feeds every surface it shows; samples that receive no pixel in a frame keep
+    /// their value. Kickstart RT's `injectionResolutionStride`.
+    pub injection_resolution_stride: u32,
     /// Accepted for symmetry with trace tasks; injection always uses the ray-tracing pipeline.
     pub use_inline_rt: bool,
 }
@@ -37,6 +43,7 @@ impl Default for DirectLightingInjectionTask {
             viewport: Viewport::default(),
             camera: Camera::default(),
             average_window: 200.0,
+            injection_resolution_stride: 1,
             use_inline_rt: false,
         }
     }

@@ -371,9 +371,15 @@ impl Check for DirectLightingInjectionTask {
         if !(t.average_window.is_finite() && t.average_window >= 1.0) {
             return Err(Error::invalid("DirectLightingInjectionTask.average_window", "must be finite and >= 1"));
         }
+        if !(1..=MAX_INJECTION_STRIDE).contains(&t.injection_resolution_stride) {
+            return Err(Error::invalid("DirectLightingInjectionTask.injection_resolution_stride", "must be 1..=16"));
+        }
         Ok(())
     }
 }
+
+/// The largest `DirectLightingInjectionTask::injection_resolution_stride`.
+const MAX_INJECTION_STRIDE: u32 = 16;
 
 /// Environment maps: formats the shader reads as colour (any size; RGB used).
 const ENVIRONMENT_FORMATS: &[vk::Format] = &[
