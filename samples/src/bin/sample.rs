@@ -72,10 +72,18 @@ struct Cli {
     /// Size of the lidar view that fills the cache around the camera (pixels).
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(8..=4096))]
     lidar_size: u32,
+    /// Shadow rays per pixel and light of the lidar view (its lit image feeds the cache).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
+    lidar_rays: u32,
     /// Exposure of the tone-mapped PNGs (the EXRs are linear). Default: automatic in headless
     /// runs (the last frame's log-average luminance to mid-grey), 1 in a window.
     #[arg(long)]
     exposure: Option<f32>,
+    /// Inject one pixel of every NxN block of the main view per frame
+    /// (DirectLightingInjectionTask::injection_resolution_stride). 0: the view's height over
+    /// 540 (2 at 1080p).
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=16))]
+    injection_stride: u32,
     /// Show surfaces the cache has not lit in magenta instead of black.
     #[arg(long)]
     magenta_unlit: bool,
@@ -120,8 +128,10 @@ fn run() -> Result<(), String> {
         width: cli.width,
         height: cli.height,
         lidar_size: cli.lidar_size,
+        lidar_rays: cli.lidar_rays,
         unlit_color: if cli.magenta_unlit { [1.0, 0.0, 1.0] } else { [0.0; 3] },
         relight_samples: cli.relight_samples,
+        injection_stride: cli.injection_stride,
         hit_lighting: cli.hit_lighting,
         cache_budget_bytes: cli.cache_budget_mib.saturating_mul(1 << 20),
         time_passes: cli.time_passes,

@@ -9,7 +9,7 @@
 //!    injection of *last* frame's lit images (main and lidar: the lit image of this frame
 //!    needs this frame's shadows, so the cache runs a frame behind, which a cache averaging
 //!    over many frames does not notice), shadows of the sun and the point light (main view:
-//!    1 ray and denoised; lidar view: 4 rays), AO, diffuse GI and reflections (1 ray each)
+//!    1 ray and denoised; lidar view: 1 ray, raw), AO, diffuse GI and reflections (1 ray each)
 //!    with their denoisers (specular and diffuse in one task), and the debug visualisations
 //!    asked for;
 //! 3. its deferred direct lighting of both views (`lighting`), then the composite
@@ -66,6 +66,11 @@ pub struct Settings {
     /// Side of the square lidar view. Default 256 (the guide's 256-512: its pixels must be
     /// no larger than a cache sample where it looks, or samples get no light).
     pub lidar_size: u32,
+    /// Shadow rays per pixel and light of the lidar view. Default 1: its lit image only feeds
+    /// the caches' running average (`injection_window` frames), which averages the noise; at
+    /// 256x256 every extra ray is another full trace latency on a mostly idle GPU (4 rays
+    /// cost 3.3x one on an H200).
+    pub lidar_rays: u32,
     /// BLAS builds per frame (`BvhBuildTask::max_blas_build_count`). Default 4: the default
     /// scene's 12 meshes take three frames, as a level streaming in would.
     pub max_blas_build_count: u32,
@@ -77,6 +82,11 @@ pub struct Settings {
     /// Frames over which injection averages a cache sample. Default 24 (the guide's 200
     /// suits a static level; the sample's cube moves and its shadow with it).
     pub injection_window: f32,
+    /// `DirectLightingInjectionTask::injection_resolution_stride` of the main view (the lidar
+    /// always injects every pixel). Default 0: the view's height over 540 (1 up to 1079
+    /// lines, 2 at 1080p and 1440p, 4 at 2160p), about as many injected pixels as a 960x540
+    /// view, which is still several per cache sample where the camera looks.
+    pub injection_stride: u32,
     /// Multiplies radiance before tone mapping. Default 1.
     pub exposure: f32,
     /// The colour of cache samples no camera has lit yet (`InstanceInput::initial_tile_color`).
@@ -107,11 +117,13 @@ impl Default for Settings {
             width: 640,
             height: 360,
             lidar_size: 256,
+            lidar_rays: 1,
             unlit_color: [0.0; 3],
             max_blas_build_count: 4,
             rays_per_pixel: 1,
             checkerboard: false,
             injection_window: 24.0,
+            injection_stride: 0,
             exposure: 1.0,
             relight_samples: 65_536,
             hit_lighting: false,

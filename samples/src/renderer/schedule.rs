@@ -97,10 +97,14 @@ impl Renderer<'_> {
     /// needs this frame's shadows, so the cache runs a frame behind).
     fn schedule_injection(&mut self, prev: usize, cameras: &FrameCameras) -> HostResult<()> {
         let window = self.settings.injection_window;
+        let main_stride = match self.settings.injection_stride {
+            0 => (self.settings.height / 540).max(1),
+            s => s,
+        };
         let p = &self.slots[prev];
-        for (view, cam, label) in [
-            (&p.main, &cameras.prev_main, "inject main (last frame)"),
-            (&p.lidar, &cameras.prev_lidar, "inject lidar (last frame)"),
+        for (view, cam, stride, label) in [
+            (&p.main, &cameras.prev_main, main_stride, "inject main (last frame)"),
+            (&p.lidar, &cameras.prev_lidar, 1, "inject lidar (last frame)"),
         ] {
             let inputs = Inputs::of(&view.targets, cam);
             let task = DirectLightingInjectionTask {
@@ -109,6 +113,7 @@ impl Renderer<'_> {
                 viewport: inputs.common.viewport,
                 camera: inputs.common.camera,
                 average_window: window,
+                injection_resolution_stride: stride,
                 ..Default::default()
             };
             schedule(&mut self.container, label, |c| c.schedule_direct_lighting_injection(&task))?;
@@ -116,8 +121,8 @@ impl Renderer<'_> {
         Ok(())
     }
 
-    /// Shadows: the main view 1 ray (or the settings' rays) and denoised, the lidar view 4
-    /// rays (it is small and its image only feeds the cache).
+    /// Shadows: the main view 1 ray (or the settings' rays) and denoised, the lidar view its
+    /// own rays, undenoised (its image only feeds the cache's running average).
     fn schedule_shadows(&mut self, main: &Inputs, lidar: &Inputs, sun: LightInfo, point: LightInfo) -> HostResult<()> {
         let wk = &self.work;
         let c = &mut self.container;
@@ -144,9 +149,15 @@ impl Renderer<'_> {
             };
             schedule(c, labels[1], |c| c.schedule_denoise_shadow(&denoise))?;
         }
+        let lidar_rays = self.settings.lidar_rays;
         for (light, out) in [(sun, &wk.lidar_sun), (point, &wk.lidar_point)] {
-            let trace =
-                TraceShadowTask { common: lidar.common, light, output: out.input(GENERAL), rays_per_pixel: 4, first_hit: false };
+            let trace = TraceShadowTask {
+                common: lidar.common,
+                light,
+                output: out.input(GENERAL),
+                rays_per_pixel: lidar_rays,
+                first_hit: false,
+            };
             schedule(c, "shadow lidar", |c| c.schedule_shadow(&trace))?;
         }
         Ok(())
