@@ -875,6 +875,11 @@ typedef struct HrtBvhBuildTask {
    * Default 4.
    */
   uint32_t max_blas_build_count;
+  /**
+   * Times in a row a TLAS may be refit instead of rebuilt when only instance transforms
+   * changed. Default 0: always rebuilt.
+   */
+  uint32_t tlas_max_refits;
 } HrtBvhBuildTask;
 
 typedef struct HrtVertexBufferInput {

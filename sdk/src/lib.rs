@@ -27,7 +27,7 @@
 //!         input: InstanceInput { geometry: mesh, transform, ..Default::default() },
 //!         ..Default::default()
 //!     })?;
-//!     frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 4 })?;
+//!     frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 4, ..Default::default() })?;
 //!     frame.schedule_ambient_occlusion(ao)?;
 //!     ctx.build_gpu_task(&mut frame, cmd) // records into *your* command buffer
 //! }

@@ -135,7 +135,7 @@ impl<'h> World<'h> {
                 c.schedule_clear_cache(&ClearCacheTask { instance: self.instances[0] }).unwrap();
             }
         }
-        c.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 2 }).unwrap();
+        c.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 2, ..Default::default() }).unwrap();
         if f > 0 {
             c.schedule_direct_lighting_injection(&DirectLightingInjectionTask {
                 depth: DepthInput { image: self.images.depth.input(READ), depth_type: DepthType::ClipSpace },

@@ -61,6 +61,12 @@ fn params() -> AoParams {
 
 /// Checks, box by box, that the ring around each box is occluded exactly when `in_tlas(i)`.
 fn check_rings(gpu: &[f32], g: &GBuffer, b: &Boxes, in_tlas: impl Fn(usize) -> bool, what: &str) {
+    check_rings_moved(gpu, g, b, in_tlas, None, what)
+}
+
+/// `check_rings` where box `moved` has left its place: its old ring matches the reference
+/// of where it is now, occluded or not.
+fn check_rings_moved(gpu: &[f32], g: &GBuffer, b: &Boxes, in_tlas: impl Fn(usize) -> bool, moved: Option<usize>, what: &str) {
     let tracer = Tracer::with_instances(&b.boxes, &in_tlas);
     for (i, c) in b.centres.iter().enumerate() {
         let mask = ring(g, *c);
@@ -82,6 +88,9 @@ fn check_rings(gpu: &[f32], g: &GBuffer, b: &Boxes, in_tlas: impl Fn(usize) -> b
             (gpu_mean - ref_mean).abs() <= tol,
             "{what}: box {i}: GPU ring AO {gpu_mean:.4} vs reference {ref_mean:.4} (tol {tol:.4})"
         );
+        if moved == Some(i) {
+            continue;
+        }
         if in_tlas(i) {
             assert!(ref_mean < 0.9, "{what}: box {i} should occlude its ring ({ref_mean})");
         } else {
@@ -133,7 +142,7 @@ impl Fixture {
 fn blas_throttle_brings_instances_in_over_frames() {
     let mut f = fixture(10, false);
     for (k, expected) in [3usize, 6, 9, 10].into_iter().enumerate() {
-        f.frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 3 }).unwrap();
+        f.frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 3, ..Default::default() }).unwrap();
         f.frame.schedule_ambient_occlusion(&f.ao()).unwrap();
         run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
         assert_eq!(f.ctx.tlas_instance_count(), expected, "build {k}");
@@ -165,6 +174,49 @@ fn moving_an_instance_moves_its_occlusion() {
     run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
     f.b.boxes.instances[0].transform = far;
     check_rings(&f.images.read_output(&f.host).unwrap(), &f.g, &f.b, |i| i == 1, "after the move");
+    f.finish();
+}
+
+/// With `tlas_max_refits`, frames that only move instances refit the TLAS in place; one that
+/// removes an instance, or the refit budget running out, rebuilds it. Every frame's occlusion
+/// matches the reference of that frame's placement.
+#[test]
+fn a_refit_tlas_follows_moving_instances() {
+    let mut f = fixture(3, false);
+    let build = BvhBuildTask { tlas_max_refits: 2, ..Default::default() };
+    let place = |f: &mut Fixture, i: usize, t: Option<Affine3A>, op: InstanceOperation| {
+        let task = InstanceTask {
+            handle: f.gpu_scene.instances[i],
+            operation: op,
+            input: InstanceInput { geometry: f.gpu_scene.geometries[i], transform: t.unwrap_or_default(), ..Default::default() },
+        };
+        f.frame.schedule_instance(&task).unwrap();
+    };
+    let start: Vec<Affine3A> = f.b.boxes.instances.iter().map(|i| i.transform).collect();
+    // Box 0 slides a little each frame, then far; box 2 leaves (a rebuild) and comes back.
+    for step in 0..8usize {
+        let mut present = [true; 3];
+        if step > 0 {
+            let shift =
+                if step == 4 { Vec3::new(0.0, 50.0, 0.0) } else { Vec3::new(0.15 * step as f32, 0.0, -0.1 * step as f32) };
+            let t = Affine3A::from_translation(shift) * start[0];
+            place(&mut f, 0, Some(t), InstanceOperation::Update);
+            f.b.boxes.instances[0].transform = t;
+            present[2] = step != 5;
+            let op = match step {
+                5 => InstanceOperation::Remove,
+                6 => InstanceOperation::Register,
+                _ => InstanceOperation::Update,
+            };
+            place(&mut f, 2, present[2].then_some(start[2]), op);
+        }
+        f.frame.schedule_bvh_build(&build).unwrap();
+        f.frame.schedule_ambient_occlusion(&f.ao()).unwrap();
+        run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
+        let gpu = f.images.read_output(&f.host).unwrap();
+        let moved = (step > 0).then_some(0);
+        check_rings_moved(&gpu, &f.g, &f.b, |i| present[i], moved, &format!("step {step}"));
+    }
     f.finish();
 }
 
@@ -231,7 +283,7 @@ fn updating_a_deformable_geometry_refits_its_blas() {
     frame
         .schedule_geometry(&GeometryTask { handle: geo, operation: TaskOperation::Update, input: input(vb_high.buffer) })
         .unwrap();
-    frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 0 }).unwrap();
+    frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 0, ..Default::default() }).unwrap();
     frame.schedule_ambient_occlusion(&images.ao_task(&camera, 1.0, RAYS)).unwrap();
     run_frame(&host, &ctx, &mut frame).unwrap();
     let after = stats::masked_mean(&images.read_output(&host).unwrap(), &under);
@@ -281,7 +333,7 @@ fn fast_first_builds_are_rebuilt_for_fast_trace_later() {
     }
     // (in TLAS, pending builds: queued registrations + quality rebuilds) after each build.
     for (k, (in_tlas, pending)) in [(2usize, 4usize), (4, 4), (4, 2), (4, 0)].into_iter().enumerate() {
-        f.frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 2 }).unwrap();
+        f.frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 2, ..Default::default() }).unwrap();
         f.frame.schedule_ambient_occlusion(&f.ao()).unwrap();
         run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
         assert_eq!((f.ctx.tlas_instance_count(), f.ctx.pending_blas_builds()), (in_tlas, pending), "build {k}");

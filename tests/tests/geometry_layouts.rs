@@ -168,7 +168,7 @@ fn every_engine_layout_traces_the_same_ao() {
     for (l, &h) in layouts.iter().zip(&geometries) {
         let before = ctx.resource_allocations().geometry_copies.bytes;
         frame.schedule_geometry(&GeometryTask { handle: h, input: l.input.clone(), ..Default::default() }).unwrap();
-        frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 8 }).unwrap();
+        frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 8, ..Default::default() }).unwrap();
         run_frame(&host, &ctx, &mut frame).unwrap();
         copy_bytes.push(ctx.resource_allocations().geometry_copies.bytes - before);
         assert_eq!(ctx.geometry_invalid_triangles(h).unwrap(), 0, "{}: no bad triangles", l.name);

@@ -166,7 +166,7 @@ fn triangles_with_out_of_range_indices_are_dropped_and_reported() {
     let camera = Camera::look_at(Vec3::new(0.0, 6.0, 0.01), Vec3::ZERO);
     let gbuffer = GBuffer::render(&Tracer::new(&ground), &camera, 32, 32);
     let images = GBufferImages::upload(&host, &gbuffer).unwrap();
-    c.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 8 }).unwrap();
+    c.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 8, ..Default::default() }).unwrap();
     c.schedule_ambient_occlusion(&images.ao_task(&camera, 1.0, 8)).unwrap();
     run_frame(&host, &ctx, &mut c).unwrap();
     assert_eq!(ctx.geometry_invalid_triangles(geometries[0]).unwrap(), 1, "one 32-bit triangle was bad");
@@ -220,7 +220,7 @@ fn big_caches_fill_completely_and_oversized_ones_are_coarsened() {
         };
         c.schedule_instance(&InstanceTask { handle: instances[k], operation: InstanceOperation::Register, input }).unwrap();
     }
-    c.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 2 }).unwrap();
+    c.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 2, ..Default::default() }).unwrap();
     run_frame(&host, &ctx, &mut c).unwrap();
     // The layouts' sample counts come back with the ticket; the next recording allocates and
     // fills the caches. A count over the budget is laid out again at a smaller resolution

@@ -174,7 +174,7 @@ fn two_thousand_frames_of_churn_keep_memory_flat() {
                 .unwrap(),
             );
         }
-        frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 2 }).unwrap();
+        frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 2, ..Default::default() }).unwrap();
         frame
             .schedule_ambient_occlusion(&TraceAmbientOcclusionTask {
                 output: noisy.input(vk::ImageLayout::GENERAL),

@@ -69,6 +69,9 @@ pub struct HrtInstanceTask {
 pub struct HrtBvhBuildTask {
     /// Default 4.
     pub max_blas_build_count: u32,
+    /// Times in a row a TLAS may be refit instead of rebuilt when only instance transforms
+    /// changed. Default 0: always rebuilt.
+    pub tlas_max_refits: u32,
 }
 
 fn instance_task(t: &HrtInstanceTask) -> Result<rt::InstanceTask, Failure> {
@@ -121,7 +124,8 @@ pub unsafe extern "C" fn hrt_schedule_instance(container: *mut HrtTaskContainer,
 
 #[no_mangle]
 pub extern "C" fn hrt_bvh_build_task_default() -> HrtBvhBuildTask {
-    HrtBvhBuildTask { max_blas_build_count: rt::BvhBuildTask::default().max_blas_build_count }
+    let d = rt::BvhBuildTask::default();
+    HrtBvhBuildTask { max_blas_build_count: d.max_blas_build_count, tlas_max_refits: d.tlas_max_refits }
 }
 
 #[no_mangle]
@@ -129,7 +133,7 @@ pub unsafe extern "C" fn hrt_schedule_bvh_build(container: *mut HrtTaskContainer
     schedule(
         container,
         task,
-        |t| Ok(rt::BvhBuildTask { max_blas_build_count: t.max_blas_build_count }),
+        |t| Ok(rt::BvhBuildTask { max_blas_build_count: t.max_blas_build_count, tlas_max_refits: t.tlas_max_refits }),
         rt::TaskContainer::schedule_bvh_build,
     )
 }

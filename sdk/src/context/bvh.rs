@@ -154,25 +154,41 @@ impl Recorder<'_> {
     }
 
     /// Rebuilds this working set's TLAS when the snapshot changed since it last did.
-    pub fn record_tlas(&mut self) -> Result<()> {
+    /// Builds this working set's TLAS from the snapshot, or refits it (`max_refits`, see
+    /// `BvhBuildTask::tlas_max_refits`) when only instance transforms changed since its last
+    /// full build.
+    pub fn record_tlas(&mut self, max_refits: u32) -> Result<()> {
         let (device, memory, cmd) = (self.device, self.memory, self.cmd);
         let version = self.st.scene.snapshot_version;
         if self.working_set().tlas.version == version {
             return Ok(());
         }
         let count = self.st.scene.snapshot.len() as u32;
-        let sizes = tlas::sizes(device, count);
-        let scratch = self.ensure_scratch(sizes.build_scratch_size)?;
+        let refittable = max_refits > 0;
+        let key = if refittable { tlas::topology_key(&self.st.scene.snapshot) } else { 0 };
+        let sizes = tlas::sizes(device, count, refittable);
+        let scratch = self.ensure_scratch(sizes.build_scratch_size.max(sizes.update_scratch_size))?;
         self.ensure_ring(self.st.scene.snapshot.len() as u64 * 64 + 256)?;
         let st = &mut *self.st;
         let ws = &mut st.working_sets[self.ws];
-        if let Some(old) = ws.tlas.ensure_storage(device, memory, sizes.acceleration_structure_size)? {
-            self.journal.replaced(Slot::Tlas, old.map(Held::Accel));
-        }
+        let fresh_storage = match ws.tlas.ensure_storage(device, memory, sizes.acceleration_structure_size)? {
+            Some(old) => {
+                self.journal.replaced(Slot::Tlas, old.map(Held::Accel));
+                true
+            }
+            None => false,
+        };
+        let refit = refittable && !fresh_storage && ws.tlas.refit.is_some_and(|r| r.key == key && r.done < max_refits);
         let upload = ws.ring.push(instance::instance_bytes(&st.scene.snapshot), 16);
         self.hazards.read_write(&device.raw, cmd, sync::AS_BUILD_READ, sync::AS_BUILD_WRITE);
-        ws.tlas.record_build(device, cmd, upload, count, scratch);
+        let how = if refit { tlas::Build::Refit } else { tlas::Build::Full { refittable } };
+        ws.tlas.record_build(device, cmd, upload, count, scratch, how);
         ws.tlas.version = version;
+        ws.tlas.refit = match (refittable, ws.tlas.refit) {
+            (false, _) => None,
+            (true, Some(r)) if refit => Some(tlas::Refit { key, done: r.done + 1 }),
+            (true, _) => Some(tlas::Refit { key, done: 0 }),
+        };
         Ok(())
     }
 }

@@ -97,6 +97,7 @@ pub(super) struct Journal {
     cache_allocations: Vec<CacheRange>,
     pool_retired_len: usize,
     tlas_version: u64,
+    tlas_refit: Option<crate::scene::tlas::Refit>,
 }
 
 impl Journal {
@@ -126,6 +127,7 @@ impl Journal {
             cache_allocations: Vec::new(),
             pool_retired_len: st.cache_pool.retired_len(),
             tlas_version: st.working_sets[ws].tlas.version,
+            tlas_refit: st.working_sets[ws].tlas.refit,
         }
     }
 
@@ -233,7 +235,7 @@ impl Journal {
             s.snapshot = old;
         }
         let w = &mut st.working_sets[ws];
-        w.tlas.version = self.tlas_version;
+        (w.tlas.version, w.tlas.refit) = (self.tlas_version, self.tlas_refit);
         // A working set is recorded only when idle, so these started empty.
         w.compactions.clear();
         w.index_checks.clear();

@@ -280,13 +280,14 @@ impl ExecuteContext {
         for w in &st.working_sets {
             let _ = writeln!(
                 out,
-                "working set {:?} ring {:?}/{} scratch {:?} tlas {:?} v{} compactions {} readbacks {}",
+                "working set {:?} ring {:?}/{} scratch {:?} tlas {:?} v{} {:?} compactions {} readbacks {}",
                 w.in_flight,
                 w.ring.buffer.raw,
                 w.ring.capacity(),
                 w.scratch.as_ref().map(|b| (b.raw, b.size)),
                 w.tlas.accel.as_ref().map(|a| a.accel),
                 w.tlas.version,
+                w.tlas.refit,
                 w.compactions.len(),
                 w.readbacks.len()
             );

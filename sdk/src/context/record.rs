@@ -73,6 +73,12 @@ impl Recorder<'_> {
             .iter()
             .filter_map(|t| if let Task::BvhBuild(b) = t { Some(b.max_blas_build_count) } else { None })
             .reduce(|a, b| a.saturating_add(b));
+        // A TLAS rebuilt in a frame without a BVH task (render tasks only) is rebuilt in full.
+        let max_refits = tasks
+            .iter()
+            .filter_map(|t| if let Task::BvhBuild(b) = t { Some(b.tlas_max_refits) } else { None })
+            .max()
+            .unwrap_or(0);
         if let Some(max_builds) = max_builds {
             let span = self.begin(TaskKind::BlasBuild, first_bvh.unwrap_or(0));
             self.record_blas_work(max_builds)?;
@@ -85,7 +91,7 @@ impl Recorder<'_> {
             }
             if self.working_set().tlas.version != self.st.scene.snapshot_version {
                 let span = self.begin(TaskKind::TlasBuild, first_bvh.unwrap_or(0));
-                self.record_tlas()?;
+                self.record_tlas(max_refits)?;
                 self.end(span);
             }
         }

@@ -102,7 +102,7 @@ impl WorkingSet {
             usage: None,
             usage_readback: None,
             usage_slots: 0,
-            tlas: Tlas { accel: None, version: 0 },
+            tlas: Tlas { accel: None, version: 0, refit: None },
             marker,
         })
     }

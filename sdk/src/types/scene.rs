@@ -398,11 +398,22 @@ pub struct InstanceTask {
 pub struct BvhBuildTask {
     /// Default 4 (Kickstart RT's default). 0 builds none this frame.
     pub max_blas_build_count: u32,
+    /// How many times in a row a TLAS may be refit instead of rebuilt. Default 0: rebuilt
+    /// whenever anything changed, as Kickstart RT does. Above 0, a frame whose instances
+    /// differ from the TLAS's last full build only by their transforms (none added, removed,
+    /// or pointed at another BLAS) refits it — about a quarter of a build's GPU time for a
+    /// few thousand instances (more where ray tracing has no dedicated hardware) — and every
+    /// `tlas_max_refits + 1`-th such frame rebuilds it, so a tree that grew loose while
+    /// instances moved far is rebuilt within that many frames. Refitting suits slow, local
+    /// motion (foliage, doors, vehicles in view); instances that jump across the level
+    /// make a refit TLAS slow to trace until its rebuild. A TLAS is kept per ticket in
+    /// flight; each counts its own refits.
+    pub tlas_max_refits: u32,
 }
 
 impl Default for BvhBuildTask {
     fn default() -> Self {
-        BvhBuildTask { max_blas_build_count: 4 }
+        BvhBuildTask { max_blas_build_count: 4, tlas_max_refits: 0 }
     }
 }
 

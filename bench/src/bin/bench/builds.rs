@@ -130,12 +130,12 @@ impl Bench<'_> {
         for i in 0..6 {
             let operation = if i == 0 { TaskOperation::Register } else { TaskOperation::Update };
             self.frame.schedule_geometry(&GeometryTask { handle: geo, operation, input: input.clone() }).map_err(sdk)?;
-            self.frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 1 }).map_err(sdk)?;
+            self.frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 1, ..Default::default() }).map_err(sdk)?;
             let done = run_frame(host, self.ctx, &mut self.frame)?;
             // The compaction of a fast-trace build happens in the next build's frame (its size
             // is read when this ticket is back): give it a frame of its own, so the measured
             // frame is the registration's alone, as an engine's first frame with the mesh.
-            self.frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 0 }).map_err(sdk)?;
+            self.frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 0, ..Default::default() }).map_err(sdk)?;
             let compacted = run_frame(host, self.ctx, &mut self.frame)?;
             let floor_build = floor.build(host, flags)?;
             if i >= 2 {
@@ -174,7 +174,7 @@ impl Bench<'_> {
         let surfels = SurfelSettings { tile_unit_length: s.tile_unit_length, ..Default::default() };
         let colours = vec![[0.0; 3]; scene.instances.len()];
         let gpu = SceneOnGpu::register_interleaved(host, self.ctx, &mut self.frame, &scene, surfels, &colours, s.vertex_stride)?;
-        self.frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: u32::MAX }).map_err(sdk)?;
+        self.frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: u32::MAX, ..Default::default() }).map_err(sdk)?;
         // Warm clocks for this frame too (the floor's builds keep the GPU busy until it starts).
         warm_up(s.warmup, || floor.build(host, BuildHint::Auto.build_flags(false, true)).map(drop))?;
         floor.destroy(host);
@@ -205,7 +205,7 @@ impl Bench<'_> {
                 };
                 self.frame.schedule_geometry(&GeometryTask { handle, operation: TaskOperation::Update, input }).map_err(sdk)?;
             }
-            self.frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: u32::MAX }).map_err(sdk)?;
+            self.frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: u32::MAX, ..Default::default() }).map_err(sdk)?;
             let done = run_frame(self.host, self.ctx, &mut self.frame)?;
             rebuild.push(done.gpu_ms(TaskKind::Bvh));
             rebuild_blas.push(done.gpu_ms(TaskKind::BlasBuild));
@@ -254,7 +254,7 @@ impl Bench<'_> {
                     },
                 })
                 .map_err(sdk)?;
-            self.frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 0 }).map_err(sdk)?;
+            self.frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 0, ..Default::default() }).map_err(sdk)?;
             let (done, cpu_us) = self.recorded_frame()?;
             record_us.push(cpu_us);
             tlas_ms.push(done.gpu_ms(TaskKind::Bvh));
