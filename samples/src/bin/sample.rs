@@ -75,6 +75,10 @@ struct Cli {
     /// Shadow rays per pixel and light of the lidar view (its lit image feeds the cache).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=64))]
     lidar_rays: u32,
+    /// Frames in a row the TLAS may be refit instead of rebuilt while only instance
+    /// transforms change (BvhBuildTask::tlas_max_refits); 0 rebuilds it every frame.
+    #[arg(long, default_value_t = 15)]
+    tlas_max_refits: u32,
     /// Exposure of the tone-mapped PNGs (the EXRs are linear). Default: automatic in headless
     /// runs (the last frame's log-average luminance to mid-grey), 1 in a window.
     #[arg(long)]
@@ -129,6 +133,7 @@ fn run() -> Result<(), String> {
         height: cli.height,
         lidar_size: cli.lidar_size,
         lidar_rays: cli.lidar_rays,
+        tlas_max_refits: cli.tlas_max_refits,
         unlit_color: if cli.magenta_unlit { [1.0, 0.0, 1.0] } else { [0.0; 3] },
         relight_samples: cli.relight_samples,
         injection_stride: cli.injection_stride,

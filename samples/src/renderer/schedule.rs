@@ -89,7 +89,10 @@ impl Renderer<'_> {
             let task = GeometryTask { handle: self.geometries[mesh], operation: TaskOperation::Update, input };
             schedule(c, BVH_LABEL, |c| c.schedule_geometry(&task))?;
         }
-        let build = BvhBuildTask { max_blas_build_count: self.settings.max_blas_build_count };
+        let build = BvhBuildTask {
+            max_blas_build_count: self.settings.max_blas_build_count,
+            tlas_max_refits: self.settings.tlas_max_refits,
+        };
         schedule(c, BVH_LABEL, |c| c.schedule_bvh_build(&build))
     }
 
