@@ -26,14 +26,15 @@ const float TILE_WEIGHT = 0.5;
 // Per invocation, then summed: (sum of count x mean width, count, tiles where some pixel sees
 // light) over the tiles in reach.
 shared vec3 s_tiles[64];
+shared vec3 s_rows[8];
 // The intermediate and the denoiser's G-buffer around the workgroup (one texel of border).
 const int APRON = 10;
 shared vec4 s_temp[APRON * APRON];
 shared uint s_gbuf[APRON * APRON];
 
-// Sums the tile summaries within `reach` pixels of this workgroup's 8x8 pixels into
-// s_tiles[0]. Every invocation calls it (it has barriers).
-void sum_tiles(int reach) {
+// The tile summaries within `reach` pixels of this workgroup's 8x8 pixels, summed. Every
+// invocation calls it (it has barriers).
+vec3 sum_tiles(int reach) {
     uint me = gl_LocalInvocationIndex;
     ivec2 group = ivec2(gl_WorkGroupID.xy) * 8; // relative to the viewport's origin
     ivec2 lo = max(group - reach, ivec2(0)) / 8;
@@ -47,10 +48,17 @@ void sum_tiles(int reach) {
     }
     s_tiles[me] = sum;
     barrier();
-    for (uint half_count = 32u; half_count > 0u; half_count >>= 1) {
-        if (me < half_count) s_tiles[me] += s_tiles[me + half_count];
-        barrier();
+    // Two levels (8 rows of 8, then every invocation sums the 8 row sums itself): two
+    // barriers instead of a six-level tree's seven.
+    if (me < 8u) {
+        vec3 row = vec3(0.0);
+        for (uint i = 0u; i < 8u; ++i) row += s_tiles[me * 8u + i];
+        s_rows[me] = row;
     }
+    barrier();
+    vec3 total = vec3(0.0);
+    for (uint i = 0u; i < 8u; ++i) total += s_rows[i];
+    return total;
 }
 
 // Fills the 10x10 apron: texels outside the viewport read as background.
@@ -72,8 +80,7 @@ int apron_index(ivec2 q, ivec2 origin) {
 
 void main() {
     float max_radius = u_d.stops.w;
-    sum_tiles(int(ceil(max_radius)));
-    vec3 tiles = s_tiles[0];
+    vec3 tiles = sum_tiles(int(ceil(max_radius)));
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
     // No occluded sample within reach: the width would be unknown (radius 0) and the
     // visibility passes unchanged. In a sunlit view most tiles end here. No pixel within reach
@@ -116,16 +123,11 @@ void main() {
     // The temporal pass after this one averages up to max-history frames: as the pixel's
     // history grows, each frame needs less blur (the blur's own error, a flattened penumbra,
     // then stops dominating). Radius x sqrt(SHADOW_BLUR_FRAMES / length), down to a quarter.
-    // The length is the previous frame's at the nearest texel where the surface was, when it
-    // is the same surface.
-    if (u_d.flags.z == 0u && radius >= 0.5) {
-        ivec2 was = ivec2(floor(hrt_previous_position(pixel, p)));
-        if (hrt_in_viewport(was) && hrt_was_same_surface(was, p, n, dist)) {
-            int k = apron_index(was, origin);
-            float len = k >= 0 ? s_temp[k].w : hrt_load_temp(0u, was).w;
-            radius *= clamp(sqrt(SHADOW_BLUR_FRAMES / max(len, 1.0)), 0.25, 1.0);
-        }
-    }
+    // The length is the kept history's at this pixel (the prep pass's copy, already in the
+    // apron): while the view moves it is a neighbour's, a frame or two off at most, and
+    // reprojecting it cost the pass three fetches a pixel (motion, last frame's guide, the
+    // texel) for no measured difference.
+    if (u_d.flags.z == 0u && radius >= 0.5) radius *= clamp(sqrt(SHADOW_BLUR_FRAMES / max(c.w, 1.0)), 0.25, 1.0);
     if (radius < 0.5) {
         hrt_store_temp(0u, pixel, vec4(c.x, radius, c.zw));
         return;

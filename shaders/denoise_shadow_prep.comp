@@ -21,6 +21,7 @@ vec2 decode_shadow(ivec2 q, vec3 p) {
 // it sees some of the light; then summed over the workgroup (a tree in shared memory: no float
 // atomics needed).
 shared vec3 s_sum[64];
+shared vec3 s_rows[8];
 
 // Decodes one pixel into the intermediate (with the pixel's history texel in z, w); returns
 // (visibility, penumbra width or -1 where it holds no occluded sample).
@@ -61,14 +62,19 @@ void main() {
     vec2 v = hrt_in_viewport(pixel) ? prep(pixel) : vec2(1.0, -1.0);
     s_sum[me] = vec3(v.y >= 0.0 ? vec2(min(v.y, 60000.0), 1.0) : vec2(0.0), v.x > 0.0 ? 1.0 : 0.0);
     barrier();
-    for (uint half_count = 32u; half_count > 0u; half_count >>= 1) {
-        if (me < half_count) s_sum[me] += s_sum[me + half_count];
-        barrier();
+    // Two levels (8 rows of 8, then the 8 row sums) instead of a six-level tree: two barriers,
+    // not seven.
+    if (me < 8u) {
+        vec3 row = vec3(0.0);
+        for (uint i = 0u; i < 8u; ++i) row += s_sum[me * 8u + i];
+        s_rows[me] = row;
     }
+    barrier();
     // (mean width, count) as halves, the count negative where no pixel sees any light (pixels
     // outside the viewport count as lit); 0 where the tile holds no occluded sample.
-    vec3 sum = s_sum[0];
     if (me == 0u) {
+        vec3 sum = vec3(0.0);
+        for (uint i = 0u; i < 8u; ++i) sum += s_rows[i];
         uint texel = sum.y > 0.0 ? packHalf2x16(vec2(sum.x / sum.y, sum.z > 0.0 ? sum.y : -sum.y)) : 0u;
         imageStore(u_tiles, ivec2(gl_WorkGroupID.xy), uvec4(texel));
     }
