@@ -744,6 +744,11 @@ int main(void) {
     EXPECT(hrt_schedule_denoise_diffuse(frame, &wrong) == HRT_ERROR_UNSUPPORTED_FORMAT, "a two-channel image is no diffuse input");
     CHECK_HRT(hrt_destroy_denoising_context(ctx, denoiser));
     EXPECT(hrt_destroy_denoising_context(ctx, denoiser) == HRT_ERROR_INVALID_HANDLE, "destroyed twice");
+    /* Or all of a context's at once (level unload). */
+    HrtDenoisingContextHandle spare;
+    CHECK_HRT(hrt_create_denoising_context(ctx, &dci_in, &spare));
+    CHECK_HRT(hrt_destroy_all_denoising_context_handles(ctx));
+    EXPECT(hrt_destroy_denoising_context(ctx, spare) == HRT_ERROR_INVALID_HANDLE, "destroyed by destroy-all");
     free_image(noisy);
     free_image(clean);
 
@@ -1054,8 +1059,10 @@ int main(void) {
     free_image(view);
 
     /* ---- Teardown. */
+    EXPECT(hrt_destroy_all_geometry_handles(ctx) == HRT_ERROR_GEOMETRY_IN_USE, "geometries still placed");
     CHECK_HRT(hrt_destroy_all_instance_handles(ctx));
-    CHECK_HRT(hrt_destroy_geometry_handles(ctx, geometries, 2));
+    CHECK_HRT(hrt_destroy_all_geometry_handles(ctx));
+    EXPECT(hrt_destroy_geometry_handles(ctx, geometries, 1) == HRT_ERROR_INVALID_HANDLE, "destroyed by destroy-all");
     CHECK_HRT(hrt_release_device_resources_immediately(ctx));
     CHECK_HRT(hrt_task_container_destroy(frame));
     /* Destroyed objects are recognised, not dereferenced: a second destroy, or any call on a

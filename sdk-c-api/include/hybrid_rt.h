@@ -1595,6 +1595,11 @@ enum HrtStatus hrt_create_denoising_context(struct HrtContext *ctx,
 enum HrtStatus hrt_destroy_denoising_context(struct HrtContext *ctx,
                                              HrtDenoisingContextHandle handle);
 
+/**
+ * Destroys every denoising context of the context.
+ */
+enum HrtStatus hrt_destroy_all_denoising_context_handles(struct HrtContext *ctx);
+
 struct HrtDenoiseTask hrt_denoise_task_default(void);
 
 struct HrtDenoiseShadowTask hrt_denoise_shadow_task_default(void);
@@ -1655,6 +1660,12 @@ enum HrtStatus hrt_destroy_instance_handles(struct HrtContext *ctx,
                                             uint32_t count);
 
 enum HrtStatus hrt_destroy_all_instance_handles(struct HrtContext *ctx);
+
+/**
+ * Destroys every geometry, all-or-nothing: HRT_ERROR_GEOMETRY_IN_USE while an instance still
+ * places one (destroy the instances first).
+ */
+enum HrtStatus hrt_destroy_all_geometry_handles(struct HrtContext *ctx);
 
 /**
  * Gives a geometry a debug name (NUL-terminated, copied): quoted in errors and log messages,

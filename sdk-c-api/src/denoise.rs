@@ -286,6 +286,15 @@ pub unsafe extern "C" fn hrt_destroy_denoising_context(ctx: *mut HrtContext, han
     guard(|| Ok(context(ctx)?.ctx.destroy_denoising_context(rt::DenoisingContextHandle(handle))?))
 }
 
+/// Destroys every denoising context of the context.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_destroy_all_denoising_context_handles(ctx: *mut HrtContext) -> HrtStatus {
+    guard(|| {
+        context(ctx)?.ctx.destroy_all_denoising_context_handles();
+        Ok(())
+    })
+}
+
 #[no_mangle]
 pub extern "C" fn hrt_denoise_task_default() -> HrtDenoiseTask {
     let out = image_c(&rt::DenoiseDiffuseTask::default().output);

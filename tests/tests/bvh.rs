@@ -388,3 +388,37 @@ fn destruction_is_deferred_until_tickets_return() {
     ctx.release_device_resources_immediately().unwrap();
     f.finish();
 }
+
+/// Level unload: every geometry at once (refused, changing nothing, while instances place
+/// them), every denoising context at once.
+#[test]
+fn destroy_all_geometries_and_denoising_contexts() {
+    let mut f = fixture(2, true);
+    let ctx = &f.ctx;
+    let geometries = f.gpu_scene.geometries.clone();
+    assert!(matches!(ctx.destroy_all_geometry_handles(), Err(Error::GeometryInUse { .. })));
+    for g in &geometries {
+        ctx.geometry_invalid_triangles(*g).expect("a refused destroy-all keeps every geometry");
+    }
+    ctx.destroy_all_instance_handles();
+    ctx.destroy_all_geometry_handles().unwrap();
+    for g in &geometries {
+        assert!(matches!(ctx.geometry_invalid_triangles(*g), Err(Error::InvalidHandle { .. })));
+    }
+    let input = |signal| hybrid_rt::DenoisingContextInput { max_width: W, max_height: H, signal, ..Default::default() };
+    let contexts = [
+        ctx.create_denoising_context(&input(hybrid_rt::SignalType::Shadow)).unwrap(),
+        ctx.create_denoising_context(&input(hybrid_rt::SignalType::DiffuseOcclusion)).unwrap(),
+    ];
+    assert!(ctx.resource_allocations().denoiser.count > 0);
+    ctx.destroy_all_denoising_context_handles();
+    for c in contexts {
+        assert!(matches!(ctx.destroy_denoising_context(c), Err(Error::InvalidHandle { .. })));
+    }
+    // Nothing in flight: everything deferred goes now.
+    run_frame(&f.host, ctx, &mut f.frame).unwrap();
+    ctx.release_device_resources_immediately().unwrap();
+    let left = ctx.resource_allocations();
+    assert_eq!((left.blas.count, left.denoiser.count), (0, 0), "{left:?}");
+    f.finish();
+}

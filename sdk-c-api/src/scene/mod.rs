@@ -209,6 +209,13 @@ pub unsafe extern "C" fn hrt_destroy_all_instance_handles(ctx: *mut HrtContext) 
     })
 }
 
+/// Destroys every geometry, all-or-nothing: HRT_ERROR_GEOMETRY_IN_USE while an instance still
+/// places one (destroy the instances first).
+#[no_mangle]
+pub unsafe extern "C" fn hrt_destroy_all_geometry_handles(ctx: *mut HrtContext) -> HrtStatus {
+    guard(|| Ok(context(ctx)?.ctx.destroy_all_geometry_handles()?))
+}
+
 /// Gives a geometry a debug name (NUL-terminated, copied): quoted in errors and log messages,
 /// and the Vulkan name of its BLAS and copy when debug_utils is on.
 #[no_mangle]

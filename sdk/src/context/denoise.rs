@@ -114,6 +114,17 @@ impl ExecuteContext {
         }
         Ok(())
     }
+
+    /// Destroys every denoising context (its history is freed once the tickets issued before
+    /// are back, as for one). Tasks already scheduled with them fail at `build_gpu_task`.
+    /// Kickstart RT's `DestroyAllDenoisingContextHandles`.
+    pub fn destroy_all_denoising_context_handles(&self) {
+        let all: Vec<DenoisingContextHandle> = self.shared.state.lock().denoisers.iter().map(|(h, _)| h).collect();
+        for h in all {
+            // Only a context another thread destroyed meanwhile fails here: gone either way.
+            let _ = self.destroy_denoising_context(h);
+        }
+    }
 }
 
 impl Shared {

@@ -51,7 +51,19 @@ impl ExecuteContext {
     /// flight now have come back.
     pub fn destroy_geometry_handles(&self, handles: &[GeometryHandle]) -> Result<()> {
         let mut guard = self.shared.state.lock();
-        let st = &mut *guard;
+        self.destroy_geometries(&mut guard, handles)
+    }
+
+    /// Destroys every geometry (level unload), all-or-nothing: `Error::GeometryInUse` while an
+    /// instance still places one (destroy the instances first, e.g. with
+    /// `destroy_all_instance_handles`). Kickstart RT's `DestroyAllGeometryHandles`.
+    pub fn destroy_all_geometry_handles(&self) -> Result<()> {
+        let mut guard = self.shared.state.lock();
+        let all: Vec<GeometryHandle> = guard.scene.geometries.iter().map(|(h, _)| h).collect();
+        self.destroy_geometries(&mut guard, &all)
+    }
+
+    fn destroy_geometries(&self, st: &mut super::State, handles: &[GeometryHandle]) -> Result<()> {
         for (i, h) in handles.iter().enumerate() {
             let g = st.scene.geometries.get(*h)?;
             if g.instance_refs > 0 {
