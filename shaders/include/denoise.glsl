@@ -228,27 +228,25 @@ vec2 hrt_previous_position(ivec2 pixel, vec3 p) {
     return (ndc * 0.5 + 0.5) * u_d.c.viewport.zw + u_d.c.viewport.xy;
 }
 
-// Whether the previous frame's texel q (in the viewport) showed the surface (p, n) seen at
-// distance `dist`: not background, not another surface (off the plane) or orientation
-// (disocclusion).
-bool hrt_was_same_surface(ivec2 q, vec3 p, vec3 n, float dist) {
-    vec3 q_p, q_n;
-    if (!hrt_surface_at(imageLoad(u_gbuf_prev, q).xy, u_d.prev_clip_to_world, u_d.prev_eye.xyz, q, q_p, q_n)) return false;
-    return abs(dot(n, q_p - p)) <= u_d.stops.z * dist && dot(n, q_n) >= 0.8;
-}
-
-// Bilinear taps of the previous frame around `prev_pos` that show the same surface as (p, n):
-// weights are zero for taps off screen, on background or on another surface (disocclusion).
+// Bilinear taps of the previous frame around `prev_pos` that show the same surface as (p, n)
+// seen at distance `dist`: weights are zero for taps off screen, on background, on another
+// surface (off the plane) or orientation (disocclusion).
+// (The four taps' positions come from the previous camera's pixel rays, one matrix product
+// for all four instead of one each.)
 void hrt_history_taps(vec2 prev_pos, vec3 p, vec3 n, float dist, out ivec2 taps[4], out vec4 weights) {
     vec2 f = prev_pos - 0.5;
     ivec2 base = ivec2(floor(f));
     vec2 t = f - vec2(base);
     taps[0] = base; taps[1] = base + ivec2(1, 0); taps[2] = base + ivec2(0, 1); taps[3] = base + ivec2(1, 1);
     vec4 bilinear = vec4((1.0 - t.x) * (1.0 - t.y), t.x * (1.0 - t.y), (1.0 - t.x) * t.y, t.x * t.y);
+    HrtPixelRays rays = hrt_pixel_rays(u_d.prev_clip_to_world);
+    vec3 eye = u_d.prev_eye.xyz;
     for (int i = 0; i < 4; ++i) {
         weights[i] = 0.0;
         if (!hrt_in_viewport(taps[i]) || bilinear[i] <= 0.0) continue;
-        if (hrt_was_same_surface(taps[i], p, n, dist)) weights[i] = bilinear[i];
+        vec3 q_p, q_n;
+        if (!hrt_surface_on(rays, imageLoad(u_gbuf_prev, taps[i]).xy, eye, taps[i], q_p, q_n)) continue;
+        if (abs(dot(n, q_p - p)) <= u_d.stops.z * dist && dot(n, q_n) >= 0.8) weights[i] = bilinear[i];
     }
 }
 
