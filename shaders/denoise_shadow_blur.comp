@@ -120,6 +120,9 @@ void main() {
     }
     float width = (pen + TILE_WEIGHT * tiles.x / tiles.y) / (pen_w + TILE_WEIGHT);
     float radius = min(0.5 * width / pixel_world, max_radius);
+    // Stored in y for the temporal pass: the penumbra's half-width in pixels, before the
+    // history shrinks the blur (under half a pixel the shadow's edge is sharp).
+    float penumbra = radius;
     // The temporal pass after this one averages up to max-history frames: as the pixel's
     // history grows, each frame needs less blur (the blur's own error, a flattened penumbra,
     // then stops dominating). Radius x sqrt(SHADOW_BLUR_FRAMES / length), down to a quarter.
@@ -129,7 +132,7 @@ void main() {
     // texel) for no measured difference.
     if (u_d.flags.z == 0u && radius >= 0.5) radius *= clamp(sqrt(SHADOW_BLUR_FRAMES / max(c.w, 1.0)), 0.25, 1.0);
     if (radius < 0.5) {
-        hrt_store_temp(0u, pixel, vec4(c.x, radius, c.zw));
+        hrt_store_temp(0u, pixel, vec4(c.x, penumbra, c.zw));
         return;
     }
     float rotation = hrt_u01(hrt_pcg(uint(pixel.x) ^ hrt_pcg(uint(pixel.y) ^ hrt_pcg(u_d.c.frame.x)))) * 2.0 * HRT_PI;
@@ -148,5 +151,5 @@ void main() {
         sum += w * (k >= 0 ? s_temp[k].x : hrt_load_temp(0u, q).x);
         wsum += w;
     }
-    hrt_store_temp(0u, pixel, vec4(sum / wsum, radius, c.zw));
+    hrt_store_temp(0u, pixel, vec4(sum / wsum, penumbra, c.zw));
 }

@@ -442,17 +442,23 @@ pub const REGIONS: [&str; 3] = ["umbra", "lit", "penumbra"];
 
 /// Mean absolute error of the raw last frame and of the denoised image against the converged
 /// trace after 32 frames, per region of the converged shadow of a sun of `angular_extent` over
-/// a sphere on a plane: (raw, denoised, pixels).
-pub fn shadow_regions(angular_extent: f32, seed: u64) -> [(f32, f32, usize); 3] {
+/// a sphere on a plane: (raw, denoised, pixels). `pan`: metres the camera moves sideways each
+/// frame (0: still; 0.013 is about a quarter of a pixel, so every frame's history is
+/// resampled between texels).
+pub fn shadow_regions(angular_extent: f32, pan: f32, seed: u64) -> [(f32, f32, usize); 3] {
     const S: u32 = 64;
     let (scene, camera) = reference::sphere_on_plane();
     let sun = Signal::Shadow(LightInfo { direction: Vec3::new(-0.5, -1.0, -0.3), angular_extent, ..Default::default() });
     let mut st = Stage::new(&scene, None, camera, S, SignalType::Shadow, seed);
-    let reference = sun.converged(&mut st, 4);
-    for _ in 0..32 {
+    for f in 0..32 {
+        if pan != 0.0 {
+            let shift = Vec3::new(pan * f as f32, 0.0, 0.0);
+            st.move_camera(&scene, Camera { eye: camera.eye + shift, target: camera.target + shift, ..camera });
+        }
         sun.frame(&mut st, 1, true);
     }
     let (raw, out) = (sun.noisy(&st), sun.denoised(&st));
+    let reference = sun.converged(&mut st, 4);
     let mut regions = [(0.0f32, 0.0f32, 0usize); 3];
     for i in (0..reference.len()).filter(|&i| st.g.hit[i]) {
         let r = reference[i][0];
