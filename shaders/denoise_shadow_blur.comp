@@ -15,6 +15,7 @@
 // within reach, and those deep in an umbra (no pixel within reach sees any light), do nothing
 // but copy.
 #include "include/denoise.glsl"
+#include "include/group_sum.glsl"
 
 // History length (frames) up to which the full penumbra-wide blur is kept.
 const float SHADOW_BLUR_FRAMES = 1.0;
@@ -23,10 +24,6 @@ const float SHADOW_BLUR_FRAMES = 1.0;
 // pixel beside a penumbra) the tiles do.
 const float TILE_WEIGHT = 0.5;
 
-// Per invocation, then summed: (sum of count x mean width, count, tiles where some pixel sees
-// light) over the tiles in reach.
-shared vec3 s_tiles[64];
-shared vec3 s_rows[8];
 // The intermediate and the denoiser's G-buffer around the workgroup (one texel of border).
 const int APRON = 10;
 shared vec4 s_temp[APRON * APRON];
@@ -46,19 +43,9 @@ vec3 sum_tiles(int reach) {
         float count = abs(t.y);
         sum += vec3(t.x * count, count, t.y >= 0.0 ? 1.0 : 0.0);
     }
-    s_tiles[me] = sum;
-    barrier();
-    // Two levels (8 rows of 8, then every invocation sums the 8 row sums itself): two
-    // barriers instead of a six-level tree's seven.
-    if (me < 8u) {
-        vec3 row = vec3(0.0);
-        for (uint i = 0u; i < 8u; ++i) row += s_tiles[me * 8u + i];
-        s_rows[me] = row;
-    }
-    barrier();
-    vec3 total = vec3(0.0);
-    for (uint i = 0u; i < 8u; ++i) total += s_rows[i];
-    return total;
+    // Per invocation, then summed: (sum of count x mean width, count, tiles where some pixel
+    // sees light) over the tiles in reach.
+    return hrt_group_sum(sum);
 }
 
 // Fills the 10x10 apron: texels outside the viewport read as background.

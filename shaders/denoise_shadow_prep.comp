@@ -8,6 +8,7 @@
 // occluded samples, how many it holds (0: none, so the blur skips tiles out of reach), and
 // whether any of its pixels sees some of the light (none: the blur skips umbra interiors).
 #include "include/denoise.glsl"
+#include "include/group_sum.glsl"
 
 // (visibility, penumbra width or -1) of a traced texel at surface point p.
 vec2 decode_shadow(ivec2 q, vec3 p) {
@@ -17,11 +18,6 @@ vec2 decode_shadow(ivec2 q, vec3 p) {
     return vec2(vis, v.r >= 0.0 ? hrt_penumbra_width(u_d.light, p, v.r) : -1.0);
 }
 
-// Per invocation (penumbra width, 1, 0) where its pixel holds an occluded sample, z = 1 where
-// it sees some of the light; then summed over the workgroup (a tree in shared memory: no float
-// atomics needed).
-shared vec3 s_sum[64];
-shared vec3 s_rows[8];
 
 // Decodes one pixel into the intermediate (with the pixel's history texel in z, w); returns
 // (visibility, penumbra width or -1 where it holds no occluded sample).
@@ -60,21 +56,12 @@ void main() {
     uint me = gl_LocalInvocationIndex;
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
     vec2 v = hrt_in_viewport(pixel) ? prep(pixel) : vec2(1.0, -1.0);
-    s_sum[me] = vec3(v.y >= 0.0 ? vec2(min(v.y, 60000.0), 1.0) : vec2(0.0), v.x > 0.0 ? 1.0 : 0.0);
-    barrier();
-    // Two levels (8 rows of 8, then the 8 row sums) instead of a six-level tree: two barriers,
-    // not seven.
-    if (me < 8u) {
-        vec3 row = vec3(0.0);
-        for (uint i = 0u; i < 8u; ++i) row += s_sum[me * 8u + i];
-        s_rows[me] = row;
-    }
-    barrier();
+    // Per invocation (penumbra width, 1, 0) where its pixel holds an occluded sample, z = 1
+    // where it sees some of the light; summed over the workgroup (no float atomics needed).
+    vec3 sum = hrt_group_sum(vec3(v.y >= 0.0 ? vec2(min(v.y, 60000.0), 1.0) : vec2(0.0), v.x > 0.0 ? 1.0 : 0.0));
     // (mean width, count) as halves, the count negative where no pixel sees any light (pixels
     // outside the viewport count as lit); 0 where the tile holds no occluded sample.
     if (me == 0u) {
-        vec3 sum = vec3(0.0);
-        for (uint i = 0u; i < 8u; ++i) sum += s_rows[i];
         uint texel = sum.y > 0.0 ? packHalf2x16(vec2(sum.x / sum.y, sum.z > 0.0 ? sum.y : -sum.y)) : 0u;
         imageStore(u_tiles, ivec2(gl_WorkGroupID.xy), uvec4(texel));
     }

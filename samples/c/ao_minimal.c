@@ -494,6 +494,10 @@ int main(void) {
         CHECK_HRT(hrt_schedule_instance(frame, &inst));
     }
     HrtBvhBuildTask bvh = hrt_bvh_build_task_default();
+    /* Frames that only move instances may refit the TLAS (up to 4 in a row); adding or
+     * removing one, as below, rebuilds it. */
+    EXPECT(bvh.tlas_max_refits == 0, "rebuilt every frame by default");
+    bvh.tlas_max_refits = 4;
     CHECK_HRT(hrt_schedule_bvh_build(frame, &bvh));
 
     /* ---- Bad input gets a status, and schedules nothing. */

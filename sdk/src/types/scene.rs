@@ -407,7 +407,8 @@ pub struct BvhBuildTask {
     /// instances moved far is rebuilt within that many frames. Refitting suits slow, local
     /// motion (foliage, doors, vehicles in view); instances that jump across the level
     /// make a refit TLAS slow to trace until its rebuild. A TLAS is kept per ticket in
-    /// flight; each counts its own refits.
+    /// flight; each counts its own refits. A container without a `BvhBuildTask` (render
+    /// tasks only) rebuilds a changed TLAS in full and starts the count again.
     pub tlas_max_refits: u32,
 }
 
