@@ -28,7 +28,7 @@ void main() {
             continue;
         }
         vec4 slow = hrt_load_temp(s, pixel);
-        float len = fast_c.a;
+        float len = max(fast_c.a, 1.0); // HRT_MOVING_LEN: a restarted pixel
         vec3 m1 = vec3(0.0), m2 = vec3(0.0);
         float l1 = 0.0, l2 = 0.0, k = 0.0;
         for (int dy = -1; dy <= 1; ++dy) {

@@ -667,6 +667,10 @@ typedef struct HrtDenoiserSettings {
    * Default true (see DenoiserSettings::anti_lag).
    */
   bool anti_lag;
+  /**
+   * World units; 0 turns it off. Default 1.0 (see DenoiserSettings::moving_object_reach).
+   */
+  float moving_object_reach;
 } HrtDenoiserSettings;
 
 typedef struct HrtDenoisingCommon {

@@ -99,6 +99,8 @@ pub struct HrtDenoiserSettings {
     pub max_shadow_blur_radius: f32,
     /// Default true (see DenoiserSettings::anti_lag).
     pub anti_lag: bool,
+    /// World units; 0 turns it off. Default 1.0 (see DenoiserSettings::moving_object_reach).
+    pub moving_object_reach: f32,
 }
 
 #[repr(C)]
@@ -191,6 +193,7 @@ fn common(c: &HrtDenoisingCommon) -> Result<rt::DenoisingCommon, Failure> {
             anti_firefly: s.anti_firefly,
             max_shadow_blur_radius: s.max_shadow_blur_radius,
             anti_lag: s.anti_lag,
+            moving_object_reach: s.moving_object_reach,
         },
     })
 }
@@ -228,6 +231,7 @@ pub extern "C" fn hrt_denoising_common_default() -> HrtDenoisingCommon {
             anti_firefly: s.anti_firefly,
             max_shadow_blur_radius: s.max_shadow_blur_radius,
             anti_lag: s.anti_lag,
+            moving_object_reach: s.moving_object_reach,
         },
     }
 }

@@ -75,6 +75,11 @@ layout(set = 0, binding = 24, r32ui) uniform uimage2D u_tiles;
 // passes read the previous frame's; the temporal pass then overwrites it in place. (Radiance
 // passes bind a stand-in and ignore it.)
 layout(set = 0, binding = 25, r32ui) uniform uimage2D u_shadow_history;
+// AO: where objects moved, one texel per 8x8 tile in two halves side by side (even frames
+// write the left, odd frames the right; each frame reads the other): how far, in pixels, the
+// occlusion of a moving surface in that tile reaches (0: none). Written and read by the
+// temporal pass while the scene changes; other passes bind a stand-in.
+layout(set = 0, binding = 26, r32ui) uniform uimage2D u_motion_tiles;
 
 // The radiance passes' signal configuration, fixed per pipeline (one pipeline per signal type:
 // specular + diffuse, specular, diffuse, AO) so the compiler drops the code and the registers
@@ -86,8 +91,21 @@ layout(constant_id = 2) const uint HRT_KIND1 = HRT_SIGNAL_DIFFUSE;
 uint hrt_kind(uint s) { return s == 0u ? HRT_KIND0 : HRT_KIND1; }
 
 layout(push_constant) uniform Pass {
-    uvec4 u_pass;            // à-trous: step in pixels, last iteration (0/1)
+    // Blur: pass index, last pass (0/1). Temporal: 0, 0, HRT_MOVING_* flags, reach (world
+    // units, float bits).
+    uvec4 u_pass;
 };
+
+// The temporal pass's moving-object flags (u_pass.z): the scene changed lately (look for
+// moving objects, write this frame's tiles), last frame's tiles are valid (read them), the
+// camera did not move, this frame writes the right half of u_motion_tiles.
+#define HRT_MOVING_LOOK 1u
+#define HRT_MOVING_READ 2u
+#define HRT_MOVING_STILL_CAMERA 4u
+#define HRT_MOVING_ODD 8u
+// The history length a pixel near a moving object stores (it restarted this frame): below 1,
+// so the blur passes know to keep the contact occlusion sharp.
+const float HRT_MOVING_LEN = 0.5;
 
 // The denoiser's own images are RGBA16F, and Vulkan lets a store to them round towards zero
 // (lavapipe does). A running mean stored that way every frame loses half an ulp a frame on

@@ -50,6 +50,8 @@ pub struct Stage {
     pub next_frame: u64,
     /// Trace and denoise in checkerboard mode (`half_resolution_mode`). Default false.
     pub half_resolution: bool,
+    /// The denoise tasks' settings. Default: the SDK's.
+    pub settings: DenoiserSettings,
 }
 
 impl Stage {
@@ -72,7 +74,8 @@ impl Stage {
         let dn = ctx
             .create_denoising_context(&DenoisingContextInput { max_width: size, max_height: size, signal, ..Default::default() })
             .unwrap();
-        Stage { host, ctx, frame, g, camera, images, gpu_scene, noisy, den, dn, next_frame: seed, half_resolution: false }
+        let (next_frame, half_resolution, settings) = (seed, false, DenoiserSettings::default());
+        Stage { host, ctx, frame, g, camera, images, gpu_scene, noisy, den, dn, next_frame, half_resolution, settings }
     }
 
     /// Replaces the denoising context with a fresh one of `method` (same signal and size).
@@ -88,7 +91,7 @@ impl Stage {
     }
 
     pub fn denoising_common(&self) -> DenoisingCommon {
-        self.images.denoising_common(&self.camera)
+        DenoisingCommon { settings: self.settings, ..self.images.denoising_common(&self.camera) }
     }
 
     /// Builds and runs the scheduled tasks as the next frame.
@@ -356,8 +359,10 @@ pub fn moving_object_residual(signal: Signal, seed: u64) -> Vec<f32> {
 /// between the converged image `lag` frames ago and now that the denoised image still misses,
 /// over the floor pixels whose converged value changed by more than 0.2 (each pixel's shortfall
 /// counted in the direction of its change) — 1 while the old contact AO or shadow lingers, 0
-/// once the image has caught up.
-pub fn sliding_object_residual(signal: Signal, seed: u64, lags: &[usize]) -> Vec<f32> {
+/// once the image has caught up. Then, last, the price: the mean absolute error of the denoised
+/// image against the converged one over the changed pixels of the first lag. `settings`: the
+/// denoise tasks'.
+pub fn sliding_object_residual(signal: Signal, seed: u64, lags: &[usize], settings: DenoiserSettings) -> Vec<f32> {
     const S: u32 = 64;
     const STILL: usize = 16;
     const SLIDING: usize = 12;
@@ -369,6 +374,7 @@ pub fn sliding_object_residual(signal: Signal, seed: u64, lags: &[usize]) -> Vec
     let at = |k: usize| Affine3A::from_translation(Vec3::new(-0.8 + STEP * k as f32, 0.2, 0.3));
     scene.add_instance(cube, at(0));
     let mut st = Stage::new(&scene, None, camera, S, signal.signal_type(), seed);
+    st.settings = settings;
     // Moves the cube to its place in frame k: instance, TLAS, G-buffer; returns that G-buffer.
     let place = |st: &mut Stage, k: usize| -> GBuffer {
         let mut moved = scene.clone();
@@ -394,24 +400,29 @@ pub fn sliding_object_residual(signal: Signal, seed: u64, lags: &[usize]) -> Vec
     }
     let denoised = signal.denoised(&st);
     let new = signal.converged(&mut st, 4);
-    let residuals = lags
+    let mut error = None;
+    let mut residuals: Vec<f32> = lags
         .iter()
         .map(|&lag| {
             let then = place(&mut st, SLIDING - lag);
             let old = signal.converged(&mut st, 4);
-            let (mut num, mut den) = (0.0f32, 0.0f32);
+            let (mut num, mut den, mut abs, mut n) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
             for i in 0..old.len() {
                 let change = new[i][0] - old[i][0];
                 let floor = last.hit[i] && then.hit[i] && last.instance[i] == 0 && then.instance[i] == 0;
                 if floor && change.abs() > 0.2 {
                     num += (new[i][0] - denoised[i][0]) * change.signum();
                     den += change.abs();
+                    abs += (new[i][0] - denoised[i][0]).abs();
+                    n += 1.0;
                 }
             }
             assert!(den > 0.0, "the sliding cube changes some floor pixels by more than 0.2");
+            error.get_or_insert(abs / n);
             num / den
         })
         .collect();
+    residuals.extend(error);
     st.finish();
     residuals
 }

@@ -829,24 +829,24 @@ fn bad_denoise_inputs_are_typed_errors_and_leave_the_context_usable() {
 }
 
 /// The passes' intermediates are one set shared by every context: a second context of the same
-/// size and signal adds only what it keeps (its guide pair, its slow and fast history), and
-/// the last one destroyed frees the shared set too.
+/// size and signal adds only what it keeps (its guide pair, its history, its moving-object
+/// tiles), and the last one destroyed frees the shared set too.
 #[test]
 fn contexts_share_their_intermediates() {
     let (_host, ctx) = host_and_context(InitSettings::default());
     let count = || ctx.resource_allocations().denoiser.count;
     let a = context(&ctx, SignalType::DiffuseOcclusion, 64, 64);
     let first = count();
-    assert_eq!(first, 6, "guide pair and history (3) + the shared pair and tile map (3)");
+    assert_eq!(first, 7, "guide pair, history and moving-object tiles (4) + the shared pair and tile map (3)");
     let b = context(&ctx, SignalType::DiffuseOcclusion, 64, 64);
-    assert_eq!(count(), first + 3, "the second context keeps only its own guide and history");
+    assert_eq!(count(), first + 4, "the second context keeps only its own guide, history and tiles");
     let bytes_two = ctx.resource_allocations().denoiser.bytes;
     for h in [a, b] {
         ctx.destroy_denoising_context(h).unwrap();
     }
     ctx.release_device_resources_immediately().unwrap();
     assert_eq!(count(), 0, "the last context frees the shared set");
-    eprintln!("two 64x64 AO contexts: {bytes_two} bytes of denoiser images (9 images)");
+    eprintln!("two 64x64 AO contexts: {bytes_two} bytes of denoiser images (11 images)");
     drop(ctx);
     assert_no_validation_errors();
 }
@@ -890,7 +890,8 @@ fn every_setting_affects_the_denoisers_that_read_it() {
     ];
     // Which denoisers read each field (DenoiserSettings' documentation). `anti_lag` acts only
     // when the signal changes: a_moving_object_leaves_no_old_occlusion_behind (AO) and
-    // anti_lag_restarts_a_changed_signal (diffuse) show it.
+    // anti_lag_restarts_a_changed_signal (diffuse) show it; `moving_object_reach` only while
+    // objects move: a_sliding_object_s_occlusion_follows_it (denoise_quality.rs) shows it.
     let reads = |signal: SignalType, field: &str| match field {
         "max_history_frames" | "normal_power" | "plane_distance_sigma" => true,
         "fast_history_frames" | "history_clamp_sigma" | "spatial_passes" | "luminance_sigma" => signal != SignalType::Shadow,

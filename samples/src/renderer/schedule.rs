@@ -181,9 +181,12 @@ impl Renderer<'_> {
             ..Default::default()
         };
         schedule(c, "AO", |c| c.schedule_ambient_occlusion(&ao))?;
+        // A moving object changes the occlusion within the AO rays' reach.
+        let mut denoising = main.denoising;
+        denoising.settings.moving_object_reach = self.scene.ao_ray_length;
         let ao_denoise = DenoiseDiffuseOcclusionTask {
             context: self.denoisers.ao,
-            common: main.denoising,
+            common: denoising,
             input: wk.ao_noisy.input(GENERAL),
             output: wk.ao.input(GENERAL),
         };

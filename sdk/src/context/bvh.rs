@@ -14,7 +14,7 @@ use ash::vk;
 impl Recorder<'_> {
     /// Compactions, throttled BLAS builds and refits, in one batch where possible.
     pub fn record_blas_work(&mut self, max_builds: u32) -> Result<()> {
-        let (device, memory, cmd) = (self.device, self.memory, self.cmd);
+        let (device, memory, cmd, serial) = (self.device, self.memory, self.cmd, self.serial);
         let d = &device.raw;
         let st = &mut *self.st;
         let journal = &mut self.journal;
@@ -71,6 +71,8 @@ impl Recorder<'_> {
                 scratch_offset: scratch_total,
             });
             scratch_total += sizes.update_scratch_size.div_ceil(align) * align;
+            // A deformed mesh (a skinned character) changes what its surroundings see.
+            st.scene.changed_at = serial;
         }
         let mut built = 0;
         // Fast first builds of this recording, rebuilt for fast trace at a later one.

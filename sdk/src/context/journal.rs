@@ -69,6 +69,7 @@ struct SceneMeta {
     refit_queue: Vec<GeometryHandle>,
     compaction_ready: Vec<GeometryHandle>,
     snapshot_version: u64,
+    changed_at: u64,
     snapshot_dirty: bool,
     caches_dirty: bool,
     next_layout_id: u64,
@@ -109,6 +110,7 @@ impl Journal {
                 refit_queue: s.refit_queue.clone(),
                 compaction_ready: s.compaction_ready.clone(),
                 snapshot_version: s.snapshot_version,
+                changed_at: s.changed_at,
                 snapshot_dirty: s.snapshot_dirty,
                 caches_dirty: s.caches_dirty,
                 next_layout_id: s.next_layout_id,
@@ -230,7 +232,7 @@ impl Journal {
         (s.build_queue, s.refit_queue, s.compaction_ready) = (m.build_queue, m.refit_queue, m.compaction_ready);
         (s.snapshot_version, s.snapshot_dirty, s.caches_dirty, s.next_layout_id, s.cache_stats) =
             (m.snapshot_version, m.snapshot_dirty, m.caches_dirty, m.next_layout_id, m.cache_stats);
-        (s.relayout, s.quality_queue) = (m.relayout, m.quality_queue);
+        (s.relayout, s.quality_queue, s.changed_at) = (m.relayout, m.quality_queue, m.changed_at);
         if let Some(old) = self.old_snapshot {
             s.snapshot = old;
         }

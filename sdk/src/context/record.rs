@@ -88,6 +88,7 @@ impl Recorder<'_> {
             if self.st.scene.snapshot_dirty {
                 self.journal.saved_snapshot(std::mem::take(&mut self.st.scene.snapshot));
                 self.st.scene.rebuild_snapshot();
+                self.st.scene.changed_at = self.serial;
             }
             if self.working_set().tlas.version != self.st.scene.snapshot_version {
                 let span = self.begin(TaskKind::TlasBuild, first_bvh.unwrap_or(0));

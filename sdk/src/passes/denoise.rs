@@ -53,6 +53,10 @@ const SHADOW_HISTORY_FORMAT: vk::Format = vk::Format::R32_UINT;
 const TILE_FORMAT: vk::Format = vk::Format::R32_UINT;
 /// Pixels per tile side (the passes' workgroup size).
 const TILE: u32 = 8;
+/// For how many recordings after the scene last changed the AO denoiser looks for moving
+/// objects (`DenoiserSettings::moving_object_reach`): an engine may record its BVH work and
+/// its frame in separate command buffers.
+const MOVING_RECORDINGS: u64 = 4;
 
 /// What a denoising context keeps between frames: single history images, overwritten in place
 /// once the frame's first pass has read them (radiance: slow and fast RGBA16F per signal, 16
@@ -75,6 +79,11 @@ pub(crate) struct DenoiserState {
     /// Shadows: the one history image (visibility + length), overwritten in place each frame
     /// (the prep pass copies what the later passes read of it into the intermediates).
     shadow_history: Option<Image>,
+    /// AO: where objects moved, per 8x8 tile, two frames side by side (u_motion_tiles in
+    /// shaders/include/denoise.glsl).
+    motion_tiles: Option<Image>,
+    /// The guide frame whose moving-object tiles `motion_tiles` holds (0: none valid).
+    motion_frame: u64,
     initialized: bool,
     previous_camera: Option<Camera>,
     previous_jitter: [f32; 2],
@@ -100,6 +109,20 @@ impl DenoiserState {
         let history = images.by_ref().take(signals).collect();
         let fast = images.by_ref().take(fast_signals).collect();
         let shadow_history = images.next();
+        let motion_tiles = if input.signal == SignalType::DiffuseOcclusion {
+            let (w, h) = (2 * input.max_width.div_ceil(TILE), input.max_height.div_ceil(TILE));
+            match create_all(memory, "denoiser motion tiles", std::iter::once(TILE_FORMAT), w, h) {
+                Ok(mut t) => t.pop(),
+                Err(e) => {
+                    for image in images.chain(history).chain(fast).chain(shadow_history) {
+                        memory.destroy_image(image);
+                    }
+                    return Err(e);
+                }
+            }
+        } else {
+            None
+        };
         Ok(DenoiserState {
             input: *input,
             guide,
@@ -107,6 +130,8 @@ impl DenoiserState {
             history,
             fast,
             shadow_history,
+            motion_tiles,
+            motion_frame: 0,
             initialized: false,
             previous_camera: None,
             previous_jitter: [0.0; 2],
@@ -125,12 +150,12 @@ impl DenoiserState {
 
     /// Every image, for (deferred) destruction.
     pub fn into_images(self) -> Vec<Image> {
-        let DenoiserState { history, fast, shadow_history, .. } = self;
-        history.into_iter().chain(fast).chain(shadow_history).collect()
+        let DenoiserState { history, fast, shadow_history, motion_tiles, .. } = self;
+        history.into_iter().chain(fast).chain(shadow_history).chain(motion_tiles).collect()
     }
 
     fn images(&self) -> impl Iterator<Item = &Image> {
-        self.history.iter().chain(&self.fast).chain(&self.shadow_history)
+        self.history.iter().chain(&self.fast).chain(&self.shadow_history).chain(&self.motion_tiles)
     }
 }
 
@@ -246,8 +271,8 @@ pub(crate) struct DenoisePass {
 }
 
 /// Binding order of shaders/include/denoise.glsl: 6 sampled (depth, normals, roughness,
-/// motion, input 0/1), 16 storage, 1 uniform buffer, 1 sampled (the input mask), 2 storage
-/// (the tile map, the shadow history).
+/// motion, input 0/1), 16 storage, 1 uniform buffer, 1 sampled (the input mask), 3 storage
+/// (the tile map, the shadow history, the moving-object tiles).
 const SAMPLED_BINDINGS: usize = 6;
 const STORAGE_BINDINGS: usize = 16;
 
@@ -259,8 +284,7 @@ impl DenoisePass {
         bindings.extend((0..STORAGE_BINDINGS).map(|_| Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None }));
         bindings.push(Binding { ty: vk::DescriptorType::UNIFORM_BUFFER, sampler: None });
         bindings.push(Binding { ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER, sampler: Some(sampler) });
-        bindings.push(Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None });
-        bindings.push(Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None });
+        bindings.extend((0..3).map(|_| Binding { ty: vk::DescriptorType::STORAGE_IMAGE, sampler: None }));
         let set_layout = b.set_layout(&bindings, vk::ShaderStageFlags::COMPUTE)?;
         let layout = b.layout(Some(set_layout), 16, vk::ShaderStageFlags::COMPUTE)?;
         let mut radiance = Vec::with_capacity(RADIANCE_SIGNALS.len());
@@ -281,14 +305,15 @@ impl DenoisePass {
     }
 
     /// Records one denoise task against its context's state and guide (and advances both),
-    /// with the shared intermediates of `temps`; `serial` is the recording's.
+    /// with the shared intermediates of `temps`; `serial` is the recording's, `scene_changed`
+    /// the serial of the last one that changed the scene (`Scene::changed_at`).
     pub fn record(
         &self,
         r: &mut Recording<'_>,
         (state, guide): (&mut DenoiserState, &mut Guide),
         temps: &mut TempPool,
         job: &DenoiseJob,
-        serial: u64,
+        (serial, scene_changed): (u64, u64),
     ) {
         // The pool grows with every context made (`ExecuteContext::create_denoising_context`),
         // so it always serves a live context's task; recording nothing beats an out-of-bounds
@@ -343,6 +368,7 @@ impl DenoisePass {
         let fast_prev = per_signal(&state.fast);
         let fast_cur = temps_in[1];
         let shadow_history = state.shadow_history.as_ref().map_or(tiles, Image::input);
+        let motion_tiles = state.motion_tiles.as_ref().map_or(tiles, Image::input);
         let gb_prev = guide.images()[guide_prev].input();
         let gb_cur = guide.images()[guide_cur].input();
         let stand_in = temps_in[0][0];
@@ -381,6 +407,7 @@ impl DenoisePass {
                     Slot::Sampled(mask),
                     Slot::Storage(&tiles),
                     Slot::Storage(&shadow_history),
+                    Slot::Storage(&motion_tiles),
                 ];
                 let bind = vk::PipelineBindPoint::COMPUTE;
                 let dev = &r.device.raw;
@@ -403,7 +430,19 @@ impl DenoisePass {
             let Some(k) = RADIANCE_SIGNALS.iter().position(|(s, _)| *s == job.signal) else { return };
             let p = &self.radiance[k];
             let passes = c.settings.spatial_passes;
-            dispatch(r, "temporal", p.temporal, 1, 0, [0; 4]);
+            // AO looks for moving objects while the scene changes (see DenoiserSettings::
+            // moving_object_reach), reading last frame's tiles where that frame wrote them.
+            let reach = c.settings.moving_object_reach;
+            let look = state.motion_tiles.is_some()
+                && reach > 0.0
+                && !reset
+                && scene_changed != 0
+                && serial.saturating_sub(scene_changed) <= MOVING_RECORDINGS;
+            let read = look && state.motion_frame != 0 && state.motion_frame + 1 == guide_frame;
+            let still = previous == c.camera;
+            let flags = look as u32 | (read as u32) << 1 | (still as u32) << 2 | ((guide_frame & 1) as u32) << 3;
+            state.motion_frame = if look { guide_frame } else { 0 };
+            dispatch(r, "temporal", p.temporal, 1, 0, [0, 0, flags, reach.to_bits()]);
             dispatch(r, "clamp", p.clamp, 0, 0, [0, (passes == 0) as u32, 0, 0]);
             for (i, name) in (0..passes).zip(BLUR_PASS_NAMES) {
                 let src = i as usize % 2;
@@ -546,7 +585,7 @@ impl PassTask for DenoiseJob {
     fn record(&self, r: &mut Recording<'_>, passes: &Passes, world: &mut World<'_>) {
         let Ok(state) = world.denoisers.get_mut(self.context) else { return };
         let Some(guide) = world.denoise_guides.get_mut(&state.guide) else { return };
-        passes.denoise.record(r, (state, guide), world.denoise_temps, self, world.serial);
+        passes.denoise.record(r, (state, guide), world.denoise_temps, self, (world.serial, world.scene.changed_at));
     }
 }
 

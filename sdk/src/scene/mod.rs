@@ -29,6 +29,10 @@ pub(crate) struct Scene {
     /// TLAS records of every registered instance whose BLAS is ready.
     pub snapshot: Vec<vk::AccelerationStructureInstanceKHR>,
     pub snapshot_version: u64,
+    /// The serial of the last recording whose TLAS or BLASes show the scene changed (instances
+    /// moved, added or removed; geometry refit or rebuilt): the denoisers look for moving
+    /// objects only shortly after it. 0: never.
+    pub changed_at: u64,
     /// Something changed that the snapshot must follow (rebuilt before the next TLAS).
     pub snapshot_dirty: bool,
     /// Some instance may need a cache (new layout, new or moved instance).
@@ -64,6 +68,7 @@ impl Scene {
             compaction_ready: Vec::new(),
             snapshot: Vec::new(),
             snapshot_version: 1,
+            changed_at: 0,
             snapshot_dirty: false,
             caches_dirty: false,
             next_layout_id: 0,
