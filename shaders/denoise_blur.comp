@@ -72,7 +72,7 @@ void main() {
         // spread over the open floor around it (the quality program's AO error 0.047 -> 0.043
         // at 8 frames; the sample in motion 0.032 -> 0.028).
         if (hrt_kind(s) == HRT_SIGNAL_SCALAR) scale *= mix(0.25, 1.0, smoothstep(0.7, 1.0, c[s].x));
-        // AO near a moving object (the temporal pass restarted it, HRT_MOVING_LEN): a narrow
+        // AO near a moving object (the clamp pass restarted it, HRT_MOVING_LEN): a narrow
         // disk, as a wide one spreads the contact shadow — a fifth of a sliding cube's
         // change missing with the full disk, none measurable with a quarter of it.
         if (hrt_kind(s) == HRT_SIGNAL_SCALAR && len[s] < 1.0) scale *= MOVING_RADIUS_SCALE;

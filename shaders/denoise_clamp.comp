@@ -8,7 +8,9 @@
 // noise left in the mean), blended from the neighbourhood's while history is short.
 // Both histories are kept in place here (the temporal pass has read the previous frame's), and
 // the intermediate is filtered in place (the fast history's image is then free for à-trous).
-// u_pass.y = 1: no spatial passes follow, write the output.
+// u_pass.y = 1: no spatial passes follow, write the output. AO near a moving object (while the
+// scene changes, a second pipeline: HRT_MOVING_OBJECTS) starts over from this frame's sample
+// (denoise_moving.comp found the objects; u_pass.x is this frame's stamp).
 #include "include/denoise.glsl"
 
 void main() {
@@ -18,7 +20,11 @@ void main() {
     bool last = u_pass.y != 0u;
     vec3 n;
     float dist;
-    hrt_unpack_surface(imageLoad(u_gbuf_cur, pixel).xy, n, dist);
+    uvec2 surface = imageLoad(u_gbuf_cur, pixel).xy;
+    hrt_unpack_surface(surface, n, dist);
+    // A constant condition but in AO's pipeline for moving objects.
+    bool near_moving = HRT_SIGNALS == 1u && HRT_KIND0 == HRT_SIGNAL_SCALAR && HRT_MOVING_OBJECTS != 0u && dist >= 0.0 &&
+                       hrt_moving_load(ivec2(gl_GlobalInvocationID.xy) / HRT_MOVING_STAMP_TILE) == u_pass.x;
     for (uint s = 0u; s < count; ++s) {
         vec4 fast_c = hrt_load_fast_cur(s, pixel);
         if (dist < 0.0) {
@@ -28,6 +34,16 @@ void main() {
             continue;
         }
         vec4 slow = hrt_load_temp(s, pixel);
+        if (near_moving) {
+            // This frame's sample alone: the history and the fast window behind the clamp both
+            // lag a contact shadow that slides (the blur passes then keep it narrow).
+            vec3 p, n_again;
+            hrt_surface_at(surface, u_d.c.clip_to_world, u_d.eye.xyz, pixel, p, n_again);
+            vec4 cur = hrt_as_signal(hrt_kind(s), hrt_noisy_sample(s, pixel, p, n, dist));
+            float l = hrt_luminance(cur.rgb);
+            slow = vec4(cur.rgb, l * l);
+            fast_c = vec4(cur.rgb, HRT_MOVING_LEN);
+        }
         float len = max(fast_c.a, 1.0); // HRT_MOVING_LEN: a restarted pixel
         vec3 m1 = vec3(0.0), m2 = vec3(0.0);
         float l1 = 0.0, l2 = 0.0, k = 0.0;
@@ -45,11 +61,14 @@ void main() {
         vec3 sigma = sqrt(max(m2 - m1 * m1, vec3(0.0)));
         vec3 lo = min(m1 - u_d.history.z * sigma, fast_c.rgb);
         vec3 hi = max(m1 + u_d.history.z * sigma, fast_c.rgb);
-        vec3 clamped = clamp(slow.rgb, lo, hi);
+        vec3 clamped = near_moving ? slow.rgb : clamp(slow.rgb, lo, hi);
         float l_slow = hrt_luminance(slow.rgb);
         float var_temporal = max(slow.a - l_slow * l_slow, 0.0) / len;
         float var_spatial = max(l2 - l1 * l1, 0.0);
         float variance = mix(var_spatial, var_temporal, clamp((len - 1.0) / 7.0, 0.0, 1.0));
+        // A restarted AO pixel is one sample: at least the spread of one visibility sample of
+        // the neighbourhood's mean (its neighbours' fast histories are smoother than that).
+        if (near_moving) variance = max(variance, l1 * (1.0 - l1));
         hrt_keep_histories(s, pixel, vec4(clamped, slow.a), fast_c);
         if (last) hrt_store_output(s, pixel, vec4(clamped, 1.0));
         else hrt_store_temp(s, pixel, vec4(clamped, variance));

@@ -53,97 +53,6 @@ shared vec4 s_win[2][WINDOWS * WINDOWS];
 // pixels) of the diffuse signal.
 shared vec4 s_rows[TILE];
 
-// Moving objects (AO): a moving object changes the occlusion of the static surfaces around it
-// (its contact shadow slides over the floor), and nothing in the floor's own history or
-// neighbourhood says so: its pixels reproject onto themselves, and a contact band changing by
-// 0.2-0.5 stands out of 25 1-ray samples by about one deviation, which no anti-lag test can
-// tell from noise within a frame. So the pass looks for the objects instead: while the scene
-// changes (the SDK knows when its TLAS does), a pixel whose surface moved — its motion vector
-// differs from the camera's motion, or, without motion vectors under a still camera, it shows
-// a surface the last frame did not have there — marks its 8x8 tile with how far its occlusion
-// reaches on screen (the task's reach at its distance). Pixels within that reach of a marked
-// tile of this frame's group or of last frame's (the tiles are read a frame late: this frame's
-// are being written) restart their history every frame and are blurred narrowly, so a moving
-// contact shadow is this frame's, noisy but in place. (One frame of history already leaves a
-// quarter of a 2.6 px/frame slide's change behind; the full-width blur a fifth.)
-// Tiles each way a workgroup looks for last frame's marks (16: 128 pixels of reach).
-const int MOVING_SCAN = 16;
-// Marked tiles a workgroup keeps; past that, all its pixels count as near a moving object.
-const uint MOVING_CANDIDATES = 32u;
-// A motion vector this many pixels off the camera's motion marks a moving surface (TAA's
-// jitter moves a static surface's reprojection by under a pixel).
-const float MOVING_MIN_PIXELS = 1.0;
-shared uint s_moving_count;
-shared uvec2 s_moving[MOVING_CANDIDATES]; // (tile x | tile y << 16, reach in pixels)
-shared uint s_own_reach;
-
-// Pixels from the rectangle of tile `t` to the point `x` (both relative to the viewport).
-float tile_distance(ivec2 t, vec2 x) {
-    vec2 lo = vec2(t * TILE);
-    vec2 d = max(max(lo - x, x - (lo + float(TILE))), vec2(0.0));
-    return length(d);
-}
-
-// Whether this pixel's occlusion may have changed under a moving object (see above), marking
-// this workgroup's tile for the next frame. Every invocation calls it (it has barriers).
-// `prev_pos`: where the surface was last frame (motion vectors or cameras); `has_history`: the
-// last frame showed this surface there.
-bool near_moving_object(bool surface, vec3 p, float dist, vec2 prev_pos, bool has_history) {
-    uint flags = u_pass.z;
-    uint me = gl_LocalInvocationIndex;
-    bool moved = false;
-    if (surface && u_d.flags.z == 0u) {
-        if (u_d.flags.x != HRT_MOTION_NONE) {
-            vec4 clip = u_d.prev_world_to_clip * vec4(p, 1.0);
-            vec2 camera = (clip.xy / clip.w * 0.5 + 0.5) * u_d.c.viewport.zw + u_d.c.viewport.xy + u_d.jitter_delta.xy;
-            moved = clip.w > 0.0 && distance(camera, prev_pos) > MOVING_MIN_PIXELS;
-        } else if ((flags & HRT_MOVING_STILL_CAMERA) != 0u) {
-            moved = !has_history;
-        }
-    }
-    if (me == 0u) {
-        s_own_reach = 0u;
-        s_moving_count = 0u;
-    }
-    barrier();
-    if (moved) {
-        float reach = uintBitsToFloat(u_pass.w) / (dist * u_d.eye.w);
-        atomicMax(s_own_reach, uint(clamp(reach, 1.0, float(MOVING_SCAN * TILE))));
-    }
-    ivec2 group = ivec2(gl_WorkGroupID.xy);
-    ivec2 tiles = (ivec2(u_d.c.viewport.zw) + TILE - 1) / TILE;
-    // Odd frames write the right half and read the left; even frames the other way round.
-    int half_width = imageSize(u_motion_tiles).x / 2;
-    int read_x = (flags & HRT_MOVING_ODD) != 0u ? 0 : half_width;
-    if ((flags & HRT_MOVING_READ) != 0u) {
-        const int SIDE_TILES = 2 * MOVING_SCAN + 1;
-        vec2 lo = vec2(group * TILE), hi = lo + float(TILE);
-        for (int i = int(me); i < SIDE_TILES * SIDE_TILES; i += TILE * TILE) {
-            ivec2 t = group + ivec2(i % SIDE_TILES, i / SIDE_TILES) - MOVING_SCAN;
-            if (any(lessThan(t, ivec2(0))) || any(greaterThanEqual(t, tiles))) continue;
-            uint r = imageLoad(u_motion_tiles, ivec2(t.x + read_x, t.y)).x;
-            if (r == 0u) continue;
-            vec2 t_lo = vec2(t * TILE);
-            vec2 gap = max(max(t_lo - hi, lo - (t_lo + float(TILE))), vec2(0.0));
-            if (length(gap) > float(r)) continue;
-            uint k = atomicAdd(s_moving_count, 1u);
-            if (k < MOVING_CANDIDATES) s_moving[k] = uvec2(uint(t.x) | (uint(t.y) << 16), r);
-        }
-    }
-    barrier();
-    if (me == 0u) imageStore(u_motion_tiles, ivec2(group.x + half_width - read_x, group.y), uvec4(s_own_reach));
-    if (!surface) return false;
-    vec2 x = vec2(gl_GlobalInvocationID.xy) + 0.5;
-    if (s_own_reach > 0u) return true;
-    uint n = s_moving_count;
-    if (n > MOVING_CANDIDATES) return true;
-    for (uint k = 0u; k < n; ++k) {
-        uvec2 m = s_moving[k];
-        if (tile_distance(ivec2(m.x & 0xffffu, m.x >> 16), x) <= float(m.y)) return true;
-    }
-    return false;
-}
-
 // Whether the task has a diffuse signal, and which. (Functions of the specialization
 // constants: a driver folds them; glslang cannot make a short-circuit constant of them.)
 bool has_diffuse() { return HRT_KIND0 == HRT_SIGNAL_DIFFUSE || (HRT_SIGNALS == 2u && HRT_KIND1 == HRT_SIGNAL_DIFFUSE); }
@@ -219,14 +128,10 @@ void main() {
     vec4 cur[2], hist[2], fast[2];
     float lum_cur[2], lum_fast[2];
     bool found[2];
-    vec2 prev_pos = vec2(-1e9);
     if (surface) {
         ivec2 taps[4];
         vec4 weights = vec4(0.0);
-        if (!reset) {
-            prev_pos = hrt_previous_position(pixel, p);
-            hrt_history_taps(prev_pos, p, n, dist, taps, weights);
-        }
+        if (!reset) hrt_history_taps(hrt_previous_position(pixel, p), p, n, dist, taps, weights);
         [[unroll]] for (uint s = 0u; s < 2u; ++s) {
             cur[s] = hist[s] = fast[s] = vec4(0.0);
             lum_cur[s] = lum_fast[s] = 0.0;
@@ -266,13 +171,6 @@ void main() {
             lum_cur[s] = lum_fast[s] = 0.0;
             found[s] = false;
         }
-    }
-
-    // AO near a moving object restarts every frame (see near_moving_object). A constant
-    // condition for the other pipelines, uniform over the dispatch for AO's.
-    bool near_moving = false;
-    if (HRT_SIGNALS == 1u && HRT_KIND0 == HRT_SIGNAL_SCALAR && (u_pass.z & HRT_MOVING_LOOK) != 0u) {
-        near_moving = near_moving_object(surface, p, dist, prev_pos, found[0]);
     }
 
     vec4 group = vec4(0.0);
@@ -390,7 +288,6 @@ void main() {
             float l = hrt_luminance(cur[s].rgb);
             if (l > limit) cur[s].rgb *= limit / l;
         }
-        if (near_moving) len = 0.0;
         // Smoother specular accumulates fewer frames (its signal changes with the view); a
         // mirror keeps only this frame.
         float max_len = u_d.history.x;
@@ -400,6 +297,6 @@ void main() {
         float a_fast = max(a, 1.0 / u_d.history.y);
         float l = hrt_luminance(cur[s].rgb);
         hrt_store_temp(s, pixel, vec4(mix(hist[s].rgb, cur[s].rgb, a), mix(hist[s].a, l * l, a)));
-        hrt_store_fast_cur(s, pixel, vec4(mix(fast[s].rgb, cur[s].rgb, a_fast), near_moving ? HRT_MOVING_LEN : len));
+        hrt_store_fast_cur(s, pixel, vec4(mix(fast[s].rgb, cur[s].rgb, a_fast), len));
     }
 }

@@ -746,8 +746,8 @@ int main(void) {
     EXPECT(hrt_schedule_denoise_diffuse(frame, &wrong) == HRT_ERROR_INVALID_INPUT, "an image without SAMPLED usage is no input");
     wrong.input = sdk_image(&noisy, VK_IMAGE_LAYOUT_GENERAL);
     EXPECT(hrt_schedule_denoise_diffuse(frame, &wrong) == HRT_ERROR_UNSUPPORTED_FORMAT, "a two-channel image is no diffuse input");
-    /* AO near moving objects: set the reach to the AO trace's ray length (0 turns it off). */
-    EXPECT(denoise.common.settings.moving_object_reach == 1.0f, "the reach defaults to the AO trace's default ray length");
+    /* AO near moving objects: half the AO trace's ray length suits its default falloff. */
+    EXPECT(denoise.common.settings.moving_object_reach == 0.5f, "the reach defaults to half the AO trace's default ray length");
     HrtDenoiseShadowTask reaching = denoise;
     reaching.common.settings.moving_object_reach = -1.0f;
     EXPECT(hrt_schedule_denoise_shadow(frame, &reaching) == HRT_ERROR_INVALID_INPUT, "a negative moving-object reach");

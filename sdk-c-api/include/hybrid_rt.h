@@ -668,7 +668,7 @@ typedef struct HrtDenoiserSettings {
    */
   bool anti_lag;
   /**
-   * World units; 0 turns it off. Default 1.0 (see DenoiserSettings::moving_object_reach).
+   * World units; 0 turns it off. Default 0.5 (see DenoiserSettings::moving_object_reach).
    */
   float moving_object_reach;
 } HrtDenoiserSettings;

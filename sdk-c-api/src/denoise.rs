@@ -99,7 +99,7 @@ pub struct HrtDenoiserSettings {
     pub max_shadow_blur_radius: f32,
     /// Default true (see DenoiserSettings::anti_lag).
     pub anti_lag: bool,
-    /// World units; 0 turns it off. Default 1.0 (see DenoiserSettings::moving_object_reach).
+    /// World units; 0 turns it off. Default 0.5 (see DenoiserSettings::moving_object_reach).
     pub moving_object_reach: f32,
 }
 

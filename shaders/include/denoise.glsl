@@ -75,10 +75,9 @@ layout(set = 0, binding = 24, r32ui) uniform uimage2D u_tiles;
 // passes read the previous frame's; the temporal pass then overwrites it in place. (Radiance
 // passes bind a stand-in and ignore it.)
 layout(set = 0, binding = 25, r32ui) uniform uimage2D u_shadow_history;
-// AO: where objects moved, one texel per 8x8 tile in two halves side by side (even frames
-// write the left, odd frames the right; each frame reads the other): how far, in pixels, the
-// occlusion of a moving surface in that tile reaches (0: none). Written and read by the
-// temporal pass while the scene changes; other passes bind a stand-in.
+// AO: which 32x32 tiles of the viewport a moving object's occlusion reaches, as the number of
+// the frame that found it there (a stamp: nothing to clear). Written by denoise_moving.comp
+// while the scene changes, read by the clamp pass after it; other passes bind a stand-in.
 layout(set = 0, binding = 26, r32ui) uniform uimage2D u_motion_tiles;
 
 // The radiance passes' signal configuration, fixed per pipeline (one pipeline per signal type:
@@ -89,20 +88,23 @@ layout(constant_id = 0) const uint HRT_SIGNALS = 2u;
 layout(constant_id = 1) const uint HRT_KIND0 = HRT_SIGNAL_SPECULAR;
 layout(constant_id = 2) const uint HRT_KIND1 = HRT_SIGNAL_DIFFUSE;
 uint hrt_kind(uint s) { return s == 0u ? HRT_KIND0 : HRT_KIND1; }
+// AO's clamp pass: whether this pipeline reads the moving-object stamps (a second pipeline,
+// used while the scene changes: see denoise_moving.comp).
+layout(constant_id = 3) const uint HRT_MOVING_OBJECTS = 0u;
 
 layout(push_constant) uniform Pass {
-    // Blur: pass index, last pass (0/1). Temporal: 0, 0, HRT_MOVING_* flags, reach (world
-    // units, float bits).
+    // Blur: pass index, last pass (0/1). Clamp: this frame's stamp (AO's moving objects: its
+    // guide frame, never 0), last pass (0/1). AO's moving-object pass: the stamp, 0,
+    // HRT_MOVING_* flags, reach (world units, float bits).
     uvec4 u_pass;
 };
 
-// The temporal pass's moving-object flags (u_pass.z): the scene changed lately (look for
-// moving objects, write this frame's tiles), last frame's tiles are valid (read them), the
-// camera did not move, this frame writes the right half of u_motion_tiles.
-#define HRT_MOVING_LOOK 1u
-#define HRT_MOVING_READ 2u
+// The moving-object pass's flags (u_pass.z): the camera did not move.
 #define HRT_MOVING_STILL_CAMERA 4u
-#define HRT_MOVING_ODD 8u
+// Pixels per side of u_motion_tiles' tiles.
+const int HRT_MOVING_STAMP_TILE = 32;
+uint hrt_moving_load(ivec2 tile) { return imageLoad(u_motion_tiles, tile).x; }
+void hrt_moving_store(ivec2 tile, uint stamp) { imageStore(u_motion_tiles, tile, uvec4(stamp)); }
 // The history length a pixel near a moving object stores (it restarted this frame): below 1,
 // so the blur passes know to keep the contact occlusion sharp.
 const float HRT_MOVING_LEN = 0.5;

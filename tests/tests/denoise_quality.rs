@@ -55,7 +55,7 @@ fn a_moving_object_leaves_no_old_occlusion_behind() {
 
 /// An object sliding over a static floor (a 0.4 m cube, 2.6 pixels a frame): its contact AO and
 /// its shadow follow it — of the change the last 4 frames brought, at most 10% missing in the
-/// denoised image, and no more than 10% overshoot (mean of 4 seeds; measured -1% for AO, 1% for
+/// denoised image, and no more than 10% overshoot (mean of 4 seeds; measured 0% for AO, 1% for
 /// the shadow; AO kept 44% before it restarted pixels near moving objects). The floor's pixels
 /// reproject onto themselves and their change is within the noise of 25 1-ray samples: AO
 /// finds the moving object instead (`DenoiserSettings::moving_object_reach`).

@@ -181,9 +181,9 @@ impl Renderer<'_> {
             ..Default::default()
         };
         schedule(c, "AO", |c| c.schedule_ambient_occlusion(&ao))?;
-        // A moving object changes the occlusion within the AO rays' reach.
+        // A moving object changes the occlusion noticeably within half the AO rays' length.
         let mut denoising = main.denoising;
-        denoising.settings.moving_object_reach = self.scene.ao_ray_length;
+        denoising.settings.moving_object_reach = 0.5 * self.scene.ao_ray_length;
         let ao_denoise = DenoiseDiffuseOcclusionTask {
             context: self.denoisers.ao,
             common: denoising,

@@ -113,7 +113,7 @@ impl Hazards {
     }
 }
 
-fn barrier(device: &ash::Device, cmd: vk::CommandBuffer, src: Use, dst: Use) {
+pub(crate) fn barrier(device: &ash::Device, cmd: vk::CommandBuffer, src: Use, dst: Use) {
     let mb = [vk::MemoryBarrier2::default()
         .src_stage_mask(src.stages)
         .src_access_mask(src.access)

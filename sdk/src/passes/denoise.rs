@@ -3,7 +3,8 @@
 //! layout (shaders/include/denoise.glsl); a pass's step size travels as a push constant.
 //!
 //! Radiance: temporal → clamp (in place) → rotated-disk blur × `spatial_passes` (the last
-//! writes the output).
+//! writes the output). AO while the scene changes: a moving-object search first, and a clamp
+//! pass that restarts the pixels the moving objects reach.
 //! Shadows: prep → penumbra blur → temporal (writes the output).
 use super::constants::LightGpu;
 use super::constants::TraceCommonGpu;
@@ -53,6 +54,8 @@ const SHADOW_HISTORY_FORMAT: vk::Format = vk::Format::R32_UINT;
 const TILE_FORMAT: vk::Format = vk::Format::R32_UINT;
 /// Pixels per tile side (the passes' workgroup size).
 const TILE: u32 = 8;
+/// Pixels per side of the tiles AO's moving objects stamp (HRT_MOVING_STAMP_TILE).
+const STAMP_TILE: u32 = 32;
 /// For how many recordings after the scene last changed the AO denoiser looks for moving
 /// objects (`DenoiserSettings::moving_object_reach`): an engine may record its BVH work and
 /// its frame in separate command buffers.
@@ -79,11 +82,9 @@ pub(crate) struct DenoiserState {
     /// Shadows: the one history image (visibility + length), overwritten in place each frame
     /// (the prep pass copies what the later passes read of it into the intermediates).
     shadow_history: Option<Image>,
-    /// AO: where objects moved, per 8x8 tile, two frames side by side (u_motion_tiles in
-    /// shaders/include/denoise.glsl).
+    /// AO: the 32x32 tiles a moving object's occlusion reaches, stamped with the frame
+    /// (u_motion_tiles in shaders/include/denoise.glsl).
     motion_tiles: Option<Image>,
-    /// The guide frame whose moving-object tiles `motion_tiles` holds (0: none valid).
-    motion_frame: u64,
     initialized: bool,
     previous_camera: Option<Camera>,
     previous_jitter: [f32; 2],
@@ -110,7 +111,7 @@ impl DenoiserState {
         let fast = images.by_ref().take(fast_signals).collect();
         let shadow_history = images.next();
         let motion_tiles = if input.signal == SignalType::DiffuseOcclusion {
-            let (w, h) = (2 * input.max_width.div_ceil(TILE), input.max_height.div_ceil(TILE));
+            let (w, h) = (input.max_width.div_ceil(STAMP_TILE), input.max_height.div_ceil(STAMP_TILE));
             match create_all(memory, "denoiser motion tiles", std::iter::once(TILE_FORMAT), w, h) {
                 Ok(mut t) => t.pop(),
                 Err(e) => {
@@ -131,7 +132,6 @@ impl DenoiserState {
             fast,
             shadow_history,
             motion_tiles,
-            motion_frame: 0,
             initialized: false,
             previous_camera: None,
             previous_jitter: [0.0; 2],
@@ -250,6 +250,9 @@ impl TempPool {
 struct RadiancePipelines {
     temporal: vk::Pipeline,
     clamp: vk::Pipeline,
+    /// AO's clamp pass that also restarts pixels near moving objects (HRT_MOVING_OBJECTS),
+    /// used while the scene changes; the plain one the rest of the time.
+    clamp_moving: Option<vk::Pipeline>,
     blur: vk::Pipeline,
 }
 
@@ -268,6 +271,8 @@ pub(crate) struct DenoisePass {
     shadow_prep: vk::Pipeline,
     shadow_blur: vk::Pipeline,
     shadow_temporal: vk::Pipeline,
+    /// AO's moving-object search (shaders/denoise_moving.comp).
+    moving: vk::Pipeline,
 }
 
 /// Binding order of shaders/include/denoise.glsl: 6 sampled (depth, normals, roughness,
@@ -288,10 +293,16 @@ impl DenoisePass {
         let set_layout = b.set_layout(&bindings, vk::ShaderStageFlags::COMPUTE)?;
         let layout = b.layout(Some(set_layout), 16, vk::ShaderStageFlags::COMPUTE)?;
         let mut radiance = Vec::with_capacity(RADIANCE_SIGNALS.len());
-        for (_, constants) in RADIANCE_SIGNALS {
+        for (signal, constants) in RADIANCE_SIGNALS {
+            let moving = [constants[0], constants[1], constants[2], 1];
             radiance.push(RadiancePipelines {
                 temporal: b.compute_specialized(layout, shaders::DENOISE_TEMPORAL_COMP, &constants)?,
                 clamp: b.compute_specialized(layout, shaders::DENOISE_CLAMP_COMP, &constants)?,
+                clamp_moving: if signal == SignalType::DiffuseOcclusion {
+                    Some(b.compute_specialized(layout, shaders::DENOISE_CLAMP_COMP, &moving)?)
+                } else {
+                    None
+                },
                 blur: b.compute_specialized(layout, shaders::DENOISE_BLUR_COMP, &constants)?,
             });
         }
@@ -301,6 +312,7 @@ impl DenoisePass {
             shadow_prep: b.compute(layout, shaders::DENOISE_SHADOW_PREP_COMP)?,
             shadow_blur: b.compute(layout, shaders::DENOISE_SHADOW_BLUR_COMP)?,
             shadow_temporal: b.compute(layout, shaders::DENOISE_SHADOW_TEMPORAL_COMP)?,
+            moving: b.compute(layout, shaders::DENOISE_MOVING_COMP)?,
         })
     }
 
@@ -376,78 +388,91 @@ impl DenoisePass {
         let motion = descriptors::optional_or(&c.motion.image, &stand_in);
         let mask = descriptors::optional_or(&c.input_mask, &stand_in);
 
-        let dispatch =
-            |r: &mut Recording<'_>, name: &'static str, pipeline: vk::Pipeline, src: usize, dst: usize, push: [u32; 4]| {
-                r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
-                let span = r.begin_pass(name);
-                let slots = [
-                    Slot::Sampled(&c.depth.image),
-                    Slot::Sampled(&c.normals.image),
-                    Slot::Sampled(roughness),
-                    Slot::Sampled(motion),
-                    Slot::Sampled(&job.inputs[0]),
-                    Slot::Sampled(&job.inputs[1]),
-                    Slot::Storage(&job.outputs[0]),
-                    Slot::Storage(&job.outputs[1]),
-                    Slot::Storage(&gb_prev),
-                    Slot::Storage(&gb_cur),
-                    Slot::Storage(&hist_prev[0]),
-                    Slot::Storage(&hist_prev[1]),
-                    Slot::Storage(&hist_cur[0]),
-                    Slot::Storage(&hist_cur[1]),
-                    Slot::Storage(&fast_prev[0]),
-                    Slot::Storage(&fast_prev[1]),
-                    Slot::Storage(&fast_cur[0]),
-                    Slot::Storage(&fast_cur[1]),
-                    Slot::Storage(&temps_in[src][0]),
-                    Slot::Storage(&temps_in[src][1]),
-                    Slot::Storage(&temps_in[dst][0]),
-                    Slot::Storage(&temps_in[dst][1]),
-                    Slot::Uniform(ubo),
-                    Slot::Sampled(mask),
-                    Slot::Storage(&tiles),
-                    Slot::Storage(&shadow_history),
-                    Slot::Storage(&motion_tiles),
-                ];
-                let bind = vk::PipelineBindPoint::COMPUTE;
-                let dev = &r.device.raw;
-                // SAFETY: slots match the set layout; inputs were validated when scheduled.
-                unsafe { dev.cmd_bind_pipeline(r.cmd, bind, pipeline) };
-                descriptors::push(r.device, r.cmd, bind, self.layout, &slots);
-                unsafe {
-                    dev.cmd_push_constants(r.cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&push));
-                    dev.cmd_dispatch(r.cmd, extent.0.div_ceil(TILE), extent.1.div_ceil(TILE), 1);
-                }
-                r.end_pass(span);
-            };
+        // Workgroups: one invocation per pixel, or per 4x4 block (AO's moving-object search).
+        let pixel_groups = (extent.0.div_ceil(TILE), extent.1.div_ceil(TILE));
+        let block_groups = (extent.0.div_ceil(4 * TILE), extent.1.div_ceil(4 * TILE));
+        let dispatch = |r: &mut Recording<'_>,
+                        name: &'static str,
+                        pipeline: vk::Pipeline,
+                        (src, dst): (usize, usize),
+                        push: [u32; 4],
+                        groups: (u32, u32)| {
+            r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
+            let span = r.begin_pass(name);
+            let slots = [
+                Slot::Sampled(&c.depth.image),
+                Slot::Sampled(&c.normals.image),
+                Slot::Sampled(roughness),
+                Slot::Sampled(motion),
+                Slot::Sampled(&job.inputs[0]),
+                Slot::Sampled(&job.inputs[1]),
+                Slot::Storage(&job.outputs[0]),
+                Slot::Storage(&job.outputs[1]),
+                Slot::Storage(&gb_prev),
+                Slot::Storage(&gb_cur),
+                Slot::Storage(&hist_prev[0]),
+                Slot::Storage(&hist_prev[1]),
+                Slot::Storage(&hist_cur[0]),
+                Slot::Storage(&hist_cur[1]),
+                Slot::Storage(&fast_prev[0]),
+                Slot::Storage(&fast_prev[1]),
+                Slot::Storage(&fast_cur[0]),
+                Slot::Storage(&fast_cur[1]),
+                Slot::Storage(&temps_in[src][0]),
+                Slot::Storage(&temps_in[src][1]),
+                Slot::Storage(&temps_in[dst][0]),
+                Slot::Storage(&temps_in[dst][1]),
+                Slot::Uniform(ubo),
+                Slot::Sampled(mask),
+                Slot::Storage(&tiles),
+                Slot::Storage(&shadow_history),
+                Slot::Storage(&motion_tiles),
+            ];
+            let bind = vk::PipelineBindPoint::COMPUTE;
+            let dev = &r.device.raw;
+            // SAFETY: slots match the set layout; inputs were validated when scheduled.
+            unsafe { dev.cmd_bind_pipeline(r.cmd, bind, pipeline) };
+            descriptors::push(r.device, r.cmd, bind, self.layout, &slots);
+            unsafe {
+                dev.cmd_push_constants(r.cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&push));
+                dev.cmd_dispatch(r.cmd, groups.0, groups.1, 1);
+            }
+            r.end_pass(span);
+        };
 
         if shadow {
-            dispatch(r, "shadow_prep", self.shadow_prep, 1, 0, [0; 4]);
-            dispatch(r, "shadow_blur", self.shadow_blur, 0, 1, [0; 4]);
-            dispatch(r, "shadow_temporal", self.shadow_temporal, 1, 0, [0; 4]);
+            dispatch(r, "shadow_prep", self.shadow_prep, (1, 0), [0; 4], pixel_groups);
+            dispatch(r, "shadow_blur", self.shadow_blur, (0, 1), [0; 4], pixel_groups);
+            dispatch(r, "shadow_temporal", self.shadow_temporal, (1, 0), [0; 4], pixel_groups);
         } else {
             // Every radiance signal type has its pipelines (RADIANCE_SIGNALS).
             let Some(k) = RADIANCE_SIGNALS.iter().position(|(s, _)| *s == job.signal) else { return };
             let p = &self.radiance[k];
             let passes = c.settings.spatial_passes;
             // AO looks for moving objects while the scene changes (see DenoiserSettings::
-            // moving_object_reach), reading last frame's tiles where that frame wrote them.
+            // moving_object_reach) and restarts the pixels they reach.
             let reach = c.settings.moving_object_reach;
             let look = state.motion_tiles.is_some()
                 && reach > 0.0
                 && !reset
                 && scene_changed != 0
                 && serial.saturating_sub(scene_changed) <= MOVING_RECORDINGS;
-            let read = look && state.motion_frame != 0 && state.motion_frame + 1 == guide_frame;
-            let still = previous == c.camera;
-            let flags = look as u32 | (read as u32) << 1 | (still as u32) << 2 | ((guide_frame & 1) as u32) << 3;
-            state.motion_frame = if look { guide_frame } else { 0 };
-            dispatch(r, "temporal", p.temporal, 1, 0, [0, 0, flags, reach.to_bits()]);
-            dispatch(r, "clamp", p.clamp, 0, 0, [0, (passes == 0) as u32, 0, 0]);
+            // The tiles' stamp: the guide frame (never 0, which cleared tiles hold).
+            let stamp = (guide_frame as u32).max(1);
+            let clamp = match p.clamp_moving {
+                Some(restarting) if look => {
+                    let push = [stamp, 0, ((previous == c.camera) as u32) << 2, reach.to_bits()];
+                    dispatch(r, "moving_objects", self.moving, (1, 0), push, block_groups);
+                    restarting
+                }
+                _ => p.clamp,
+            };
+            dispatch(r, "temporal", p.temporal, (1, 0), [0; 4], pixel_groups);
+            dispatch(r, "clamp", clamp, (0, 0), [stamp, (passes == 0) as u32, 0, 0], pixel_groups);
             for (i, name) in (0..passes).zip(BLUR_PASS_NAMES) {
                 let src = i as usize % 2;
                 let push = [i, (i + 1 == passes) as u32, 0, 0];
-                dispatch(r, name, p.blur, src, 1 - src, push);
+                dispatch(r, name, p.blur, (src, 1 - src), push, pixel_groups);
             }
         }
         state.initialized = true;
@@ -492,6 +517,17 @@ fn initialize_images(r: &mut Recording<'_>, state: &DenoiserState, guide: &mut G
     // SAFETY: the command buffer is recording; the images are the SDK's and alive.
     unsafe { r.device.raw.cmd_pipeline_barrier2(r.cmd, &vk::DependencyInfo::default().image_memory_barriers(&barriers)) };
     guide.initialized = true;
+    // AO's moving-object stamps: a stamp left in reused memory must not match a frame. (The
+    // transitions above wait for nothing; the clear waits for them.)
+    if let (false, Some(tiles)) = (state.initialized, &state.motion_tiles) {
+        let clear = sync::Use { stages: vk::PipelineStageFlags2::CLEAR, access: vk::AccessFlags2::TRANSFER_WRITE };
+        let transitions = sync::Use { stages: vk::PipelineStageFlags2::COMPUTE_SHADER, access: vk::AccessFlags2::NONE };
+        sync::barrier(&r.device.raw, r.cmd, transitions, clear);
+        r.hazards.write(&r.device.raw, r.cmd, clear);
+        let zero = vk::ClearColorValue { uint32: [0; 4] };
+        // SAFETY: the image is in GENERAL (the barrier above) and has TRANSFER_DST usage.
+        unsafe { r.device.raw.cmd_clear_color_image(r.cmd, tiles.raw, vk::ImageLayout::GENERAL, &zero, &[COLOR_RANGE]) };
+    }
 }
 
 fn constants(job: &DenoiseJob, previous: &Camera, previous_jitter: [f32; 2], seed: u32, reset: bool) -> DenoiseConstantsGpu {
