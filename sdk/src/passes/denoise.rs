@@ -17,7 +17,7 @@ use crate::gpu::pipeline::{Binding, PipelineBuilder};
 use crate::gpu::sync;
 use crate::shaders;
 use crate::types::{Camera, ImageInput};
-use crate::types::{DenoiseJob, DenoisingContextInput, DenoisingMethod, MotionType, SignalType, TaskKind};
+use crate::types::{DenoiseJob, DenoisingCommon, DenoisingContextInput, DenoisingMethod, MotionType, SignalType, TaskKind};
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
@@ -146,6 +146,24 @@ impl DenoiserState {
             "initialized {} guide {:?} frame {} camera {:?} viewport {:?}",
             self.initialized, self.guide, self.guide_frame, self.previous_camera, self.previous_viewport
         )
+    }
+
+    /// Whether a task starts over: asked to, nothing recorded yet, spatial only, another
+    /// viewport, or a history its view's guide no longer describes (the context skipped the
+    /// view's previous frame).
+    fn must_reset(&self, c: &DenoisingCommon, guide_frame: u64, viewport: [u32; 4]) -> bool {
+        c.reset_history
+            || !self.initialized
+            || self.guide_frame + 1 != guide_frame
+            || self.input.method == DenoisingMethod::SpatialOnly
+            || self.previous_viewport != viewport
+    }
+
+    /// After a task: its history now continues from `guide_frame`, `c`'s camera and `viewport`.
+    fn recorded(&mut self, guide_frame: u64, c: &DenoisingCommon, viewport: [u32; 4]) {
+        self.initialized = true;
+        self.guide_frame = guide_frame;
+        (self.previous_camera, self.previous_jitter, self.previous_viewport) = (Some(c.camera), c.camera_jitter, viewport);
     }
 
     /// Every image, for (deferred) destruction.
@@ -347,13 +365,7 @@ impl DenoisePass {
         let c = &job.common;
         let extent = (c.viewport.width, c.viewport.height);
         let viewport = [c.viewport.x, c.viewport.y, c.viewport.width, c.viewport.height];
-        // A context that skipped its view's previous frame has history the guide no longer
-        // describes.
-        let reset = c.reset_history
-            || !state.initialized
-            || state.guide_frame + 1 != guide_frame
-            || state.input.method == DenoisingMethod::SpatialOnly
-            || state.previous_viewport != viewport;
+        let reset = state.must_reset(c, guide_frame, viewport);
         let previous = c.previous_camera.or(state.previous_camera).unwrap_or(c.camera);
         let constants = constants(job, &previous, state.previous_jitter, r.seed, reset);
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
@@ -449,18 +461,11 @@ impl DenoisePass {
             let Some(k) = RADIANCE_SIGNALS.iter().position(|(s, _)| *s == job.signal) else { return };
             let p = &self.radiance[k];
             let passes = c.settings.spatial_passes;
-            // AO looks for moving objects while the scene changes (see DenoiserSettings::
-            // moving_object_reach) and restarts the pixels they reach.
-            let reach = c.settings.moving_object_reach;
-            let look = state.motion_tiles.is_some()
-                && reach > 0.0
-                && !reset
-                && scene_changed != 0
-                && serial.saturating_sub(scene_changed) <= MOVING_RECORDINGS;
             // The tiles' stamp: the guide frame (never 0, which cleared tiles hold).
             let stamp = (guide_frame as u32).max(1);
             let clamp = match p.clamp_moving {
-                Some(restarting) if look => {
+                Some(restarting) if looks_for_moving_objects(state, c, reset, (serial, scene_changed)) => {
+                    let reach = c.settings.moving_object_reach;
                     let push = [stamp, 0, ((previous == c.camera) as u32) << 2, reach.to_bits()];
                     dispatch(r, "moving_objects", self.moving, (1, 0), push, block_groups);
                     restarting
@@ -475,13 +480,26 @@ impl DenoisePass {
                 dispatch(r, name, p.blur, (src, 1 - src), push, pixel_groups);
             }
         }
-        state.initialized = true;
-        state.guide_frame = guide_frame;
         temps.initialized = true;
-        state.previous_camera = Some(c.camera);
-        state.previous_jitter = c.camera_jitter;
-        state.previous_viewport = viewport;
+        state.recorded(guide_frame, c, viewport);
     }
+}
+
+/// Whether an AO task looks for moving objects (and restarts the pixels they reach): while the
+/// scene changes (`scene_changed`, the last recording that changed it, is at most
+/// MOVING_RECORDINGS before `serial`), with a reach (DenoiserSettings::moving_object_reach),
+/// and with a history to restart.
+fn looks_for_moving_objects(
+    state: &DenoiserState,
+    c: &DenoisingCommon,
+    reset: bool,
+    (serial, scene_changed): (u64, u64),
+) -> bool {
+    state.motion_tiles.is_some()
+        && c.settings.moving_object_reach > 0.0
+        && !reset
+        && scene_changed != 0
+        && serial.saturating_sub(scene_changed) <= MOVING_RECORDINGS
 }
 
 /// SDK-owned images start UNDEFINED; they live in GENERAL from the first task that uses them
