@@ -122,8 +122,12 @@ void main() {
                 if (s >= count || (s != d && !shared_disk)) continue;
                 vec4 v = hrt_load_temp(s, q);
                 // The local variance so far: the centre's and the taps' before this one (the
-                // disk runs outwards), weighted by their geometry.
-                float inv_stop = 1.0 / (u_d.stops.x * sqrt(max(var_sum[s] / var_w[s], 0.0)) + 1e-4);
+                // disk runs outwards), weighted by their geometry — or the tap's own where that
+                // is larger, so the stop is symmetric. A skewed 1-ray signal's bright pixels
+                // have the larger variances: stopped by the centre's alone, a dark pixel kept
+                // its bright neighbours out while a bright one took its dark neighbours in, and
+                // the image came out dark (the sample's reflections in motion by 0.9%).
+                float inv_stop = 1.0 / (u_d.stops.x * sqrt(max(max(var_sum[s] / var_w[s], v.a), 0.0)) + 1e-4);
                 float g = exp2(lg);
                 var_sum[s] += g * v.a;
                 var_w[s] += g;

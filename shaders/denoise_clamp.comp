@@ -26,25 +26,30 @@ void main() {
     bool near_moving = HRT_SIGNALS == 1u && HRT_KIND0 == HRT_SIGNAL_SCALAR && HRT_MOVING_OBJECTS != 0u && dist >= 0.0 &&
                        hrt_moving_load(ivec2(gl_GlobalInvocationID.xy) / HRT_MOVING_STAMP_TILE) == u_pass.x;
     for (uint s = 0u; s < count; ++s) {
-        vec4 fast_c = hrt_load_fast_cur(s, pixel);
         if (dist < 0.0) {
-            hrt_keep_histories(s, pixel, vec4(0.0), fast_c);
+            hrt_keep_histories(s, pixel, vec4(0.0), hrt_load_fast_cur(s, pixel));
             if (last) hrt_store_output(s, pixel, hrt_as_signal(hrt_kind(s), hrt_load_input(s, pixel)));
             else hrt_store_temp(s, pixel, vec4(0.0));
             continue;
         }
-        vec4 slow = hrt_load_temp(s, pixel);
         if (near_moving) {
             // This frame's sample alone: the history and the fast window behind the clamp both
-            // lag a contact shadow that slides (the blur passes then keep it narrow).
+            // lag a contact shadow that slides (the blur passes then keep it narrow). Nothing
+            // to clamp, so no neighbourhood to read; its variance is the largest one
+            // visibility sample can have (the luminance stop then leaves the narrow disk
+            // alone, as a neighbourhood's spread of one sample would).
             vec3 p, n_again;
             hrt_surface_at(surface, u_d.c.clip_to_world, u_d.eye.xyz, pixel, p, n_again);
             vec4 cur = hrt_as_signal(hrt_kind(s), hrt_noisy_sample(s, pixel, p, n, dist));
             float l = hrt_luminance(cur.rgb);
-            slow = vec4(cur.rgb, l * l);
-            fast_c = vec4(cur.rgb, HRT_MOVING_LEN);
+            hrt_keep_histories(s, pixel, vec4(cur.rgb, l * l), vec4(cur.rgb, HRT_MOVING_LEN));
+            if (last) hrt_store_output(s, pixel, vec4(cur.rgb, 1.0));
+            else hrt_store_temp(s, pixel, vec4(cur.rgb, 0.25));
+            continue;
         }
-        float len = max(fast_c.a, 1.0); // HRT_MOVING_LEN: a restarted pixel
+        vec4 fast_c = hrt_load_fast_cur(s, pixel);
+        vec4 slow = hrt_load_temp(s, pixel);
+        float len = max(fast_c.a, 1.0);
         vec3 m1 = vec3(0.0), m2 = vec3(0.0);
         float l1 = 0.0, l2 = 0.0, k = 0.0;
         for (int dy = -1; dy <= 1; ++dy) {
@@ -61,14 +66,11 @@ void main() {
         vec3 sigma = sqrt(max(m2 - m1 * m1, vec3(0.0)));
         vec3 lo = min(m1 - u_d.history.z * sigma, fast_c.rgb);
         vec3 hi = max(m1 + u_d.history.z * sigma, fast_c.rgb);
-        vec3 clamped = near_moving ? slow.rgb : clamp(slow.rgb, lo, hi);
+        vec3 clamped = clamp(slow.rgb, lo, hi);
         float l_slow = hrt_luminance(slow.rgb);
         float var_temporal = max(slow.a - l_slow * l_slow, 0.0) / len;
         float var_spatial = max(l2 - l1 * l1, 0.0);
         float variance = mix(var_spatial, var_temporal, clamp((len - 1.0) / 7.0, 0.0, 1.0));
-        // A restarted AO pixel is one sample: at least the spread of one visibility sample of
-        // the neighbourhood's mean (its neighbours' fast histories are smoother than that).
-        if (near_moving) variance = max(variance, l1 * (1.0 - l1));
         hrt_keep_histories(s, pixel, vec4(clamped, slow.a), fast_c);
         if (last) hrt_store_output(s, pixel, vec4(clamped, 1.0));
         else hrt_store_temp(s, pixel, vec4(clamped, variance));

@@ -15,7 +15,8 @@
 //!   temporal moments, or from the neighbourhood while history is short; then edge-aware
 //!   blurs of 8 taps on a rotated disk, as NRD's blur and post-blur (plane, normal,
 //!   luminance-variance and roughness stops), whose radius shrinks as a pixel's history grows;
-//!   and an anti-firefly clamp of each new sample to its neighbourhood.
+//!   glossy history capped by how far the view turned against the lobe's width (parallax);
+//!   and, for diffuse GI, an anti-firefly cut of each new sample against its pixel's history.
 //! - **Shadows** (one light or many), SIGMA-like: the penumbra's width is derived per pixel
 //!   from the occluder distance and the light's size (hit distance × angular size), spread to
 //!   the lit side of the edge by a neighbourhood search (skipped for the 8x8 tiles with no
@@ -181,17 +182,18 @@ pub struct DenoiserSettings {
     /// Plane-distance stop, relative to the view distance (> 0): also the disocclusion
     /// threshold. Default 0.02. All.
     pub plane_distance_sigma: f32,
-    /// Cut fireflies: a new radiance sample more than 4 deviations (and 5x the mean) above its
+    /// Cut fireflies: a new diffuse sample more than 4 deviations (and 5x the mean) above its
     /// pixel's history is brought down to that bound; without 4 frames of history, one more
     /// than 8x its brightest neighbour. A plain 1-ray distribution stays unbiased (measured:
-    /// the same image means with and without it). Not applied to mirrors. Default true.
-    /// Radiance (AO and shadows are bounded signals: no fireflies).
+    /// the same image means with and without it). Default true. Diffuse GI (AO and shadows
+    /// are bounded signals; a reflection's glints are its signal, and its history is of
+    /// another lobe while the view moves: cutting them darkened reflections in motion).
     pub anti_firefly: bool,
     /// Widest penumbra blur radius in pixels (0..=64). Default 24. Shadows.
     pub max_shadow_blur_radius: f32,
     /// Restart a pixel's history where this frame's 5x5 same-surface samples and its fast
     /// history disagree by more than 2.5 deviations (and keep at most the fast window past 2;
-    /// reflections, whose samples are heavier-tailed, one deviation more): a moved object's
+    /// reflections, whose samples are heavier-tailed, half a deviation more): a moved object's
     /// contact AO, a light switched on, an object that left a reflection (the reflection's
     /// history is compared where the reflected point was). Diffuse GI also compares its 8x8
     /// workgroup's mean (a light switched on: a change smaller than 1-ray noise over 25 pixels).
