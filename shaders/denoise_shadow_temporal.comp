@@ -13,6 +13,12 @@ const float ANTILAG_SOFT = 3.0;
 const float SOFT_FRAMES = 4.0;
 // Mean change of the 3x3's visibility past which more than a column of it changed (see below).
 const float WHOLE_CHANGE = 0.4;
+// Penumbrae narrower than this half-width in pixels keep at most two frames while the view
+// moves (see below). Sample in motion, 320x180: sun shadow error 0.082 with 0.5 pixels, 0.074
+// with 1, 0.072 with 2 and wider (point light 0.042, 0.041, 0.040; at 640x360 with 0.5 pixels
+// 0.065 and 0.037 on the H200, from 0.097 and 0.042 without the rule); one frame instead of two
+// gave 0.075 / 0.063, four 0.104 / 0.043 (at 0.5 pixels).
+const float SHARP_EDGE_RADIUS = 2.0;
 
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
@@ -95,15 +101,13 @@ void main() {
         else if (z > ANTILAG_SOFT) prior = min(prior, SOFT_FRAMES);
     }
     float len = min(prior + 1.0, u_d.history.x);
-    // A penumbra under a pixel wide (the blur's y: its half-width in pixels) is a sharp edge,
-    // which one raw frame gets right but for the edge's own pixel. A history interpolated
-    // between texels softens such an edge a little more every frame the view moves, and the
-    // 3x3 box spans both sides of it, so nothing clamps that away: there the pixel keeps at
-    // most two frames (the edge pixel's noise halved, one frame's softening). Still views read
-    // single texels and keep everything. (Sample in motion, H200, 640x360: sun shadow error
-    // 0.097 -> 0.065, point light 0.042 -> 0.037; with one frame 0.078 / 0.060 at 320x180,
-    // with four 0.104 / 0.043, against 0.082 / 0.042 with two.)
-    if (radius_here < 0.5 && resampled) len = min(len, 2.0);
+    // A penumbra under SHARP_EDGE_RADIUS pixels (the blur's y: its half-width) is a sharp
+    // edge, which one raw frame gets right but for the edge's own pixels. A history
+    // interpolated between texels softens such an edge a little more every frame the view
+    // moves, and the 3x3 box spans both sides of it, so nothing clamps that away: there the
+    // pixel keeps at most two frames (the edge pixel's noise halved, one frame's softening).
+    // Still views read single texels and keep everything.
+    if (radius_here < SHARP_EDGE_RADIUS && resampled) len = min(len, 2.0);
     // The box is widened by the noise a 3x3 of one-ray visibilities has where the history
     // says the visibility is h: 3 deviations of a mean of 9 Bernoulli samples. Without it a
     // penumbra pixel at 0.93 whose 9 neighbours all happened to be lit this frame (half the
