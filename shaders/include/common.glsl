@@ -67,10 +67,14 @@ HrtSequence hrt_sequence(uint frame, bool checkerboard, uvec2 pixel, uint salt, 
 }
 
 // The salt for a sequence rotated anew every frame (frame 0 of it each time): frames are then
-// independent. AO, diffuse GI and reflections keep this: their denoisers' variance-driven
-// rules (the crease rule, anti-lag) estimate noise from frame-to-frame differences, which a
-// stratified sequence makes smaller than the noise of one frame (measured: creases 1% too
-// bright, anti-lag slower); the shadow denoiser has no such rule.
+// independent. AO keeps this: its crease rule estimates noise from frame-to-frame differences,
+// which a stratified sequence makes smaller than the noise of one frame (measured: creases 1%
+// too bright). Shadows, diffuse GI and reflections run their pixel's sequence on across
+// frames: their anti-lag tests take one sample's variance from this frame's 5x5 neighbours
+// (decorrelated by their rotations) where that is larger than the history's, and a light
+// switched on still leaves GI within 8% of its new value after 4 frames. The quality
+// program's static views, 8 / 32 frames: GI 0.057 / 0.037 -> 0.034 / 0.023, glossy
+// reflections 0.060 / 0.038 -> 0.046 / 0.027.
 uint hrt_independent_frames(uint frame, uint salt) {
     return hrt_pcg(frame ^ salt);
 }

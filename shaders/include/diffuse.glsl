@@ -62,8 +62,8 @@ void hrt_diffuse_main() {
     bool bilinear = u_c.params.y != 0u;
     InstanceTable table = InstanceTable(u_c.params.zw);
     float ray_length = u_c.miss.w;
-    // A new rotation every frame (see hrt_independent_frames).
-    HrtSequence seq = hrt_sequence(0u, false, pixel, hrt_independent_frames(c.frame.x, 0xd1ffu), rays);
+    // The pixel's sequence runs on across frames (see hrt_independent_frames).
+    HrtSequence seq = hrt_sequence(c.frame.x, c.frame.z != 0u, pixel, 0xd1ffu, rays);
 
     vec3 sum = vec3(0.0);
     float dist = 0.0;

@@ -132,8 +132,8 @@ void hrt_specular_main() {
     InstanceTable table = InstanceTable(u_c.counts.zw);
     float ray_length = u_c.params.x;
     float clamp_lum = u_c.params.y;
-    // A new rotation every frame (see hrt_independent_frames).
-    HrtSequence seq = hrt_sequence(0u, false, pixel, hrt_independent_frames(c.frame.x, 0x5bec7u), rays);
+    // The pixel's sequence runs on across frames (see hrt_independent_frames).
+    HrtSequence seq = hrt_sequence(c.frame.x, c.frame.z != 0u, pixel, 0x5bec7u, rays);
     bool hit_lit = u_c.hit_lighting.x > 0u && roughness <= u_c.hit_params.x;
     uint h = hrt_pcg(pixel.x ^ hrt_pcg(pixel.y ^ hrt_pcg(c.frame.x ^ 0x4c1u)));
 

@@ -179,8 +179,9 @@ fn diffuse_gi_denoised_over_32_frames_approaches_the_reference() {
         den_e += den / 3.0;
     }
     // One cosine sample of radiances between 0.1 and 0.9 is ~0.6 relative; the reference's
-    // 576 samples leave ~0.02.
-    assert!(den_e < 0.08, "denoised relative RMSE {den_e}");
+    // 576 samples leave ~0.02. Measured 0.030 (0.036 while each frame's rays were independent
+    // of the last's: a pixel's sequence now runs on across frames).
+    assert!(den_e < 0.045, "denoised relative RMSE {den_e}");
     assert!(den_e * 5.0 < raw_e, "raw {raw_e} denoised {den_e}");
     f.ctx.destroy_denoising_context(dn).unwrap();
     f.finish([noisy, denoised]);
