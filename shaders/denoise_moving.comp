@@ -33,10 +33,9 @@ shared uint s_reach;
 // Whether the surface at `pixel` moved since the last frame (see above).
 bool surface_moved(ivec2 pixel, vec3 p, vec3 n, float dist) {
     if (u_d.flags.x != HRT_MOTION_NONE) {
-        vec2 prev_pos = hrt_previous_position(pixel, p);
-        vec4 clip = u_d.prev_world_to_clip * vec4(p, 1.0);
-        vec2 camera = (clip.xy / clip.w * 0.5 + 0.5) * u_d.c.viewport.zw + u_d.c.viewport.xy + u_d.jitter_delta.xy;
-        return clip.w > 0.0 && distance(camera, prev_pos) > MOVING_MIN_PIXELS;
+        vec2 camera;
+        bool in_front = hrt_previous_camera_position(p, camera);
+        return in_front && distance(camera + u_d.jitter_delta.xy, hrt_previous_position(pixel, p)) > MOVING_MIN_PIXELS;
     }
     if ((u_pass.z & HRT_MOVING_STILL_CAMERA) == 0u) return false;
     // A still camera sees the same point at the same pixel: another surface there moved.

@@ -73,9 +73,7 @@ uint diffuse_signal() { return HRT_KIND0 == HRT_SIGNAL_DIFFUSE ? 0u : 1u; }
 // the previous frame, in pixels; false where it was behind the camera.
 bool reflected_point_position(vec3 q_p, float q_dist, float hit_dist, out vec2 pos) {
     vec3 virtual_p = u_d.eye.xyz + (q_p - u_d.eye.xyz) / q_dist * (q_dist + max(hit_dist, 0.0));
-    vec4 clip = u_d.prev_world_to_clip * vec4(virtual_p, 1.0);
-    pos = (clip.xy / clip.w * 0.5 + 0.5) * u_d.c.viewport.zw + u_d.c.viewport.xy;
-    return clip.w > 0.0;
+    return hrt_previous_camera_position(virtual_p, pos);
 }
 
 // This pixel's texel of the anti-lag tile: this frame's sample (luminance) of each signal and

@@ -232,6 +232,14 @@ float hrt_geometry_weight(vec3 p, vec3 n, float dist, vec3 q_p, vec3 q_n) {
 
 // Where the surface at `pixel` (world position p) was in the previous frame, in pixels
 // (continuous, pixel centres at +0.5).
+// Where the world point `p` was on the previous camera's screen, in pixels; false where it was
+// behind that camera.
+bool hrt_previous_camera_position(vec3 p, out vec2 pos) {
+    vec4 clip = u_d.prev_world_to_clip * vec4(p, 1.0);
+    pos = (clip.xy / clip.w * 0.5 + 0.5) * u_d.c.viewport.zw + u_d.c.viewport.xy;
+    return clip.w > 0.0;
+}
+
 vec2 hrt_previous_position(ivec2 pixel, vec3 p) {
     uint motion = u_d.flags.x;
     vec2 here = vec2(pixel) + 0.5;
@@ -242,10 +250,8 @@ vec2 hrt_previous_position(ivec2 pixel, vec3 p) {
     }
     vec3 prev_p = p;
     if (motion == HRT_MOTION_WORLD) prev_p += texelFetch(u_motion, pixel, 0).xyz * u_d.motion_scale.xyz;
-    vec4 clip = u_d.prev_world_to_clip * vec4(prev_p, 1.0);
-    if (clip.w <= 0.0) return vec2(-1e9);
-    vec2 ndc = clip.xy / clip.w;
-    return (ndc * 0.5 + 0.5) * u_d.c.viewport.zw + u_d.c.viewport.xy;
+    vec2 pos;
+    return hrt_previous_camera_position(prev_p, pos) ? pos : vec2(-1e9);
 }
 
 // Bilinear taps of the previous frame around `prev_pos` that show the same surface as (p, n)

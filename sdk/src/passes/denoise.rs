@@ -101,29 +101,23 @@ impl DenoiserState {
     pub fn new(memory: &Memory, input: &DenoisingContextInput, guide: GuideKey) -> Result<DenoiserState> {
         let shadow = is_shadow(input.signal);
         let signals = if shadow { 0 } else { signal_count(input.signal) };
+        let ao = input.signal == SignalType::DiffuseOcclusion;
         // AO keeps its fast history in its history image's spare channels.
-        let fast_signals = if input.signal == SignalType::DiffuseOcclusion { 0 } else { signals };
+        let fast_signals = if ao { 0 } else { signals };
         // Radiance: the slow histories, then the fast ones, of HISTORY_FORMAT. Shadows: one.
-        let formats = std::iter::repeat_n(HISTORY_FORMAT, signals + fast_signals)
-            .chain(std::iter::repeat_n(SHADOW_HISTORY_FORMAT, shadow as usize));
-        let mut images = create_all(memory, "denoiser", formats, input.max_width, input.max_height)?.into_iter();
+        // AO: its moving-object stamps, one texel per STAMP_TILE pixels.
+        let (w, h) = (input.max_width, input.max_height);
+        let specs = std::iter::repeat_n(("denoiser", HISTORY_FORMAT, w, h), signals + fast_signals)
+            .chain(std::iter::repeat_n(("denoiser", SHADOW_HISTORY_FORMAT, w, h), shadow as usize))
+            .chain(std::iter::repeat_n(
+                ("denoiser motion tiles", TILE_FORMAT, w.div_ceil(STAMP_TILE), h.div_ceil(STAMP_TILE)),
+                ao as usize,
+            ));
+        let mut images = create_all(memory, specs)?.into_iter();
         let history = images.by_ref().take(signals).collect();
         let fast = images.by_ref().take(fast_signals).collect();
-        let shadow_history = images.next();
-        let motion_tiles = if input.signal == SignalType::DiffuseOcclusion {
-            let (w, h) = (input.max_width.div_ceil(STAMP_TILE), input.max_height.div_ceil(STAMP_TILE));
-            match create_all(memory, "denoiser motion tiles", std::iter::once(TILE_FORMAT), w, h) {
-                Ok(mut t) => t.pop(),
-                Err(e) => {
-                    for image in images.chain(history).chain(fast).chain(shadow_history) {
-                        memory.destroy_image(image);
-                    }
-                    return Err(e);
-                }
-            }
-        } else {
-            None
-        };
+        let shadow_history = if shadow { images.next() } else { None };
+        let motion_tiles = images.next();
         Ok(DenoiserState {
             input: *input,
             guide,
@@ -178,15 +172,10 @@ impl DenoiserState {
 }
 
 /// One image per format, all or none (a failure frees the ones already made).
-fn create_all(
-    memory: &Memory,
-    name: &'static str,
-    formats: impl Iterator<Item = vk::Format>,
-    width: u32,
-    height: u32,
-) -> Result<Vec<Image>> {
+/// Creates the images `specs` names (debug name, format, width, height), all or none.
+fn create_all(memory: &Memory, specs: impl Iterator<Item = (&'static str, vk::Format, u32, u32)>) -> Result<Vec<Image>> {
     let mut made = Vec::new();
-    for format in formats {
+    for (name, format, width, height) in specs {
         match memory.create_image(name, format, width, height, MemoryKind::Denoiser) {
             Ok(image) => made.push(image),
             Err(e) => {
@@ -234,18 +223,10 @@ impl TempPool {
         if signals == self.pairs.len() && width == self.width && height == self.height {
             return Ok(Vec::new());
         }
-        let formats = std::iter::repeat_n(HISTORY_FORMAT, 2 * signals);
-        let mut images = create_all(memory, "denoiser intermediate", formats, width, height)?;
-        let tile_format = std::iter::once(TILE_FORMAT);
-        let tiles = match create_all(memory, "denoiser tiles", tile_format, width.div_ceil(TILE), height.div_ceil(TILE)) {
-            Ok(mut t) => t.pop(),
-            Err(e) => {
-                for image in images {
-                    memory.destroy_image(image);
-                }
-                return Err(e);
-            }
-        };
+        let specs = std::iter::repeat_n(("denoiser intermediate", HISTORY_FORMAT, width, height), 2 * signals)
+            .chain(std::iter::once(("denoiser tiles", TILE_FORMAT, width.div_ceil(TILE), height.div_ceil(TILE))));
+        let mut images = create_all(memory, specs)?;
+        let tiles = images.pop();
         let mut images = images.drain(..);
         let pairs = (0..signals).map(|_| [images.next().expect("counted"), images.next().expect("counted")]).collect();
         let old = std::mem::replace(&mut self.pairs, pairs);
