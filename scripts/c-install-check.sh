@@ -25,13 +25,17 @@ echo "[c-install] cmake"
 cmake -S samples/c -B "$work/cmake" -DCMAKE_PREFIX_PATH="$prefix" -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build "$work/cmake" >/dev/null
 
-# The shared builds must load the installed library through its SONAME.
+# The shared builds must load the installed library through its SONAME. ldd's output is
+# captured before it is searched: `ldd | grep -q` under pipefail fails at random, because grep
+# stops at the first match and ldd dies of SIGPIPE while still writing.
 for exe in "$work/pc_shared" "$work/cmake/ao_minimal"; do
-  LD_LIBRARY_PATH="$prefix/lib" ldd "$exe" | grep -q "libhybrid_rt.so.0.* => $prefix/lib/" \
-    || { echo "[c-install] $exe does not load the installed libhybrid_rt" >&2; LD_LIBRARY_PATH="$prefix/lib" ldd "$exe" >&2; exit 1; }
+  libs=$(LD_LIBRARY_PATH="$prefix/lib" ldd "$exe")
+  grep -q "libhybrid_rt.so.0.* => $prefix/lib/" <<<"$libs" \
+    || { echo "[c-install] $exe does not load the installed libhybrid_rt" >&2; echo "$libs" >&2; exit 1; }
 done
 for exe in "$work/pc_static" "$work/cmake/ao_minimal_static"; do
-  if ldd "$exe" | grep -q libhybrid_rt; then echo "[c-install] $exe is not static" >&2; exit 1; fi
+  libs=$(ldd "$exe")
+  if grep -q libhybrid_rt <<<"$libs"; then echo "[c-install] $exe is not static" >&2; exit 1; fi
 done
 for exe in "$work/pc_shared" "$work/pc_static" "$work/cmake/ao_minimal" "$work/cmake/ao_minimal_static"; do
   echo "[c-install] running ${exe#"$work"/}"

@@ -84,10 +84,12 @@ main() {
   have_cmd cmake || pkgs+=(cmake)
   have_cmd Xvfb || pkgs+=(xvfb)
   # winit's X11 backend dlopens these (no -dev packages: nothing links against them).
-  local lib
+  local lib known
+  # Captured once, not piped into grep -q (SIGPIPE under pipefail).
+  known=$(ldconfig -p 2>/dev/null || /sbin/ldconfig -p 2>/dev/null || true)
   for lib in libX11-xcb.so.1:libx11-xcb1 libXcursor.so.1:libxcursor1 libXrandr.so.2:libxrandr2 \
              libXi.so.6:libxi6 libxkbcommon-x11.so.0:libxkbcommon-x11-0; do
-    { ldconfig -p 2>/dev/null || /sbin/ldconfig -p 2>/dev/null; } | grep -q "${lib%%:*}" || pkgs+=("${lib##*:}")
+    grep -q "${lib%%:*}" <<<"$known" || pkgs+=("${lib##*:}")
   done
   if [ ${#pkgs[@]} -gt 0 ]; then apt_install "${pkgs[@]}"; fi
 
