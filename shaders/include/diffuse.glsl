@@ -63,7 +63,7 @@ void hrt_diffuse_main() {
     InstanceTable table = InstanceTable(u_c.params.zw);
     float ray_length = u_c.miss.w;
     // The pixel's sequence runs on across frames (see hrt_independent_frames).
-    HrtSequence seq = hrt_sequence(c.frame.x, c.frame.z != 0u, pixel, 0xd1ffu, rays);
+    HrtSequence seq = hrt_tile_sequence(c.frame.x, c.frame.z != 0u, pixel, 0xd1ffu, rays);
 
     vec3 sum = vec3(0.0);
     float dist = 0.0;

@@ -133,7 +133,7 @@ void hrt_specular_main() {
     float ray_length = u_c.params.x;
     float clamp_lum = u_c.params.y;
     // The pixel's sequence runs on across frames (see hrt_independent_frames).
-    HrtSequence seq = hrt_sequence(c.frame.x, c.frame.z != 0u, pixel, 0x5bec7u, rays);
+    HrtSequence seq = hrt_tile_sequence(c.frame.x, c.frame.z != 0u, pixel, 0x5bec7u, rays);
     bool hit_lit = u_c.hit_lighting.x > 0u && roughness <= u_c.hit_params.x;
     uint h = hrt_pcg(pixel.x ^ hrt_pcg(pixel.y ^ hrt_pcg(c.frame.x ^ 0x4c1u)));
 

@@ -23,14 +23,18 @@ const SIGNALS: [(&str, Mode, Mode); 5] = [
 ];
 
 /// One run's last frame: per signal (raw, denoised) as linear RGB and as the display's sRGB;
-/// the surface mask.
+/// the surface mask; per signal, a second raw trace of the same view (see `render`).
 struct Run {
     linear: Vec<[Vec<[f32; 4]>; 2]>,
     display: Vec<[Vec<u8>; 2]>,
     surface: Vec<bool>,
+    retrace: Vec<Vec<[f32; 4]>>,
 }
 
-fn render(host: &Host, rays: u32, width: u32, height: u32, frames: u32) -> Result<Run, String> {
+/// Renders `frames` frames along the camera path and captures the last. With `retrace`, then
+/// renders the last view once more (same camera, same time: only the rays' sequence moves on)
+/// and keeps its raw traces: two traces of one view tell the trace's own noise.
+fn render(host: &Host, rays: u32, width: u32, height: u32, frames: u32, retrace: bool) -> Result<Run, String> {
     let settings = Settings { width, height, rays_per_pixel: rays, ..Default::default() };
     let mut r = Renderer::new(host, scenes::cornell_room(), settings)?;
     for f in 0..frames {
@@ -38,7 +42,7 @@ fn render(host: &Host, rays: u32, width: u32, height: u32, frames: u32) -> Resul
         r.render(camera, f as f32 / 30.0, &[], None)?;
     }
     r.finish()?;
-    let mut run = Run { linear: Vec::new(), display: Vec::new(), surface: Vec::new() };
+    let mut run = Run { linear: Vec::new(), display: Vec::new(), surface: Vec::new(), retrace: Vec::new() };
     for (_, raw, denoised) in SIGNALS {
         let (raw_linear, raw_display) = r.capture(raw)?;
         let (den_linear, den_display) = r.capture(denoised)?;
@@ -48,6 +52,14 @@ fn render(host: &Host, rays: u32, width: u32, height: u32, frames: u32) -> Resul
     // Surfaces: the normals mode maps a unit normal n to 0.5 n + 0.5, the sky's zero to 0.5.
     let (normals, _) = r.capture(Mode::Normals)?;
     run.surface = normals.iter().map(|t| (0..3).map(|c| (2.0 * t[c] - 1.0).powi(2)).sum::<f32>() > 0.25).collect();
+    if retrace {
+        let camera = r.scene.camera_path.at(1.0);
+        r.render(camera, (frames - 1) as f32 / 30.0, &[], None)?;
+        r.finish()?;
+        for (_, raw, _) in SIGNALS {
+            run.retrace.push(r.capture(raw)?.0);
+        }
+    }
     r.destroy()?;
     Ok(run)
 }
@@ -63,10 +75,12 @@ pub fn sample_in_motion(out: &Path, width: u32, height: u32, frames: u32) -> Res
     println!(
         "\n## The sample in motion (the room, {width}x{height}, {frames} frames along its camera path; reference: the last frame traced at {REFERENCE_RAYS} rays per pixel)\n"
     );
-    let one = render(&host, 1, width, height, frames)?;
-    let many = render(&host, REFERENCE_RAYS, width, height, frames)?;
-    println!("| signal | raw frame | denoised | gain (raw / denoised) | bias | the {REFERENCE_RAYS}-ray run denoised (bias) |");
-    println!("|---|---|---|---|---|---|");
+    let one = render(&host, 1, width, height, frames, false)?;
+    let many = render(&host, REFERENCE_RAYS, width, height, frames, true)?;
+    println!(
+        "| signal | raw frame | denoised | gain (raw / denoised) | bias | the {REFERENCE_RAYS}-ray run denoised (bias) | the reference's own noise |"
+    );
+    println!("|---|---|---|---|---|---|---|");
     for (k, (name, _, _)) in SIGNALS.iter().enumerate() {
         let reference = grey(&many.linear[k][0]);
         let (raw, denoised, denoised_many) = (grey(&one.linear[k][0]), grey(&one.linear[k][1]), grey(&many.linear[k][1]));
@@ -74,12 +88,16 @@ pub fn sample_in_motion(out: &Path, width: u32, height: u32, frames: u32) -> Res
         let e_raw = hybrid_rt_testkit::stats::relative_rmse(&raw, &reference, mask);
         let e_den = hybrid_rt_testkit::stats::relative_rmse(&denoised, &reference, mask);
         let e_many = hybrid_rt_testkit::stats::relative_rmse(&denoised_many, &reference, mask);
+        // Two independent traces differ by sqrt(2) times either's noise. Every error above
+        // holds the reference's noise too (in quadrature where the output is independent of
+        // it, as the 1-ray run's is).
+        let e_ref = hybrid_rt_testkit::stats::relative_rmse(&grey(&many.retrace[k]), &reference, mask) / std::f32::consts::SQRT_2;
         let sum = |v: &[f32]| v.iter().zip(mask).filter(|(_, m)| **m).map(|(x, _)| *x as f64).sum::<f64>();
         let bias = |v: &[f32]| (sum(v) / sum(&reference).max(1e-12) - 1.0) * 100.0;
         // The 64-ray run's bias tells the denoiser's own (history, reprojection) from what it
         // does to 1-ray noise (edge stops, firefly cuts, anti-lag decisions).
         println!(
-            "| {name} | {e_raw:.3} | {e_den:.3} | {:.1}x | {:+.1}% | {e_many:.3} ({:+.1}%) |",
+            "| {name} | {e_raw:.3} | {e_den:.3} | {:.1}x | {:+.1}% | {e_many:.3} ({:+.1}%) | {e_ref:.3} |",
             e_raw / e_den.max(1e-9),
             bias(&denoised),
             bias(&denoised_many)
