@@ -28,7 +28,8 @@ const float BLUR_RADIUS = 16.0;
 // Taps per disk: 6 for AO alone (its blur passes were over the frame's budget on screens of
 // surfaces: 19 fetches a pixel a pass with 8 taps, 15 with 6; the quality program's AO error
 // 0.044 -> 0.047 at 8 frames, 0.021 -> 0.022 at 32), 8 for radiance.
-const int TAPS = (HRT_SIGNALS == 1u && HRT_KIND0 == HRT_SIGNAL_SCALAR) ? 6 : 8;
+const bool AO_ONLY = HRT_SIGNALS == 1u && HRT_KIND0 == HRT_SIGNAL_SCALAR;
+const int TAPS = AO_ONLY ? 6 : 8;
 // Radiance disks take twice the taps while their pixel's history is shorter than this many
 // frames: a young history leaves a 1-ray signal's noise to the blur, and 8 taps leave it
 // blotchy. The sample in motion (lavapipe, 320x180): GI 0.094 -> 0.087, reflections 0.203 ->
@@ -116,7 +117,9 @@ void main() {
     [[unroll]] for (uint d = 0u; d < 2u; ++d) {
         if (d >= count || (d == 1u && shared_disk)) break;
         if (radius[d] <= 0.0) continue;
-        bool young = !(HRT_SIGNALS == 1u && HRT_KIND0 == HRT_SIGNAL_SCALAR) && len[d] < SHORT_HISTORY;
+        // A shared disk serves both signals: young if either history is.
+        float disk_len = d == 0u && shared_disk ? min(len[0], len[1]) : len[d];
+        bool young = !AO_ONLY && disk_len < SHORT_HISTORY;
         int disk_taps = young ? 2 * TAPS : TAPS;
         for (int i = 0; i < disk_taps; ++i) {
             float r = sqrt((float(i) + 0.5) / float(disk_taps)) * radius[d];

@@ -78,14 +78,13 @@ HrtSequence hrt_sequence(uint frame, bool checkerboard, uvec2 pixel, uint salt, 
 // correlates their errors frame after frame) nor shadows (a 0.03 rad sun's penumbra after 32
 // frames 0.083 -> 0.096).
 HrtSequence hrt_tile_sequence(uint frame, bool checkerboard, uvec2 pixel, uint salt, uint rays) {
-    uvec2 tile = pixel >> 3u;
-    uint h = hrt_pcg(tile.x ^ hrt_pcg(tile.y ^ salt));
+    // The tile's sequence is hrt_sequence's for the tile as if it were one pixel.
+    HrtSequence seq = hrt_sequence(frame, checkerboard, pixel >> 3u, salt, rays);
     uvec2 q = pixel & 7u;
     uint morton = (q.x & 1u) | ((q.y & 1u) << 1u) | ((q.x & 2u) << 1u) | ((q.y & 2u) << 2u) | ((q.x & 4u) << 2u) | ((q.y & 4u) << 3u);
     uint k = bitfieldReverse(morton) >> 26u;
-    uvec2 lattice = uvec2(k, (k * 10u) & 63u) << 26u;
-    uint pixel_frame = checkerboard ? frame >> 1u : frame;
-    return HrtSequence(uvec2(h, hrt_pcg(h)) + lattice, pixel_frame * rays);
+    seq.shift += uvec2(k, (k * 10u) & 63u) << 26u;
+    return seq;
 }
 
 // The salt for a sequence rotated anew every frame (frame 0 of it each time): frames are then
