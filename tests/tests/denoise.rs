@@ -1119,7 +1119,14 @@ fn contexts_of_one_view_share_their_guide_and_denoise_the_same() {
     assert!(ao_alone == ao_shared, "AO denoised differently with a shared guide");
     assert!(shadow_alone == shadow_shared, "shadow denoised differently with a shared guide");
     assert_eq!(count_shared + 2, count_alone, "one guide pair fewer");
-    assert_eq!(bytes_shared + 2 * 4 * (S * S) as u64, bytes_alone, "R32_UINT guide images of {S}x{S}");
+    // Two R32_UINT guide images of SxS fewer, as the driver sizes them: their texels' bytes
+    // on lavapipe; drivers that pad rows or align sizes add less than a 64 KiB page to each.
+    let saved = bytes_alone.checked_sub(bytes_shared).expect("a shared guide took more memory");
+    let texels = 4 * (S * S) as u64;
+    assert!(
+        saved % 2 == 0 && (texels..texels + 65536).contains(&(saved / 2)),
+        "saved {saved} bytes: not two R32_UINT guide images of {S}x{S}"
+    );
 }
 
 /// A view's contexts have one size, and one view's tasks in a container one camera: both are
