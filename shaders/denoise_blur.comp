@@ -1,26 +1,25 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
-// Radiance denoiser, pass 3 (repeated): an edge-aware blur of 8 taps on a rotated disk (16 while
-// the history is young), as NRD's REBLUR blurs (its blur and post-blur), with SVGF's
-// variance-guided luminance stop (Schied et al. 2017). u_pass = (pass index from 0, last pass
-// 0/1, 0, 0).
+// Radiance denoiser, pass 3 (repeated): an edge-aware blur of 8 taps on a rotated disk, as
+// NRD's REBLUR blurs (its blur and post-blur), with SVGF's variance-guided luminance stop
+// (Schied et al. 2017). u_pass = (pass index from 0, last pass 0/1, 0, 0).
 //
-// A converged pass fetches 8 taps and the centre, each one fetch of the view's guide and one of
-// each signal (and, for specular, of the roughness), where four 5x5 à-trous iterations fetched 25
-// taps each; and it weighs each tap as it arrives, keeping none, so it needs few registers (48-64:
-// more pixels in flight hide the fetches' latency). Specular and diffuse share the guide's fetches
-// and each tap's geometry weight. The disk's radius halves with every pass (the first reaches
-// BLUR_RADIUS pixels) and shrinks as the pixel's history grows (the temporal mean needs less help)
-// and, for specular, as the surface gets smoother (a mirror is not blurred). Each pass turns the
-// disk by its own angle, so what one pass misses the next covers; the same for every pixel, so
-// neighbouring pixels fetch neighbouring texels, and the same every frame: the blur's output is not
-// accumulated, and a disk turned per frame made the image flicker (0.22% -> 0.48% of the mean a
-// frame for AO, 0.45% -> 1.78% for GI; 0.20% and 0.69% with a fixed disk). Stops: plane distance,
-// normal, luminance against the local variance (the centre's and the taps' before each tap,
-// weighted by geometry: the disk runs outwards), and roughness for specular; weights fall off as
-// exp(-r²/R²) over the disk (a steeper fall-off, exp(-2r²/R²), left GI 10% noisier after 32
-// frames).
+// A pass fetches 8 taps and the centre, each one fetch of the view's guide and one of each
+// signal (and, for specular, of the roughness), where four 5x5 à-trous iterations fetched 25
+// taps each; and it weighs each tap as it arrives, keeping none, so it needs few registers
+// (48-64: more pixels in flight hide the fetches' latency). Specular and diffuse share the
+// guide's fetches and each tap's geometry weight. The disk's radius halves with every pass
+// (the first reaches BLUR_RADIUS pixels) and shrinks as the pixel's history grows (the
+// temporal mean needs less help) and, for specular, as the surface gets smoother (a mirror is
+// not blurred). Each pass turns the disk by its own angle, so what one pass misses the next
+// covers; the same for every pixel, so neighbouring pixels fetch neighbouring texels, and the
+// same every frame: the blur's output is not accumulated, and a disk turned per frame made the
+// image flicker (0.22% -> 0.48% of the mean a frame for AO, 0.45% -> 1.78% for GI; 0.20% and
+// 0.69% with a fixed disk). Stops: plane distance, normal, luminance against the local
+// variance (the centre's and the taps' before each tap, weighted by geometry: the disk runs
+// outwards), and roughness for specular; weights fall off as exp(-r²/R²) over the disk (a
+// steeper fall-off, exp(-2r²/R²), left GI 10% noisier after 32 frames).
 #include "include/denoise.glsl"
 
 // Radius of the first pass's disk, in pixels, for a pixel without history.
@@ -30,15 +29,10 @@ const float BLUR_RADIUS = 16.0;
 // 0.044 -> 0.047 at 8 frames, 0.021 -> 0.022 at 32), 8 for radiance.
 const bool AO_ONLY = HRT_SIGNALS == 1u && HRT_KIND0 == HRT_SIGNAL_SCALAR;
 const int TAPS = AO_ONLY ? 6 : 8;
-// Radiance disks take twice the taps while their pixel's history is shorter than this many
-// frames: a young history leaves a 1-ray signal's noise to the blur, and 8 taps leave it
-// blotchy. The sample in motion (lavapipe, 320x180): GI 0.094 -> 0.087, reflections 0.203 ->
-// 0.187; the quality program's static views after one frame GI 0.171 -> 0.110, glossy
-// reflections 0.188 -> 0.136. Up to 8 frames gained little more (0.086 / 0.186) and kept a
-// revealed textured wall blurred 1.26x the error of the pixels that kept their history after
-// 4 frames (1.14x now). A converged view fetches as before; a moving one pays twice where
-// history restarts (disocclusions, the screen's edges) for its first frames.
-const float SHORT_HISTORY = 4.0;
+// AO takes half the taps once its history is this share of the longest: the temporal mean then
+// holds most of the noise (the quality program's AO error 0.042 -> 0.043 at 8 frames, 0.021 ->
+// 0.022 at 32; the room's AO blur passes at 1440p a sixth cheaper).
+const float AO_FEW_TAPS_HISTORY = 0.25;
 // AO near a moving object: the share of the disk kept (see below).
 const float MOVING_RADIUS_SCALE = 0.25;
 // History length from which pixels beside a crease keep their value (see below).
@@ -117,12 +111,12 @@ void main() {
     [[unroll]] for (uint d = 0u; d < 2u; ++d) {
         if (d >= count || (d == 1u && shared_disk)) break;
         if (radius[d] <= 0.0) continue;
-        // A shared disk serves both signals: young if either history is.
-        float disk_len = d == 0u && shared_disk ? min(len[0], len[1]) : len[d];
-        bool young = !AO_ONLY && disk_len < SHORT_HISTORY;
-        int disk_taps = young ? 2 * TAPS : TAPS;
-        for (int i = 0; i < disk_taps; ++i) {
-            float r = sqrt((float(i) + 0.5) / float(disk_taps)) * radius[d];
+        // Half the taps: the first TAPS / 2 of the unrolled loop, on a spiral of that many.
+        bool few = AO_ONLY && len[d] >= AO_FEW_TAPS_HISTORY * u_d.history.x;
+        float disk_taps = few ? float(TAPS / 2) : float(TAPS);
+        [[unroll]] for (int i = 0; i < TAPS; ++i) {
+            if (i >= TAPS / 2 && few) break;
+            float r = sqrt((float(i) + 0.5) / disk_taps) * radius[d];
             float a = float(i) * 2.39996323 + rotation;
             ivec2 q = pixel + ivec2(round(r * vec2(cos(a), sin(a))));
             vec3 q_p, q_n;
