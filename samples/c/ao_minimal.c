@@ -751,6 +751,14 @@ int main(void) {
     HrtDenoiseShadowTask reaching = denoise;
     reaching.common.settings.moving_object_reach = -1.0f;
     EXPECT(hrt_schedule_denoise_shadow(frame, &reaching) == HRT_ERROR_INVALID_INPUT, "a negative moving-object reach");
+    /* A denoise task's G-buffer errors name the struct the engine filled. */
+    HrtDenoiseShadowTask remap = denoise;
+    remap.common.roughness.min_roughness = 0.5f;
+    remap.common.roughness.max_roughness = 0.4f;
+    EXPECT(hrt_schedule_denoise_shadow(frame, &remap) == HRT_ERROR_INVALID_INPUT, "a roughness remap with min above max");
+    char remap_why[256];
+    hrt_last_error_message(remap_why, sizeof remap_why);
+    EXPECT(strstr(remap_why, "DenoisingCommon.roughness") != NULL, "the error names DenoisingCommon: %s", remap_why);
     CHECK_HRT(hrt_destroy_denoising_context(ctx, denoiser));
     EXPECT(hrt_destroy_denoising_context(ctx, denoiser) == HRT_ERROR_INVALID_HANDLE, "destroyed twice");
     /* Or all of a context's at once (level unload). */

@@ -4,8 +4,9 @@ use ash::vk;
 use common::*;
 use glam::{Affine3A, Mat4, Vec3};
 use hybrid_rt::{
-    BvhBuildTask, Error, GeometryInput, GeometryTask, GpuTicket, HandleProblem, IndexBufferInput, InitSettings, InstanceInput,
-    InstanceOperation, InstanceTask, TaskOperation, VertexBufferInput,
+    BvhBuildTask, DenoiseDiffuseOcclusionTask, DenoisingCommon, DenoisingContextInput, Error, GeometryInput, GeometryTask,
+    GpuTicket, HandleProblem, IndexBufferInput, InitSettings, InstanceInput, InstanceOperation, InstanceTask, SignalType,
+    TaskOperation, VertexBufferInput,
 };
 use hybrid_rt_testkit::reference::*;
 use hybrid_rt_testkit::sdk_scene::*;
@@ -280,6 +281,50 @@ fn non_finite_transforms_and_cameras_are_refused() {
         bad.falloff_power = power;
         assert!(matches!(c.schedule_ambient_occlusion(&bad).unwrap_err(), Error::InvalidInput { .. }), "{rays} {len} {power}");
     }
+    // A denoise task's G-buffer errors name `DenoisingCommon`, the struct the engine filled
+    // (the checks are the trace tasks').
+    let dn = ctx
+        .create_denoising_context(&DenoisingContextInput {
+            max_width: 16,
+            max_height: 16,
+            signal: SignalType::DiffuseOcclusion,
+            ..Default::default()
+        })
+        .unwrap();
+    let task = |common| DenoiseDiffuseOcclusionTask { context: dn, common, input: good.output, output: good.output };
+    // Each spoils one field of a good `DenoisingCommon`; the field the error must name.
+    type Spoiler = (fn(&mut DenoisingCommon), &'static str);
+    let spoilers: [Spoiler; 4] = [
+        (
+            |d| {
+                d.input_mask = d.depth.image;
+                d.input_mask.format = vk::Format::R32_UINT;
+            },
+            "DenoisingCommon.input_mask.format",
+        ),
+        (
+            |d| {
+                d.roughness.min_roughness = 0.5;
+                d.roughness.max_roughness = 0.4;
+            },
+            "DenoisingCommon.roughness",
+        ),
+        (
+            |d| {
+                d.normals.space = hybrid_rt::NormalSpace::Custom;
+                d.normals.normal_to_world = glam::Mat3::ZERO;
+            },
+            "DenoisingCommon.normals.normal_to_world",
+        ),
+        (|d| d.depth.image.view = vk::ImageView::null(), "DenoisingCommon.depth.image"),
+    ];
+    for (spoil, field) in spoilers {
+        let mut common = images.denoising_common(&camera);
+        spoil(&mut common);
+        let e = c.schedule_denoise_diffuse_occlusion(&task(common)).unwrap_err().to_string();
+        assert!(e.contains(field) && !e.contains("TraceCommon"), "{field}: {e}");
+    }
+    ctx.destroy_denoising_context(dn).unwrap();
     assert!(c.is_empty());
     c.schedule_ambient_occlusion(&good).unwrap();
     c.clear();

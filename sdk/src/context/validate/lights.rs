@@ -1,6 +1,6 @@
 //! Light and shadow task inputs: lights (cones, ranges, intensities), single- and
 //! multi-light shadow outputs, per-light outputs.
-use super::{format_in, image, trace_common, Check, Use, COLOR_OUTPUT_FORMATS};
+use super::{format_in, image, trace_common, Check, Common, Use, COLOR_OUTPUT_FORMATS};
 use crate::context::Shared;
 use crate::error::{Error, Result};
 use crate::types::*;
@@ -18,7 +18,7 @@ pub(super) const SHADOW_OUTPUT_FORMATS: &[vk::Format] = &[
 impl Check for TraceShadowTask {
     fn check(&self, shared: &Shared) -> Result<()> {
         let (t, limits) = (self, &shared.device.limits);
-        trace_common(&t.common, limits)?;
+        trace_common(&t.common, limits, Common::Trace)?;
         if t.common.debug_output != DebugOutput::Default {
             image("TraceShadowTask.output", &t.output, &t.common.viewport, Use::Storage)?;
             return format_in(
@@ -129,7 +129,7 @@ pub(super) fn hit_lighting(h: &HitLighting) -> Result<()> {
 impl Check for TraceMultiShadowTask {
     fn check(&self, shared: &Shared) -> Result<()> {
         let (t, limits) = (self, &shared.device.limits);
-        trace_common(&t.common, limits)?;
+        trace_common(&t.common, limits, Common::Trace)?;
         if t.common.debug_output != DebugOutput::Default {
             return Err(Error::invalid(
                 "TraceMultiShadowTask.common.debug_output",

@@ -191,45 +191,64 @@ pub(crate) fn dispatch_size(what: &'static str, vp: &Viewport, limits: &Limits) 
     Ok(())
 }
 
-pub(crate) fn trace_common(c: &TraceCommon, limits: &Limits) -> Result<()> {
-    dispatch_size("TraceCommon.viewport", &c.viewport, limits)?;
+/// The struct whose G-buffer fields `trace_common` checks: a trace task's `TraceCommon` or a
+/// denoise task's `DenoisingCommon` (checked as the `TraceCommon` it converts to), so that an
+/// error names the field the user filled.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(crate) enum Common {
+    Trace,
+    Denoising,
+}
+
+/// `field!(on, "depth.image")`: the field's path in the struct `on` names, as a static string.
+macro_rules! field {
+    ($on:expr, $path:literal) => {
+        match $on {
+            Common::Trace => concat!("TraceCommon.", $path),
+            Common::Denoising => concat!("DenoisingCommon.", $path),
+        }
+    };
+}
+
+pub(crate) fn trace_common(c: &TraceCommon, limits: &Limits, on: Common) -> Result<()> {
+    dispatch_size(field!(on, "viewport"), &c.viewport, limits)?;
     let vp = &c.viewport;
     if vp.width == 0 || vp.height == 0 {
-        return Err(Error::invalid("TraceCommon.viewport", "has zero width or height"));
+        return Err(Error::invalid(field!(on, "viewport"), "has zero width or height"));
     }
     if !(vp.min_depth.is_finite() && vp.max_depth.is_finite()) {
-        return Err(Error::invalid("TraceCommon.viewport", "depth range is not finite"));
+        return Err(Error::invalid(field!(on, "viewport"), "depth range is not finite"));
     }
-    image("TraceCommon.depth.image", &c.depth.image, vp, Use::Sampled)?;
+    image(field!(on, "depth.image"), &c.depth.image, vp, Use::Sampled)?;
     match c.depth.depth_type {
         DepthType::ClipSpace => format_in(
-            "TraceCommon.depth.image.format",
+            field!(on, "depth.image.format"),
             c.depth.image.format,
             CLIP_DEPTH_FORMATS,
             "a depth format or R32/R16 single channel (DepthType::ClipSpace)",
         )?,
         DepthType::WorldPosition => format_in(
-            "TraceCommon.depth.image.format",
+            field!(on, "depth.image.format"),
             c.depth.image.format,
             POSITION_FORMATS,
             "R32G32B32A32_SFLOAT or R16G16B16A16_SFLOAT (DepthType::WorldPosition)",
         )?,
     }
-    image("TraceCommon.normals.image", &c.normals.image, vp, Use::Sampled)?;
+    image(field!(on, "normals.image"), &c.normals.image, vp, Use::Sampled)?;
     if !normal_format_ok(c.normals.image.format, c.normals.normal_type.channels_needed()) {
         return Err(Error::UnsupportedFormat {
-            what: "TraceCommon.normals.image.format",
+            what: field!(on, "normals.image.format"),
             format: c.normals.image.format,
             expected: "a colour format with the channels the NormalType reads",
         });
     }
     if c.direct_lighting.image != vk::Image::null() {
-        image("TraceCommon.direct_lighting", &c.direct_lighting, vp, Use::Sampled)?;
-        format_in("TraceCommon.direct_lighting.format", c.direct_lighting.format, LIT_FORMATS, "an RGB(A) colour format")?;
+        image(field!(on, "direct_lighting"), &c.direct_lighting, vp, Use::Sampled)?;
+        format_in(field!(on, "direct_lighting.format"), c.direct_lighting.format, LIT_FORMATS, "an RGB(A) colour format")?;
     }
     let r = &c.roughness;
     if r.has_image() {
-        image("TraceCommon.roughness.image", &r.image, vp, Use::Sampled)?;
+        image(field!(on, "roughness.image"), &r.image, vp, Use::Sampled)?;
         if !NORMAL_FORMATS_4.contains(&r.image.format)
             && !NORMAL_FORMATS_2.contains(&r.image.format)
             && !matches!(
@@ -238,42 +257,42 @@ pub(crate) fn trace_common(c: &TraceCommon, limits: &Limits) -> Result<()> {
             )
         {
             return Err(Error::UnsupportedFormat {
-                what: "TraceCommon.roughness.image.format",
+                what: field!(on, "roughness.image.format"),
                 format: r.image.format,
                 expected: "a 1-, 2- or 4-channel unorm/float format",
             });
         }
     }
     if !(r.global_roughness.is_finite() && r.global_roughness >= 0.0) || r.channel_mask.iter().any(|m| !m.is_finite()) {
-        return Err(Error::invalid("TraceCommon.roughness", "global_roughness must be finite and >= 0, the mask finite"));
+        return Err(Error::invalid(field!(on, "roughness"), "global_roughness must be finite and >= 0, the mask finite"));
     }
     // NaN fails every comparison, so `!(..)` also refuses it.
     if !(0.0 <= r.min_roughness && r.min_roughness <= r.max_roughness && r.max_roughness <= 1.0) {
-        return Err(Error::invalid("TraceCommon.roughness", "needs 0 <= min_roughness <= max_roughness <= 1"));
+        return Err(Error::invalid(field!(on, "roughness"), "needs 0 <= min_roughness <= max_roughness <= 1"));
     }
     if c.normals.space == NormalSpace::Custom {
         let m = &c.normals.normal_to_world;
         let det = m.determinant();
         if !m.is_finite() || !det.is_finite() || det.abs() < 1e-12 {
-            return Err(Error::InvalidTransform { what: "TraceCommon.normals.normal_to_world" });
+            return Err(Error::InvalidTransform { what: field!(on, "normals.normal_to_world") });
         }
     }
     if c.input_mask.image != vk::Image::null() {
-        image("TraceCommon.input_mask", &c.input_mask, vp, Use::Sampled)?;
+        image(field!(on, "input_mask"), &c.input_mask, vp, Use::Sampled)?;
         format_in(
-            "TraceCommon.input_mask.format",
+            field!(on, "input_mask.format"),
             c.input_mask.format,
             MASK_FORMATS,
             "a unorm or float format with an R channel",
         )?;
     }
-    matrix("TraceCommon.camera.world_to_view", &c.camera.world_to_view)?;
-    matrix("TraceCommon.camera.view_to_clip", &c.camera.view_to_clip)?;
-    matrix("TraceCommon.camera (view_to_clip * world_to_view)", &(c.camera.view_to_clip * c.camera.world_to_view))?;
+    matrix(field!(on, "camera.world_to_view"), &c.camera.world_to_view)?;
+    matrix(field!(on, "camera.view_to_clip"), &c.camera.view_to_clip)?;
+    matrix(field!(on, "camera (view_to_clip * world_to_view)"), &(c.camera.view_to_clip * c.camera.world_to_view))?;
     let o = &c.ray_offset;
     let params = [o.world_threshold, o.world_float_scale, o.world_int_scale, o.cam_constant, o.cam_linear, o.cam_quadratic];
     if params.iter().any(|p| !p.is_finite()) {
-        return Err(Error::invalid("TraceCommon.ray_offset", "has a non-finite parameter"));
+        return Err(Error::invalid(field!(on, "ray_offset"), "has a non-finite parameter"));
     }
     Ok(())
 }
@@ -290,7 +309,7 @@ pub(crate) const COLOR_OUTPUT_FORMATS: &[vk::Format] =
 impl Check for TraceAmbientOcclusionTask {
     fn check(&self, shared: &Shared) -> Result<()> {
         let (t, limits) = (self, &shared.device.limits);
-        trace_common(&t.common, limits)?;
+        trace_common(&t.common, limits, Common::Trace)?;
         if t.common.debug_output != DebugOutput::Default {
             image("TraceAmbientOcclusionTask.output", &t.output, &t.common.viewport, Use::Storage)?;
             format_in(
@@ -419,7 +438,7 @@ fn environment(what: &'static str, e: &EnvironmentInput) -> Result<()> {
 impl Check for TraceDiffuseTask {
     fn check(&self, shared: &Shared) -> Result<()> {
         let (t, limits) = (self, &shared.device.limits);
-        trace_common(&t.common, limits)?;
+        trace_common(&t.common, limits, Common::Trace)?;
         environment("TraceDiffuseTask.environment", &t.environment)?;
         image("TraceDiffuseTask.output", &t.output, &t.common.viewport, Use::Storage)?;
         format_in(
@@ -444,7 +463,7 @@ impl Check for TraceDiffuseTask {
 impl Check for TraceSpecularTask {
     fn check(&self, shared: &Shared) -> Result<()> {
         let (t, limits) = (self, &shared.device.limits);
-        trace_common(&t.common, limits)?;
+        trace_common(&t.common, limits, Common::Trace)?;
         environment("TraceSpecularTask.environment", &t.environment)?;
         image("TraceSpecularTask.output", &t.output, &t.common.viewport, Use::Storage)?;
         let formats = [vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT];
@@ -495,7 +514,7 @@ impl Check for Box<DenoiseJob> {
         shared.check_denoising_context_alive(self.context)?;
         let (j, limits) = (&**self, &shared.device.limits);
         let c = &j.common;
-        trace_common(&c.as_trace_common(), limits)?;
+        trace_common(&c.as_trace_common(), limits, Common::Denoising)?;
         if let Some(p) = &c.previous_camera {
             matrix("DenoisingCommon.previous_camera.world_to_view", &p.world_to_view)?;
             matrix("DenoisingCommon.previous_camera (view_to_clip * world_to_view)", &(p.view_to_clip * p.world_to_view))?;
