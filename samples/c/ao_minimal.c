@@ -596,9 +596,13 @@ int main(void) {
         float c = custom_result[(H / 2) * W + W / 2];
         EXPECT(c < 0.6f, "custom-space normals: the ceiling still occludes the centre (%f)", c);
 
-        Image mask = filled_image(VK_FORMAT_R8_UNORM, 1, 0, 0, 0);
+        /* Any colour format a float sampler reads is a mask: here an sRGB colour image. */
+        Image mask = filled_image(VK_FORMAT_R8G8B8A8_SRGB, 1, 0, 0, 1);
         HrtTraceAmbientOcclusionTask masked = ao;
         masked.common.input_mask = sdk_image(&mask, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+        HrtTraceAmbientOcclusionTask integer_mask = masked;
+        integer_mask.common.input_mask.format = VK_FORMAT_R8_UINT;
+        EXPECT(hrt_schedule_ambient_occlusion(frame, &integer_mask) == HRT_ERROR_UNSUPPORTED_FORMAT, "an integer mask format is refused");
         CHECK_HRT(hrt_schedule_ambient_occlusion(frame, &masked));
         float masked_result[W * H];
         run_frame(ctx, frame, &out, 4, masked_result);

@@ -1087,7 +1087,8 @@ typedef struct HrtTraceCommon {
   struct HrtSpecularInput specular;
   /**
    * Optional (image = VK_NULL_HANDLE for none): pixels with R >= 0.5 are excluded from the
-   * trace (written as background).
+   * trace (written as background). Any unorm, snorm, sRGB or float colour format the device
+   * can sample; integer and depth/stencil formats give HRT_ERROR_UNSUPPORTED_FORMAT.
    */
   struct HrtImageInput input_mask;
   /**

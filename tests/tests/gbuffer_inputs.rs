@@ -192,10 +192,63 @@ fn masked(i: usize) -> bool {
 
 fn mask_image(room: &mut Room) -> ImageInput {
     let texels: Vec<u8> = (0..(W * H) as usize).map(|i| if masked(i) { 255 } else { 0 }).collect();
-    let img = room.host.image_with_data(vk::Format::R8_UNORM, W, H, vk::ImageUsageFlags::SAMPLED, &texels, READ).unwrap();
+    mask_image_of(room, vk::Format::R8_UNORM, &texels)
+}
+
+/// The mask in `format`, its texels given as bytes.
+fn mask_image_of(room: &mut Room, format: vk::Format, texels: &[u8]) -> ImageInput {
+    let img = room.host.image_with_data(format, W, H, vk::ImageUsageFlags::SAMPLED, texels, READ).unwrap();
     let input = img.input(READ);
     room.owned.push(img);
     input
+}
+
+/// Any colour format a float sampler reads is a mask: sRGB, 16-bit unorm and snorm masks
+/// exclude exactly the pixels an R8_UNORM mask does. An integer format is refused with an
+/// error naming the field.
+#[test]
+fn every_float_readable_format_is_a_mask() {
+    let mut room = Room::new();
+    let texels = |masked_texel: &[u8], clear_texel: &[u8]| -> Vec<u8> {
+        (0..(W * H) as usize).flat_map(|i| if masked(i) { masked_texel.to_vec() } else { clear_texel.to_vec() }).collect()
+    };
+    let one16 = 65535u16.to_le_bytes();
+    let masks = [
+        (vk::Format::R8_UNORM, texels(&[255], &[0])),
+        (vk::Format::R8G8B8A8_SRGB, texels(&[255, 0, 0, 255], &[0, 0, 0, 255])),
+        (
+            vk::Format::R16G16B16A16_UNORM,
+            texels(&[one16, [0; 2], [0; 2], one16].concat(), &[[0; 2], [0; 2], [0; 2], one16].concat()),
+        ),
+        (vk::Format::R8_SNORM, texels(&[127], &[0])),
+    ];
+    let mut outputs = Vec::new();
+    for (format, texels) in &masks {
+        let mut common = room.images.trace_common(&room.camera);
+        common.input_mask = mask_image_of(&mut room, *format, texels);
+        let (ao, ao_i) = room.target();
+        let task = TraceAmbientOcclusionTask { common, output: ao, ray_length: 1.0, rays_per_pixel: 2, ..Default::default() };
+        room.frame.schedule_ambient_occlusion(&task).unwrap();
+        outputs.push((*format, ao_i));
+    }
+    let mut refused = room.images.trace_common(&room.camera);
+    refused.input_mask = mask_image_of(&mut room, vk::Format::R8_UINT, &texels(&[1], &[0]));
+    let (ao, _) = room.target();
+    let e = room
+        .frame
+        .schedule_ambient_occlusion(&TraceAmbientOcclusionTask { common: refused, output: ao, ..Default::default() })
+        .unwrap_err();
+    assert!(matches!(e, Error::UnsupportedFormat { what: "TraceCommon.input_mask.format", .. }), "{e}");
+    room.run();
+    let reference = room.read(outputs[0].1);
+    let covered = (0..reference.len()).filter(|&i| masked(i) && room.hit[i]).count();
+    assert!(covered > 200, "the mask covers surfaces ({covered} px)");
+    for (format, index) in &outputs[1..] {
+        let image = room.read(*index);
+        let differ = (0..image.len()).filter(|&i| image[i][0] != reference[i][0]).count();
+        assert_eq!(differ, 0, "{format:?}: {differ} pixels differ from the R8_UNORM mask's");
+    }
+    room.finish();
 }
 
 /// Every trace task, given the mask, writes its background value under it and exactly what it

@@ -154,7 +154,8 @@ pub struct HrtTraceCommon {
     pub roughness: HrtRoughnessInput,
     pub specular: HrtSpecularInput,
     /// Optional (image = VK_NULL_HANDLE for none): pixels with R >= 0.5 are excluded from the
-    /// trace (written as background).
+    /// trace (written as background). Any unorm, snorm, sRGB or float colour format the device
+    /// can sample; integer and depth/stencil formats give HRT_ERROR_UNSUPPORTED_FORMAT.
     pub input_mask: HrtImageInput,
     /// Optional lit frame (image = VK_NULL_HANDLE for none): secondary hits on screen take
     /// its radiance, others the cache's.

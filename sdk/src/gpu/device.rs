@@ -1,6 +1,7 @@
 //! The engine's device as the SDK sees it: extension loaders, the properties passes need, and
 //! the check that everything the SDK relies on is there (with an error naming what is not).
 use crate::error::{Error, Result};
+use crate::gpu::formats::MaskFormats;
 use ash::{khr, vk};
 use std::ffi::CStr;
 
@@ -129,6 +130,8 @@ pub(crate) struct Limits {
     pub max_ray_dispatch: u32,
     /// maxImageDimension2D (denoiser history images).
     pub max_image_dimension_2d: u32,
+    /// The float-readable colour formats the device samples (input masks).
+    pub mask_formats: MaskFormats,
 }
 
 impl<'a> DeviceDesc<'a> {
@@ -256,6 +259,7 @@ impl Device {
             max_dispatch_groups: [limits.max_compute_work_group_count[0], limits.max_compute_work_group_count[1]],
             max_ray_dispatch: rt_props.max_ray_dispatch_invocation_count,
             max_image_dimension_2d: limits.max_image_dimension2_d,
+            mask_formats: MaskFormats::query(desc.instance, desc.physical_device),
         };
 
         Ok(Device {

@@ -331,8 +331,11 @@ pub struct TraceCommon {
     /// treated as background (sky) by the trace, which writes its "nothing here" value there
     /// (AO 1, shadows lit, radiance 0), and by the denoisers, which neither filter them nor let
     /// them into a neighbourhood or history. For what the depth buffer shows but rays should not
-    /// start from: UI, first-person hands, a portal. Any sampled format with an R channel
-    /// (R8_UNORM, R8G8B8A8_UNORM, R16_SFLOAT, R32_SFLOAT, ...).
+    /// start from: UI, first-person hands, a portal. Any unorm, snorm, sRGB or float colour
+    /// format the device can sample (R8_UNORM, R8_SNORM, R8G8B8A8_SRGB, B8G8R8A8_UNORM,
+    /// R16_UNORM, R16G16B16A16_UNORM, R16_SFLOAT, R32_SFLOAT, packed formats such as
+    /// A2B10G10R10_UNORM_PACK32, ...); integer and depth/stencil formats are refused
+    /// (`Error::UnsupportedFormat`), as is a format the device cannot sample.
     pub input_mask: ImageInput,
     /// Optional (leave `image` null for none): the lit frame of this view, as a direct-lighting
     /// source for secondary hits. A diffuse or specular hit that lands in the viewport where the

@@ -279,12 +279,13 @@ pub(crate) fn trace_common(c: &TraceCommon, limits: &Limits, on: Common) -> Resu
     }
     if c.input_mask.image != vk::Image::null() {
         image(field!(on, "input_mask"), &c.input_mask, vp, Use::Sampled)?;
-        format_in(
-            field!(on, "input_mask.format"),
-            c.input_mask.format,
-            MASK_FORMATS,
-            "a unorm or float format with an R channel",
-        )?;
+        if !limits.mask_formats.sampled(c.input_mask.format) {
+            return Err(Error::UnsupportedFormat {
+                what: field!(on, "input_mask.format"),
+                format: c.input_mask.format,
+                expected: "a unorm, snorm, sRGB or float colour format the device can sample",
+            });
+        }
     }
     matrix(field!(on, "camera.world_to_view"), &c.camera.world_to_view)?;
     matrix(field!(on, "camera.view_to_clip"), &c.camera.view_to_clip)?;
@@ -336,21 +337,6 @@ impl Check for TraceAmbientOcclusionTask {
         Ok(())
     }
 }
-
-/// Input masks: sampled as float, R read.
-const MASK_FORMATS: &[vk::Format] = &[
-    vk::Format::R8_UNORM,
-    vk::Format::R8G8_UNORM,
-    vk::Format::R8G8B8A8_UNORM,
-    vk::Format::B8G8R8A8_UNORM,
-    vk::Format::R16_UNORM,
-    vk::Format::R16_SFLOAT,
-    vk::Format::R16G16_SFLOAT,
-    vk::Format::R16G16B16A16_SFLOAT,
-    vk::Format::R32_SFLOAT,
-    vk::Format::R32G32_SFLOAT,
-    vk::Format::R32G32B32A32_SFLOAT,
-];
 
 const LIT_FORMATS: &[vk::Format] = &[
     vk::Format::R8G8B8A8_UNORM,
