@@ -7,7 +7,9 @@
 //!
 //! The Khronos validation layer is enabled when installed (set HRT_VALIDATION=0 to turn it
 //! off), with synchronization validation (HRT_SYNC_VALIDATION=0 turns that part off) and,
-//! with HRT_BEST_PRACTICES=1, the best-practices checks. Every error and warning it reports
+//! with HRT_BEST_PRACTICES=1, the best-practices checks, and with HRT_GPU_ASSISTED=1 its
+//! GPU-assisted checks of shader accesses (the layer's own settings, e.g. in a
+//! vk_layer_settings.txt, choose which). Every error and warning it reports
 //! about this host's instance is counted per host, and dropping a host that saw any panics with
 //! the messages: a test passes only with a clean log, whether or not it asks. Warnings on the
 //! short list in `IGNORED_WARNINGS` (each says why) are logged, not counted.
@@ -251,6 +253,9 @@ fn create_instance(entry: &ash::Entry, instance_extensions: &[&CStr]) -> HostRes
     }
     if env_flag("HRT_BEST_PRACTICES", false) {
         checks.push(vk::ValidationFeatureEnableEXT::BEST_PRACTICES);
+    }
+    if env_flag("HRT_GPU_ASSISTED", false) {
+        checks.push(vk::ValidationFeatureEnableEXT::GPU_ASSISTED);
     }
     let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&checks);
     let info = if validation_enabled && !checks.is_empty() { info.push_next(&mut features) } else { info };
