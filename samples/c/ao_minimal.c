@@ -1085,6 +1085,13 @@ int main(void) {
     CHECK_HRT(hrt_destroy_all_geometry_handles(ctx));
     EXPECT(hrt_destroy_geometry_handles(ctx, geometries, 1) == HRT_ERROR_INVALID_HANDLE, "destroyed by destroy-all");
     CHECK_HRT(hrt_release_device_resources_immediately(ctx));
+    /* A ticket whose command buffer never finishes, as after a device loss (here: it is never
+     * submitted). */
+    CHECK_HRT(hrt_schedule_bvh_build(frame, &bvh));
+    VkCommandBuffer lost_cmd = begin();
+    HrtTicket lost;
+    CHECK_HRT(hrt_build_gpu_task(ctx, frame, lost_cmd, &lost));
+    EXPECT(vkEndCommandBuffer(lost_cmd) == VK_SUCCESS, "the engine ends its command buffer");
     CHECK_HRT(hrt_task_container_destroy(frame));
     /* Destroyed objects are recognised, not dereferenced: a second destroy, or any call on a
      * destroyed object, is HRT_ERROR_INVALID_HANDLE (and so is a container passed as a context). */
@@ -1092,8 +1099,13 @@ int main(void) {
     EXPECT(hrt_schedule_bvh_build(frame, &bvh) == HRT_ERROR_INVALID_HANDLE, "a destroyed container");
     EXPECT(hrt_task_container_len(frame) == 0, "a destroyed container has no tasks");
     EXPECT(hrt_release_device_resources_immediately((HrtContext *)frame) == HRT_ERROR_INVALID_HANDLE, "not a context");
-    CHECK_HRT(hrt_context_destroy(ctx));
+    /* The lost ticket holds the plain destroy back; after a device loss the context is
+     * destroyed without it, everything freed at once (the validation layer checks at
+     * vkDestroyDevice that nothing of the SDK's is left). */
+    EXPECT(hrt_context_destroy(ctx) == HRT_ERROR_TICKETS_IN_FLIGHT, "a ticket that never ran holds the context");
+    CHECK_HRT(hrt_context_destroy_after_device_lost(ctx));
     EXPECT(hrt_context_destroy(ctx) == HRT_ERROR_INVALID_HANDLE, "context destroyed twice");
+    EXPECT(hrt_context_destroy_after_device_lost(NULL) == HRT_OK, "NULL is ignored");
     HrtTaskContainer *late = NULL;
     EXPECT(hrt_task_container_create(ctx, &late) == HRT_ERROR_INVALID_HANDLE && !late, "a destroyed context");
     EXPECT(hrt_context_destroy(NULL) == HRT_OK, "NULL is ignored");

@@ -1436,6 +1436,16 @@ enum HrtStatus hrt_context_create(const struct HrtContextDesc *desc, struct HrtC
  */
 enum HrtStatus hrt_context_destroy(struct HrtContext *ctx);
 
+/**
+ * Destroys a context after the engine's device was lost (VK_ERROR_DEVICE_LOST), when its
+ * tickets can never come back: every GPU object and all host memory of the SDK are freed at
+ * once, and nothing waits (NULL is ignored: HRT_OK). Call it before destroying the device.
+ * Only after a device loss, or when no command buffer holding one of its tickets will run
+ * again: on a working device it frees memory the GPU may still use. Destroying it twice, or
+ * any call on it afterwards, is HRT_ERROR_INVALID_HANDLE.
+ */
+enum HrtStatus hrt_context_destroy_after_device_lost(struct HrtContext *ctx);
+
 bool hrt_supports_inline_rt(const struct HrtContext *ctx);
 
 /**

@@ -376,3 +376,38 @@ fn tickets_working_sets_and_settings() {
     drop(ctx);
     assert_no_validation_errors();
 }
+
+/// After a device loss the engine's tickets never come back: `destroy` refuses (the GPU might
+/// still run them, as far as the SDK can tell), and `destroy_after_device_lost` frees every
+/// object at once without waiting. The validation layer, which checks at the device's
+/// destruction that every object made on it was destroyed, sees nothing left behind (a plain
+/// drop with tickets out leaks them on purpose).
+#[test]
+fn a_lost_device_tears_the_context_down_without_its_tickets() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let mut scene = Scene::default();
+    let m = scene.add_mesh(Mesh::grid(10.0, 1));
+    scene.add_instance(m, Affine3A::IDENTITY);
+    let camera = Camera::look_at(Vec3::new(0.0, 4.0, 0.01), Vec3::ZERO);
+    let g = GBuffer::render(&Tracer::new(&scene), &camera, 16, 16);
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let mut frame = ctx.create_task_container();
+    let s = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    frame.schedule_ambient_occlusion(&images.ao_task(&camera, 1.0, 1)).unwrap();
+    // The device is lost before the engine submits (or while the GPU runs it): the ticket's
+    // command buffer never finishes.
+    let cmd = host.allocate_command_buffer().unwrap();
+    host.begin(cmd).unwrap();
+    let _ticket = ctx.build_gpu_task(&mut frame, cmd).unwrap();
+    unsafe { host.device.end_command_buffer(cmd) }.unwrap();
+    let (ctx, e) = ctx.destroy().unwrap_err();
+    assert!(matches!(e, Error::TicketsInFlight { .. }), "{e}");
+    assert_eq!(ctx.unfinished_tickets().len(), 1);
+    // SAFETY: the ticket's command buffer is never submitted.
+    unsafe { ctx.destroy_after_device_lost() };
+    images.destroy(&host);
+    s.destroy(&host);
+    drop(host);
+    assert_no_validation_errors();
+}

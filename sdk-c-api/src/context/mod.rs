@@ -260,6 +260,26 @@ pub unsafe extern "C" fn hrt_context_destroy(ctx: *mut HrtContext) -> HrtStatus 
     })
 }
 
+/// Destroys a context after the engine's device was lost (VK_ERROR_DEVICE_LOST), when its
+/// tickets can never come back: every GPU object and all host memory of the SDK are freed at
+/// once, and nothing waits (NULL is ignored: HRT_OK). Call it before destroying the device.
+/// Only after a device loss, or when no command buffer holding one of its tickets will run
+/// again: on a working device it frees memory the GPU may still use. Destroying it twice, or
+/// any call on it afterwards, is HRT_ERROR_INVALID_HANDLE.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_context_destroy_after_device_lost(ctx: *mut HrtContext) -> HrtStatus {
+    if ctx.is_null() {
+        return HrtStatus::HRT_OK;
+    }
+    guard(|| {
+        live::unregister(ctx, live::Kind::Context, "ctx")?;
+        let HrtContext { ctx, _entry } = *Box::from_raw(ctx);
+        // SAFETY: the caller declares the device lost (see above).
+        ctx.destroy_after_device_lost();
+        Ok(())
+    })
+}
+
 #[no_mangle]
 pub unsafe extern "C" fn hrt_supports_inline_rt(ctx: *const HrtContext) -> bool {
     context(ctx).is_ok_and(|c| c.ctx.supports_inline_rt())

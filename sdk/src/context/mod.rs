@@ -64,6 +64,9 @@ pub(crate) struct Shared {
     /// where handles are created and destroyed, inside the state lock.
     live: RwLock<handles::Live>,
     warned_inline: AtomicBool,
+    /// Set by `destroy_after_device_lost`: tickets still out will never finish, and nothing of
+    /// theirs runs any more, so dropping frees everything instead of leaking it.
+    device_lost: AtomicBool,
 }
 
 struct State {
@@ -166,6 +169,7 @@ impl ExecuteContext {
             }),
             live: RwLock::new(handles::Live::default()),
             warned_inline: AtomicBool::new(false),
+            device_lost: AtomicBool::new(false),
         });
         {
             let mut st = shared.state.lock();
@@ -209,6 +213,21 @@ impl ExecuteContext {
         }
         drop(self);
         Ok(())
+    }
+
+    /// Destroys the context after the engine's device was lost (`VK_ERROR_DEVICE_LOST`), when
+    /// the tickets still out can never be handed back: every GPU object and all host memory
+    /// of the SDK are freed at once, and nothing waits. (A lost device's command buffers are
+    /// no longer pending, so destroying what they use is valid.) Destroy the context this way
+    /// before the device; tickets the engine still holds are then meaningless.
+    ///
+    /// # Safety
+    /// The device must be lost, or every command buffer holding one of this context's tickets
+    /// must have finished or never be submitted: on a working device this frees memory that a
+    /// running command buffer may still use.
+    pub unsafe fn destroy_after_device_lost(self) {
+        self.shared.device_lost.store(true, Ordering::Relaxed);
+        drop(self);
     }
 
     /// A new, empty task container (`Send`: fill it on any thread).
@@ -355,7 +374,7 @@ impl Drop for Shared {
     /// the log, rather than freed under the GPU. Nothing here waits: the SDK owns no queue.
     fn drop(&mut self) {
         let unfinished = self.unfinished_tickets();
-        if !unfinished.is_empty() {
+        if !unfinished.is_empty() && !self.device_lost.load(Ordering::Relaxed) {
             log::error!(
                 "hybrid-rt context dropped with tickets {unfinished:?} still running on the GPU: leaking its GPU objects \
                  (wait for the tickets' fences and hand them back, or use ExecuteContext::destroy)"
