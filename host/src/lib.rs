@@ -148,6 +148,15 @@ pub struct HostBuffer {
     mapped: *mut u8,
 }
 
+impl HostBuffer {
+    /// The bytes of a host-visible buffer (None for device-local memory). Read them after the
+    /// GPU's writes have finished and were made visible to the host.
+    pub fn mapped_bytes(&self) -> Option<&[u8]> {
+        // SAFETY: `mapped` covers `size` bytes for the buffer's life.
+        (!self.mapped.is_null()).then(|| unsafe { std::slice::from_raw_parts(self.mapped, self.size as usize) })
+    }
+}
+
 pub type HostResult<T> = Result<T, String>;
 
 /// A queue of a second compute family and its command pool.
@@ -439,6 +448,12 @@ impl Host {
     /// Validation errors and counted warnings reported so far by this host's instance.
     pub fn validation_problems(&self) -> Vec<String> {
         self.validation_log.problems.lock().map(|p| p.clone()).unwrap_or_default()
+    }
+
+    /// Takes the validation errors and counted warnings this host's instance reported so far,
+    /// so a test that provokes them on purpose can check them and still drop the host cleanly.
+    pub fn take_validation_problems(&self) -> Vec<String> {
+        self.validation_log.problems.lock().map(|mut p| std::mem::take(&mut *p)).unwrap_or_default()
     }
 
     /// Validation errors and counted warnings reported so far in this process.
