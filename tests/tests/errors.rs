@@ -8,7 +8,6 @@ use hybrid_rt::{
     GpuTicket, HandleProblem, IndexBufferInput, InitSettings, InstanceInput, InstanceOperation, InstanceTask, SignalType,
     TaskOperation, VertexBufferInput,
 };
-use hybrid_rt_testkit::reference::*;
 use hybrid_rt_testkit::sdk_scene::*;
 
 fn triangle_buffers(
@@ -24,12 +23,7 @@ fn triangle_buffers(
 
 /// A small working scene rendered after every refusal: the context must still work.
 fn render_ok(host: &hybrid_rt_testkit::host::Host, ctx: &hybrid_rt::ExecuteContext) {
-    let mut scene = Scene::default();
-    let m = scene.add_mesh(Mesh::grid(10.0, 1));
-    scene.add_instance(m, Affine3A::IDENTITY);
-    let camera = Camera::look_at(Vec3::new(0.0, 4.0, 0.01), Vec3::ZERO);
-    let g = GBuffer::render(&Tracer::new(&scene), &camera, 16, 16);
-    let images = GBufferImages::upload(host, &g).unwrap();
+    let (scene, camera, images) = ground_view(host);
     let mut frame = ctx.create_task_container();
     let s = SceneOnGpu::register(host, ctx, &mut frame, &scene).unwrap();
     frame.schedule_bvh_build(&Default::default()).unwrap();
@@ -218,12 +212,7 @@ fn non_finite_transforms_and_cameras_are_refused() {
     }
 
     // AO task validation: camera, viewport, formats, layouts, parameters.
-    let mut scene = Scene::default();
-    let m = scene.add_mesh(Mesh::grid(10.0, 1));
-    scene.add_instance(m, Affine3A::IDENTITY);
-    let camera = Camera::look_at(Vec3::new(0.0, 4.0, 0.01), Vec3::ZERO);
-    let gb = GBuffer::render(&Tracer::new(&scene), &camera, 16, 16);
-    let images = GBufferImages::upload(&host, &gb).unwrap();
+    let (_, camera, images) = ground_view(&host);
     let good = images.ao_task(&camera, 1.0, 1);
     let mut bad = good;
     bad.common.camera.world_to_view = Mat4::from_cols_array(&[f32::NAN; 16]);
@@ -385,12 +374,7 @@ fn tickets_working_sets_and_settings() {
 #[test]
 fn a_lost_device_tears_the_context_down_without_its_tickets() {
     let (host, ctx) = host_and_context(InitSettings::default());
-    let mut scene = Scene::default();
-    let m = scene.add_mesh(Mesh::grid(10.0, 1));
-    scene.add_instance(m, Affine3A::IDENTITY);
-    let camera = Camera::look_at(Vec3::new(0.0, 4.0, 0.01), Vec3::ZERO);
-    let g = GBuffer::render(&Tracer::new(&scene), &camera, 16, 16);
-    let images = GBufferImages::upload(&host, &g).unwrap();
+    let (scene, camera, images) = ground_view(&host);
     let mut frame = ctx.create_task_container();
     let s = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
     frame.schedule_bvh_build(&Default::default()).unwrap();

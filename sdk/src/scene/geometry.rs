@@ -181,7 +181,9 @@ impl CopyPlan {
     /// an error here, never a wrapped size that reaches the driver. (`validate` has checked
     /// each field; this checks what they add up to.)
     pub fn of(input: &GeometryInput) -> Result<CopyPlan> {
-        let overflow = |what: &str| Error::invalid("GeometryInput", format!("{what} overflows"));
+        let overflow = |what: &str| {
+            Error::invalid("GeometryInput.vertices / indices (counts, strides, offsets)", format!("{what} overflows"))
+        };
         let (mut vertices, mut triangles, mut staging) = (0u32, 0u32, 0u64);
         let mut parts = Vec::with_capacity(1 + input.extra_components.len());
         for c in input.components() {

@@ -41,7 +41,7 @@ pub(crate) fn geometry_input(device: &Device, input: &GeometryInput) -> Result<(
     let layout = plan.layout;
     if layout.primitive_count as u64 > device.limits.max_primitive_count {
         return Err(Error::invalid(
-            "GeometryInput",
+            "GeometryInput.vertices.count / indices.count (every part's triangles)",
             format!(
                 "{} triangles exceed the device's maxPrimitiveCount {}",
                 layout.primitive_count, device.limits.max_primitive_count
@@ -51,7 +51,7 @@ pub(crate) fn geometry_input(device: &Device, input: &GeometryInput) -> Result<(
     for (what, bytes) in [("copy", layout.total_bytes()), ("staging copy", plan.staging_bytes)] {
         if bytes > device.limits.max_buffer_size {
             return Err(Error::invalid(
-                "GeometryInput",
+                "GeometryInput.vertices.count / stride (every part's vertices)",
                 format!("its {bytes}-byte {what} exceeds the device's maxBufferSize {}", device.limits.max_buffer_size),
             ));
         }

@@ -493,6 +493,23 @@ const RADIANCE_FORMATS: &[vk::Format] = &[vk::Format::R16G16B16A16_SFLOAT, vk::F
 const MOTION_FORMATS_2: &[vk::Format] =
     &[vk::Format::R16G16_SFLOAT, vk::Format::R32G32_SFLOAT, vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT];
 
+/// The fields of the task the engine filled that hold a denoise job's input and output `k`.
+fn denoise_image_fields(signal: SignalType, k: usize) -> (&'static str, &'static str) {
+    match (signal, k) {
+        (SignalType::Specular, _) => ("DenoiseSpecularTask.input", "DenoiseSpecularTask.output"),
+        (SignalType::Diffuse, _) => ("DenoiseDiffuseTask.input", "DenoiseDiffuseTask.output"),
+        (SignalType::SpecularAndDiffuse, 0) => {
+            ("DenoiseSpecularAndDiffuseTask.input_specular", "DenoiseSpecularAndDiffuseTask.output_specular")
+        }
+        (SignalType::SpecularAndDiffuse, _) => {
+            ("DenoiseSpecularAndDiffuseTask.input_diffuse", "DenoiseSpecularAndDiffuseTask.output_diffuse")
+        }
+        (SignalType::DiffuseOcclusion, _) => ("DenoiseDiffuseOcclusionTask.input", "DenoiseDiffuseOcclusionTask.output"),
+        (SignalType::Shadow, _) => ("DenoiseShadowTask.input", "DenoiseShadowTask.output"),
+        (SignalType::MultiShadow, _) => ("DenoiseMultiShadowTask.input", "DenoiseMultiShadowTask.output"),
+    }
+}
+
 /// A denoise task, normalised (see `DenoiseJob`): G-buffer, cameras, motion, settings, and the
 /// formats its signal reads and writes.
 impl Check for Box<DenoiseJob> {
@@ -549,15 +566,11 @@ impl Check for Box<DenoiseJob> {
             SignalType::MultiShadow => (RADIANCE_FORMATS, SCALAR_OUTPUT_FORMATS),
         };
         for k in 0..j.count {
-            image("denoise task input", &j.inputs[k], vp, Use::Sampled)?;
-            format_in("denoise task input", j.inputs[k].format, inputs, "the format of the trace task's output for this signal")?;
-            image("denoise task output", &j.outputs[k], vp, Use::Storage)?;
-            format_in(
-                "denoise task output",
-                j.outputs[k].format,
-                outputs,
-                "an RGBA16F/32F (radiance) or scalar/RGBA (visibility) format",
-            )?;
+            let (input, output) = denoise_image_fields(j.signal, k);
+            image(input, &j.inputs[k], vp, Use::Sampled)?;
+            format_in(input, j.inputs[k].format, inputs, "the format of the trace task's output for this signal")?;
+            image(output, &j.outputs[k], vp, Use::Storage)?;
+            format_in(output, j.outputs[k].format, outputs, "an RGBA16F/32F (radiance) or scalar/RGBA (visibility) format")?;
         }
         if j.signal == SignalType::Shadow {
             light("DenoiseShadowTask.light", &j.light)?;
