@@ -608,8 +608,9 @@ typedef struct HrtNormalInput {
 } HrtNormalInput;
 
 /**
- * Roughness: clamp(global_roughness * dot(texel, channel_mask), min_roughness, max_roughness)
- * with an image (image != 0), clamp(global_roughness, min, max) without.
+ * Roughness, Kickstart RT's rule: r = global_roughness * dot(texel, channel_mask) with an
+ * image (image != 0), global_roughness without; then
+ * clamp(r * roughness_multiplier + min_roughness, min_roughness, max_roughness).
  */
 typedef struct HrtRoughnessInput {
   /**
@@ -621,11 +622,15 @@ typedef struct HrtRoughnessInput {
    */
   float channel_mask[4];
   /**
-   * The multiplier. Default 1.0.
+   * Scales the image's roughness (or is the roughness, without an image). Default 1.0.
    */
   float global_roughness;
   /**
-   * Default 0.
+   * The remap's multiplier. Default 1.0.
+   */
+  float roughness_multiplier;
+  /**
+   * The remap's offset and lower clamp. Default 0.
    */
   float min_roughness;
   /**

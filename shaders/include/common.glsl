@@ -30,7 +30,7 @@ struct TraceCommon {
     vec4 depth_range;     // viewport min depth, max depth, background depth texel, has input mask (0/1)
     uvec4 modes;          // depth type, normal type, normals need normal_to_world (0/1), ray offset type
     vec4 offset_world;    // threshold, float scale, int scale, unused
-    vec4 offset_camera;   // constant, linear, quadratic, unused
+    vec4 offset_camera;   // constant, linear, quadratic; w: the roughness remap's multiplier (see below)
     uvec4 frame;          // random seed, TLAS instance mask, half-resolution checkerboard (0/1), has direct-lighting image (0/1)
     mat4 world_to_clip;   // view_to_clip * world_to_view
     mat4 normal_to_world; // 3x3 (in a mat4) taking decoded normals to world space when modes.z = 1
@@ -176,12 +176,13 @@ vec3 hrt_world_normal(TraceCommon c, vec4 normal_texel) {
     return n;
 }
 
-// Surface roughness (RoughnessInput): clamp(multiplier * dot(texel, mask), min, max), or
-// clamp(multiplier, min, max) without an image. One rule for every pass that reads it.
+// Surface roughness (RoughnessInput), Kickstart RT's rule: r = multiplier (global roughness) x
+// dot(texel, mask), or the global roughness alone without an image; then
+// clamp(r * remap multiplier + min, min, max).
 float hrt_surface_roughness(TraceCommon c, sampler2D roughness, ivec2 pixel) {
     float r = c.roughness.x;
     if (c.roughness.y != 0.0) r *= dot(texelFetch(roughness, pixel, 0), c.roughness_mask);
-    return clamp(r, c.roughness.z, c.roughness.w);
+    return clamp(r * c.offset_camera.w + c.roughness.z, c.roughness.z, c.roughness.w);
 }
 
 // The input mask (TraceCommon::input_mask): pixels whose R is >= 0.5 are excluded from every

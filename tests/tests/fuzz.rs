@@ -103,7 +103,7 @@ fn spoil_common(c: &mut TraceCommon, s: &Spoil) {
         14 => c.roughness.global_roughness = s.float,
         15 => c.roughness.min_roughness = s.float,
         16 => c.roughness.max_roughness = s.float,
-        17 => c.roughness.channel_mask = [s.float; 4],
+        17 => (c.roughness.channel_mask, c.roughness.roughness_multiplier) = ([s.float; 4], s.matrix[0]),
         18 => c.ray_offset.world_threshold = s.float,
         19 => c.ray_offset.cam_linear = s.float,
         20 => c.ray_offset.world_int_scale = s.float,

@@ -107,25 +107,38 @@ fn bands(values: [f32; 4]) -> Vec<[f32; 4]> {
     (0..W * H).map(|i| [0.95, values[((i % W) * 4 / W) as usize], 0.0, 0.0]).collect()
 }
 
-/// `clamp(multiplier * texel, min, max)`: the raw bands 0.05, 0.15, 0.25, 0.45 under
-/// multiplier 2 and [0.2, 0.6] are 0.2 (clamped up), 0.3, 0.5, 0.6 (clamped down) — each exact
-/// in f32 (doubling is exact), so the remapped trace and the trace of the remapped image agree to
-/// the bit in the specular trace, the Disney diffuse trace and the specular denoiser.
+/// Kickstart RT's roughness rule (its RemapRoughness and LoadRoughness), on the CPU:
+/// `r = global * dot(texel, mask)`, then `clamp(r * multiplier + min, min, max)`.
+fn kickstart_roughness(texel: [f32; 4], r: &RoughnessInput) -> f32 {
+    let dot: f32 = (0..4).map(|c| texel[c] * r.channel_mask[c]).sum();
+    (r.global_roughness * dot * r.roughness_multiplier + r.min_roughness).clamp(r.min_roughness, r.max_roughness)
+}
+
+/// The remap, as Kickstart RT computes it: the raw bands 0.05, 0.15, 0.25, 0.45 under global 4,
+/// multiplier 0.5 and [0.2, 0.6] are 0.3, 0.5 (lifted by the minimum), 0.6 and 0.6 (clamped) —
+/// each exact in f32 (the scalings are powers of two), so the remapped trace and the trace of
+/// the image remapped on the CPU agree to the bit in the specular trace, the Disney diffuse
+/// trace and the specular denoiser.
 #[test]
-fn the_roughness_remap_multiplies_then_clamps_in_every_pass_that_reads_roughness() {
+fn the_roughness_remap_is_kickstart_rts_in_every_pass_that_reads_roughness() {
     let remap = |image| RoughnessInput {
         image,
         channel_mask: [0.0, 1.0, 0.0, 0.0],
-        global_roughness: 2.0,
+        global_roughness: 4.0,
+        roughness_multiplier: 0.5,
         min_roughness: 0.2,
         max_roughness: 0.6,
     };
     let plain = |image| RoughnessInput { image, channel_mask: [0.0, 1.0, 0.0, 0.0], ..Default::default() };
+    let raw = [0.05, 0.15, 0.25, 0.45];
+    let rule = remap(ImageInput::default());
+    let remapped = raw.map(|v| kickstart_roughness([0.95, v, 0.0, 0.0], &rule));
+    assert_eq!(remapped, [0.3, 0.5, 0.6, 0.6], "Kickstart RT's rule on the CPU");
     let mut images = Vec::new();
     for (raw, rule) in [
-        ([0.05, 0.15, 0.25, 0.45], remap as fn(ImageInput) -> RoughnessInput),
-        ([0.2, 0.3, 0.5, 0.6], plain as fn(ImageInput) -> RoughnessInput),
-        ([0.05, 0.15, 0.25, 0.45], plain as fn(ImageInput) -> RoughnessInput),
+        (raw, remap as fn(ImageInput) -> RoughnessInput),
+        (remapped, plain as fn(ImageInput) -> RoughnessInput),
+        (raw, plain as fn(ImageInput) -> RoughnessInput),
     ] {
         let mut room = Room::new();
         let roughness = rule(room.input(&bands(raw)));

@@ -117,8 +117,9 @@ pub enum HrtDebugOutput {
     HRT_DEBUG_BARYCENTRICS = 5,
 }
 
-/// Roughness: clamp(global_roughness * dot(texel, channel_mask), min_roughness, max_roughness)
-/// with an image (image != 0), clamp(global_roughness, min, max) without.
+/// Roughness, Kickstart RT's rule: r = global_roughness * dot(texel, channel_mask) with an
+/// image (image != 0), global_roughness without; then
+/// clamp(r * roughness_multiplier + min_roughness, min_roughness, max_roughness).
 #[repr(C)]
 #[derive(Clone, Copy)]
 pub struct HrtRoughnessInput {
@@ -126,9 +127,11 @@ pub struct HrtRoughnessInput {
     pub image: HrtImageInput,
     /// Default {1, 0, 0, 0}.
     pub channel_mask: [f32; 4],
-    /// The multiplier. Default 1.0.
+    /// Scales the image's roughness (or is the roughness, without an image). Default 1.0.
     pub global_roughness: f32,
-    /// Default 0.
+    /// The remap's multiplier. Default 1.0.
+    pub roughness_multiplier: f32,
+    /// The remap's offset and lower clamp. Default 0.
     pub min_roughness: f32,
     /// Default 1.
     pub max_roughness: f32,
@@ -234,6 +237,7 @@ pub(crate) fn roughness(r: &HrtRoughnessInput) -> rt::RoughnessInput {
         image: image(&r.image),
         channel_mask: r.channel_mask,
         global_roughness: r.global_roughness,
+        roughness_multiplier: r.roughness_multiplier,
         min_roughness: r.min_roughness,
         max_roughness: r.max_roughness,
     }
@@ -311,6 +315,7 @@ pub extern "C" fn hrt_trace_common_default() -> HrtTraceCommon {
             image: image_c(&d.roughness.image),
             channel_mask: d.roughness.channel_mask,
             global_roughness: d.roughness.global_roughness,
+            roughness_multiplier: d.roughness.roughness_multiplier,
             min_roughness: d.roughness.min_roughness,
             max_roughness: d.roughness.max_roughness,
         },

@@ -85,7 +85,7 @@ impl TraceCommonGpu {
                 },
             ],
             offset_world: [o.world_threshold, o.world_float_scale, o.world_int_scale, 0.0],
-            offset_camera: [o.cam_constant, o.cam_linear, o.cam_quadratic, 0.0],
+            offset_camera: [o.cam_constant, o.cam_linear, o.cam_quadratic, r.roughness_multiplier],
             frame: [seed, mask as u32, c.half_resolution_mode as u32, (c.direct_lighting.image != ash::vk::Image::null()) as u32],
             world_to_clip: (c.camera.view_to_clip * c.camera.world_to_view).to_cols_array(),
             normal_to_world: glam::Mat4::from_mat3(normal_to_world.unwrap_or(glam::Mat3::IDENTITY)).to_cols_array(),

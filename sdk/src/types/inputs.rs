@@ -229,15 +229,16 @@ impl Default for RayOffset {
 }
 
 /// Surface roughness (perceptual, 0 = mirror .. 1), read by specular traces, the normalized
-/// Disney diffuse BRDF and the specular denoiser — one rule for all three:
-/// `clamp(global_roughness * dot(texel, channel_mask), min_roughness, max_roughness)` with an
-/// image, `clamp(global_roughness, min_roughness, max_roughness)` without.
+/// Disney diffuse BRDF and the specular denoiser — one rule for all three, Kickstart RT's:
+/// `r = global_roughness * dot(texel, channel_mask)` (`global_roughness` alone without an
+/// image), then `clamp(r * roughness_multiplier + min_roughness, min_roughness,
+/// max_roughness)`. An engine moving from Kickstart RT keeps its numbers.
 ///
-/// Kickstart RT's remap is the same three numbers: its roughness multiplier is
-/// `global_roughness`; `min_roughness` keeps near-mirrors from aliasing (a 0.05 floor is common
-/// in engines whose normal maps have detail below a pixel), `max_roughness` caps how wide a
-/// lobe the reflection trace spends rays on (above ~0.6 a reflection is barely distinguishable
-/// from the engine's own prefiltered probe).
+/// `min_roughness` both lifts and floors: it keeps near-mirrors from aliasing (a 0.05 floor is
+/// common in engines whose normal maps have detail below a pixel); `max_roughness` caps how wide
+/// a lobe the reflection trace spends rays on (above ~0.6 a reflection is barely
+/// distinguishable from the engine's own prefiltered probe). Kickstart RT suggests multiplier
+/// 0.5, min 0.1, max 0.4 to limit roughness smoothly.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RoughnessInput {
     /// Optional: leave `image` null to use `global_roughness` everywhere.
@@ -247,9 +248,11 @@ pub struct RoughnessInput {
     /// Multiplier of the image's roughness, or the roughness itself without an image.
     /// Default 1.0 (the guide: set it to 0 to debug mirror reflections first).
     pub global_roughness: f32,
-    /// Lower clamp of the remapped roughness, in [0, `max_roughness`]. Default 0.
+    /// The remap's multiplier (Kickstart RT's `roughnessMultiplier`). Default 1.0.
+    pub roughness_multiplier: f32,
+    /// The remap's offset and lower clamp, in [0, `max_roughness`]. Default 0.
     pub min_roughness: f32,
-    /// Upper clamp, in [`min_roughness`, 1]. Default 1.
+    /// The remap's upper clamp, in [`min_roughness`, 1]. Default 1.
     pub max_roughness: f32,
 }
 
@@ -259,6 +262,7 @@ impl Default for RoughnessInput {
             image: ImageInput::default(),
             channel_mask: [1.0, 0.0, 0.0, 0.0],
             global_roughness: 1.0,
+            roughness_multiplier: 1.0,
             min_roughness: 0.0,
             max_roughness: 1.0,
         }

@@ -266,6 +266,9 @@ pub(crate) fn trace_common(c: &TraceCommon, limits: &Limits, on: Common) -> Resu
     if !(r.global_roughness.is_finite() && r.global_roughness >= 0.0) || r.channel_mask.iter().any(|m| !m.is_finite()) {
         return Err(Error::invalid(field!(on, "roughness"), "global_roughness must be finite and >= 0, the mask finite"));
     }
+    if !r.roughness_multiplier.is_finite() {
+        return Err(Error::invalid(field!(on, "roughness.roughness_multiplier"), "must be finite"));
+    }
     // NaN fails every comparison, so `!(..)` also refuses it.
     if !(0.0 <= r.min_roughness && r.min_roughness <= r.max_roughness && r.max_roughness <= 1.0) {
         return Err(Error::invalid(field!(on, "roughness"), "needs 0 <= min_roughness <= max_roughness <= 1"));
