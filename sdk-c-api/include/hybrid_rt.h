@@ -164,6 +164,10 @@ enum HrtBuildHint
    * Fast build when registered, rebuilt for fast trace (and compacted) at a later BVH build.
    */
   HRT_BUILD_HINT_FAST_THEN_TRACE = 4,
+  /**
+   * No preference flag (the driver's trade-off); compacted when static.
+   */
+  HRT_BUILD_HINT_PREFER_NONE = 5,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L

@@ -83,9 +83,12 @@ fn non_indexed(host: &Host, m: &Mesh) -> Layout {
             format: vk::Format::R32G32B32A32_SFLOAT,
             ..Default::default()
         },
+        build_hint: BuildHint::PreferNone,
         ..Default::default()
     };
-    Layout { name: "non-indexed RGBA32F", input, buffers: vec![vb] }
+    // No preference flag: the driver's trade-off, compacted (static).
+    assert_eq!(input.build_hint.build_flags(false, false), vk::BuildAccelerationStructureFlagsKHR::ALLOW_COMPACTION);
+    Layout { name: "non-indexed RGBA32F, no build preference", input, buffers: vec![vb] }
 }
 
 /// (d) Two parts: the first half of the triangles as is, the second half stored 10 units up

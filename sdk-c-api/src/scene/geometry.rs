@@ -134,6 +134,8 @@ pub enum HrtBuildHint {
     HRT_BUILD_HINT_LOW_MEMORY = 3,
     /// Fast build when registered, rebuilt for fast trace (and compacted) at a later BVH build.
     HRT_BUILD_HINT_FAST_THEN_TRACE = 4,
+    /// No preference flag (the driver's trade-off); compacted when static.
+    HRT_BUILD_HINT_PREFER_NONE = 5,
 }
 
 #[repr(C)]
@@ -156,6 +158,7 @@ fn build_hint(v: u32) -> Result<rt::BuildHint, Failure> {
             rt::BuildHint::PreferFastBuild,
             rt::BuildHint::LowMemory,
             rt::BuildHint::FastThenTrace,
+            rt::BuildHint::PreferNone,
         ],
     )
 }

@@ -203,6 +203,9 @@ pub enum BuildHint {
     /// streamed in while the camera moves. Static geometry only (`allow_update` geometry is
     /// built fast anyway).
     FastThenTrace = 4,
+    /// No preference: neither the fast-trace nor the fast-build flag, the driver's own
+    /// trade-off (Kickstart RT's `PreferNone`); compacted when static.
+    PreferNone = 5,
 }
 
 impl BuildHint {
@@ -219,6 +222,7 @@ impl BuildHint {
                 F::PREFER_FAST_TRACE
             }
             (BuildHint::LowMemory, _) => F::LOW_MEMORY,
+            (BuildHint::PreferNone, _) => F::empty(),
         };
         let mut f = preference;
         if allow_update {
