@@ -683,6 +683,10 @@ int main(void) {
     shadow_task.light.light_type = HRT_LIGHT_POINT;
     shadow_task.light.position[1] = 2.0f;
     shadow_task.output = sdk_image(&shadow, VK_IMAGE_LAYOUT_GENERAL);
+    EXPECT(isinf(shadow_task.max_ray_length), "shadow rays are not capped by default");
+    HrtTraceShadowTask uncapped = shadow_task;
+    uncapped.max_ray_length = 0.0f;
+    EXPECT(hrt_schedule_shadow(frame, &uncapped) == HRT_ERROR_INVALID_INPUT, "a zero max_ray_length is refused");
     CHECK_HRT(hrt_schedule_shadow(frame, &shadow_task));
     float rg[W * H * 2];
     printf("shadow frame:\n");

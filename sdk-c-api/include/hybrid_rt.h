@@ -1279,6 +1279,11 @@ typedef struct HrtTraceShadowTask {
    * Default false.
    */
   bool first_hit;
+  /**
+   * Occluders farther than this from the surface do not shadow it (world units, > 0).
+   * Default unlimited (INFINITY).
+   */
+  float max_ray_length;
 } HrtTraceShadowTask;
 
 /**
@@ -1329,6 +1334,10 @@ typedef struct HrtTraceMultiShadowTask {
    * First-hit traversal (see HrtTraceShadowTask). Default false.
    */
   bool first_hit;
+  /**
+   * As HrtTraceShadowTask's, for every light. Default unlimited (INFINITY).
+   */
+  float max_ray_length;
 } HrtTraceMultiShadowTask;
 
 #define HRT_TASK_DIRECT_LIGHTING_INJECTION 4

@@ -26,6 +26,7 @@ layout(set = 0, binding = 5, std140) uniform MultiShadowConstants {
     TraceCommon common_;
     uvec4 counts;      // rays per pixel, light count, first-hit mode, has visibility_high
     uvec4 outputs;     // light written by each per-light output (0xffffffff: none)
+    vec4 limits;       // max ray length, unused x3
     LightGpu lights[HRT_MAX_LIGHTS];
 } u_c;
 layout(set = 0, binding = 6) uniform sampler2D u_input_mask;
@@ -85,6 +86,7 @@ void hrt_multi_shadow_main() {
                 vec3 dir;
                 float tmax;
                 hrt_light_ray(light, origin, hrt_sample(seq, i), dir, tmax);
+                tmax = min(tmax, u_c.limits.x);
                 float t = hrt_trace_record_flags(u_tlas, flags, c.frame.y & 0xffu, origin, dir, tmax).t;
                 if (t < 0.0) {
                     visible += 1u;

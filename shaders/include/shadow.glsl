@@ -18,7 +18,7 @@ layout(set = 0, binding = 3) uniform writeonly image2D u_out;
 layout(set = 0, binding = 4, std140) uniform ShadowConstants {
     TraceCommon common_;
     LightGpu light;
-    uvec4 counts;     // rays per pixel, first-hit mode
+    uvec4 counts;     // rays per pixel, first-hit mode, max ray length (float bits)
 } u_c;
 layout(set = 0, binding = 5) uniform sampler2D u_input_mask;
 
@@ -51,6 +51,7 @@ void hrt_shadow_main() {
         vec3 dir;
         float tmax;
         hrt_light_ray(u_c.light, origin, hrt_sample(seq, i), dir, tmax);
+        tmax = min(tmax, uintBitsToFloat(u_c.counts.z));
         // Any occluder will do for visibility; the denoiser's penumbra estimate wants the
         // closest (unless the task chose first-hit speed).
         float t = hrt_trace_record_flags(u_tlas, flags, c.frame.y & 0xffu, origin, dir, tmax).t;

@@ -202,7 +202,7 @@ fn denoised_shadow(light: LightInfo, frames: u32, seed: u64) -> (Vec<f32>, Vec<f
         light,
         output: noisy.input(GENERAL),
         rays_per_pixel: 1,
-        first_hit: false,
+        ..Default::default()
     };
     let task = DenoiseShadowTask {
         context: dn,

@@ -59,7 +59,7 @@ fn pipeline_and_inline_ray_queries_give_the_same_images() {
         let light =
             LightInfo { light_type: LightType::Point, position: Vec3::new(0.5, 3.0, 0.2), radius: 0.4, ..Default::default() };
         frame
-            .schedule_shadow(&TraceShadowTask { common: c, light, output: out(k), rays_per_pixel: 4, first_hit: false })
+            .schedule_shadow(&TraceShadowTask { common: c, light, output: out(k), rays_per_pixel: 4, ..Default::default() })
             .unwrap();
         frame
             .schedule_diffuse(&TraceDiffuseTask {

@@ -24,11 +24,17 @@ fn scene() -> (Scene, Camera) {
 
 /// Renders `frames` shadow frames; returns (mean visibility G, last R) per pixel.
 fn gpu_shadow(light: LightInfo, rays: u32, frames: u32) -> (Vec<f32>, Vec<f32>, GBuffer, Scene, Camera) {
-    gpu_shadow_mode(light, rays, frames, false)
+    gpu_shadow_mode(light, rays, frames, false, f32::INFINITY)
 }
 
-/// `gpu_shadow` with the task's first-hit mode on or off.
-fn gpu_shadow_mode(light: LightInfo, rays: u32, frames: u32, first_hit: bool) -> (Vec<f32>, Vec<f32>, GBuffer, Scene, Camera) {
+/// `gpu_shadow` with the task's first-hit mode on or off and its ray length capped.
+fn gpu_shadow_mode(
+    light: LightInfo,
+    rays: u32,
+    frames: u32,
+    first_hit: bool,
+    max_ray_length: f32,
+) -> (Vec<f32>, Vec<f32>, GBuffer, Scene, Camera) {
     let (host, ctx) = host_and_context(InitSettings::default());
     let (scene, camera) = scene();
     let g = GBuffer::render(&Tracer::new(&scene), &camera, W, H);
@@ -44,6 +50,7 @@ fn gpu_shadow_mode(light: LightInfo, rays: u32, frames: u32, first_hit: bool) ->
         output: out.input(vk::ImageLayout::GENERAL),
         rays_per_pixel: rays,
         first_hit,
+        max_ray_length,
     };
     let mut vis = vec![0.0f32; (W * H) as usize];
     let mut dist = Vec::new();
@@ -239,7 +246,7 @@ fn multi_light_visibility_equals_single_light_results() {
                 light: *l,
                 output: out.input(vk::ImageLayout::GENERAL),
                 rays_per_pixel: rays,
-                first_hit: false,
+                ..Default::default()
             })
             .unwrap();
     }
@@ -389,8 +396,8 @@ fn multi_light_visibility_equals_single_light_results() {
 #[test]
 fn first_hit_mode_keeps_visibility() {
     let light = LightInfo { light_type: LightType::Point, position: Vec3::new(0.3, 3.0, 0.2), radius: 0.2, ..Default::default() };
-    let (vis_closest, dist_closest, ..) = gpu_shadow_mode(light, 8, 1, false);
-    let (vis_first, dist_first, ..) = gpu_shadow_mode(light, 8, 1, true);
+    let (vis_closest, dist_closest, ..) = gpu_shadow_mode(light, 8, 1, false, f32::INFINITY);
+    let (vis_first, dist_first, ..) = gpu_shadow_mode(light, 8, 1, true, f32::INFINITY);
     assert_eq!(vis_closest, vis_first, "the same rays reach the light");
     let occluded = dist_closest.iter().filter(|&&d| d >= 0.0).count();
     assert!(occluded > 100, "the box shadows the ground ({occluded} pixels)");
@@ -400,4 +407,19 @@ fn first_hit_mode_keeps_visibility() {
             assert!(*f >= *c - 1e-4 && *f <= *c + 0.25, "an occluder's distance: {f} vs closest {c}");
         }
     }
+}
+
+/// `max_ray_length` (Kickstart RT's `maxRayLength`): the box floats 0.9 above the ground, so
+/// rays capped at 0.5 find no occluder and every pixel is lit, while a cap of 2 leaves the
+/// image exactly as without one.
+#[test]
+fn capped_shadow_rays_ignore_farther_occluders() {
+    let sun = LightInfo { light_type: LightType::Directional, direction: Vec3::new(1.2, -1.0, 0.6), ..Default::default() };
+    let (free_vis, free_dist, ..) = gpu_shadow(sun, 2, 1);
+    let (short_vis, short_dist, ..) = gpu_shadow_mode(sun, 2, 1, false, 0.5);
+    let (long_vis, long_dist, ..) = gpu_shadow_mode(sun, 2, 1, false, 2.0);
+    let shadowed = free_vis.iter().filter(|v| **v < 0.5).count();
+    assert!(shadowed > 100, "the box shadows the ground ({shadowed} px)");
+    assert!(short_vis.iter().all(|v| *v == 1.0) && short_dist.iter().all(|d| *d < 0.0), "a 0.5 cap: nothing occludes");
+    assert!(long_vis == free_vis && long_dist == free_dist, "a cap beyond every occluder changes nothing");
 }

@@ -140,7 +140,7 @@ impl Renderer<'_> {
                 light,
                 output: noisy.input(GENERAL),
                 rays_per_pixel: self.settings.rays_per_pixel,
-                first_hit: false,
+                ..Default::default()
             };
             schedule(c, labels[0], |c| c.schedule_shadow(&trace))?;
             let denoise = DenoiseShadowTask {
@@ -159,7 +159,7 @@ impl Renderer<'_> {
                 light,
                 output: out.input(GENERAL),
                 rays_per_pixel: lidar_rays,
-                first_hit: false,
+                ..Default::default()
             };
             schedule(c, "shadow lidar", |c| c.schedule_shadow(&trace))?;
         }

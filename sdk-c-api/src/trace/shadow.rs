@@ -72,6 +72,9 @@ pub struct HrtTraceShadowTask {
     /// Stop at the first occluder found (R is then an occluder's distance, >= the closest).
     /// Default false.
     pub first_hit: bool,
+    /// Occluders farther than this from the surface do not shadow it (world units, > 0).
+    /// Default unlimited (INFINITY).
+    pub max_ray_length: f32,
 }
 
 /// Shadows from 1..=16 lights in one pass (see the Rust docs of TraceMultiShadowTask): the
@@ -96,6 +99,8 @@ pub struct HrtTraceMultiShadowTask {
     pub rays_per_pixel: u32,
     /// First-hit traversal (see HrtTraceShadowTask). Default false.
     pub first_hit: bool,
+    /// As HrtTraceShadowTask's, for every light. Default unlimited (INFINITY).
+    pub max_ray_length: f32,
 }
 
 pub(crate) fn light(l: &HrtLightInfo) -> Result<rt::LightInfo, Failure> {
@@ -144,6 +149,7 @@ fn shadow_task(t: &HrtTraceShadowTask) -> Result<rt::TraceShadowTask, Failure> {
         output: image(&t.output),
         rays_per_pixel: t.rays_per_pixel,
         first_hit: t.first_hit,
+        max_ray_length: t.max_ray_length,
     })
 }
 
@@ -156,6 +162,7 @@ pub extern "C" fn hrt_trace_shadow_task_default() -> HrtTraceShadowTask {
         output: image_c(&d.output),
         rays_per_pixel: d.rays_per_pixel,
         first_hit: d.first_hit,
+        max_ray_length: d.max_ray_length,
     }
 }
 
@@ -184,6 +191,7 @@ fn multi_shadow_task(t: &HrtTraceMultiShadowTask) -> Result<rt::TraceMultiShadow
         },
         rays_per_pixel: t.rays_per_pixel,
         first_hit: t.first_hit,
+        max_ray_length: t.max_ray_length,
     })
 }
 
@@ -203,6 +211,7 @@ pub extern "C" fn hrt_trace_multi_shadow_task_default() -> HrtTraceMultiShadowTa
         light_output_count: 0,
         rays_per_pixel: d.rays_per_pixel,
         first_hit: d.first_hit,
+        max_ray_length: d.max_ray_length,
     }
 }
 

@@ -41,7 +41,7 @@ impl ShadowPass {
         let constants = ShadowConstantsGpu {
             common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::SHADOWS.bits()),
             light: LightGpu::new(&task.light),
-            counts: [task.rays_per_pixel, task.first_hit as u32, 0, 0],
+            counts: [task.rays_per_pixel, task.first_hit as u32, task.max_ray_length.to_bits(), 0],
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
         let mut slots = super::gbuffer_slots(r.tlas, &task.common, &task.output, ubo);
@@ -58,6 +58,8 @@ struct MultiShadowConstantsGpu {
     common: TraceCommonGpu,
     counts: [u32; 4],
     outputs: [u32; 4],
+    /// x: the task's max_ray_length.
+    limits: [f32; 4],
     lights: [LightGpu; MAX_SHADOW_LIGHTS],
 }
 
@@ -104,6 +106,7 @@ impl MultiShadowPass {
             common: TraceCommonGpu::new(&task.common, r.seed, InstanceInclusionMask::SHADOWS.bits()),
             counts: [task.rays_per_pixel, task.lights.len() as u32, task.first_hit as u32, has_high as u32],
             outputs,
+            limits: [task.max_ray_length, 0.0, 0.0, 0.0],
             lights,
         };
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);

@@ -121,6 +121,11 @@ pub struct TraceShadowTask {
     /// occluder's distance (>= the closest), so `DenoiseShadowTask` may blur penumbrae a little
     /// wider. Default false (exact distances); the bench measures the difference.
     pub first_hit: bool,
+    /// Shadow rays stop after this many world units (Kickstart RT's `maxRayLength`): an occluder
+    /// farther from the surface does not shadow it — a cheap cap where far geometry should not
+    /// shadow (a distant mountain in a valley's sun). At most the distance to a point or spot
+    /// light. > 0; default unlimited (`f32::INFINITY`).
+    pub max_ray_length: f32,
 }
 
 impl Default for TraceShadowTask {
@@ -131,6 +136,7 @@ impl Default for TraceShadowTask {
             output: ImageInput { layout: vk::ImageLayout::GENERAL, ..Default::default() },
             rays_per_pixel: 1,
             first_hit: false,
+            max_ray_length: f32::INFINITY,
         }
     }
 }
@@ -169,6 +175,11 @@ pub struct TraceMultiShadowTask {
     /// First-hit traversal, as `TraceShadowTask::first_hit` (the packed penumbra width and min
     /// distance then come from the first occluders found). Default false.
     pub first_hit: bool,
+    /// Shadow rays stop after this many world units (Kickstart RT's `maxRayLength`): an occluder
+    /// farther from the surface does not shadow it — a cheap cap where far geometry should not
+    /// shadow (a distant mountain in a valley's sun). At most the distance to a point or spot
+    /// light. > 0; default unlimited (`f32::INFINITY`).
+    pub max_ray_length: f32,
 }
 
 /// One light of a `TraceMultiShadowTask` written on its own.
@@ -193,6 +204,7 @@ impl Default for TraceMultiShadowTask {
             light_outputs: Vec::new(),
             rays_per_pixel: 1,
             first_hit: false,
+            max_ray_length: f32::INFINITY,
         }
     }
 }

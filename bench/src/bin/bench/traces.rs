@@ -158,7 +158,7 @@ impl Bench<'_> {
             light: LightInfo { direction: glam::Vec3::new(0.5, -1.0, 0.3), angular_extent: 0.02, ..Default::default() },
             output,
             rays_per_pixel: 1,
-            first_hit: false,
+            ..Default::default()
         };
         let shadow_ms = self.time_vs_floor(TaskKind::Shadow, |f| f.schedule_shadow(&shadow).map_err(sdk))?;
         // First-hit traversal: the same visibility, an occluder's distance instead of the closest.

@@ -39,6 +39,10 @@ impl Check for TraceShadowTask {
         if !(1..=64).contains(&t.rays_per_pixel) {
             return Err(Error::invalid("TraceShadowTask.rays_per_pixel", format!("{} is not in 1..=64", t.rays_per_pixel)));
         }
+        // Infinity (no cap) is the default.
+        if t.max_ray_length.is_nan() || t.max_ray_length <= 0.0 {
+            return Err(Error::invalid("TraceShadowTask.max_ray_length", format!("{} is not > 0", t.max_ray_length)));
+        }
         Ok(())
     }
 }
@@ -223,6 +227,10 @@ impl Check for TraceMultiShadowTask {
         )?;
         if !(1..=64).contains(&t.rays_per_pixel) {
             return Err(Error::invalid("TraceMultiShadowTask.rays_per_pixel", format!("{} is not in 1..=64", t.rays_per_pixel)));
+        }
+        // Infinity (no cap) is the default.
+        if t.max_ray_length.is_nan() || t.max_ray_length <= 0.0 {
+            return Err(Error::invalid("TraceMultiShadowTask.max_ray_length", format!("{} is not > 0", t.max_ray_length)));
         }
         Ok(())
     }
