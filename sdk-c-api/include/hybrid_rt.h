@@ -393,7 +393,8 @@ typedef struct HrtDirectLightingInjectionTask {
    */
   uint32_t injection_resolution_stride;
   /**
-   * Default false (injection always uses the ray-tracing pipeline).
+   * Default false. Injection traces with the ray-tracing pipeline only: true is refused
+   * (HRT_ERROR_INVALID_INPUT).
    */
   bool use_inline_rt;
 } HrtDirectLightingInjectionTask;

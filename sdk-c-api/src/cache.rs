@@ -50,7 +50,8 @@ pub struct HrtDirectLightingInjectionTask {
     /// Inject one pixel of every stride x stride block, a different one each frame (1..=16).
     /// Default 1: every pixel.
     pub injection_resolution_stride: u32,
-    /// Default false (injection always uses the ray-tracing pipeline).
+    /// Default false. Injection traces with the ray-tracing pipeline only: true is refused
+    /// (HRT_ERROR_INVALID_INPUT).
     pub use_inline_rt: bool,
 }
 

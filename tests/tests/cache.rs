@@ -212,6 +212,10 @@ fn strided_injection_covers_every_sample_in_stride_squared_frames() {
         let err = w.frame.schedule_direct_lighting_injection(&injection(&images, &lit, &camera, 200.0, stride)).unwrap_err();
         assert!(err.to_string().contains("injection_resolution_stride"), "{err}");
     }
+    // Injection has no inline-ray-query variant: asking for one is an error, not ignored.
+    let inline = DirectLightingInjectionTask { use_inline_rt: true, ..injection(&images, &lit, &camera, 200.0, 1) };
+    let err = w.frame.schedule_direct_lighting_injection(&inline).unwrap_err();
+    assert!(err.to_string().contains("DirectLightingInjectionTask.use_inline_rt"), "{err}");
     w.finish(vec![images], vec![lit]);
 }
 

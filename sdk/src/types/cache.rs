@@ -31,7 +31,8 @@ pub struct DirectLightingInjectionTask {
     /// and still feeds every surface it shows; samples that receive no pixel in a frame keep
     /// their value. Kickstart RT's `injectionResolutionStride`.
     pub injection_resolution_stride: u32,
-    /// Accepted for symmetry with trace tasks; injection always uses the ray-tracing pipeline.
+    /// Kickstart RT's `useInlineRT`. Injection always traces with the ray-tracing pipeline, so
+    /// `true` is refused (`Error::InvalidInput`) rather than silently ignored. Default false.
     pub use_inline_rt: bool,
 }
 

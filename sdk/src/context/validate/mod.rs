@@ -364,6 +364,12 @@ impl Check for DirectLightingInjectionTask {
             return Err(Error::invalid("DirectLightingInjectionTask.viewport", "depth range is not finite"));
         }
         dispatch_size("DirectLightingInjectionTask.viewport", vp, limits)?;
+        if t.use_inline_rt {
+            return Err(Error::invalid(
+                "DirectLightingInjectionTask.use_inline_rt",
+                "injection traces with the ray-tracing pipeline only; leave it false",
+            ));
+        }
         image("DirectLightingInjectionTask.depth.image", &t.depth.image, vp, Use::Sampled)?;
         let depth_formats = if t.depth.depth_type == DepthType::ClipSpace { CLIP_DEPTH_FORMATS } else { POSITION_FORMATS };
         format_in(
