@@ -5,8 +5,8 @@ use common::*;
 use glam::{Affine3A, Mat4, Vec3};
 use hybrid_rt::{
     BvhBuildTask, DenoiseDiffuseOcclusionTask, DenoisingCommon, DenoisingContextInput, Error, GeometryInput, GeometryTask,
-    GpuTicket, HandleProblem, IndexBufferInput, InitSettings, InstanceInput, InstanceOperation, InstanceTask, SignalType,
-    TaskOperation, VertexBufferInput,
+    GpuTicket, HandleProblem, IndexBufferInput, InitSettings, InstanceHandle, InstanceInput, InstanceOperation, InstanceTask,
+    SignalType, TaskOperation, TraceAmbientOcclusionTask, VertexBufferInput,
 };
 use hybrid_rt_testkit::sdk_scene::*;
 
@@ -392,6 +392,63 @@ fn a_lost_device_tears_the_context_down_without_its_tickets() {
     unsafe { ctx.destroy_after_device_lost() };
     images.destroy(&host);
     s.destroy(&host);
+    drop(host);
+    assert_no_validation_errors();
+}
+
+/// A name given with `set_instance_name` is quoted in the errors about that instance.
+#[test]
+fn an_instance_name_is_quoted_in_its_errors() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let i = ctx.create_instance_handles(1)[0];
+    let g = ctx.create_geometry_handles(1)[0];
+    ctx.set_instance_name(i, "left wall").unwrap();
+    let mut frame = ctx.create_task_container();
+    // Updating an instance that was never registered: refused when the container is built.
+    let input = InstanceInput { geometry: g, ..Default::default() };
+    frame.schedule_instance(&InstanceTask { handle: i, operation: InstanceOperation::Update, input }).unwrap();
+    let e = run_frame(&host, &ctx, &mut frame).unwrap_err();
+    assert!(e.contains("\"left wall\"") && e.contains("not registered"), "{e}");
+    assert!(matches!(ctx.set_instance_name(InstanceHandle::NULL, "x"), Err(Error::InvalidHandle { .. })));
+    render_ok(&host, &ctx);
+    drop(ctx);
+    drop(host);
+    assert_no_validation_errors();
+}
+
+/// `InitSettings::max_timed_tasks` bounds a ticket's timed intervals (two more go to the BVH
+/// and cache work); the tasks past it run untimed, their images made all the same.
+#[test]
+fn tasks_past_max_timed_tasks_run_untimed() {
+    let (host, ctx) = host_and_context(InitSettings { max_timed_tasks: 2, ..Default::default() });
+    let (scene, camera, images) = ground_view(&host);
+    let mut frame = ctx.create_task_container();
+    let s = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    run_frame(&host, &ctx, &mut frame).unwrap();
+    let outputs: Vec<_> = (0..4)
+        .map(|_| {
+            host.image_cleared(vk::Format::R32_SFLOAT, 16, 16, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap()
+        })
+        .collect();
+    for out in &outputs {
+        let task = TraceAmbientOcclusionTask { output: out.input(vk::ImageLayout::GENERAL), ..images.ao_task(&camera, 1.0, 1) };
+        frame.schedule_ambient_occlusion(&task).unwrap();
+    }
+    let done = run_frame(&host, &ctx, &mut frame).unwrap();
+    let timed = done.timings.iter().filter(|t| t.kind == hybrid_rt::TaskKind::AmbientOcclusion).count();
+    assert_eq!(done.timings.len(), 2 + 2, "{:?}", done.timings);
+    assert!(timed < 4, "the fourth AO task runs untimed: {:?}", done.timings);
+    for out in outputs {
+        let ao: Vec<f32> = bytemuck::cast_slice(&host.read_image(&out, vk::ImageLayout::GENERAL).unwrap()).to_vec();
+        assert!(ao.iter().all(|v| *v > 0.999), "every AO task ran, timed or not");
+        host.destroy_image(out);
+    }
+    ctx.destroy_instance_handles(&s.instances).unwrap();
+    ctx.destroy_geometry_handles(&s.geometries).unwrap();
+    images.destroy(&host);
+    s.destroy(&host);
+    drop(ctx);
     drop(host);
     assert_no_validation_errors();
 }

@@ -13,8 +13,8 @@ pub struct InitSettings {
     /// frame needs more (64 bytes per TLAS instance plus 256 per render task), so this only
     /// avoids early reallocations.
     pub upload_ring_bytes: u64,
-    /// Timestamp slots per working set (default 64: 31 timed tasks per ticket plus the BVH
-    /// work). Tasks past the limit run untimed.
+    /// Timed intervals per ticket, besides two for the BVH and cache work (default 64; with
+    /// `time_passes` each task's passes come on top). Tasks past the limit run untimed.
     pub max_timed_tasks: u32,
     /// An engine-owned `VkPipelineCache` the SDK creates its pipelines through (null: none,
     /// the default). Save it with `vkGetPipelineCacheData` and create it from that data on the
