@@ -468,7 +468,8 @@ typedef struct HrtInitSettings {
    */
   uint64_t upload_ring_bytes;
   /**
-   * Timed tasks per ticket. Default 64.
+   * Timed intervals per ticket, besides two for the BVH and cache work; tasks past it run
+   * untimed. Default 64.
    */
   uint32_t max_timed_tasks;
   /**

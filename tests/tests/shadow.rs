@@ -422,4 +422,47 @@ fn capped_shadow_rays_ignore_farther_occluders() {
     assert!(shadowed > 100, "the box shadows the ground ({shadowed} px)");
     assert!(short_vis.iter().all(|v| *v == 1.0) && short_dist.iter().all(|d| *d < 0.0), "a 0.5 cap: nothing occludes");
     assert!(long_vis == free_vis && long_dist == free_dist, "a cap beyond every occluder changes nothing");
+    // The multi-light task caps its rays alike (its per-light output is the single task's image).
+    let multi = |cap| gpu_multi_shadow_output(sun, 2, cap);
+    assert!(multi(0.5).iter().all(|t| t[1] == 1.0 && t[0] < 0.0), "a 0.5 cap: nothing occludes in the multi-light task");
+    let free = multi(f32::INFINITY);
+    assert!(free.iter().filter(|t| t[1] < 0.5).count() > 100, "the box shadows the ground in the multi-light task");
+    assert!(multi(2.0) == free, "a cap beyond every occluder changes nothing in the multi-light task");
+}
+
+/// One frame of the multi-light task with `light` alone: its per-light output (R distance,
+/// G visibility), with the task's rays capped at `max_ray_length`.
+fn gpu_multi_shadow_output(light: LightInfo, rays: u32, max_ray_length: f32) -> Vec<[f32; 2]> {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let (scene, camera) = scene();
+    let g = GBuffer::render(&Tracer::new(&scene), &camera, W, H);
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let storage = |format| host.image_cleared(format, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
+    let (visibility, packed, out) =
+        (storage(vk::Format::R32_UINT), storage(vk::Format::R32G32B32A32_SFLOAT), storage(vk::Format::R32G32_SFLOAT));
+    let mut frame = ctx.create_task_container();
+    let s = SceneOnGpu::register(&host, &ctx, &mut frame, &scene).unwrap();
+    frame.schedule_bvh_build(&Default::default()).unwrap();
+    frame
+        .schedule_multi_shadow(&hybrid_rt::TraceMultiShadowTask {
+            common: images.trace_common(&camera),
+            lights: vec![light],
+            visibility: visibility.input(vk::ImageLayout::GENERAL),
+            packed: packed.input(vk::ImageLayout::GENERAL),
+            light_outputs: vec![hybrid_rt::LightShadowOutput { light: 0, output: out.input(vk::ImageLayout::GENERAL) }],
+            rays_per_pixel: rays,
+            max_ray_length,
+            ..Default::default()
+        })
+        .unwrap();
+    run_frame(&host, &ctx, &mut frame).unwrap();
+    let texels: Vec<[f32; 2]> = bytemuck::cast_slice(&host.read_image(&out, vk::ImageLayout::GENERAL).unwrap()).to_vec();
+    for img in [visibility, packed, out] {
+        host.destroy_image(img);
+    }
+    images.destroy(&host);
+    s.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+    texels
 }

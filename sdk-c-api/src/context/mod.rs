@@ -111,7 +111,8 @@ pub struct HrtInitSettings {
     pub supported_working_sets: u32,
     /// Initial upload ring bytes per working set. Default 1 MiB.
     pub upload_ring_bytes: u64,
-    /// Timed tasks per ticket. Default 64.
+    /// Timed intervals per ticket, besides two for the BVH and cache work; tasks past it run
+    /// untimed. Default 64.
     pub max_timed_tasks: u32,
     /// An engine-owned VkPipelineCache the SDK creates its pipelines through (0: none).
     /// Save it with vkGetPipelineCacheData and reload it next run to skip shader compilation.

@@ -373,8 +373,10 @@ impl Drop for Shared {
     /// `destroy`'s check): then the SDK's GPU objects and memory are leaked, with an error in
     /// the log, rather than freed under the GPU. Nothing here waits: the SDK owns no queue.
     fn drop(&mut self) {
-        let unfinished = self.unfinished_tickets();
-        if !unfinished.is_empty() && !self.device_lost.load(Ordering::Relaxed) {
+        // After a declared device loss the tickets' completion markers are not read: the
+        // device will never write them, and everything is freed either way.
+        let unfinished = if self.device_lost.load(Ordering::Relaxed) { Vec::new() } else { self.unfinished_tickets() };
+        if !unfinished.is_empty() {
             log::error!(
                 "hybrid-rt context dropped with tickets {unfinished:?} still running on the GPU: leaking its GPU objects \
                  (wait for the tickets' fences and hand them back, or use ExecuteContext::destroy)"
