@@ -23,7 +23,8 @@ rest=${version#*.}
 minor=${rest%%.*}
 if [ "$major" = 0 ]; then abi="0.$minor"; else abi="$major"; fi
 
-cargo build --release --locked -p hybrid-rt-c --lib
+# The SONAME (see sdk-c-api/build.rs) only for the installed library.
+HRT_C_SONAME=1 cargo build --release --locked -p hybrid-rt-c --lib
 target=${CARGO_TARGET_DIR:-target}/release
 
 install -d "$prefix/include" "$prefix/lib/pkgconfig" "$prefix/lib/cmake/hybrid_rt" "$prefix/share/doc/hybrid_rt"

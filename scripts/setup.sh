@@ -75,6 +75,8 @@ main() {
   have_cmd glslangValidator || pkgs+=(glslang-tools)
   have_cmd spirv-val || pkgs+=(spirv-tools)
   have_cmd cc || pkgs+=(gcc libc6-dev)
+  # A C++ translation unit includes the header in the C tests.
+  have_cmd c++ || pkgs+=(g++)
   have_cmd vulkaninfo || pkgs+=(vulkan-tools)
   [ -e /usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json ] \
     || pkgs+=(vulkan-validationlayers)

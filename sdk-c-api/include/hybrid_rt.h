@@ -705,9 +705,10 @@ typedef struct HrtDenoisingCommon {
    */
   float camera_jitter[2];
   /**
-   * The trace ran in checkerboard mode in the same container. Default false.
+   * The HrtHalfResolutionMode the trace ran with in the same container. Default
+   * HRT_HALF_RESOLUTION_OFF.
    */
-  bool half_resolution_mode;
+  uint32_t half_resolution_mode;
   /**
    * Default false.
    */
@@ -1120,9 +1121,10 @@ typedef struct HrtTraceCommon {
    */
   uint32_t debug_output;
   /**
-   * Checkerboard: half the pixels per ticket, alternating. Default false.
+   * An HrtHalfResolutionMode: checkerboard tracing, half the pixels per ticket,
+   * alternating. Default HRT_HALF_RESOLUTION_OFF.
    */
-  bool half_resolution_mode;
+  uint32_t half_resolution_mode;
 } HrtTraceCommon;
 
 typedef struct HrtTraceAmbientOcclusionTask {
@@ -1510,7 +1512,8 @@ enum HrtStatus hrt_task_container_set_task_label(struct HrtTaskContainer *contai
 /**
  * Records the container into `command_buffer` (begun by the engine, which also ends, submits
  * and waits for it) and writes a ticket. On success the container is emptied; on error it
- * keeps its tasks and nothing usable was recorded.
+ * keeps its tasks, the context is as before, and nothing was recorded into `command_buffer`:
+ * the engine's own commands in it stay valid, and it can be ended and submitted as usual.
  */
 enum HrtStatus hrt_build_gpu_task(struct HrtContext *ctx,
                                   struct HrtTaskContainer *container,
@@ -1752,6 +1755,13 @@ enum HrtStatus hrt_build_hint_flags(uint32_t build_hint,
 enum HrtStatus hrt_geometry_invalid_triangles(const struct HrtContext *ctx,
                                               HrtGeometryHandle geometry,
                                               uint32_t *triangles);
+
+/**
+ * The name of a status code as this header spells it ("HRT_ERROR_INVALID_INPUT"): a static
+ * NUL-terminated string for logs, "HRT_STATUS_UNKNOWN" for a value that is no HrtStatus.
+ * (What went wrong is `hrt_last_error_message`.)
+ */
+const char *hrt_status_string(int32_t status);
 
 struct HrtTraceCommon hrt_trace_common_default(void);
 

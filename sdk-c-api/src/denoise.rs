@@ -7,8 +7,8 @@ use crate::context::{context, schedule, HrtContext, HrtTaskContainer, HrtTaskKin
 use crate::image::{image, image_c, HrtImageInput};
 use crate::status::{guard, Failure, HrtStatus};
 use crate::trace::{
-    camera, camera_c, depth, hrt_trace_common_default, hrt_trace_shadow_task_default, light, normals, roughness, viewport,
-    HrtCamera, HrtDepthInput, HrtLightInfo, HrtNormalInput, HrtRoughnessInput, HrtViewport,
+    camera, camera_c, depth, half_resolution_mode, hrt_trace_common_default, hrt_trace_shadow_task_default, light, normals,
+    roughness, viewport, HrtCamera, HrtDepthInput, HrtLightInfo, HrtNormalInput, HrtRoughnessInput, HrtViewport,
 };
 use hybrid_rt as rt;
 
@@ -119,8 +119,9 @@ pub struct HrtDenoisingCommon {
     pub previous_camera: HrtCamera,
     /// Pixels; default {0, 0}.
     pub camera_jitter: [f32; 2],
-    /// The trace ran in checkerboard mode in the same container. Default false.
-    pub half_resolution_mode: bool,
+    /// The HrtHalfResolutionMode the trace ran with in the same container. Default
+    /// HRT_HALF_RESOLUTION_OFF.
+    pub half_resolution_mode: u32,
     /// Default false.
     pub reset_history: bool,
     pub settings: HrtDenoiserSettings,
@@ -180,7 +181,7 @@ fn common(c: &HrtDenoisingCommon) -> Result<rt::DenoisingCommon, Failure> {
         camera: camera(&c.camera),
         previous_camera: c.has_previous_camera.then(|| camera(&c.previous_camera)),
         camera_jitter: c.camera_jitter,
-        half_resolution_mode: c.half_resolution_mode,
+        half_resolution_mode: half_resolution_mode("HrtDenoisingCommon.half_resolution_mode", c.half_resolution_mode)?,
         reset_history: c.reset_history,
         settings: rt::DenoiserSettings {
             max_history_frames: s.max_history_frames,
@@ -218,7 +219,7 @@ pub extern "C" fn hrt_denoising_common_default() -> HrtDenoisingCommon {
         has_previous_camera: false,
         previous_camera: camera_c(&d.camera),
         camera_jitter: d.camera_jitter,
-        half_resolution_mode: d.half_resolution_mode,
+        half_resolution_mode: d.half_resolution_mode as u32,
         reset_history: d.reset_history,
         settings: HrtDenoiserSettings {
             max_history_frames: s.max_history_frames,

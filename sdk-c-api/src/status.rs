@@ -103,3 +103,73 @@ pub(crate) fn guard(f: impl FnOnce() -> Result<(), Failure>) -> HrtStatus {
         }
     }
 }
+
+/// The status names, indexed by value (checked against the enum in the tests).
+const STATUS_NAMES: [&std::ffi::CStr; 19] = [
+    c"HRT_OK",
+    c"HRT_ERROR_NULL_POINTER",
+    c"HRT_ERROR_VERSION_MISMATCH",
+    c"HRT_ERROR_MISSING_DEVICE_SUPPORT",
+    c"HRT_ERROR_VULKAN",
+    c"HRT_ERROR_OUT_OF_MEMORY",
+    c"HRT_ERROR_INVALID_HANDLE",
+    c"HRT_ERROR_INVALID_INPUT",
+    c"HRT_ERROR_UNSUPPORTED_FORMAT",
+    c"HRT_ERROR_BUFFER_TOO_SMALL",
+    c"HRT_ERROR_INVALID_TRANSFORM",
+    c"HRT_ERROR_WORKING_SETS_EXHAUSTED",
+    c"HRT_ERROR_UNKNOWN_TICKET",
+    c"HRT_ERROR_TICKETS_IN_FLIGHT",
+    c"HRT_ERROR_GEOMETRY_IN_USE",
+    c"HRT_ERROR_FOREIGN_CONTAINER",
+    c"HRT_ERROR_INTERNAL",
+    c"HRT_ERROR_CONTEXT_DESTROYED",
+    c"HRT_ERROR_TICKET_NOT_COMPLETE",
+];
+
+/// The name of a status code as this header spells it ("HRT_ERROR_INVALID_INPUT"): a static
+/// NUL-terminated string for logs, "HRT_STATUS_UNKNOWN" for a value that is no HrtStatus.
+/// (What went wrong is `hrt_last_error_message`.)
+#[no_mangle]
+pub extern "C" fn hrt_status_string(status: i32) -> *const std::ffi::c_char {
+    let name = usize::try_from(status).ok().and_then(|i| STATUS_NAMES.get(i));
+    name.copied().unwrap_or(c"HRT_STATUS_UNKNOWN").as_ptr()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use HrtStatus::*;
+
+    #[test]
+    fn every_status_has_its_name() {
+        let name = |s: i32| unsafe { std::ffi::CStr::from_ptr(hrt_status_string(s)) }.to_str().unwrap().to_owned();
+        let all = [
+            HRT_OK,
+            HRT_ERROR_NULL_POINTER,
+            HRT_ERROR_VERSION_MISMATCH,
+            HRT_ERROR_MISSING_DEVICE_SUPPORT,
+            HRT_ERROR_VULKAN,
+            HRT_ERROR_OUT_OF_MEMORY,
+            HRT_ERROR_INVALID_HANDLE,
+            HRT_ERROR_INVALID_INPUT,
+            HRT_ERROR_UNSUPPORTED_FORMAT,
+            HRT_ERROR_BUFFER_TOO_SMALL,
+            HRT_ERROR_INVALID_TRANSFORM,
+            HRT_ERROR_WORKING_SETS_EXHAUSTED,
+            HRT_ERROR_UNKNOWN_TICKET,
+            HRT_ERROR_TICKETS_IN_FLIGHT,
+            HRT_ERROR_GEOMETRY_IN_USE,
+            HRT_ERROR_FOREIGN_CONTAINER,
+            HRT_ERROR_INTERNAL,
+            HRT_ERROR_CONTEXT_DESTROYED,
+            HRT_ERROR_TICKET_NOT_COMPLETE,
+        ];
+        assert_eq!(all.len(), STATUS_NAMES.len());
+        for s in all {
+            assert_eq!(name(s as i32), format!("{s:?}"));
+        }
+        assert_eq!(name(all.len() as i32), "HRT_STATUS_UNKNOWN");
+        assert_eq!(name(-1), "HRT_STATUS_UNKNOWN");
+    }
+}

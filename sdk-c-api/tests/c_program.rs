@@ -1,9 +1,16 @@
 //! Builds the C sample (samples/c/ao_minimal.c) against the static library with the system C
 //! compiler and runs it on the test device. The program checks its own results and exits 0
-//! only if every check passed.
+//! only if every check passed. Then a C++ translation unit that includes the header, linked
+//! against the shared library of the build tree and run from there.
 use std::process::Command;
 
+/// The static library of this crate.
 fn staticlib() -> std::path::PathBuf {
+    library(".a")
+}
+
+/// The built library of this crate whose file name ends with `suffix`.
+fn library(suffix: &str) -> std::path::PathBuf {
     // `cargo test` builds only the rlib, so build the staticlib of this crate explicitly.
     let out = Command::new(env!("CARGO"))
         .args(["build", "-p", "hybrid-rt-c", "--lib", "--message-format=json"])
@@ -17,13 +24,13 @@ fn staticlib() -> std::path::PathBuf {
             let list = &list[..list.find(']').unwrap_or(list.len())];
             for f in list.split(',') {
                 let f = f.trim_matches('"');
-                if f.ends_with(".a") {
+                if f.ends_with(suffix) {
                     return f.into();
                 }
             }
         }
     }
-    panic!("no staticlib in cargo's output");
+    panic!("no {suffix} library in cargo's output");
 }
 
 #[test]
@@ -53,4 +60,30 @@ fn c_program_runs_ao_end_to_end() {
     eprintln!("{text}");
     assert!(out.status.success(), "the C sample failed");
     assert!(text.contains("c_api: all checks passed"));
+}
+
+#[test]
+fn a_cpp_program_includes_the_header_and_loads_the_build_trees_library() {
+    let shared = library(".so");
+    let lib_dir = shared.parent().unwrap();
+    let dir = env!("CARGO_MANIFEST_DIR");
+    let exe = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("header_check");
+    let cxx = std::env::var("CXX").unwrap_or_else(|_| "c++".into());
+    let status = Command::new(&cxx)
+        .args(["-std=c++17", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O1"])
+        .arg(format!("-I{dir}/include"))
+        .arg(format!("{dir}/tests/c/header_check.cpp"))
+        .arg(format!("-L{}", lib_dir.display()))
+        .args(["-lhybrid_rt_c", "-o"])
+        .arg(&exe)
+        .status()
+        .expect("run the C++ compiler (install g++: scripts/setup.sh)");
+    assert!(status.success(), "the header does not compile as C++");
+    // Loaded from the build tree: the library names no SONAME there, so the program asks for
+    // the file it was linked with.
+    let out = Command::new(&exe).env("LD_LIBRARY_PATH", lib_dir).output().expect("run the C++ program");
+    let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    eprintln!("{text}");
+    assert!(out.status.success(), "the C++ program failed: {text}");
+    assert!(text.contains("c++: header checks passed"));
 }

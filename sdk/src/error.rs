@@ -61,8 +61,15 @@ pub enum Error {
     },
 
     /// A handle that is null, foreign, stale, or in the wrong state for the task.
-    #[error("{kind} handle {raw:#x}{} {problem}", .name.as_ref().map(|n| format!(" (\"{n}\")")).unwrap_or_default())]
+    #[error(
+        "{}{kind} handle {raw:#x}{} {problem}",
+        if field.is_empty() { String::new() } else { format!("{field}: ") },
+        .name.as_ref().map(|n| format!(" (\"{n}\")")).unwrap_or_default()
+    )]
     InvalidHandle {
+        /// The field or argument that held it ("InstanceTask.input.geometry"), empty where
+        /// there is none to name.
+        field: &'static str,
         /// "geometry", "instance" or "denoising context".
         kind: &'static str,
         /// The handle's raw value.
@@ -171,6 +178,17 @@ pub enum Error {
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 impl Error {
+    /// Names the field that held a refused handle (an `InvalidHandle` that names none yet);
+    /// any other error is returned as it is.
+    pub(crate) fn for_field(self, at: &'static str) -> Error {
+        match self {
+            Error::InvalidHandle { field: "", kind, raw, problem, name } => {
+                Error::InvalidHandle { field: at, kind, raw, problem, name }
+            }
+            other => other,
+        }
+    }
+
     pub(crate) fn vk(call: &'static str) -> impl FnOnce(vk::Result) -> Error {
         move |result| Error::Vulkan { call, result }
     }

@@ -77,7 +77,7 @@ pub use context::ExecuteContext;
 pub use error::{Error, HandleProblem, Result};
 pub use gpu::device::{query_device_support, DeviceDesc, DeviceSupport, OPTIONAL_DEVICE_EXTENSIONS, REQUIRED_DEVICE_EXTENSIONS};
 pub use gpu::features::DeviceFeatures;
-pub use gpu::memory::{AllocationCount, ResourceAllocations};
+pub use gpu::memory::{AllocationCount, MemoryKind, ResourceAllocations};
 // The public data, family by family (not `types::*`, which would also export the family
 // modules under names the crate's own layers use).
 pub use types::cache::*;

@@ -142,10 +142,16 @@ vec3 hrt_decode_normal(vec4 texel, uint normal_type) {
     }
 }
 
-// Checkerboard (half-resolution) mode: this ticket traces the pixels where x + y + seed is
-// even; the next ticket (seed + 1) traces the others. Skipped pixels are left untouched.
+// Checkerboard (half-resolution) mode, frame.z: 0 off; 1 this ticket traces the pixels where
+// x + y + seed is even, the next ticket (seed + 1) the others; 2 the opposite half (inverted).
+// Skipped pixels are left untouched.
+bool hrt_traced_this_frame(TraceCommon c, uvec2 pixel) {
+    uint phase = c.frame.z == 2u ? 1u : 0u;
+    return c.frame.z == 0u || ((pixel.x + pixel.y + c.frame.x + phase) & 1u) == 0u;
+}
+
 bool hrt_checkerboard_skip(TraceCommon c, uvec2 pixel) {
-    return c.frame.z != 0u && ((pixel.x + pixel.y + c.frame.x) & 1u) != 0u;
+    return !hrt_traced_this_frame(c, pixel);
 }
 
 // Pixel centre -> clip space for this viewport (Vulkan: y down, z in [0, 1]).

@@ -283,7 +283,7 @@ float hrt_denoise_roughness(ivec2 pixel) {
 
 // Checkerboard: was this pixel traced by this ticket? (the trace tasks' rule in common.glsl)
 bool hrt_traced_now(ivec2 pixel) {
-    return u_d.c.frame.z == 0u || ((uint(pixel.x + pixel.y) + u_d.c.frame.x) & 1u) == 0u;
+    return hrt_traced_this_frame(u_d.c, uvec2(pixel));
 }
 
 // This frame's surface at a pixel from the engine's G-buffer (false: background, or excluded

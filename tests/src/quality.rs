@@ -169,8 +169,9 @@ impl Signal {
     /// One frame traced at `rays` per pixel into the stage's noisy image, denoised or not.
     pub fn frame(self, st: &mut Stage, rays: u32, denoise: bool) {
         let (mut common, mut dc) = (st.trace_common(), st.denoising_common());
-        common.half_resolution_mode = st.half_resolution;
-        dc.half_resolution_mode = st.half_resolution;
+        let mode = if st.half_resolution { HalfResolutionMode::Checkerboard } else { HalfResolutionMode::Off };
+        common.half_resolution_mode = mode;
+        dc.half_resolution_mode = mode;
         let (input, output, context) = (st.noisy.input(GENERAL), st.den.input(GENERAL), st.dn);
         let f = &mut st.frame;
         match self {

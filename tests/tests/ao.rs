@@ -499,7 +499,7 @@ fn half_resolution_traces_only_its_checkerboard() {
             )
             .unwrap();
         let mut task = images.ao_task(&camera, 1.0, 1);
-        task.common.half_resolution_mode = true;
+        task.common.half_resolution_mode = hybrid_rt::HalfResolutionMode::Checkerboard;
         task.output = out.input(vk::ImageLayout::GENERAL);
         frame.schedule_ambient_occlusion(&task).unwrap();
         run_frame(&host, &ctx, &mut frame).unwrap();

@@ -7,6 +7,12 @@
 //! builds the same container. The images of that context, frame by frame, must equal those of
 //! a twin context that never failed — bit for bit, since seeds follow the ticket serials and a
 //! failed build issues none.
+//!
+//! The engine's command buffer is never reset: like an engine that records its own passes and
+//! the SDK's into one buffer, the test records a command of its own before every attempt and
+//! retries in the same buffer, then ends and submits it. A failed build must have recorded
+//! nothing there (under validation, a command naming an object the rollback destroyed fails the
+//! test), and every command of the engine's must have run.
 mod common;
 use ash::vk;
 use glam::{Affine3A, Vec3};
@@ -201,15 +207,20 @@ fn a_build_failing_at_any_allocation_changes_nothing() {
     twin.destroy();
 
     let w = World::new(&host);
+    // The engine's own commands: one fill per attempt, each writing its attempt's number.
+    const MAX_ATTEMPTS: u64 = 200;
+    let engine_marks = host.buffer_with_data(&[0; MAX_ATTEMPTS as usize * 4], vk::BufferUsageFlags::TRANSFER_DST).unwrap();
     let mut failures_per_frame = Vec::new();
     for (f, expected) in expected.iter().enumerate() {
         let mut c = w.container(f);
         let tasks = c.len();
         let cmd = host.allocate_command_buffer().unwrap();
+        host.begin(cmd).unwrap();
         let mut failures = 0;
         let ticket = loop {
             let before = w.ctx.debug_state_digest();
-            host.begin(cmd).unwrap();
+            // SAFETY: the buffer holds MAX_ATTEMPTS words; cmd is recording.
+            unsafe { host.device.cmd_fill_buffer(cmd, engine_marks.buffer, failures * 4, 4, failures as u32 + 1) };
             w.ctx.inject_allocation_failure(Some(failures));
             let built = w.ctx.build_gpu_task(&mut c, cmd);
             w.ctx.inject_allocation_failure(None);
@@ -224,10 +235,9 @@ fn a_build_failing_at_any_allocation_changes_nothing() {
                         "frame {f}, failure at allocation {failures} changed the state:\n{}",
                         diff(&before, &after)
                     );
-                    // The engine resets the partly recorded command buffer.
-                    unsafe { host.device.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty()) }.unwrap();
+                    // The engine goes on recording into the same buffer and tries again.
                     failures += 1;
-                    assert!(failures < 200, "frame {f}: the build never succeeds");
+                    assert!(failures < MAX_ATTEMPTS, "frame {f}: the build never succeeds");
                 }
             }
         };
@@ -235,8 +245,17 @@ fn a_build_failing_at_any_allocation_changes_nothing() {
         let got = w.finish(cmd, ticket);
         assert!(got.0 == expected.0, "frame {f}: AO differs from the twin that never failed");
         assert!(got.1 == expected.1, "frame {f}: denoised AO differs from the twin that never failed");
+        let marks: Vec<u32> = engine_marks.mapped_bytes().unwrap()[..(failures as usize + 1) * 4]
+            .chunks_exact(4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect();
+        let wanted: Vec<u32> = (1..=failures as u32 + 1).collect();
+        assert_eq!(marks, wanted, "frame {f}: the engine's own commands around the failed builds all ran");
+        let problems = host.take_validation_problems();
+        assert!(problems.is_empty(), "frame {f}: validation after failed builds in the engine's buffer: {problems:?}");
     }
     eprintln!("allocations per frame (each failed once): {failures_per_frame:?}");
+    host.destroy_buffer(engine_marks);
     // Registration allocates geometry copies, read-backs, BLASes, scratch, TLAS and the
     // denoiser's nothing; frame 1 the surfel layouts, staging and caches; frames 2-3 BLAS
     // compactions and rebuilds.

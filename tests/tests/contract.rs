@@ -101,12 +101,17 @@ impl Frame {
 
     /// AO with 2 rays per pixel (noisy), checkerboarded when `half`.
     fn ao(&self, ctx: &ExecuteContext, frame_index: Option<u64>, half: bool) -> Vec<f32> {
+        let mode = if half { HalfResolutionMode::Checkerboard } else { HalfResolutionMode::Off };
+        self.ao_in_mode(ctx, frame_index, mode)
+    }
+
+    fn ao_in_mode(&self, ctx: &ExecuteContext, frame_index: Option<u64>, mode: HalfResolutionMode) -> Vec<f32> {
         let mut c = ctx.create_task_container();
         if let Some(i) = frame_index {
             c.set_frame_index(i);
         }
         let mut task = self.images.ao_task(&self.camera, 1.0, 2);
-        task.common.half_resolution_mode = half;
+        task.common.half_resolution_mode = mode;
         c.schedule_ambient_occlusion(&task).unwrap();
         run_frame(&self.host, ctx, &mut c).unwrap();
         self.images.read_output(&self.host).unwrap()
@@ -133,6 +138,33 @@ fn the_same_frame_index_gives_the_same_image() {
     assert_ne!(odd, f.ao(&b, Some(8), true));
     drop(a);
     drop(b);
+    f.images.destroy(&f.host);
+}
+
+/// The two checkerboard modes of one frame trace complementary halves of the pixels — each
+/// pixel exactly once between them, in a checker pattern — and the halves swap with the frame.
+#[test]
+fn checkerboard_and_inverted_checkerboard_trace_complementary_halves() {
+    let f = Frame::new();
+    let ctx = f.context(0);
+    let (w, h) = (f.images.width as usize, f.images.height as usize);
+    // Which pixels a mode traces in a frame: the output starts at -1 and keeps it where untouched.
+    let traced = |mode, frame| -> Vec<bool> {
+        let untouched: Vec<u8> = (0..w * h).flat_map(|_| (-1.0f32).to_ne_bytes()).collect();
+        f.host.write_image(&f.images.output, &untouched, vk::ImageLayout::GENERAL).unwrap();
+        f.ao_in_mode(&ctx, Some(frame), mode).iter().map(|v| *v >= 0.0).collect()
+    };
+    let all = traced(HalfResolutionMode::Off, 4);
+    assert!(all.iter().all(|t| *t), "without checkerboard every pixel is traced");
+    let even = traced(HalfResolutionMode::Checkerboard, 4);
+    let odd = traced(HalfResolutionMode::CheckerboardInverted, 4);
+    for (i, (e, o)) in even.iter().zip(&odd).enumerate() {
+        let (x, y) = (i % w, i / w);
+        assert_eq!(*e, (x + y + 4) % 2 == 0, "Checkerboard at ({x}, {y})");
+        assert_ne!(e, o, "({x}, {y}): traced by exactly one of the two modes");
+    }
+    assert_eq!(traced(HalfResolutionMode::Checkerboard, 5), odd, "the next frame traces the other half");
+    drop(ctx);
     f.images.destroy(&f.host);
 }
 

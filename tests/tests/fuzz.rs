@@ -117,7 +117,11 @@ fn spoil_common(c: &mut TraceCommon, s: &Spoil) {
             c.direct_lighting.format = format(s.raw);
         }
         24 => c.depth.image.usage = vk::ImageUsageFlags::from_raw(s.int),
-        25 => c.half_resolution_mode = s.int & 1 == 0,
+        25 => {
+            c.half_resolution_mode =
+                [HalfResolutionMode::Off, HalfResolutionMode::Checkerboard, HalfResolutionMode::CheckerboardInverted]
+                    [s.int as usize % 3]
+        }
         _ => c.depth.image.height = s.int,
     }
 }
@@ -134,7 +138,7 @@ fn spoil_image(i: &mut ImageInput, s: &Spoil) {
 }
 
 /// An error is a refusal of the input (not a Vulkan or internal failure) and names what it
-/// refuses: a `Struct.field` path, or the handle.
+/// refuses: a `Struct.field` path (a refused handle, the field that held it).
 fn check_refusal(e: &Error) -> Result<(), TestCaseError> {
     let text = e.to_string();
     let names_field = text.split(|c: char| c.is_whitespace() || c == ':' || c == '(').any(|w| {
@@ -148,7 +152,9 @@ fn check_refusal(e: &Error) -> Result<(), TestCaseError> {
         | Error::InvalidTransform { .. } => {
             prop_assert!(names_field, "the error names no field: {text}")
         }
-        Error::InvalidHandle { .. } => {}
+        Error::InvalidHandle { field, .. } => {
+            prop_assert!(names_field && text.starts_with(field), "the handle error names no field: {text}")
+        }
         other => prop_assert!(false, "not a refusal of the input: {other}"),
     }
     Ok(())

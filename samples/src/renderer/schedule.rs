@@ -130,7 +130,8 @@ impl Renderer<'_> {
         let wk = &self.work;
         let c = &mut self.container;
         let mut common = main.common;
-        common.half_resolution_mode = self.settings.checkerboard;
+        common.half_resolution_mode =
+            if self.settings.checkerboard { HalfResolutionMode::Checkerboard } else { HalfResolutionMode::Off };
         for (light, noisy, out, context, labels) in [
             (sun, &wk.sun_noisy, &wk.sun, self.denoisers.sun, ["shadow sun", "denoise shadow sun"]),
             (point, &wk.point_noisy, &wk.point, self.denoisers.point, ["shadow point", "denoise shadow point"]),
@@ -172,7 +173,8 @@ impl Renderer<'_> {
         let (wk, rays, reach, sky) = (&self.work, self.settings.rays_per_pixel, self.reach, self.scene.sky);
         let c = &mut self.container;
         let mut common = main.common;
-        common.half_resolution_mode = self.settings.checkerboard;
+        common.half_resolution_mode =
+            if self.settings.checkerboard { HalfResolutionMode::Checkerboard } else { HalfResolutionMode::Off };
         let ao = TraceAmbientOcclusionTask {
             common,
             output: wk.ao_noisy.input(GENERAL),

@@ -362,7 +362,8 @@ pub unsafe extern "C" fn hrt_task_container_set_task_label(container: *mut HrtTa
 
 /// Records the container into `command_buffer` (begun by the engine, which also ends, submits
 /// and waits for it) and writes a ticket. On success the container is emptied; on error it
-/// keeps its tasks and nothing usable was recorded.
+/// keeps its tasks, the context is as before, and nothing was recorded into `command_buffer`:
+/// the engine's own commands in it stay valid, and it can be ended and submitted as usual.
 #[no_mangle]
 pub unsafe extern "C" fn hrt_build_gpu_task(
     ctx: *mut HrtContext,

@@ -147,10 +147,10 @@ pub struct HrtGeometryTask {
     pub input: HrtGeometryInput,
 }
 
-/// An HrtBuildHint.
-fn build_hint(v: u32) -> Result<rt::BuildHint, Failure> {
+/// An HrtBuildHint, read from the field or argument `what`.
+fn build_hint(what: &str, v: u32) -> Result<rt::BuildHint, Failure> {
     pick(
-        "HrtBuildHint",
+        what,
         v,
         &[
             rt::BuildHint::Auto,
@@ -245,7 +245,7 @@ unsafe fn geometry_task(t: &HrtGeometryTask) -> Result<rt::GeometryTask, Failure
             }),
             extra_components: extra,
             allow_update: i.allow_update,
-            build_hint: build_hint(i.build_hint)?,
+            build_hint: build_hint("HrtGeometryInput.build_hint", i.build_hint)?,
             surfels: surfels(&i.surfels)?,
         },
     })
@@ -335,7 +335,7 @@ pub unsafe extern "C" fn hrt_build_hint_flags(
 ) -> HrtStatus {
     guard(|| {
         let out = get_mut(flags, "flags")?;
-        let hint = self::build_hint(build_hint)?;
+        let hint = self::build_hint("hrt_build_hint_flags build_hint", build_hint)?;
         *out = hint.build_flags(allow_update, first_build).as_raw();
         Ok(())
     })

@@ -117,6 +117,25 @@ pub enum HrtDebugOutput {
     HRT_DEBUG_BARYCENTRICS = 5,
 }
 
+/// Checkerboard tracing (`HalfResolutionMode`): half the pixels per ticket, alternating with
+/// the frame.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtHalfResolutionMode {
+    /// Every pixel.
+    HRT_HALF_RESOLUTION_OFF = 0,
+    /// The pixels where x + y + frame is even.
+    HRT_HALF_RESOLUTION_CHECKERBOARD = 1,
+    /// The pixels where x + y + frame is odd.
+    HRT_HALF_RESOLUTION_CHECKERBOARD_INVERTED = 2,
+}
+
+/// An HrtHalfResolutionMode read from the field `what`.
+pub(crate) fn half_resolution_mode(what: &str, v: u32) -> Result<rt::HalfResolutionMode, Failure> {
+    use rt::HalfResolutionMode as M;
+    pick(what, v, &[M::Off, M::Checkerboard, M::CheckerboardInverted])
+}
+
 /// Roughness, Kickstart RT's rule: r = global_roughness * dot(texel, channel_mask) with an
 /// image (image != 0), global_roughness without; then
 /// clamp(r * roughness_multiplier + min_roughness, min_roughness, max_roughness).
@@ -169,8 +188,9 @@ pub struct HrtTraceCommon {
     pub enable_bilinear_sampling: bool,
     /// An HrtDebugOutput. Default HRT_DEBUG_DEFAULT.
     pub debug_output: u32,
-    /// Checkerboard: half the pixels per ticket, alternating. Default false.
-    pub half_resolution_mode: bool,
+    /// An HrtHalfResolutionMode: checkerboard tracing, half the pixels per ticket,
+    /// alternating. Default HRT_HALF_RESOLUTION_OFF.
+    pub half_resolution_mode: u32,
 }
 
 #[repr(C)]
@@ -281,7 +301,7 @@ pub(crate) fn trace_common(c: &HrtTraceCommon) -> Result<rt::TraceCommon, Failur
                 rt::DebugOutput::Barycentrics,
             ],
         )?,
-        half_resolution_mode: c.half_resolution_mode,
+        half_resolution_mode: half_resolution_mode("HrtTraceCommon.half_resolution_mode", c.half_resolution_mode)?,
     })
 }
 
@@ -325,7 +345,7 @@ pub extern "C" fn hrt_trace_common_default() -> HrtTraceCommon {
         use_inline_rt: d.use_inline_rt,
         enable_bilinear_sampling: d.enable_bilinear_sampling,
         debug_output: d.debug_output as u32,
-        half_resolution_mode: d.half_resolution_mode,
+        half_resolution_mode: d.half_resolution_mode as u32,
     }
 }
 

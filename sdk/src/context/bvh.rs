@@ -35,14 +35,14 @@ impl Recorder<'_> {
             let old = g.blas.replace(compact);
             journal.replaced(Slot::Blas(h), old.map(Held::Accel));
             if !declared {
-                self.hazards.read_write(d, cmd, sync::AS_COPY, sync::AS_COPY);
+                self.hazards.read_write(cmd, sync::AS_COPY, sync::AS_COPY);
                 declared = true;
             }
             let info = vk::CopyAccelerationStructureInfoKHR::default()
                 .src(src)
                 .dst(dst)
                 .mode(vk::CopyAccelerationStructureModeKHR::COMPACT);
-            unsafe { device.accel.cmd_copy_acceleration_structure(cmd, &info) };
+            cmd.copy_acceleration_structure(info);
             st.scene.snapshot_dirty = true;
         }
 
@@ -130,26 +130,18 @@ impl Recorder<'_> {
             return Ok(());
         }
         let scratch = self.ensure_scratch(scratch_total)?;
-        self.hazards.read_write(d, cmd, sync::AS_BUILD_READ, sync::AS_BUILD_WRITE);
-        blas::record_batch(device, cmd, scratch, &jobs);
+        self.hazards.read_write(cmd, sync::AS_BUILD_READ, sync::AS_BUILD_WRITE);
+        blas::record_batch(cmd, scratch, &jobs);
 
         // Ask for compacted sizes; read back when this ticket completes.
         if !compaction_candidates.is_empty() {
             let n = compaction_candidates.len() as u32;
             self.working_set().ensure_compaction_slots(d, n)?;
-            self.hazards.read(d, cmd, sync::AS_BUILD_READ);
+            self.hazards.read(cmd, sync::AS_BUILD_READ);
             let ws = self.working_set();
             let accels: Vec<_> = compaction_candidates.iter().map(|c| c.2).collect();
-            unsafe {
-                d.cmd_reset_query_pool(cmd, ws.compaction_pool, 0, n);
-                device.accel.cmd_write_acceleration_structures_properties(
-                    cmd,
-                    &accels,
-                    vk::QueryType::ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR,
-                    ws.compaction_pool,
-                    0,
-                );
-            }
+            cmd.reset_query_pool(ws.compaction_pool, 0, n);
+            cmd.write_compacted_sizes(accels, ws.compaction_pool);
             ws.compactions = compaction_candidates.iter().map(|c| (c.0, c.1)).collect();
         }
         Ok(())
@@ -182,9 +174,9 @@ impl Recorder<'_> {
         };
         let refit = refittable && !fresh_storage && ws.tlas.refit.is_some_and(|r| r.key == key && r.done < max_refits);
         let upload = ws.ring.push(instance::instance_bytes(&st.scene.snapshot), 16);
-        self.hazards.read_write(&device.raw, cmd, sync::AS_BUILD_READ, sync::AS_BUILD_WRITE);
+        self.hazards.read_write(cmd, sync::AS_BUILD_READ, sync::AS_BUILD_WRITE);
         let how = if refit { tlas::Build::Refit } else { tlas::Build::Full { refittable } };
-        ws.tlas.record_build(device, cmd, upload, count, scratch, how);
+        ws.tlas.record_build(cmd, upload, count, scratch, how);
         ws.tlas.version = version;
         ws.tlas.refit = match (refittable, ws.tlas.refit) {
             (false, _) => None,

@@ -18,6 +18,7 @@ use super::working_set::Readback;
 use super::State;
 use crate::cache::layout;
 use crate::error::Result;
+use crate::gpu::commands::Commands;
 use crate::gpu::deferred::Garbage;
 use crate::gpu::memory::{Buffer, Memory, MemoryKind};
 use crate::gpu::sync::{self, Hazards};
@@ -60,9 +61,9 @@ impl Recorder<'_> {
                 plans.push(self.plan_gpu_layout(h, build_id, copy_address, l, surfels, limit)?);
                 continue;
             }
-            let (d, cmd) = (&self.device.raw, self.cmd);
+            let cmd = self.cmd;
             if !copied {
-                self.hazards.read_write(d, cmd, sync::TRANSFER_READ, sync::TRANSFER_WRITE);
+                self.hazards.read_write(cmd, sync::TRANSFER_READ, sync::TRANSFER_WRITE);
                 copied = true;
             }
             let readback = self.memory.create_buffer(
@@ -73,7 +74,7 @@ impl Recorder<'_> {
                 MemoryKind::Readback,
             )?;
             let region = [vk::BufferCopy { src_offset: 0, dst_offset: 0, size: l.total_bytes() }];
-            unsafe { d.cmd_copy_buffer(cmd, copy_raw, readback.raw, &region) };
+            cmd.copy_buffer(copy_raw, readback.raw, &region);
             self.st.scene.cache_stats.readback_bytes += l.total_bytes();
             self.st.working_sets[self.ws].readbacks.push(Readback::Geometry { geometry: h, build_id, buffer: readback });
         }
@@ -183,7 +184,6 @@ impl Recorder<'_> {
         let clears: Vec<InstanceHandle> =
             tasks.iter().filter_map(|t| if let Task::ClearCache(c) = t { Some(c.instance) } else { None }).collect();
         let (device, memory, cmd) = (self.device, self.memory, self.cmd);
-        let d = &device.raw;
         let (hazards, journal) = (&mut self.hazards, &mut self.journal);
         let st = &mut *self.st;
         if !st.scene.caches_dirty && clears.is_empty() {
@@ -207,7 +207,7 @@ impl Recorder<'_> {
                 MemoryLocation::CpuToGpu,
                 MemoryKind::Readback,
             )?;
-            let made = Self::upload_layouts(st, journal, memory, d, cmd, hazards, &pending, &mut staging);
+            let made = Self::upload_layouts(st, journal, memory, cmd, hazards, &pending, &mut staging);
             journal.retire_at_commit(Garbage::Buffer(staging));
             made?;
         }
@@ -267,13 +267,12 @@ impl Recorder<'_> {
         st: &mut State,
         journal: &mut Journal,
         memory: &Memory,
-        d: &ash::Device,
-        cmd: vk::CommandBuffer,
+        cmd: &Commands,
         hazards: &mut Hazards,
         pending: &[(GeometryHandle, u64)],
         staging: &mut Buffer,
     ) -> Result<()> {
-        hazards.write(d, cmd, sync::TRANSFER_WRITE);
+        hazards.write(cmd, sync::TRANSFER_WRITE);
         let mut offset = 0u64;
         for &(h, size) in pending {
             let buffer = memory.create_buffer(
@@ -290,7 +289,7 @@ impl Recorder<'_> {
             };
             staging.mapped()[offset as usize..(offset + size) as usize].copy_from_slice(bytemuck::cast_slice(&l.words));
             let region = [vk::BufferCopy { src_offset: offset, dst_offset: 0, size }];
-            unsafe { d.cmd_copy_buffer(cmd, staging.raw, buffer.raw, &region) };
+            cmd.copy_buffer(staging.raw, buffer.raw, &region);
             offset += size.div_ceil(16) * 16;
             st.scene.next_layout_id += 1;
             let fresh = SurfelGpu {

@@ -43,7 +43,7 @@ impl TaskContainer {
     /// Registers or updates a geometry (its data is checked against the buffers and device limits now).
     pub fn schedule_geometry(&mut self, task: &GeometryTask) -> Result<()> {
         let shared = self.shared()?;
-        shared.check_geometry_alive(task.handle)?;
+        shared.check_geometry_alive(task.handle, "GeometryTask.handle")?;
         validate::geometry_input(&shared.device, &task.input)?;
         self.tasks.push(Task::Geometry(task.clone()));
         Ok(())
@@ -52,9 +52,9 @@ impl TaskContainer {
     /// Registers, updates or removes an instance (its transform must be finite and invertible).
     pub fn schedule_instance(&mut self, task: &InstanceTask) -> Result<()> {
         let shared = self.shared()?;
-        shared.check_instance_alive(task.handle)?;
+        shared.check_instance_alive(task.handle, "InstanceTask.handle")?;
         if task.operation != InstanceOperation::Remove {
-            shared.check_geometry_alive(task.input.geometry)?;
+            shared.check_geometry_alive(task.input.geometry, "InstanceTask.input.geometry")?;
             validate::transform("InstanceInput.transform", &task.input.transform)?;
             if task.input.initial_tile_color.iter().any(|c| !c.is_finite()) {
                 return Err(crate::Error::invalid("InstanceInput.initial_tile_color", "is not finite"));
@@ -79,7 +79,7 @@ impl TaskContainer {
 
     /// Resets an instance's cache to its initial colour (before the container's render tasks).
     pub fn schedule_clear_cache(&mut self, task: &ClearCacheTask) -> Result<()> {
-        self.shared()?.check_instance_alive(task.instance)?;
+        self.shared()?.check_instance_alive(task.instance, "ClearCacheTask.instance")?;
         self.tasks.push(Task::ClearCache(*task));
         Ok(())
     }

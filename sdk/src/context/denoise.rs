@@ -90,7 +90,7 @@ impl ExecuteContext {
     /// issued so far have come back.
     pub fn destroy_denoising_context(&self, handle: DenoisingContextHandle) -> Result<()> {
         let mut st = self.shared.state.lock();
-        let state = st.denoisers.remove(handle)?;
+        let state = st.denoisers.remove(handle).map_err(|e| e.for_field("destroy_denoising_context handle"))?;
         self.shared.live.write().denoisers.remove(&handle.0);
         let serial = st.last_issued();
         let key = state.guide;
@@ -128,10 +128,11 @@ impl ExecuteContext {
 }
 
 impl Shared {
-    pub(crate) fn check_denoising_context_alive(&self, h: DenoisingContextHandle) -> Result<()> {
+    /// `h` is a live denoising context; `field` names where the engine put it.
+    pub(crate) fn check_denoising_context_alive(&self, h: DenoisingContextHandle, field: &'static str) -> Result<()> {
         if self.live.read().denoisers.contains(&h.0) {
             return Ok(());
         }
-        Err(super::handles::not_live(DenoisingContextHandle::KIND, h.0, self.id))
+        Err(super::handles::not_live(field, DenoisingContextHandle::KIND, h.0, self.id))
     }
 }

@@ -17,7 +17,7 @@ pub(crate) struct Live {
 }
 
 /// Why `raw` is not a live handle of context `ctx`: null, foreign, or destroyed.
-pub(crate) fn not_live(kind: &'static str, raw: u64, ctx: u16) -> Error {
+pub(crate) fn not_live(field: &'static str, kind: &'static str, raw: u64, ctx: u16) -> Error {
     let problem = if raw == 0 {
         HandleProblem::Null
     } else if crate::types::handles::context_of(raw) != ctx {
@@ -25,7 +25,7 @@ pub(crate) fn not_live(kind: &'static str, raw: u64, ctx: u16) -> Error {
     } else {
         HandleProblem::Destroyed
     };
-    Error::InvalidHandle { kind, raw, problem, name: None }
+    Error::InvalidHandle { field, kind, raw, problem, name: None }
 }
 
 impl ExecuteContext {
@@ -65,12 +65,13 @@ impl ExecuteContext {
 
     fn destroy_geometries(&self, st: &mut super::State, handles: &[GeometryHandle]) -> Result<()> {
         for (i, h) in handles.iter().enumerate() {
-            let g = st.scene.geometries.get(*h)?;
+            let g = st.scene.geometries.get(*h).map_err(|e| e.for_field("destroy_geometry_handles handles"))?;
             if g.instance_refs > 0 {
                 return Err(Error::GeometryInUse { raw: h.0, instances: g.instance_refs });
             }
             if handles[..i].contains(h) {
                 return Err(Error::InvalidHandle {
+                    field: "destroy_geometry_handles handles (listed twice)",
                     kind: GeometryHandle::KIND,
                     raw: h.0,
                     problem: HandleProblem::Destroyed,
@@ -92,9 +93,10 @@ impl ExecuteContext {
     pub fn destroy_instance_handles(&self, handles: &[InstanceHandle]) -> Result<()> {
         let mut st = self.shared.state.lock();
         for (i, h) in handles.iter().enumerate() {
-            st.scene.instances.check(*h)?;
+            st.scene.instances.check(*h).map_err(|e| e.for_field("destroy_instance_handles handles"))?;
             if handles[..i].contains(h) {
                 return Err(Error::InvalidHandle {
+                    field: "destroy_instance_handles handles (listed twice)",
                     kind: InstanceHandle::KIND,
                     raw: h.0,
                     problem: HandleProblem::Destroyed,
@@ -134,7 +136,15 @@ impl ExecuteContext {
     /// driver never sees the bad index, and logs a warning; 0 until the ticket that copied the
     /// data has come back.
     pub fn geometry_invalid_triangles(&self, geometry: GeometryHandle) -> Result<u32> {
-        Ok(self.shared.state.lock().scene.geometries.get(geometry)?.invalid_triangles)
+        Ok(self
+            .shared
+            .state
+            .lock()
+            .scene
+            .geometries
+            .get(geometry)
+            .map_err(|e| e.for_field("geometry_invalid_triangles geometry"))?
+            .invalid_triangles)
     }
 
     /// Gives a geometry a debug name: errors about it and the SDK's log messages quote it, and
@@ -142,7 +152,7 @@ impl ExecuteContext {
     /// in RenderDoc, Nsight and validation messages. Kickstart RT's `GeometryInput::name`.
     pub fn set_geometry_name(&self, geometry: GeometryHandle, name: &str) -> Result<()> {
         let mut st = self.shared.state.lock();
-        let g = st.scene.geometries.get_mut(geometry)?;
+        let g = st.scene.geometries.get_mut(geometry).map_err(|e| e.for_field("set_geometry_name geometry"))?;
         g.name = Some(name.to_string());
         let d = &self.shared.device;
         if let Some(b) = &g.blas {
@@ -156,7 +166,8 @@ impl ExecuteContext {
 
     /// Gives an instance a debug name, quoted in errors and log messages about it.
     pub fn set_instance_name(&self, instance: InstanceHandle, name: &str) -> Result<()> {
-        self.shared.state.lock().scene.instances.get_mut(instance)?.name = Some(name.to_string());
+        self.shared.state.lock().scene.instances.get_mut(instance).map_err(|e| e.for_field("set_instance_name instance"))?.name =
+            Some(name.to_string());
         Ok(())
     }
 
@@ -169,7 +180,7 @@ impl ExecuteContext {
     /// cache is allocated: one recording after the ticket that registered its geometry).
     pub fn instance_cache_bytes(&self, instance: InstanceHandle) -> Result<u64> {
         let st = self.shared.state.lock();
-        let rec = st.scene.instances.get(instance)?;
+        let rec = st.scene.instances.get(instance).map_err(|e| e.for_field("instance_cache_bytes instance"))?;
         Ok(rec.placement.and_then(|p| p.cache).map_or(0, |(r, _)| r.count * crate::cache::pool::SAMPLE_BYTES))
     }
 
@@ -193,6 +204,40 @@ impl ExecuteContext {
         self.shared.memory.allocations()
     }
 
+    /// Starts a log of every device-memory allocation and free the SDK makes, as CSV lines
+    /// written to `out` (buffered):
+    ///
+    /// `time_ms,event,kind,name,bytes,kind_live_bytes` — milliseconds since the log began,
+    /// `alloc` or `free`, the [`MemoryKind`](crate::MemoryKind), what the memory holds, its
+    /// bytes, and the bytes of that kind live afterwards (`resource_allocations`' numbers).
+    ///
+    /// One log at a time: a second begin is `InvalidInput`. A write error stops the log (a
+    /// warning names it); `end_logging_resource_allocations` still hands the writer back.
+    ///
+    /// ```no_run
+    /// # fn f(ctx: &hybrid_rt::ExecuteContext) -> Result<(), Box<dyn std::error::Error>> {
+    /// ctx.begin_logging_resource_allocations(std::fs::File::create("allocations.csv")?)?;
+    /// // ... load a level ...
+    /// ctx.end_logging_resource_allocations()?;
+    /// # Ok(()) }
+    /// ```
+    pub fn begin_logging_resource_allocations(&self, out: impl std::io::Write + Send + 'static) -> Result<()> {
+        if self.shared.memory.begin_log(Box::new(out)) {
+            Ok(())
+        } else {
+            Err(Error::invalid("begin_logging_resource_allocations", "a log is open already: end it first"))
+        }
+    }
+
+    /// Ends the allocation log: flushes it and hands its writer back. With no log open,
+    /// `InvalidInput`.
+    pub fn end_logging_resource_allocations(&self) -> Result<Box<dyn std::io::Write + Send>> {
+        self.shared
+            .memory
+            .end_log()
+            .ok_or_else(|| Error::invalid("end_logging_resource_allocations", "no log is open"))
+    }
+
     /// Tickets built and not yet handed back.
     pub fn tickets_in_flight(&self) -> Vec<u64> {
         self.shared.state.lock().in_flight().collect()
@@ -214,17 +259,19 @@ impl ExecuteContext {
 }
 
 impl Shared {
-    pub(crate) fn check_geometry_alive(&self, h: GeometryHandle) -> Result<()> {
+    /// `h` is a live geometry; `field` names where the engine put it.
+    pub(crate) fn check_geometry_alive(&self, h: GeometryHandle, field: &'static str) -> Result<()> {
         if self.live.read().geometries.contains(&h.0) {
             return Ok(());
         }
-        Err(not_live(GeometryHandle::KIND, h.0, self.id))
+        Err(not_live(field, GeometryHandle::KIND, h.0, self.id))
     }
 
-    pub(crate) fn check_instance_alive(&self, h: InstanceHandle) -> Result<()> {
+    /// `h` is a live instance; `field` names where the engine put it.
+    pub(crate) fn check_instance_alive(&self, h: InstanceHandle, field: &'static str) -> Result<()> {
         if self.live.read().instances.contains(&h.0) {
             return Ok(());
         }
-        Err(not_live(InstanceHandle::KIND, h.0, self.id))
+        Err(not_live(field, InstanceHandle::KIND, h.0, self.id))
     }
 }

@@ -10,6 +10,7 @@ use super::container::Task;
 use super::journal::Journal;
 use super::State;
 use crate::error::Result;
+use crate::gpu::commands::Commands;
 use crate::gpu::device::Device;
 use crate::gpu::memory::Memory;
 use crate::gpu::sync::{self, Hazards};
@@ -33,7 +34,8 @@ pub(super) struct Recorder<'a> {
     /// What seeds the recording's random sequences and checkerboard phase: the container's
     /// frame index, or the serial.
     pub seed: u32,
-    pub cmd: vk::CommandBuffer,
+    /// What the build records, replayed into the engine's buffer once it has succeeded.
+    pub cmd: &'a Commands,
     pub hazards: Hazards,
     /// Set once the "no ray queries, using the pipeline" warning was logged.
     pub warned_inline: &'a AtomicBool,
@@ -44,24 +46,24 @@ pub(super) struct Recorder<'a> {
 impl Recorder<'_> {
     /// Opens a timed (and, with debug utils, labelled) span of the recording.
     pub fn begin(&mut self, kind: TaskKind, task_index: u32) -> Span {
-        let (d, cmd) = (&self.device.raw, self.cmd);
+        let cmd = self.cmd;
         self.device.begin_label(cmd, &format!("{kind:?}"));
-        self.working_set().timer.begin(d, cmd, kind, task_index)
+        self.working_set().timer.begin(cmd, kind, task_index)
     }
 
     pub fn end(&mut self, span: Span) {
-        let (d, cmd) = (&self.device.raw, self.cmd);
-        self.working_set().timer.end(d, cmd, span);
+        let cmd = self.cmd;
+        self.working_set().timer.end(cmd, span);
         self.device.end_label(cmd);
     }
 
     /// Records every task of a container (validated: errors here are Vulkan/memory failures).
     /// `labels` (task index, label) name the render tasks' debug-utils regions.
     pub fn record(&mut self, tasks: &[Task], labels: &[(u32, String)]) -> Result<()> {
-        let (d, cmd) = (&self.device.raw, self.cmd);
+        let cmd = self.cmd;
         let ws = self.working_set();
         ws.ring.reset();
-        ws.timer.reset(d, cmd);
+        ws.timer.reset(cmd);
 
         // ---- BVH work: copies, builds, refits, compactions, TLAS.
         let first_bvh =
@@ -114,15 +116,13 @@ impl Recorder<'_> {
         // must reach the host domain.
         // ---- The completion marker, after everything else: the ticket's serial, read when it
         // comes back. With it, read-backs and counters reach the host domain.
-        let (d, cmd) = (&self.device.raw, self.cmd);
-        self.hazards.write(d, cmd, sync::TRANSFER_WRITE);
+        let cmd = self.cmd;
+        self.hazards.write(cmd, sync::TRANSFER_WRITE);
         let marker = self.st.working_sets[self.ws].marker.raw;
         let serial = self.serial;
-        unsafe {
-            d.cmd_fill_buffer(cmd, marker, 0, 4, serial as u32);
-            d.cmd_fill_buffer(cmd, marker, 4, 4, (serial >> 32) as u32);
-        }
-        self.hazards.read(d, cmd, sync::HOST_READ);
+        cmd.fill_buffer(marker, 0, 4, serial as u32);
+        cmd.fill_buffer(marker, 4, 4, (serial >> 32) as u32);
+        self.hazards.read(cmd, sync::HOST_READ);
         Ok(())
     }
 
@@ -149,10 +149,9 @@ impl Recorder<'_> {
             None
         };
         if let Some((flags, _, _, bytes)) = usage {
-            let (d, cmd) = (&self.device.raw, self.cmd);
-            self.hazards.write(d, cmd, sync::TRANSFER_WRITE);
-            // SAFETY: the buffer holds at least `bytes`; the command buffer is recording.
-            unsafe { d.cmd_fill_buffer(cmd, flags, 0, bytes, 0) };
+            let cmd = self.cmd;
+            self.hazards.write(cmd, sync::TRANSFER_WRITE);
+            cmd.fill_buffer(flags, 0, bytes, 0);
         }
 
         let (device, cmd, seed) = (self.device, self.cmd, self.seed);
@@ -184,7 +183,7 @@ impl Recorder<'_> {
                 Ok(at) => device.begin_label(cmd, &format!("{} ({kind:?}, task {index})", labels[at].1)),
                 Err(_) => device.begin_label(cmd, &format!("{kind:?} (task {index})")),
             }
-            let span = ws.timer.begin(&device.raw, cmd, kind, index);
+            let span = ws.timer.begin(cmd, kind, index);
             let mut r = Recording {
                 device,
                 cmd,
@@ -199,15 +198,14 @@ impl Recorder<'_> {
                 task_timer: Some((&mut ws.timer, kind, index)),
             };
             task.record(&mut r, &st.passes, &mut world);
-            ws.timer.end(&device.raw, cmd, span);
+            ws.timer.end(cmd, span);
             device.end_label(cmd);
         }
         if let Some((flags, _, readback, bytes)) = usage {
-            let d = &device.raw;
-            self.hazards.read_write(d, cmd, sync::TRANSFER_READ, sync::TRANSFER_WRITE);
+            self.hazards.read_write(cmd, sync::TRANSFER_READ, sync::TRANSFER_WRITE);
             let region = [vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes }];
-            // SAFETY: both buffers hold `bytes`; the host reads the copy after the ticket's marker.
-            unsafe { d.cmd_copy_buffer(cmd, flags, readback, &region) };
+            // The host reads the copy after the ticket's marker.
+            cmd.copy_buffer(flags, readback, &region);
         }
         Ok(())
     }

@@ -24,20 +24,33 @@ use std::collections::HashMap;
 pub(super) fn validate_handles(st: &mut State, tasks: &[Task], limits: &Limits) -> Result<()> {
     let mut geometry_registered: HashMap<GeometryHandle, bool> = HashMap::new();
     let mut instance_registered: HashMap<InstanceHandle, bool> = HashMap::new();
-    let problem =
-        |kind, raw, problem, name: &Option<String>| Err(Error::InvalidHandle { kind, raw, problem, name: name.clone() });
+    let problem = |field, kind, raw, problem, name: &Option<String>| {
+        Err(Error::InvalidHandle { field, kind, raw, problem, name: name.clone() })
+    };
     let scene = &st.scene;
     for task in tasks {
         match task {
             Task::Geometry(t) => {
-                let g = scene.geometries.get(t.handle)?;
+                let g = scene.geometries.get(t.handle).map_err(|e| e.for_field("GeometryTask.handle"))?;
                 let registered = *geometry_registered.entry(t.handle).or_insert(g.registered());
                 match t.operation {
                     TaskOperation::Register if registered => {
-                        return problem(GeometryHandle::KIND, t.handle.0, HandleProblem::AlreadyRegistered, &g.name)
+                        return problem(
+                            "GeometryTask.handle",
+                            GeometryHandle::KIND,
+                            t.handle.0,
+                            HandleProblem::AlreadyRegistered,
+                            &g.name,
+                        )
                     }
                     TaskOperation::Update if !registered => {
-                        return problem(GeometryHandle::KIND, t.handle.0, HandleProblem::NotRegistered, &g.name)
+                        return problem(
+                            "GeometryTask.handle",
+                            GeometryHandle::KIND,
+                            t.handle.0,
+                            HandleProblem::NotRegistered,
+                            &g.name,
+                        )
                     }
                     TaskOperation::Update => {
                         if let Some(old) = g.layout.filter(|l| l.allow_update) {
@@ -63,14 +76,26 @@ pub(super) fn validate_handles(st: &mut State, tasks: &[Task], limits: &Limits) 
                 geometry_registered.insert(t.handle, true);
             }
             Task::Instance(t) => {
-                let rec = scene.instances.get(t.handle)?;
+                let rec = scene.instances.get(t.handle).map_err(|e| e.for_field("InstanceTask.handle"))?;
                 let registered = *instance_registered.entry(t.handle).or_insert(rec.placement.is_some());
                 match t.operation {
                     InstanceOperation::Register if registered => {
-                        return problem(InstanceHandle::KIND, t.handle.0, HandleProblem::AlreadyRegistered, &rec.name)
+                        return problem(
+                            "InstanceTask.handle",
+                            InstanceHandle::KIND,
+                            t.handle.0,
+                            HandleProblem::AlreadyRegistered,
+                            &rec.name,
+                        )
                     }
                     InstanceOperation::Update | InstanceOperation::Remove if !registered => {
-                        return problem(InstanceHandle::KIND, t.handle.0, HandleProblem::NotRegistered, &rec.name)
+                        return problem(
+                            "InstanceTask.handle",
+                            InstanceHandle::KIND,
+                            t.handle.0,
+                            HandleProblem::NotRegistered,
+                            &rec.name,
+                        )
                     }
                     _ => {}
                 }
@@ -79,15 +104,21 @@ pub(super) fn validate_handles(st: &mut State, tasks: &[Task], limits: &Limits) 
                     if scene.instances.index_of(t.handle)? >= 1 << 24 {
                         return Err(Error::invalid("InstanceTask.handle", "its slot is beyond the TLAS's 24-bit custom index"));
                     }
-                    let g = scene.geometries.get(t.input.geometry)?;
+                    let g = scene.geometries.get(t.input.geometry).map_err(|e| e.for_field("InstanceTask.input.geometry"))?;
                     if !*geometry_registered.get(&t.input.geometry).unwrap_or(&g.registered()) {
-                        return problem(GeometryHandle::KIND, t.input.geometry.0, HandleProblem::NotRegistered, &g.name);
+                        return problem(
+                            "InstanceTask.input.geometry",
+                            GeometryHandle::KIND,
+                            t.input.geometry.0,
+                            HandleProblem::NotRegistered,
+                            &g.name,
+                        );
                     }
                 }
                 instance_registered.insert(t.handle, t.operation != InstanceOperation::Remove);
             }
             Task::ClearCache(t) => {
-                scene.instances.get(t.instance)?;
+                scene.instances.get(t.instance).map_err(|e| e.for_field("ClearCacheTask.instance"))?;
             }
             Task::BvhBuild(_) | Task::Render(_) => {}
         }
@@ -160,11 +191,11 @@ impl Recorder<'_> {
     }
 
     fn apply_with_staging(&mut self, tasks: &[Task], plans: &[(CopyPlan, u64)], staging: Option<&Buffer>) -> Result<()> {
-        let (d, cmd) = (&self.device.raw, self.cmd);
+        let cmd = self.cmd;
         if let Some(s) = staging {
-            self.hazards.write(d, cmd, sync::TRANSFER_WRITE);
+            self.hazards.write(cmd, sync::TRANSFER_WRITE);
             for (plan, base) in plans {
-                plan.record_staging(d, cmd, s.raw, *base);
+                plan.record_staging(cmd, s.raw, *base);
             }
         }
         let mut read_back: Vec<GeometryHandle> = Vec::new();
@@ -223,9 +254,8 @@ impl Recorder<'_> {
         let n = packs.len() as u32;
         let counters = self.ensure_index_counters(n)?;
         let (device, cmd) = (self.device, self.cmd);
-        let d = &device.raw;
-        self.hazards.write(d, cmd, sync::TRANSFER_WRITE);
-        unsafe { d.cmd_fill_buffer(cmd, counters, 0, n as u64 * 4, 0) };
+        self.hazards.write(cmd, sync::TRANSFER_WRITE);
+        cmd.fill_buffer(counters, 0, n as u64 * 4, 0);
         let st = &mut *self.st;
         let ws = &mut st.working_sets[self.ws];
         let base = ws.index_counters.as_ref().map_or(0, |b| b.address);

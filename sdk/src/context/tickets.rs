@@ -6,6 +6,7 @@ use super::journal::Journal;
 use super::record::Recorder;
 use super::{scene, ExecuteContext};
 use crate::error::{Error, Result};
+use crate::gpu::commands::Commands;
 use crate::gpu::sync::Hazards;
 use crate::types::{CompletedTask, GpuTicket, MAX_CACHE_SAMPLES};
 use ash::vk;
@@ -14,10 +15,12 @@ use std::sync::Arc;
 impl ExecuteContext {
     /// Records every task of `container` into `cmd`, which the engine has begun and will end,
     /// submit and wait for itself. On success the container is emptied and a ticket returned.
-    /// On error nothing usable was recorded, no state changed (a build that fails halfway, out
-    /// of memory say, is undone: registries, queues, caches and GPU objects are as before), and
-    /// the container keeps its tasks, so the same build can be tried again. An error after
-    /// recording began leaves `cmd` partly recorded: reset it before reuse.
+    ///
+    /// On error nothing was recorded into `cmd` and no state changed: a build that fails
+    /// halfway (out of memory, say) is undone — registries, queues, caches and GPU objects are
+    /// as before — and the container keeps its tasks, so the same build can be tried again.
+    /// Whatever the engine recorded into `cmd` before or after the failed call stays valid:
+    /// the engine can go on recording, end and submit it as if the call had not been made.
     pub fn build_gpu_task(&self, container: &mut TaskContainer, cmd: vk::CommandBuffer) -> Result<GpuTicket> {
         if !std::ptr::eq(container.shared.as_ptr(), Arc::as_ptr(&self.shared)) {
             return Err(Error::ForeignContainer);
@@ -38,6 +41,9 @@ impl ExecuteContext {
 
         let serial = st.next_serial;
         let journal = Journal::begin(st, ws);
+        // The build records into a list first and into `cmd` only once it has succeeded, so a
+        // failure leaves the engine's buffer as it was (see `gpu::commands`).
+        let commands = Commands::default();
         let mut recorder = Recorder {
             device: &shared.device,
             memory: &shared.memory,
@@ -46,7 +52,7 @@ impl ExecuteContext {
             serial,
             // Low 32 bits: the shaders' sequences and the checkerboard parity use them.
             seed: container.frame_index.unwrap_or(serial) as u32,
-            cmd,
+            cmd: &commands,
             hazards: Hazards::after_earlier_submissions(),
             warned_inline: &shared.warned_inline,
             journal,
@@ -55,10 +61,14 @@ impl ExecuteContext {
         let Recorder { journal, .. } = recorder;
         if let Err(e) = recorded {
             // Nothing of this build stays: the context is as it was, the container keeps its
-            // tasks, and `cmd` (partly recorded) must be reset by the engine.
+            // tasks, and `cmd` never saw a command of it.
             journal.roll_back(st, ws, &shared.device, &shared.memory);
             return Err(e);
         }
+        // SAFETY: `cmd` is the engine's, begun and outside a render pass (the function's
+        // contract); every object the list names is alive — the build succeeded and keeps what
+        // it replaced until this ticket comes back.
+        unsafe { commands.replay(&shared.device, cmd) };
         journal.commit(st, serial);
         st.next_serial += 1;
         st.working_sets[ws].in_flight = Some(serial);

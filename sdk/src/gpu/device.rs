@@ -1,6 +1,7 @@
 //! The engine's device as the SDK sees it: extension loaders, the properties passes need, and
 //! the check that everything the SDK relies on is there (with an error naming what is not).
 use crate::error::{Error, Result};
+use crate::gpu::commands::Commands;
 use crate::gpu::formats::MaskFormats;
 use ash::{khr, vk};
 use std::ffi::CStr;
@@ -286,18 +287,16 @@ impl Device {
     }
 
     /// Opens a labelled region of `cmd` ("hybrid-rt <name>"); close it with `end_label`.
-    pub fn begin_label(&self, cmd: vk::CommandBuffer, name: &str) {
-        if let Some(d) = &self.debug {
-            let text = std::ffi::CString::new(format!("hybrid-rt {name}")).unwrap_or_default();
-            let label = vk::DebugUtilsLabelEXT::default().label_name(&text);
-            // SAFETY: cmd is recording; the label outlives the call.
-            unsafe { d.cmd_begin_debug_utils_label(cmd, &label) };
+    /// Without VK_EXT_debug_utils, nothing.
+    pub fn begin_label(&self, cmd: &Commands, name: &str) {
+        if self.debug.is_some() {
+            cmd.begin_label(std::ffi::CString::new(format!("hybrid-rt {name}")).unwrap_or_default());
         }
     }
 
-    pub fn end_label(&self, cmd: vk::CommandBuffer) {
-        if let Some(d) = &self.debug {
-            unsafe { d.cmd_end_debug_utils_label(cmd) };
+    pub fn end_label(&self, cmd: &Commands) {
+        if self.debug.is_some() {
+            cmd.end_label();
         }
     }
 }

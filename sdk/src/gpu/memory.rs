@@ -4,6 +4,7 @@ use crate::error::{Error, Result};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme, Allocator, AllocatorCreateDesc};
 use gpu_allocator::MemoryLocation;
+use super::allocation_log::AllocationLog;
 use parking_lot::Mutex;
 
 /// What a piece of SDK memory holds (the rows of [`ResourceAllocations`]).
@@ -97,6 +98,8 @@ pub(crate) struct Buffer {
     pub size: u64,
     pub address: vk::DeviceAddress,
     pub kind: MemoryKind,
+    /// What it holds (debug names, the allocation log).
+    name: &'static str,
     allocation: Option<Allocation>,
 }
 
@@ -134,6 +137,8 @@ pub(crate) struct Image {
     pub width: u32,
     pub height: u32,
     pub kind: MemoryKind,
+    /// What it holds (debug names, the allocation log).
+    name: &'static str,
     allocation: Option<Allocation>,
 }
 
@@ -156,6 +161,8 @@ pub(crate) struct Memory {
     device: ash::Device,
     allocator: Mutex<Option<Allocator>>,
     counts: Mutex<[AllocationCount; MEMORY_KIND_COUNT]>,
+    /// The allocation log, while one is open.
+    log: Mutex<Option<AllocationLog>>,
     /// The device's maxBufferSize: a larger buffer is refused before it reaches the driver.
     max_buffer_size: u64,
     /// Names buffers and images (VK_EXT_debug_utils), when the engine has it.
@@ -190,6 +197,7 @@ impl Memory {
             device: device.clone(),
             allocator: Mutex::new(Some(allocator)),
             counts: Mutex::new([AllocationCount::default(); MEMORY_KIND_COUNT]),
+            log: Mutex::new(None),
             max_buffer_size,
             debug,
             families,
@@ -274,10 +282,8 @@ impl Memory {
         }
         let address = unsafe { self.device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(raw)) };
         crate::gpu::device::name_object(self.debug.as_ref(), raw, name);
-        let mut counts = self.counts.lock();
-        counts[kind as usize].count += 1;
-        counts[kind as usize].bytes += allocation.size();
-        Ok(Buffer { raw, size, address, kind, allocation: Some(allocation) })
+        self.note("alloc", kind, name, allocation.size());
+        Ok(Buffer { raw, size, address, kind, name, allocation: Some(allocation) })
     }
 
     pub fn destroy_buffer(&self, mut buffer: Buffer) {
@@ -285,11 +291,7 @@ impl Memory {
         // SAFETY: the caller guarantees no pending GPU use (deferred destruction).
         unsafe { self.device.destroy_buffer(buffer.raw, None) };
         if let Some(allocation) = buffer.allocation.take() {
-            let mut counts = self.counts.lock();
-            let c = &mut counts[buffer.kind as usize];
-            c.count = c.count.saturating_sub(1);
-            c.bytes = c.bytes.saturating_sub(allocation.size());
-            drop(counts);
+            self.note("free", buffer.kind, buffer.name, allocation.size());
             if let Some(a) = self.allocator.lock().as_mut() {
                 if let Err(e) = a.free(allocation) {
                     log::error!("freeing a buffer failed: {e}");
@@ -364,10 +366,8 @@ impl Memory {
         };
         crate::gpu::device::name_object(self.debug.as_ref(), raw, name);
         crate::gpu::device::name_object(self.debug.as_ref(), view, name);
-        let mut counts = self.counts.lock();
-        counts[kind as usize].count += 1;
-        counts[kind as usize].bytes += allocation.size();
-        Ok(Image { raw, view, format, width, height, kind, allocation: Some(allocation) })
+        self.note("alloc", kind, name, allocation.size());
+        Ok(Image { raw, view, format, width, height, kind, name, allocation: Some(allocation) })
     }
 
     pub fn destroy_image(&self, mut image: Image) {
@@ -378,17 +378,48 @@ impl Memory {
             self.device.destroy_image(image.raw, None);
         }
         if let Some(allocation) = image.allocation.take() {
-            let mut counts = self.counts.lock();
-            let c = &mut counts[image.kind as usize];
-            c.count = c.count.saturating_sub(1);
-            c.bytes = c.bytes.saturating_sub(allocation.size());
-            drop(counts);
+            self.note("free", image.kind, image.name, allocation.size());
             if let Some(a) = self.allocator.lock().as_mut() {
                 if let Err(e) = a.free(allocation) {
                     log::error!("freeing an image failed: {e}");
                 }
             }
         }
+    }
+
+    /// Counts an allocation (`alloc`) or a free of `bytes` of `kind`, and logs it when a log
+    /// is open.
+    fn note(&self, event: &str, kind: MemoryKind, name: &str, bytes: u64) {
+        let live = {
+            let mut counts = self.counts.lock();
+            let c = &mut counts[kind as usize];
+            if event == "alloc" {
+                c.count += 1;
+                c.bytes += bytes;
+            } else {
+                c.count = c.count.saturating_sub(1);
+                c.bytes = c.bytes.saturating_sub(bytes);
+            }
+            c.bytes
+        };
+        if let Some(log) = self.log.lock().as_mut() {
+            log.event(event, kind, name, bytes, live);
+        }
+    }
+
+    /// Opens the allocation log (false: one is open already).
+    pub fn begin_log(&self, out: Box<dyn std::io::Write + Send>) -> bool {
+        let mut log = self.log.lock();
+        if log.is_some() {
+            return false;
+        }
+        *log = Some(AllocationLog::new(out));
+        true
+    }
+
+    /// Closes the allocation log and hands its writer back (None: none was open).
+    pub fn end_log(&self) -> Option<Box<dyn std::io::Write + Send>> {
+        self.log.lock().take().map(AllocationLog::finish)
     }
 
     pub fn allocations(&self) -> ResourceAllocations {

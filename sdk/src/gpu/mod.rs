@@ -1,5 +1,7 @@
 //! Thin ash helpers: the device and its loaders, memory, barriers, pipelines, deferred frees.
 //! Nothing here knows what a pass computes.
+pub(crate) mod allocation_log;
+pub(crate) mod commands;
 pub(crate) mod deferred;
 pub mod device;
 pub mod features;

@@ -2,6 +2,7 @@
 //! one. The SDK never changes an image layout (inputs and outputs stay in the layouts the
 //! engine gave), so every hazard is a memory hazard and a global `VkMemoryBarrier2` covers
 //! buffers, acceleration structures and images alike.
+use super::commands::Commands;
 use ash::vk;
 
 /// One declared use: the stages and access types of a step.
@@ -79,10 +80,10 @@ impl Hazards {
 
     /// Declares that the next commands read with `u`; records a barrier if an earlier write is
     /// not yet visible to them.
-    pub fn read(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, u: Use) {
+    pub fn read(&mut self, cmd: &Commands, u: Use) {
         if let Some(w) = self.write {
             if !(self.visible.0.contains(u.stages) && self.visible.1.contains(u.access)) {
-                barrier(device, cmd, w, u);
+                cmd.barrier(w, u);
                 self.visible.0 |= u.stages;
                 self.visible.1 |= u.access;
             }
@@ -92,14 +93,14 @@ impl Hazards {
 
     /// Declares that the next commands write with `u` (after any reads they also do: declare
     /// those first). Orders them after the previous write (WAW) and the reads since (WAR).
-    pub fn write(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, u: Use) {
+    pub fn write(&mut self, cmd: &Commands, u: Use) {
         let mut src = Use { stages: self.read_stages, access: vk::AccessFlags2::NONE };
         if let Some(w) = self.write {
             src.stages |= w.stages;
             src.access |= w.access;
         }
         if !src.stages.is_empty() {
-            barrier(device, cmd, src, u);
+            cmd.barrier(src, u);
         }
         self.write = Some(u);
         self.visible = (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE);
@@ -107,18 +108,8 @@ impl Hazards {
     }
 
     /// A step that reads and writes (a build that reads inputs and writes its result).
-    pub fn read_write(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, r: Use, w: Use) {
-        self.read(device, cmd, r);
-        self.write(device, cmd, w);
+    pub fn read_write(&mut self, cmd: &Commands, r: Use, w: Use) {
+        self.read(cmd, r);
+        self.write(cmd, w);
     }
-}
-
-pub(crate) fn barrier(device: &ash::Device, cmd: vk::CommandBuffer, src: Use, dst: Use) {
-    let mb = [vk::MemoryBarrier2::default()
-        .src_stage_mask(src.stages)
-        .src_access_mask(src.access)
-        .dst_stage_mask(dst.stages)
-        .dst_access_mask(dst.access)];
-    // SAFETY: cmd is in the recording state (the engine began it); synchronization2 enabled.
-    unsafe { device.cmd_pipeline_barrier2(cmd, &vk::DependencyInfo::default().memory_barriers(&mb)) };
 }

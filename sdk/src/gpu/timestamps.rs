@@ -1,6 +1,7 @@
 //! Per-task GPU timing from timestamp queries: one pool per working set, intervals may nest
 //! (the BVH interval holds the BLAS and TLAS intervals; a task's interval the intervals of its
 //! passes, when passes are timed), read back when the ticket returns.
+use super::commands::Commands;
 use crate::error::{Error, Result};
 use crate::types::{PassTiming, TaskKind, TaskTiming};
 use ash::vk;
@@ -49,64 +50,47 @@ impl Timer {
     }
 
     /// Starts a recording: every slot is reset in the command buffer itself.
-    pub fn reset(&mut self, device: &ash::Device, cmd: vk::CommandBuffer) {
+    pub fn reset(&mut self, cmd: &Commands) {
         self.next = 0;
         self.intervals.clear();
         if self.enabled {
-            unsafe { device.cmd_reset_query_pool(cmd, self.pool, 0, self.slots) };
+            cmd.reset_query_pool(self.pool, 0, self.slots);
         }
     }
 
-    fn write(&mut self, device: &ash::Device, cmd: vk::CommandBuffer) -> u32 {
+    fn write(&mut self, cmd: &Commands) -> u32 {
         let slot = self.next;
-        // BOTTOM_OF_PIPE: the stamp is written once earlier work has finished, so intervals
-        // measure their own work. (ALL_COMMANDS means the same here but draws a best-practices
-        // warning; the timestamp stage must be a single stage.)
-        unsafe { device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::BOTTOM_OF_PIPE, self.pool, slot) };
+        cmd.write_timestamp(self.pool, slot);
         self.next += 1;
         slot
     }
 
-    pub fn begin(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, kind: TaskKind, task_index: u32) -> Span {
-        self.open(device, cmd, kind, task_index, None)
+    pub fn begin(&mut self, cmd: &Commands, kind: TaskKind, task_index: u32) -> Span {
+        self.open(cmd, kind, task_index, None)
     }
 
     /// Opens the interval of one pass of a task (a no-op unless passes are timed).
-    pub fn begin_pass(
-        &mut self,
-        device: &ash::Device,
-        cmd: vk::CommandBuffer,
-        kind: TaskKind,
-        task_index: u32,
-        pass: &'static str,
-    ) -> Span {
+    pub fn begin_pass(&mut self, cmd: &Commands, kind: TaskKind, task_index: u32, pass: &'static str) -> Span {
         if !self.time_passes {
             return Span(None);
         }
-        self.open(device, cmd, kind, task_index, Some(pass))
+        self.open(cmd, kind, task_index, Some(pass))
     }
 
-    fn open(
-        &mut self,
-        device: &ash::Device,
-        cmd: vk::CommandBuffer,
-        kind: TaskKind,
-        task_index: u32,
-        pass: Option<&'static str>,
-    ) -> Span {
+    fn open(&mut self, cmd: &Commands, kind: TaskKind, task_index: u32, pass: Option<&'static str>) -> Span {
         // Keep a slot free for the end of every open interval.
         let open = self.intervals.iter().filter(|i| i.end.is_none()).count() as u32;
         if !self.enabled || self.next + open + 2 > self.slots {
             return Span(None);
         }
-        let begin = self.write(device, cmd);
+        let begin = self.write(cmd);
         self.intervals.push(Interval { kind, task_index, pass, begin, end: None });
         Span(Some(self.intervals.len() - 1))
     }
 
-    pub fn end(&mut self, device: &ash::Device, cmd: vk::CommandBuffer, span: Span) {
+    pub fn end(&mut self, cmd: &Commands, span: Span) {
         if let Some(i) = span.0 {
-            let slot = self.write(device, cmd);
+            let slot = self.write(cmd);
             self.intervals[i].end = Some(slot);
         }
     }

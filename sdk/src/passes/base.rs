@@ -5,6 +5,7 @@ use super::descriptors;
 use super::Passes;
 use crate::cache::pool::CachePool;
 use crate::error::Result;
+use crate::gpu::commands::Commands;
 use crate::gpu::device::Device;
 use crate::gpu::pipeline::Binding;
 use crate::gpu::sync::Hazards;
@@ -18,7 +19,8 @@ use ash::vk;
 /// What a pass needs while it records.
 pub(crate) struct Recording<'a> {
     pub device: &'a Device,
-    pub cmd: vk::CommandBuffer,
+    /// The build's command list (replayed into the engine's buffer once the build succeeds).
+    pub cmd: &'a Commands,
     pub ring: &'a mut UploadRing,
     pub hazards: &'a mut Hazards,
     pub tlas: vk::AccelerationStructureKHR,
@@ -43,7 +45,7 @@ impl<'a> Recording<'a> {
     /// cache fills, surfel layouts): no TLAS, instance table or usage flags.
     pub fn maintenance(
         device: &'a Device,
-        cmd: vk::CommandBuffer,
+        cmd: &'a Commands,
         ring: &'a mut UploadRing,
         hazards: &'a mut Hazards,
         seed: u32,
@@ -68,7 +70,7 @@ impl<'a> Recording<'a> {
     pub fn begin_pass(&mut self, pass: &'static str) -> Span {
         self.device.begin_label(self.cmd, pass);
         match &mut self.task_timer {
-            Some((timer, kind, index)) => timer.begin_pass(&self.device.raw, self.cmd, *kind, *index, pass),
+            Some((timer, kind, index)) => timer.begin_pass(self.cmd, *kind, *index, pass),
             None => Span::NONE,
         }
     }
@@ -76,7 +78,7 @@ impl<'a> Recording<'a> {
     /// Closes the pass `begin_pass` opened.
     pub fn end_pass(&mut self, span: Span) {
         if let Some((timer, ..)) = &mut self.task_timer {
-            timer.end(&self.device.raw, self.cmd, span);
+            timer.end(self.cmd, span);
         }
         self.device.end_label(self.cmd);
     }

@@ -53,17 +53,14 @@ impl CacheOps {
         count: u64,
         push: impl Fn(u64, u32) -> Vec<u8>,
     ) {
-        let d = &r.device.raw;
         let per_dispatch = r.device.limits.max_dispatch_groups[0].max(1) as u64 * GROUP;
-        unsafe { d.cmd_bind_pipeline(r.cmd, vk::PipelineBindPoint::COMPUTE, pipeline) };
+        r.cmd.bind_pipeline(vk::PipelineBindPoint::COMPUTE, pipeline);
         let mut first = 0u64;
         while first < count {
             let n = (count - first).min(per_dispatch);
             let bytes = push(address + first * crate::cache::pool::SAMPLE_BYTES, n as u32);
-            unsafe {
-                d.cmd_push_constants(r.cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, &bytes);
-                d.cmd_dispatch(r.cmd, n.div_ceil(GROUP) as u32, 1, 1);
-            }
+            r.cmd.push_constants(self.layout, vk::ShaderStageFlags::COMPUTE, &bytes);
+            r.cmd.dispatch(n.div_ceil(GROUP) as u32, 1, 1);
             first += n;
         }
     }
@@ -71,7 +68,7 @@ impl CacheOps {
     /// Sets `count` samples at `address` to `color` with no history.
     pub fn fill(&self, r: &mut Recording<'_>, address: u64, count: u64, color: [f32; 3]) {
         let stage = vk::PipelineStageFlags2::COMPUTE_SHADER;
-        r.hazards.write(&r.device.raw, r.cmd, sync::shader_write(stage));
+        r.hazards.write(r.cmd, sync::shader_write(stage));
         let color = [color[0], color[1], color[2], 0.0];
         self.dispatch(r, self.fill, address, count, |samples, count| {
             bytemuck::bytes_of(&FillPush { samples, count, pad: 0, color }).to_vec()
@@ -81,7 +78,7 @@ impl CacheOps {
     /// Folds accumulated injections of `count` samples at `address` into their averages.
     pub fn resolve(&self, r: &mut Recording<'_>, address: u64, count: u64, average_window: f32) {
         let stage = vk::PipelineStageFlags2::COMPUTE_SHADER;
-        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
+        r.hazards.read_write(r.cmd, sync::shader_read(stage), sync::shader_write(stage));
         self.dispatch(r, self.resolve, address, count, |samples, count| {
             bytemuck::bytes_of(&ResolvePush { samples, count, average_window }).to_vec()
         });

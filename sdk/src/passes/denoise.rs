@@ -390,7 +390,7 @@ impl DenoisePass {
                         (src, dst): (usize, usize),
                         push: [u32; 4],
                         groups: (u32, u32)| {
-            r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
+            r.hazards.read_write(r.cmd, sync::shader_read(stage), sync::shader_write(stage));
             let span = r.begin_pass(name);
             let slots = [
                 Slot::Sampled(&c.depth.image),
@@ -422,14 +422,11 @@ impl DenoisePass {
                 Slot::Storage(&motion_tiles),
             ];
             let bind = vk::PipelineBindPoint::COMPUTE;
-            let dev = &r.device.raw;
-            // SAFETY: slots match the set layout; inputs were validated when scheduled.
-            unsafe { dev.cmd_bind_pipeline(r.cmd, bind, pipeline) };
-            descriptors::push(r.device, r.cmd, bind, self.layout, &slots);
-            unsafe {
-                dev.cmd_push_constants(r.cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&push));
-                dev.cmd_dispatch(r.cmd, groups.0, groups.1, 1);
-            }
+            // The slots match the set layout; inputs were validated when scheduled.
+            r.cmd.bind_pipeline(bind, pipeline);
+            descriptors::push(r.cmd, bind, self.layout, &slots);
+            r.cmd.push_constants(self.layout, vk::ShaderStageFlags::COMPUTE, bytemuck::bytes_of(&push));
+            r.cmd.dispatch(groups.0, groups.1, 1);
             r.end_pass(span);
         };
 
@@ -513,19 +510,18 @@ fn initialize_images(r: &mut Recording<'_>, state: &DenoiserState, guide: &mut G
                 .subresource_range(COLOR_RANGE)
         })
         .collect();
-    // SAFETY: the command buffer is recording; the images are the SDK's and alive.
-    unsafe { r.device.raw.cmd_pipeline_barrier2(r.cmd, &vk::DependencyInfo::default().image_memory_barriers(&barriers)) };
+    r.cmd.image_barriers(barriers);
     guide.initialized = true;
     // AO's moving-object stamps: a stamp left in reused memory must not match a frame. (The
     // transitions above wait for nothing; the clear waits for them.)
     if let (false, Some(tiles)) = (state.initialized, &state.motion_tiles) {
         let clear = sync::Use { stages: vk::PipelineStageFlags2::CLEAR, access: vk::AccessFlags2::TRANSFER_WRITE };
         let transitions = sync::Use { stages: vk::PipelineStageFlags2::COMPUTE_SHADER, access: vk::AccessFlags2::NONE };
-        sync::barrier(&r.device.raw, r.cmd, transitions, clear);
-        r.hazards.write(&r.device.raw, r.cmd, clear);
+        r.cmd.barrier(transitions, clear);
+        r.hazards.write(r.cmd, clear);
         let zero = vk::ClearColorValue { uint32: [0; 4] };
-        // SAFETY: the image is in GENERAL (the barrier above) and has TRANSFER_DST usage.
-        unsafe { r.device.raw.cmd_clear_color_image(r.cmd, tiles.raw, vk::ImageLayout::GENERAL, &zero, &[COLOR_RANGE]) };
+        // The image is in GENERAL (the barrier above) and has TRANSFER_DST usage.
+        r.cmd.clear_color_image(tiles.raw, vk::ImageLayout::GENERAL, zero, COLOR_RANGE);
     }
 }
 
@@ -595,10 +591,11 @@ impl PassTask for DenoiseJob {
     /// At build: the context still exists, denoises this task's signal and is large enough,
     /// and a view's tasks in the container denoise one camera's G-buffer.
     fn check(&self, world: &World<'_>) -> Result<()> {
-        let state = world.denoisers.get(self.context)?;
+        let field = crate::context::validate::denoise_context_field(self.signal);
+        let state = world.denoisers.get(self.context).map_err(|e| e.for_field(field))?;
         if state.input.signal != self.signal {
             return Err(Error::invalid(
-                "denoise task context",
+                field,
                 format!("the context denoises {:?}, the task is {:?}", state.input.signal, self.signal),
             ));
         }
@@ -607,7 +604,7 @@ impl PassTask for DenoiseJob {
         let (right, bottom) = (vp.x as u64 + vp.width as u64, vp.y as u64 + vp.height as u64);
         if right > state.input.max_width as u64 || bottom > state.input.max_height as u64 {
             return Err(Error::invalid(
-                "denoise task viewport",
+                "DenoisingCommon.viewport",
                 format!("reaches ({right}, {bottom}), beyond the context's {}x{}", state.input.max_width, state.input.max_height),
             ));
         }

@@ -1,4 +1,5 @@
 //! Push-descriptor writes shared by the passes: what each binding of a set holds.
+use crate::gpu::commands::{Commands, Descriptor};
 use crate::gpu::upload::Upload;
 use crate::types::ImageInput;
 use ash::vk;
@@ -12,61 +13,17 @@ pub(crate) enum Slot<'a> {
 }
 
 /// Pushes `slots` as set 0 of `layout` at `bind_point`.
-pub(crate) fn push(
-    device: &crate::gpu::device::Device,
-    cmd: vk::CommandBuffer,
-    bind_point: vk::PipelineBindPoint,
-    layout: vk::PipelineLayout,
-    slots: &[Slot<'_>],
-) {
-    let mut tlas = Vec::new();
-    let mut images = Vec::new();
-    let mut buffers = Vec::new();
-    for s in slots {
-        match s {
-            Slot::Tlas(a) => tlas.push([*a]),
-            Slot::Sampled(i) | Slot::Storage(i) => images.push([vk::DescriptorImageInfo {
-                sampler: vk::Sampler::null(),
-                image_view: i.view,
-                image_layout: i.layout,
-            }]),
-            Slot::Uniform(u) => buffers.push([vk::DescriptorBufferInfo { buffer: u.buffer, offset: u.offset, range: u.size }]),
-        }
-    }
-    let mut as_writes: Vec<_> =
-        tlas.iter().map(|t| vk::WriteDescriptorSetAccelerationStructureKHR::default().acceleration_structures(t)).collect();
-    let (mut ii, mut bi) = (0, 0);
-    let mut as_iter = as_writes.iter_mut();
-    let writes: Vec<vk::WriteDescriptorSet> = slots
+pub(crate) fn push(cmd: &Commands, bind_point: vk::PipelineBindPoint, layout: vk::PipelineLayout, slots: &[Slot<'_>]) {
+    let set = slots
         .iter()
-        .enumerate()
-        .map(|(binding, s)| {
-            let w = vk::WriteDescriptorSet::default().dst_binding(binding as u32);
-            match s {
-                Slot::Tlas(_) => {
-                    let mut w = w
-                        .descriptor_type(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)
-                        .push_next(as_iter.next().expect("one per TLAS slot"));
-                    w.descriptor_count = 1;
-                    w
-                }
-                Slot::Sampled(_) => {
-                    ii += 1;
-                    w.descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER).image_info(&images[ii - 1])
-                }
-                Slot::Storage(_) => {
-                    ii += 1;
-                    w.descriptor_type(vk::DescriptorType::STORAGE_IMAGE).image_info(&images[ii - 1])
-                }
-                Slot::Uniform(_) => {
-                    bi += 1;
-                    w.descriptor_type(vk::DescriptorType::UNIFORM_BUFFER).buffer_info(&buffers[bi - 1])
-                }
-            }
+        .map(|s| match s {
+            Slot::Tlas(a) => Descriptor::Tlas(*a),
+            Slot::Sampled(i) => Descriptor::Sampled(i.view, i.layout),
+            Slot::Storage(i) => Descriptor::Storage(i.view, i.layout),
+            Slot::Uniform(u) => Descriptor::Uniform(*u),
         })
         .collect();
-    // SAFETY: every referenced array outlives this call; the layout has these bindings.
-    unsafe { device.push.cmd_push_descriptor_set(cmd, bind_point, layout, 0, &writes) };
+    cmd.push_descriptors(bind_point, layout, set);
 }
 
 /// An optional input image, or a stand-in when it is absent: a push-descriptor binding must

@@ -80,16 +80,13 @@ fn record_texture_copies<'j, P: Pod>(
         return;
     }
     let stage = vk::PipelineStageFlags2::COMPUTE_SHADER;
-    r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
-    let d = &r.device.raw;
+    r.hazards.read_write(r.cmd, sync::shader_read(stage), sync::shader_write(stage));
     let bind = vk::PipelineBindPoint::COMPUTE;
-    unsafe { d.cmd_bind_pipeline(r.cmd, bind, pipeline) };
+    r.cmd.bind_pipeline(bind, pipeline);
     for (texture, push, [x, y]) in copies {
-        descriptors::push(r.device, r.cmd, bind, layout, &[Slot::Sampled(texture)]);
-        unsafe {
-            d.cmd_push_constants(r.cmd, layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&push));
-            d.cmd_dispatch(r.cmd, x, y, 1);
-        }
+        descriptors::push(r.cmd, bind, layout, &[Slot::Sampled(texture)]);
+        r.cmd.push_constants(layout, vk::ShaderStageFlags::COMPUTE, bytemuck::bytes_of(&push));
+        r.cmd.dispatch(x, y, 1);
     }
 }
 
@@ -201,10 +198,9 @@ impl GeometryPack {
             return;
         }
         let stage = vk::PipelineStageFlags2::COMPUTE_SHADER;
-        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), sync::shader_atomic(stage));
-        let d = &r.device.raw;
+        r.hazards.read_write(r.cmd, sync::shader_read(stage), sync::shader_atomic(stage));
         let max_groups = r.device.limits.max_dispatch_groups[0].max(1);
-        unsafe { d.cmd_bind_pipeline(r.cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline) };
+        r.cmd.bind_pipeline(vk::PipelineBindPoint::COMPUTE, self.pipeline);
         for j in jobs {
             // One invocation per vertex and per triangle; split so no dispatch exceeds the
             // group-count limit.
@@ -238,10 +234,8 @@ impl GeometryPack {
                         PackMode::Colors(_) => 7,
                     },
                 };
-                unsafe {
-                    d.cmd_push_constants(r.cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, bytemuck::bytes_of(&push));
-                    d.cmd_dispatch(r.cmd, n.div_ceil(GROUP), 1, 1);
-                }
+                r.cmd.push_constants(self.layout, vk::ShaderStageFlags::COMPUTE, bytemuck::bytes_of(&push));
+                r.cmd.dispatch(n.div_ceil(GROUP), 1, 1);
                 first += n as u64;
             }
         }

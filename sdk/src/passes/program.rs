@@ -159,24 +159,21 @@ impl RtProgram {
             Writes::Storage => sync::shader_write(stage),
             Writes::Atomics => sync::shader_atomic(stage),
         };
-        r.hazards.read_write(&r.device.raw, r.cmd, sync::shader_read(stage), write);
-        let d = &r.device.raw;
+        r.hazards.read_write(r.cmd, sync::shader_read(stage), write);
         let push = TracePush { instance_table: r.instance_table, usage: r.usage };
-        // SAFETY: the layout has this push-constant range for these stages.
-        unsafe { d.cmd_push_constants(r.cmd, self.layout, self.push_stages, 0, bytemuck::bytes_of(&push)) };
+        r.cmd.push_constants(self.layout, self.push_stages, bytemuck::bytes_of(&push));
         match variant {
             Variant::Inline(p) => {
                 let bind = vk::PipelineBindPoint::COMPUTE;
-                // SAFETY: the slots match the set layout; the command buffer is recording.
-                unsafe { d.cmd_bind_pipeline(r.cmd, bind, p) };
-                descriptors::push(r.device, r.cmd, bind, self.layout, slots);
-                unsafe { d.cmd_dispatch(r.cmd, width.div_ceil(8), height.div_ceil(8), 1) };
+                r.cmd.bind_pipeline(bind, p);
+                descriptors::push(r.cmd, bind, self.layout, slots);
+                r.cmd.dispatch(width.div_ceil(8), height.div_ceil(8), 1);
             }
             Variant::RayTracing(p) => {
                 let bind = vk::PipelineBindPoint::RAY_TRACING_KHR;
-                unsafe { d.cmd_bind_pipeline(r.cmd, bind, p.pipeline) };
-                descriptors::push(r.device, r.cmd, bind, self.layout, slots);
-                unsafe { r.device.rt.cmd_trace_rays(r.cmd, &p.raygen, &p.miss, &p.hit, &p.callable, width, height, 1) };
+                r.cmd.bind_pipeline(bind, p.pipeline);
+                descriptors::push(r.cmd, bind, self.layout, slots);
+                r.cmd.trace_rays([p.raygen, p.miss, p.hit, p.callable], width, height);
             }
         }
     }

@@ -277,23 +277,19 @@ impl SurfelLayoutPass {
     /// side by side behind one barrier for each k (a barrier per dispatch per layout made a
     /// frame registering 1,024 meshes spend ~50 ms of the H200's time in bubbles).
     pub fn record(&self, r: &mut Recording<'_>, plans: &[Plan]) {
-        let d = &r.device.raw;
-        r.hazards.write(d, r.cmd, sync::TRANSFER_WRITE);
+        r.hazards.write(r.cmd, sync::TRANSFER_WRITE);
         for &(buffer, offset, size) in plans.iter().flat_map(|p| &p.fills) {
-            // SAFETY: each range lies inside its buffer (sizes from the same counts).
-            unsafe { d.cmd_fill_buffer(r.cmd, buffer, offset, size, 0) };
+            // Each range lies inside its buffer (sizes from the same counts).
+            r.cmd.fill_buffer(buffer, offset, size, 0);
         }
         let stage = vk::PipelineStageFlags2::COMPUTE_SHADER;
         let depth = plans.iter().map(|p| p.dispatches.len()).max().unwrap_or(0);
         for k in 0..depth {
-            r.hazards.read_write(d, r.cmd, sync::shader_read(stage), sync::shader_write(stage));
+            r.hazards.read_write(r.cmd, sync::shader_read(stage), sync::shader_write(stage));
             for (pipeline, push, groups) in plans.iter().filter_map(|p| p.dispatches.get(k)) {
-                // SAFETY: the layout has a push range of this size; the command buffer is recording.
-                unsafe {
-                    d.cmd_bind_pipeline(r.cmd, vk::PipelineBindPoint::COMPUTE, *pipeline);
-                    d.cmd_push_constants(r.cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
-                    d.cmd_dispatch(r.cmd, *groups, 1, 1);
-                }
+                r.cmd.bind_pipeline(vk::PipelineBindPoint::COMPUTE, *pipeline);
+                r.cmd.push_constants(self.layout, vk::ShaderStageFlags::COMPUTE, push);
+                r.cmd.dispatch(*groups, 1, 1);
             }
         }
     }

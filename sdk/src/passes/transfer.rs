@@ -105,8 +105,8 @@ impl PassTask for DirectLightTransferTask {
         std::mem::size_of::<TransferConstantsGpu>() as u64
     }
     fn check(&self, world: &World<'_>) -> Result<()> {
-        world.scene.instances.get(self.source)?;
-        world.scene.instances.get(self.target)?;
+        world.scene.instances.get(self.source).map_err(|e| e.for_field("DirectLightTransferTask.source"))?;
+        world.scene.instances.get(self.target).map_err(|e| e.for_field("DirectLightTransferTask.target"))?;
         // One ray per target sample: the launch must fit the device.
         if let Some(job) = TransferJob::new(world.scene, self) {
             let rays = job.target_triangles as u64 * job.samples_per_triangle as u64;

@@ -5,6 +5,7 @@
 //! preference).
 use super::geometry::{Blas, GeometryLayout, VERTEX_STRIDE};
 use crate::error::{Error, Result};
+use crate::gpu::commands::{AsBuild, Commands};
 use crate::gpu::device::Device;
 use crate::gpu::memory::{Memory, MemoryKind};
 use ash::vk;
@@ -130,14 +131,11 @@ pub(crate) struct BuildJob {
 
 /// Records every job of the batch in one vkCmdBuildAccelerationStructuresKHR, so the driver can
 /// overlap them. Each job has its own scratch region at `scratch` + its offset.
-pub(crate) fn record_batch(device: &Device, cmd: vk::CommandBuffer, scratch: vk::DeviceAddress, jobs: &[BuildJob]) {
-    if jobs.is_empty() {
-        return;
-    }
-    let infos: Vec<_> = jobs
+pub(crate) fn record_batch(cmd: &Commands, scratch: vk::DeviceAddress, jobs: &[BuildJob]) {
+    let builds = jobs
         .iter()
-        .map(|j| {
-            vk::AccelerationStructureBuildGeometryInfoKHR::default()
+        .map(|j| AsBuild {
+            info: vk::AccelerationStructureBuildGeometryInfoKHR::default()
                 .ty(vk::AccelerationStructureTypeKHR::BOTTOM_LEVEL)
                 .flags(j.flags)
                 .mode(if j.refit {
@@ -147,13 +145,10 @@ pub(crate) fn record_batch(device: &Device, cmd: vk::CommandBuffer, scratch: vk:
                 })
                 .src_acceleration_structure(if j.refit { j.dst } else { vk::AccelerationStructureKHR::null() })
                 .dst_acceleration_structure(j.dst)
-                .geometries(std::slice::from_ref(&j.geometry))
-                .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch + j.scratch_offset })
+                .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch + j.scratch_offset }),
+            geometry: j.geometry,
+            range: vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(j.primitive_count),
         })
         .collect();
-    let ranges: Vec<[vk::AccelerationStructureBuildRangeInfoKHR; 1]> =
-        jobs.iter().map(|j| [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(j.primitive_count)]).collect();
-    let range_refs: Vec<&[vk::AccelerationStructureBuildRangeInfoKHR]> = ranges.iter().map(|r| &r[..]).collect();
-    // SAFETY: all addresses point into live buffers sized from build-size queries.
-    unsafe { device.accel.cmd_build_acceleration_structures(cmd, &infos, &range_refs) };
+    cmd.build_acceleration_structures(builds);
 }

@@ -9,6 +9,7 @@
 //! per vertex, in geometry space, and 32-bit indices into the geometry's vertices.
 use crate::cache::layout::SurfelLayout;
 use crate::error::{Error, Result};
+use crate::gpu::commands::Commands;
 use crate::gpu::memory::{Buffer, Memory, MemoryKind};
 use crate::types::{BuildHint, GeometryInput, SurfelType, VertexBufferInput, MAX_ALBEDO_TEXTURE_SIZE};
 use ash::vk;
@@ -297,28 +298,28 @@ impl CopyPlan {
     }
 
     /// Records the copies of the engine's regions into `staging` at `base` (the geometry's span).
-    pub fn record_staging(&self, device: &ash::Device, cmd: vk::CommandBuffer, staging: vk::Buffer, base: u64) {
+    pub fn record_staging(&self, cmd: &Commands, staging: vk::Buffer, base: u64) {
         for p in &self.parts {
             let v =
                 [vk::BufferCopy { src_offset: p.vertex_src_offset, dst_offset: base + p.staging_vertices, size: p.vertex_bytes }];
-            // SAFETY: regions validated against the buffers' sizes at scheduling.
-            unsafe { device.cmd_copy_buffer(cmd, p.vertex_buffer, staging, &v) };
+            // Regions validated against the buffers' sizes at scheduling.
+            cmd.copy_buffer(p.vertex_buffer, staging, &v);
             if p.index_size > 0 {
                 let i = [vk::BufferCopy {
                     src_offset: p.index_src_offset,
                     dst_offset: base + p.staging_indices,
                     size: p.index_bytes,
                 }];
-                unsafe { device.cmd_copy_buffer(cmd, p.index_buffer, staging, &i) };
+                cmd.copy_buffer(p.index_buffer, staging, &i);
             }
             if p.uv_buffer != vk::Buffer::null() {
                 let u = [vk::BufferCopy { src_offset: p.uv_src_offset, dst_offset: base + p.staging_uvs, size: p.uv_bytes }];
-                unsafe { device.cmd_copy_buffer(cmd, p.uv_buffer, staging, &u) };
+                cmd.copy_buffer(p.uv_buffer, staging, &u);
             }
             if p.color_buffer != vk::Buffer::null() {
                 let c =
                     [vk::BufferCopy { src_offset: p.color_src_offset, dst_offset: base + p.staging_colors, size: p.color_bytes }];
-                unsafe { device.cmd_copy_buffer(cmd, p.color_buffer, staging, &c) };
+                cmd.copy_buffer(p.color_buffer, staging, &c);
             }
         }
     }

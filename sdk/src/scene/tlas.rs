@@ -4,6 +4,7 @@
 use super::blas;
 use super::geometry::Blas;
 use crate::error::Result;
+use crate::gpu::commands::{AsBuild, Commands};
 use crate::gpu::device::Device;
 use crate::gpu::memory::{Memory, MemoryKind};
 use crate::gpu::upload::Upload;
@@ -91,15 +92,7 @@ impl Tlas {
     /// Records the build into storage made by `ensure_storage` (nothing without it): a full
     /// build, or an in-place refit of a TLAS built refittable from as many instances of the
     /// same topology.
-    pub fn record_build(
-        &self,
-        device: &Device,
-        cmd: vk::CommandBuffer,
-        instances: Upload,
-        count: u32,
-        scratch: vk::DeviceAddress,
-        how: Build,
-    ) {
+    pub fn record_build(&self, cmd: &Commands, instances: Upload, count: u32, scratch: vk::DeviceAddress, how: Build) {
         let Some(accel) = self.accel.as_ref() else { return };
         let geometry = instances_geometry(Some(instances));
         let (mode, refittable, src) = match how {
@@ -114,10 +107,9 @@ impl Tlas {
             .mode(mode)
             .src_acceleration_structure(src)
             .dst_acceleration_structure(accel.accel)
-            .geometries(std::slice::from_ref(&geometry))
             .scratch_data(vk::DeviceOrHostAddressKHR { device_address: scratch });
-        let range = [vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(count)];
-        unsafe { device.accel.cmd_build_acceleration_structures(cmd, &[info], &[&range[..]]) };
+        let range = vk::AccelerationStructureBuildRangeInfoKHR::default().primitive_count(count);
+        cmd.build_acceleration_structures(vec![AsBuild { info, geometry, range }]);
     }
 
     pub fn destroy(&mut self, device: &Device, memory: &Memory) {

@@ -35,7 +35,7 @@
 //! `DenoisingMethod::SpatialOnly` filters each frame alone (no history), to tell a temporal
 //! problem from a spatial one.
 use super::handles::DenoisingContextHandle;
-use super::inputs::{Camera, DepthInput, ImageInput, NormalInput, RoughnessInput, TraceCommon, Viewport};
+use super::inputs::{Camera, DepthInput, HalfResolutionMode, ImageInput, NormalInput, RoughnessInput, TraceCommon, Viewport};
 use super::trace::LightInfo;
 use ash::vk;
 
@@ -261,10 +261,10 @@ pub struct DenoisingCommon {
     /// the context remembers the previous one. Only motion vectors need it (engines write
     /// them without jitter). Default [0, 0].
     pub camera_jitter: [f32; 2],
-    /// The noisy input was traced in checkerboard mode in *this* container (the pattern
-    /// follows the ticket): the other half of the pixels is reconstructed, giving a full
-    /// image. Default false.
-    pub half_resolution_mode: bool,
+    /// The checkerboard mode the noisy input was traced with in *this* container (the
+    /// pattern follows the frame): the other half of the pixels is reconstructed, giving a
+    /// full image. Default `Off`.
+    pub half_resolution_mode: HalfResolutionMode,
     /// Drop the history (a camera cut, a teleport, a new level). Default false.
     pub reset_history: bool,
     /// Filter settings (documented defaults).
@@ -301,7 +301,7 @@ impl Default for DenoisingCommon {
             camera: Camera::default(),
             previous_camera: None,
             camera_jitter: [0.0; 2],
-            half_resolution_mode: false,
+            half_resolution_mode: HalfResolutionMode::Off,
             reset_history: false,
             settings: DenoiserSettings::default(),
         }

@@ -92,7 +92,7 @@ impl<H: RawHandle, T> Registry<H, T> {
     /// Classifies a handle without touching it.
     pub fn check(&self, h: H) -> Result<u32> {
         let raw = h.raw();
-        let problem = |problem| Error::InvalidHandle { kind: H::KIND, raw, problem, name: None };
+        let problem = |problem| Error::InvalidHandle { field: "", kind: H::KIND, raw, problem, name: None };
         if raw == 0 {
             return Err(problem(HandleProblem::Null));
         }
@@ -108,7 +108,7 @@ impl<H: RawHandle, T> Registry<H, T> {
     }
 
     fn stale(h: H) -> Error {
-        Error::InvalidHandle { kind: H::KIND, raw: h.raw(), problem: HandleProblem::Destroyed, name: None }
+        Error::InvalidHandle { field: "", kind: H::KIND, raw: h.raw(), problem: HandleProblem::Destroyed, name: None }
     }
 
     pub fn get(&self, h: H) -> Result<&T> {

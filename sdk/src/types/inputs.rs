@@ -314,6 +314,29 @@ pub enum DebugOutput {
     Barycentrics = 5,
 }
 
+/// Checkerboard tracing: half the pixels per ticket, the other half reconstructed by the
+/// denoiser. The half alternates with the frame (the container's frame index, else the ticket
+/// serial), so two successive tickets cover every pixel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[repr(u32)]
+pub enum HalfResolutionMode {
+    /// Every pixel. Default.
+    #[default]
+    Off = 0,
+    /// The pixels where x + y + frame is even.
+    Checkerboard = 1,
+    /// The other half: where x + y + frame is odd. (Two tasks of one frame, one in each
+    /// mode, cover every pixel between them.)
+    CheckerboardInverted = 2,
+}
+
+impl HalfResolutionMode {
+    /// Whether only half the pixels are traced.
+    pub fn is_on(self) -> bool {
+        self != HalfResolutionMode::Off
+    }
+}
+
 /// Inputs every trace task shares.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TraceCommon {
@@ -355,10 +378,10 @@ pub struct TraceCommon {
     pub enable_bilinear_sampling: bool,
     /// Default `DebugOutput::Default`.
     pub debug_output: DebugOutput,
-    /// Checkerboard: trace only the pixels where x + y + ticket serial is even (half the
-    /// rays); the others keep their previous contents, for the denoiser to fill. Successive
-    /// tickets alternate the pattern. Default false.
-    pub half_resolution_mode: bool,
+    /// Checkerboard: trace only half the pixels (half the rays); the others keep their
+    /// previous contents, for the denoiser to fill. Successive tickets alternate the halves.
+    /// Default `Off`.
+    pub half_resolution_mode: HalfResolutionMode,
 }
 
 impl Default for TraceCommon {
@@ -376,7 +399,7 @@ impl Default for TraceCommon {
             use_inline_rt: false,
             enable_bilinear_sampling: true,
             debug_output: DebugOutput::Default,
-            half_resolution_mode: false,
+            half_resolution_mode: HalfResolutionMode::Off,
         }
     }
 }

@@ -42,10 +42,10 @@ where
 
 impl Check for DirectLightTransferTask {
     fn check(&self, shared: &Shared) -> Result<()> {
-        shared.check_instance_alive(self.source)?;
-        shared.check_instance_alive(self.target)?;
+        shared.check_instance_alive(self.source, "DirectLightTransferTask.source")?;
+        shared.check_instance_alive(self.target, "DirectLightTransferTask.target")?;
         if self.source == self.target {
-            return Err(Error::invalid("DirectLightTransferTask", "source and target are the same instance"));
+            return Err(Error::invalid("DirectLightTransferTask.target", "is the source instance"));
         }
         if !(self.max_distance.is_finite() && self.max_distance > 0.0) {
             return Err(Error::invalid("DirectLightTransferTask.max_distance", "must be finite and > 0"));
@@ -490,9 +490,11 @@ impl Check for TraceSpecularTask {
         if !(t.ray_length.is_finite() && t.ray_length > 0.0) {
             return Err(Error::invalid("TraceSpecularTask.ray_length", "must be finite and > 0"));
         }
-        if t.miss_radiance.iter().any(|c| !c.is_finite() || *c < 0.0) || !(t.firefly_clamp.is_finite() && t.firefly_clamp >= 0.0)
-        {
-            return Err(Error::invalid("TraceSpecularTask", "miss_radiance and firefly_clamp must be finite and >= 0"));
+        if t.miss_radiance.iter().any(|c| !c.is_finite() || *c < 0.0) {
+            return Err(Error::invalid("TraceSpecularTask.miss_radiance", "must be finite and >= 0"));
+        }
+        if !(t.firefly_clamp.is_finite() && t.firefly_clamp >= 0.0) {
+            return Err(Error::invalid("TraceSpecularTask.firefly_clamp", "must be finite and >= 0"));
         }
         lights::hit_lighting(&t.hit_lighting)
     }
@@ -501,6 +503,18 @@ impl Check for TraceSpecularTask {
 const RADIANCE_FORMATS: &[vk::Format] = &[vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT];
 const MOTION_FORMATS_2: &[vk::Format] =
     &[vk::Format::R16G16_SFLOAT, vk::Format::R32G32_SFLOAT, vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT];
+
+/// The field of the task the engine filled that holds a denoise job's context.
+pub(crate) fn denoise_context_field(signal: SignalType) -> &'static str {
+    match signal {
+        SignalType::Specular => "DenoiseSpecularTask.context",
+        SignalType::Diffuse => "DenoiseDiffuseTask.context",
+        SignalType::SpecularAndDiffuse => "DenoiseSpecularAndDiffuseTask.context",
+        SignalType::DiffuseOcclusion => "DenoiseDiffuseOcclusionTask.context",
+        SignalType::Shadow => "DenoiseShadowTask.context",
+        SignalType::MultiShadow => "DenoiseMultiShadowTask.context",
+    }
+}
 
 /// The fields of the task the engine filled that hold a denoise job's input and output `k`.
 fn denoise_image_fields(signal: SignalType, k: usize) -> (&'static str, &'static str) {
@@ -523,7 +537,7 @@ fn denoise_image_fields(signal: SignalType, k: usize) -> (&'static str, &'static
 /// formats its signal reads and writes.
 impl Check for Box<DenoiseJob> {
     fn check(&self, shared: &Shared) -> Result<()> {
-        shared.check_denoising_context_alive(self.context)?;
+        shared.check_denoising_context_alive(self.context, denoise_context_field(self.signal))?;
         let (j, limits) = (&**self, &shared.device.limits);
         let c = &j.common;
         trace_common(&c.as_trace_common(), limits, Common::Denoising)?;
