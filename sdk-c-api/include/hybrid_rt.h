@@ -1524,6 +1524,22 @@ enum HrtStatus hrt_resource_allocations(const struct HrtContext *ctx,
                                         struct HrtResourceAllocations *out);
 
 /**
+ * Starts a CSV log of every device-memory allocation and free the SDK makes, written to the
+ * file at `path` (NUL-terminated UTF-8; created or truncated): one line per event,
+ * `time_ms,event,kind,name,bytes,kind_live_bytes` after a header line (see the Rust docs of
+ * `ExecuteContext::begin_logging_resource_allocations`). A file that cannot be created, or a
+ * log already open, is HRT_ERROR_INVALID_INPUT.
+ */
+enum HrtStatus hrt_begin_logging_resource_allocations(const struct HrtContext *ctx,
+                                                      const char *path);
+
+/**
+ * Ends the allocation log: flushes and closes its file. With no log open, or when writing
+ * it failed (the message says how), HRT_ERROR_INVALID_INPUT.
+ */
+enum HrtStatus hrt_end_logging_resource_allocations(const struct HrtContext *ctx);
+
+/**
  * The SDK's device features (rayQuery too when `ray_query`), to enable with
  * hrt_device_features_merge (into your own chain) or hrt_device_features_chain (as the
  * whole chain). Keep it alive until hrt_context_create has returned, then destroy it.

@@ -298,6 +298,14 @@ fn every_c_schedule_entry_point_refuses_raw_bytes_by_name() {
     denoise.viewport = viewport;
     denoise.camera = camera();
 
+    // The allocation log (C: a file) records the denoisers' images made below.
+    let log_path = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("fuzz_allocations.csv");
+    let c_path = std::ffi::CString::new(log_path.to_str().unwrap()).unwrap();
+    assert_eq!(unsafe { hrt_begin_logging_resource_allocations(ctx, c_path.as_ptr()) }, HrtStatus::HRT_OK, "{}", last_error());
+    let nowhere = c"/nonexistent-dir/allocations.csv";
+    assert_eq!(unsafe { hrt_begin_logging_resource_allocations(ctx, nowhere.as_ptr()) }, HrtStatus::HRT_ERROR_INVALID_INPUT);
+    assert!(last_error().contains("path"), "{}", last_error());
+
     // Handles to name: a geometry, two instances, a denoising context per signal.
     let mut geometry = 0;
     assert_eq!(unsafe { hrt_create_geometry_handles(ctx, 1, &mut geometry) }, HrtStatus::HRT_OK);
@@ -399,6 +407,12 @@ fn every_c_schedule_entry_point_refuses_raw_bytes_by_name() {
     entry!("HrtDenoiseSpecularAndDiffuseTask", both, hrt_schedule_denoise_specular_and_diffuse);
 
     eprintln!("refused of 3000 cases: {refused:?}");
+    assert_eq!(unsafe { hrt_end_logging_resource_allocations(ctx) }, HrtStatus::HRT_OK, "{}", last_error());
+    assert_eq!(unsafe { hrt_end_logging_resource_allocations(ctx) }, HrtStatus::HRT_ERROR_INVALID_INPUT);
+    let log = std::fs::read_to_string(&log_path).unwrap();
+    assert!(log.starts_with("time_ms,event,kind,name,bytes,kind_live_bytes\n"), "{log}");
+    let denoiser_images = log.lines().filter(|l| l.split(',').nth(1) == Some("alloc") && l.contains(",Denoiser,")).count();
+    assert!(denoiser_images >= 6, "six denoising contexts' images logged: {log}");
     // Random bytes are refused far more often than not; a struct whose refusals are rare has
     // checks missing (the BVH build task has two counts, any value of which is valid).
     for (name, n) in &refused {

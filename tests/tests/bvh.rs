@@ -422,3 +422,89 @@ fn destroy_all_geometries_and_denoising_contexts() {
     assert_eq!((left.blas.count, left.denoiser.count), (0, 0), "{left:?}");
     f.finish();
 }
+
+/// A `Write` into a buffer the test keeps.
+#[derive(Clone, Default)]
+struct SharedLog(std::sync::Arc<std::sync::Mutex<Vec<u8>>>);
+
+impl std::io::Write for SharedLog {
+    fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+        self.0.lock().unwrap().extend_from_slice(b);
+        Ok(b.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// The rows of `ResourceAllocations`, by the kind names the allocation log writes.
+fn bytes_by_kind(a: &hybrid_rt::ResourceAllocations) -> Vec<(&'static str, u64)> {
+    vec![
+        ("GeometryCopy", a.geometry_copies.bytes),
+        ("Blas", a.blas.bytes),
+        ("BuildScratch", a.build_scratch.bytes),
+        ("Tlas", a.tlas.bytes),
+        ("UploadRing", a.upload_rings.bytes),
+        ("Pipeline", a.pipelines.bytes),
+        ("Cache", a.cache.bytes),
+        ("Readback", a.readback.bytes),
+        ("Denoiser", a.denoiser.bytes),
+    ]
+}
+
+/// The allocation log accounts for every byte: over a frame with a new denoiser, then a level
+/// unload, each kind's logged allocations minus frees equal the change in
+/// `resource_allocations`, and each kind's last `kind_live_bytes` is its final count.
+#[test]
+fn the_allocation_log_accounts_for_every_byte() {
+    let mut f = fixture(2, true);
+    let log = SharedLog::default();
+    f.ctx.begin_logging_resource_allocations(log.clone()).unwrap();
+    assert!(matches!(f.ctx.begin_logging_resource_allocations(SharedLog::default()), Err(Error::InvalidInput { .. })));
+    let before = f.ctx.resource_allocations();
+    let input = hybrid_rt::DenoisingContextInput {
+        max_width: W,
+        max_height: H,
+        signal: hybrid_rt::SignalType::DiffuseOcclusion,
+        ..Default::default()
+    };
+    let denoiser = f.ctx.create_denoising_context(&input).unwrap();
+    f.frame.schedule_ambient_occlusion(&f.images.ao_task(&f.b.camera, 1.0, RAYS)).unwrap();
+    run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
+    f.ctx.destroy_denoising_context(denoiser).unwrap();
+    f.ctx.destroy_all_instance_handles();
+    f.ctx.destroy_all_geometry_handles().unwrap();
+    run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
+    f.ctx.release_device_resources_immediately().unwrap();
+    let after = f.ctx.resource_allocations();
+    f.ctx.end_logging_resource_allocations().unwrap();
+    assert!(matches!(f.ctx.end_logging_resource_allocations(), Err(Error::InvalidInput { .. })));
+
+    let text = String::from_utf8(log.0.lock().unwrap().clone()).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("time_ms,event,kind,name,bytes,kind_live_bytes"));
+    let mut net: std::collections::HashMap<String, i128> = Default::default();
+    let mut last_live: std::collections::HashMap<String, u64> = Default::default();
+    let (mut allocs, mut frees) = (0, 0);
+    for line in lines {
+        let fields: Vec<&str> = line.split(',').collect();
+        assert_eq!(fields.len(), 6, "{line}");
+        let bytes: i128 = fields[4].parse().unwrap();
+        match fields[1] {
+            "alloc" => (*net.entry(fields[2].into()).or_default() += bytes, allocs += 1).1,
+            "free" => (*net.entry(fields[2].into()).or_default() -= bytes, frees += 1).1,
+            other => panic!("event {other}"),
+        };
+        last_live.insert(fields[2].into(), fields[5].parse().unwrap());
+    }
+    eprintln!("{allocs} allocations, {frees} frees logged");
+    assert!(net.contains_key("Denoiser") && net.contains_key("Blas"), "{net:?}");
+    for ((kind, b), (_, a)) in bytes_by_kind(&before).into_iter().zip(bytes_by_kind(&after)) {
+        let logged = net.get(kind).copied().unwrap_or(0);
+        assert_eq!(logged, a as i128 - b as i128, "{kind}: logged net bytes against the report");
+        if let Some(live) = last_live.get(kind) {
+            assert_eq!(*live, a, "{kind}: the last live count");
+        }
+    }
+    f.finish();
+}

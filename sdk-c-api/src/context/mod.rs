@@ -428,3 +428,35 @@ pub unsafe extern "C" fn hrt_resource_allocations(ctx: *const HrtContext, out: *
         Ok(())
     })
 }
+
+/// Starts a CSV log of every device-memory allocation and free the SDK makes, written to the
+/// file at `path` (NUL-terminated UTF-8; created or truncated): one line per event,
+/// `time_ms,event,kind,name,bytes,kind_live_bytes` after a header line (see the Rust docs of
+/// `ExecuteContext::begin_logging_resource_allocations`). A file that cannot be created, or a
+/// log already open, is HRT_ERROR_INVALID_INPUT.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_begin_logging_resource_allocations(ctx: *const HrtContext, path: *const c_char) -> HrtStatus {
+    guard(|| {
+        let c = context(ctx)?;
+        let path = unsafe { string_arg(path, "path")? };
+        let file = std::fs::File::create(&path).map_err(|e| {
+            Failure(
+                HrtStatus::HRT_ERROR_INVALID_INPUT,
+                format!("hrt_begin_logging_resource_allocations path: cannot create {path:?}: {e}"),
+            )
+        })?;
+        Ok(c.ctx.begin_logging_resource_allocations(file)?)
+    })
+}
+
+/// Ends the allocation log: flushes and closes its file. With no log open, or when writing
+/// it failed (the message says how), HRT_ERROR_INVALID_INPUT.
+#[no_mangle]
+pub unsafe extern "C" fn hrt_end_logging_resource_allocations(ctx: *const HrtContext) -> HrtStatus {
+    guard(|| {
+        let c = context(ctx)?;
+        // The file is closed when the writer drops; the log was flushed into it.
+        c.ctx.end_logging_resource_allocations()?;
+        Ok(())
+    })
+}

@@ -211,8 +211,8 @@ impl ExecuteContext {
     /// `alloc` or `free`, the [`MemoryKind`](crate::MemoryKind), what the memory holds, its
     /// bytes, and the bytes of that kind live afterwards (`resource_allocations`' numbers).
     ///
-    /// One log at a time: a second begin is `InvalidInput`. A write error stops the log (a
-    /// warning names it); `end_logging_resource_allocations` still hands the writer back.
+    /// One log at a time: a second begin is `InvalidInput`. A write error stops the log, and
+    /// `end_logging_resource_allocations` reports it.
     ///
     /// ```no_run
     /// # fn f(ctx: &hybrid_rt::ExecuteContext) -> Result<(), Box<dyn std::error::Error>> {
@@ -229,13 +229,15 @@ impl ExecuteContext {
         }
     }
 
-    /// Ends the allocation log: flushes it and hands its writer back. With no log open,
-    /// `InvalidInput`.
+    /// Ends the allocation log: flushes it and hands its writer back. With no log open, or
+    /// when writing it failed (the error says how), `InvalidInput`.
     pub fn end_logging_resource_allocations(&self) -> Result<Box<dyn std::io::Write + Send>> {
-        self.shared
-            .memory
-            .end_log()
-            .ok_or_else(|| Error::invalid("end_logging_resource_allocations", "no log is open"))
+        let what = "end_logging_resource_allocations";
+        match self.shared.memory.end_log() {
+            None => Err(Error::invalid(what, "no log is open")),
+            Some(Err(e)) => Err(Error::invalid(what, format!("writing the log failed: {e}"))),
+            Some(Ok(out)) => Ok(out),
+        }
     }
 
     /// Tickets built and not yet handed back.

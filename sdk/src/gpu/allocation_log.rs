@@ -19,24 +19,24 @@ pub(crate) const HEADER: &str = "time_ms,event,kind,name,bytes,kind_live_bytes";
 pub(crate) struct AllocationLog {
     out: BufWriter<Box<dyn Write + Send>>,
     start: Instant,
-    /// Set by the first write error: the log stops there (a warning says so).
-    failed: bool,
+    /// The first write error: the log stops there, and its end reports it.
+    failed: Option<std::io::Error>,
 }
 
 impl AllocationLog {
     pub fn new(out: Box<dyn Write + Send>) -> AllocationLog {
-        let mut log = AllocationLog { out: BufWriter::new(out), start: Instant::now(), failed: false };
+        let mut log = AllocationLog { out: BufWriter::new(out), start: Instant::now(), failed: None };
         log.write(format_args!("{HEADER}\n"));
         log
     }
 
     fn write(&mut self, line: std::fmt::Arguments<'_>) {
-        if self.failed {
+        if self.failed.is_some() {
             return;
         }
         if let Err(e) = self.out.write_fmt(line) {
             log::warn!("resource allocation log: writing failed ({e}); logging stops");
-            self.failed = true;
+            self.failed = Some(e);
         }
     }
 
@@ -52,14 +52,11 @@ impl AllocationLog {
         }
     }
 
-    /// Flushes and hands the writer back.
-    pub fn finish(self) -> Box<dyn Write + Send> {
-        match self.out.into_inner() {
-            Ok(w) => w,
-            Err(e) => {
-                log::warn!("resource allocation log: the last lines were not written ({})", e.error());
-                e.into_inner().into_parts().0
-            }
+    /// Flushes and hands the writer back, or the first write error.
+    pub fn finish(self) -> std::io::Result<Box<dyn Write + Send>> {
+        if let Some(e) = self.failed {
+            return Err(e);
         }
+        self.out.into_inner().map_err(|e| e.into_error())
     }
 }

@@ -1,10 +1,10 @@
 //! Device memory: buffers sub-allocated by gpu-allocator, each tagged with the kind of data it
 //! holds so `ExecuteContext::resource_allocations` can report bytes and counts per kind.
+use super::allocation_log::AllocationLog;
 use crate::error::{Error, Result};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme, Allocator, AllocatorCreateDesc};
 use gpu_allocator::MemoryLocation;
-use super::allocation_log::AllocationLog;
 use parking_lot::Mutex;
 
 /// What a piece of SDK memory holds (the rows of [`ResourceAllocations`]).
@@ -417,8 +417,9 @@ impl Memory {
         true
     }
 
-    /// Closes the allocation log and hands its writer back (None: none was open).
-    pub fn end_log(&self) -> Option<Box<dyn std::io::Write + Send>> {
+    /// Closes the allocation log and hands its writer back, or the first write error (None:
+    /// none was open).
+    pub fn end_log(&self) -> Option<std::io::Result<Box<dyn std::io::Write + Send>>> {
         self.log.lock().take().map(AllocationLog::finish)
     }
 
