@@ -37,7 +37,9 @@ bool surface_moved(ivec2 pixel, vec3 p, vec3 n, float dist) {
         bool in_front = hrt_previous_camera_position(p, camera);
         return in_front && distance(camera + u_d.jitter_delta.xy, hrt_previous_position(pixel, p)) > MOVING_MIN_PIXELS;
     }
-    if ((u_pass.z & HRT_MOVING_STILL_CAMERA) == 0u) return false;
+    // A still camera whose viewport changed (dynamic resolution) sees the same point at
+    // another pixel: the test below does not apply.
+    if ((u_pass.z & HRT_MOVING_STILL_CAMERA) == 0u || hrt_viewport_changed()) return false;
     // A still camera sees the same point at the same pixel: another surface there moved.
     vec3 q_p, q_n;
     if (!hrt_surface_at(imageLoad(u_gbuf_prev, pixel).xy, u_d.prev_clip_to_world, u_d.prev_eye.xyz, pixel, q_p, q_n)) return true;

@@ -20,6 +20,13 @@ const float WHOLE_CHANGE = 0.4;
 // gave 0.075 / 0.063, four 0.104 / 0.043 (at 0.5 pixels).
 const float SHARP_EDGE_RADIUS = 2.0;
 
+// The previous frame's history texel at q: the prep pass copied it into the intermediate for
+// this frame's viewport; outside it (the viewport shrank: dynamic resolution) the kept image
+// still holds it, since this pass overwrites only the viewport's texels.
+vec2 history_at(ivec2 q) {
+    return hrt_in_viewport(q) ? hrt_load_temp(0u, q).zw : hrt_load_shadow_history(q);
+}
+
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
     if (!hrt_in_viewport(pixel)) return;
@@ -42,7 +49,7 @@ void main() {
         // pixel) rather than read from one.
         resampled = max(max(w.x, w.y), max(w.z, w.w)) < 0.99 * wsum;
         if (wsum > 1e-3) {
-            for (int i = 0; i < 4; ++i) if (w[i] > 0.0) hist += w[i] * hrt_load_temp(0u, taps[i]).zw;
+            for (int i = 0; i < 4; ++i) if (w[i] > 0.0) hist += w[i] * history_at(taps[i]);
             hist /= wsum;
         }
     }
@@ -65,13 +72,15 @@ void main() {
     // pixel, the test cannot change the result: the clamp below holds the history within the
     // margin of that value either way. Most of a sunlit view is such pixels, and the history's
     // 3x3 is the pass's largest share of fetches.
-    ivec2 was = ivec2(floor(previous));
+    // One pixel of this frame spans `step` pixels of the history's viewport (dynamic
+    // resolution; 1 otherwise): the history's 3x3 covers the same part of the scene.
+    vec2 step = u_d.prev_viewport.zw / vec2(u_d.c.viewport.zw);
     bool settled = hi - lo < 1e-3 && abs(hist.x - v) < 1e-3;
     if (u_d.flags.z == 0u && hist.y > 0.0 && !settled) {
         [[unroll]] for (int i = 0; i < 9; ++i) {
-            ivec2 r = was + ivec2(i % 3 - 1, i / 3 - 1);
-            if (t[i] < 0.0 || !hrt_in_viewport(r)) continue;
-            vec2 hq = hrt_load_temp(0u, r).zw;
+            ivec2 r = ivec2(floor(previous + vec2(i % 3 - 1, i / 3 - 1) * step));
+            if (t[i] < 0.0 || !hrt_in_prev_viewport(r)) continue;
+            vec2 hq = history_at(r);
             if (hq.y <= 0.0) continue;
             float hv = clamp(hq.x, 0.0, 1.0);
             sum += t[i];

@@ -993,6 +993,14 @@ typedef struct HrtSurfelSettings {
    * Default 64.
    */
   uint32_t tile_resolution_limit;
+  /**
+   * Tiles only: one sample per triangle (direct tile mapping). Default false.
+   */
+  bool force_direct_tile_mapping;
+  /**
+   * Tiles only: map directly when triangles > threshold x samples. Default 0.7.
+   */
+  float direct_tile_mapping_threshold;
 } HrtSurfelSettings;
 
 typedef struct HrtGeometryInput {

@@ -33,6 +33,10 @@ pub struct HrtSurfelSettings {
     pub tile_unit_length: f32,
     /// Default 64.
     pub tile_resolution_limit: u32,
+    /// Tiles only: one sample per triangle (direct tile mapping). Default false.
+    pub force_direct_tile_mapping: bool,
+    /// Tiles only: map directly when triangles > threshold x samples. Default 0.7.
+    pub direct_tile_mapping_threshold: f32,
 }
 
 /// Bakes a lit view into the direct-lighting caches (see the Rust docs of
@@ -98,6 +102,8 @@ pub(crate) fn surfels(s: &HrtSurfelSettings) -> Result<rt::SurfelSettings, Failu
         surfel_type: pick("HrtSurfelSettings.surfel_type", s.surfel_type, &[rt::SurfelType::MeshColors, rt::SurfelType::Tiles])?,
         tile_unit_length: s.tile_unit_length,
         tile_resolution_limit: s.tile_resolution_limit,
+        force_direct_tile_mapping: s.force_direct_tile_mapping,
+        direct_tile_mapping_threshold: s.direct_tile_mapping_threshold,
     })
 }
 
@@ -106,6 +112,8 @@ pub(crate) fn surfels_c(s: &rt::SurfelSettings) -> HrtSurfelSettings {
         surfel_type: s.surfel_type as u32,
         tile_unit_length: s.tile_unit_length,
         tile_resolution_limit: s.tile_resolution_limit,
+        force_direct_tile_mapping: s.force_direct_tile_mapping,
+        direct_tile_mapping_threshold: s.direct_tile_mapping_threshold,
     }
 }
 

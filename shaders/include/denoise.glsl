@@ -61,6 +61,7 @@ layout(set = 0, binding = 22, std140) uniform DenoiseConstants {
     vec4 jitter_delta;       // previous - current jitter in pixels
     vec4 history;            // max frames, fast frames, clamp sigma, min radius scale
     vec4 stops;              // luminance sigma, normal power, plane-distance sigma, max shadow radius (px)
+    vec4 prev_viewport;      // the viewport the history was made in (x, y, w, h): dynamic resolution
     LightGpu light;          // single-light shadows
 } u_d;
 layout(set = 0, binding = 23) uniform sampler2D u_input_mask;
@@ -178,6 +179,17 @@ bool hrt_in_viewport(ivec2 q) {
     return all(greaterThanEqual(q, lo)) && all(lessThan(q, lo + ivec2(u_d.c.viewport.zw)));
 }
 
+// Inside the viewport the history was made in (with dynamic resolution, not this frame's).
+bool hrt_in_prev_viewport(ivec2 q) {
+    ivec2 lo = ivec2(u_d.prev_viewport.xy);
+    return all(greaterThanEqual(q, lo)) && all(lessThan(q, lo + ivec2(u_d.prev_viewport.zw)));
+}
+
+// The viewport changed since the history was made (dynamic resolution).
+bool hrt_viewport_changed() {
+    return any(notEqual(u_d.prev_viewport, vec4(u_d.c.viewport)));
+}
+
 // World direction from the camera through a pixel centre (current or previous camera).
 vec3 hrt_pixel_dir(mat4 clip_to_world, vec3 eye, vec2 pixel_pos) {
     vec2 ndc = (pixel_pos - u_d.c.viewport.xy) / u_d.c.viewport.zw * 2.0 - 1.0;
@@ -201,10 +213,14 @@ struct HrtPixelRays {
     vec4 h0, hx, hy;
 };
 
-HrtPixelRays hrt_pixel_rays(mat4 clip_to_world) {
-    vec2 s = 2.0 / u_d.c.viewport.zw;
-    vec2 o = (0.5 - u_d.c.viewport.xy) * s - 1.0; // ndc of pixel (0, 0)'s centre
+HrtPixelRays hrt_pixel_rays_in(mat4 clip_to_world, vec4 viewport) {
+    vec2 s = 2.0 / viewport.zw;
+    vec2 o = (0.5 - viewport.xy) * s - 1.0; // ndc of pixel (0, 0)'s centre
     return HrtPixelRays(clip_to_world * vec4(o, 0.5, 1.0), clip_to_world[0] * s.x, clip_to_world[1] * s.y);
+}
+
+HrtPixelRays hrt_pixel_rays(mat4 clip_to_world) {
+    return hrt_pixel_rays_in(clip_to_world, vec4(u_d.c.viewport));
 }
 
 // hrt_surface_at with the rays above (the same result up to rounding).
@@ -236,7 +252,7 @@ float hrt_geometry_weight(vec3 p, vec3 n, float dist, vec3 q_p, vec3 q_n) {
 // behind that camera.
 bool hrt_previous_camera_position(vec3 p, out vec2 pos) {
     vec4 clip = u_d.prev_world_to_clip * vec4(p, 1.0);
-    pos = (clip.xy / clip.w * 0.5 + 0.5) * u_d.c.viewport.zw + u_d.c.viewport.xy;
+    pos = (clip.xy / clip.w * 0.5 + 0.5) * u_d.prev_viewport.zw + u_d.prev_viewport.xy;
     return clip.w > 0.0;
 }
 
@@ -246,7 +262,13 @@ vec2 hrt_previous_position(ivec2 pixel, vec3 p) {
     if (motion == HRT_MOTION_VIEW || motion == HRT_MOTION_CLIP) {
         vec2 mv = texelFetch(u_motion, pixel, 0).xy * u_d.motion_scale.xy;
         if (motion == HRT_MOTION_CLIP) mv *= 0.5 * u_d.c.viewport.zw;
-        return here + mv + u_d.jitter_delta.xy;
+        vec2 was = here + mv + u_d.jitter_delta.xy;
+        // Motion is in this frame's pixels; the history lies in the previous viewport.
+        if (hrt_viewport_changed()) {
+            vec4 vp = vec4(u_d.c.viewport);
+            was = (was - vp.xy) / vp.zw * u_d.prev_viewport.zw + u_d.prev_viewport.xy;
+        }
+        return was;
     }
     vec3 prev_p = p;
     if (motion == HRT_MOTION_WORLD) prev_p += texelFetch(u_motion, pixel, 0).xyz * u_d.motion_scale.xyz;
@@ -265,11 +287,11 @@ void hrt_history_taps(vec2 prev_pos, vec3 p, vec3 n, float dist, out ivec2 taps[
     vec2 t = f - vec2(base);
     taps[0] = base; taps[1] = base + ivec2(1, 0); taps[2] = base + ivec2(0, 1); taps[3] = base + ivec2(1, 1);
     vec4 bilinear = vec4((1.0 - t.x) * (1.0 - t.y), t.x * (1.0 - t.y), (1.0 - t.x) * t.y, t.x * t.y);
-    HrtPixelRays rays = hrt_pixel_rays(u_d.prev_clip_to_world);
+    HrtPixelRays rays = hrt_pixel_rays_in(u_d.prev_clip_to_world, u_d.prev_viewport);
     vec3 eye = u_d.prev_eye.xyz;
     for (int i = 0; i < 4; ++i) {
         weights[i] = 0.0;
-        if (!hrt_in_viewport(taps[i]) || bilinear[i] <= 0.0) continue;
+        if (!hrt_in_prev_viewport(taps[i]) || bilinear[i] <= 0.0) continue;
         vec3 q_p, q_n;
         if (!hrt_surface_on(rays, imageLoad(u_gbuf_prev, taps[i]).xy, eye, taps[i], q_p, q_n)) continue;
         if (abs(dot(n, q_p - p)) <= u_d.stops.z * dist && dot(n, q_n) >= 0.8) weights[i] = bilinear[i];

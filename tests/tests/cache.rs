@@ -147,7 +147,7 @@ fn error_vs_pattern(view: &[[f32; 4]], g: &GBuffer) -> (f32, f32) {
 }
 
 fn settings(surfel_type: SurfelType, unit: f32) -> SurfelSettings {
-    SurfelSettings { surfel_type, tile_unit_length: unit, tile_resolution_limit: 64 }
+    SurfelSettings { surfel_type, tile_unit_length: unit, tile_resolution_limit: 64, ..Default::default() }
 }
 
 #[test]
@@ -336,7 +336,12 @@ fn mesh_colors_are_continuous_where_tiles_step() {
 #[test]
 fn cache_memory_scales_with_inverse_square_unit_length() {
     let bytes = |unit: f32, limit: u32| {
-        let s = SurfelSettings { surfel_type: SurfelType::Tiles, tile_unit_length: unit, tile_resolution_limit: limit };
+        let s = SurfelSettings {
+            surfel_type: SurfelType::Tiles,
+            tile_unit_length: unit,
+            tile_resolution_limit: limit,
+            ..Default::default()
+        };
         let w = world(ground(4.0, 4), s);
         let b = w.ctx.instance_cache_bytes(w.gpu_scene.instances[0]).unwrap();
         w.finish(vec![], vec![]);
@@ -346,6 +351,45 @@ fn cache_memory_scales_with_inverse_square_unit_length() {
     eprintln!("cache bytes: unit 0.2 -> {coarse}, unit 0.1 -> {fine}");
     assert!((fine / coarse - 4.0).abs() < 0.6, "ratio {}", fine / coarse);
     assert_eq!(bytes(0.001, 8), bytes(0.0001, 8), "the resolution limit caps it");
+}
+
+/// Direct tile mapping: a tiles layout whose triangles are nearly one sample each (32 grid
+/// triangles of one sample, one big triangle of four: 36 samples for 33 triangles, a ratio
+/// over the default threshold of 0.7) gets exactly one sample per triangle; a threshold of 1
+/// keeps the 36; forcing it maps a fine layout (64 samples a triangle) directly too. Built
+/// by the GPU layout passes, decided when their count comes back.
+#[test]
+fn tiles_near_one_sample_per_triangle_are_mapped_directly() {
+    let mut mesh = Mesh::grid(4.0, 4);
+    let base = mesh.positions.len() as u32;
+    mesh.positions.extend([Vec3::new(3.0, 0.0, 0.0), Vec3::new(5.0, 0.0, 0.0), Vec3::new(3.0, 0.0, 2.0)]);
+    mesh.indices.extend([base, base + 2, base + 1]);
+    let samples = |unit: f32, force: bool, threshold: f32| {
+        let mut scene = Scene::default();
+        let m = scene.add_mesh(mesh.clone());
+        scene.add_instance(m, Affine3A::IDENTITY);
+        let s = SurfelSettings {
+            surfel_type: SurfelType::Tiles,
+            tile_unit_length: unit,
+            force_direct_tile_mapping: force,
+            direct_tile_mapping_threshold: threshold,
+            ..Default::default()
+        };
+        let mut w = world(scene, s);
+        // A layout mapped directly is built again at one sample per triangle: two more frames.
+        for _ in 0..2 {
+            w.frame.schedule_bvh_build(&Default::default()).unwrap();
+            run_frame(&w.host, &w.ctx, &mut w.frame).unwrap();
+        }
+        let bytes = w.ctx.instance_cache_bytes(w.gpu_scene.instances[0]).unwrap();
+        w.finish(vec![], vec![]);
+        bytes
+    };
+    let per_sample = samples(1.5, false, 1.0) / 36;
+    assert_eq!(samples(1.5, false, 1.0), 36 * per_sample, "one grid triangle a sample, the big one four");
+    assert_eq!(samples(1.5, false, 0.7), 33 * per_sample, "33 triangles > 0.7 x 36 samples: one each");
+    assert_eq!(samples(0.2, false, 0.7), (32 * 64 + 15 * 15) * per_sample, "a fine layout is kept");
+    assert_eq!(samples(0.2, true, 0.7), 33 * per_sample, "forced: one each");
 }
 
 /// HitT and barycentrics match the reference's primary rays; mesh colours differ per instance.
@@ -478,7 +522,10 @@ fn surfel_layouts_are_sized_on_the_gpu_without_a_geometry_read_back() {
         + edges.values().map(|r| r - 1).sum::<u64>()
         + res.iter().map(|&r| interior(r)).sum::<u64>();
     for (surfel_type, expected) in [(SurfelType::Tiles, tiles_expected), (SurfelType::MeshColors, colors_expected)] {
-        let w = world(scene.clone(), SurfelSettings { surfel_type, tile_unit_length: unit, tile_resolution_limit: limit });
+        let w = world(
+            scene.clone(),
+            SurfelSettings { surfel_type, tile_unit_length: unit, tile_resolution_limit: limit, ..Default::default() },
+        );
         let bytes = w.ctx.instance_cache_bytes(w.gpu_scene.instances[0]).unwrap();
         let report = w.ctx.cache_report();
         eprintln!(

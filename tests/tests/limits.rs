@@ -208,6 +208,7 @@ fn big_caches_fill_completely_and_oversized_ones_are_coarsened() {
                 surfel_type: SurfelType::Tiles,
                 tile_unit_length: if k == 0 { 0.02 } else { 0.0001 },
                 tile_resolution_limit: limit,
+                ..Default::default()
             },
             ..Default::default()
         };

@@ -34,14 +34,24 @@ pub(crate) fn resolution(tri: [Vec3; 3], s: &SurfelSettings) -> u32 {
 pub(crate) fn build(positions: &[Vec3], triangles: &[[u32; 3]], s: &SurfelSettings, max_samples: u64) -> Option<SurfelLayout> {
     let max_samples = max_samples.min(u32::MAX as u64);
     let mut settings = *s;
+    if s.maps_directly(triangles.len() as u64, u64::MAX) {
+        // Forced: one sample per triangle from the start.
+        settings.tile_resolution_limit = 1;
+    }
     loop {
         let layout = match settings.surfel_type {
             SurfelType::Tiles => tiles(positions, triangles, &settings, max_samples),
             SurfelType::MeshColors => mesh_colors(positions, triangles, &settings, max_samples),
         };
         match layout {
+            // Nearly one sample per triangle already: exactly one (direct tile mapping).
+            Some(l) if settings.tile_resolution_limit > 1 && s.maps_directly(triangles.len() as u64, l.sample_count as u64) => {
+                settings.tile_resolution_limit = 1;
+            }
             Some(l) => {
-                if settings.tile_resolution_limit != s.tile_resolution_limit {
+                if settings.tile_resolution_limit != s.tile_resolution_limit
+                    && !s.maps_directly(triangles.len() as u64, l.sample_count as u64)
+                {
                     log::warn!(
                         "surfel layout of {} triangles: tile_resolution_limit {} needs more than {max_samples} samples; using {}",
                         triangles.len(),
@@ -178,12 +188,47 @@ mod tests {
     }
 
     fn settings(t: SurfelType, unit: f32, limit: u32) -> SurfelSettings {
-        SurfelSettings { surfel_type: t, tile_unit_length: unit, tile_resolution_limit: limit }
+        SurfelSettings { surfel_type: t, tile_unit_length: unit, tile_resolution_limit: limit, ..Default::default() }
     }
 
     /// A unit quad as two triangles sharing the diagonal (0, 2).
     fn quad() -> (Vec<Vec3>, Vec<[u32; 3]>) {
         (vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 0.0, 1.0), Vec3::Z], vec![[0, 1, 2], [0, 2, 3]])
+    }
+
+    /// The CPU builder maps directly as the GPU passes do: nine unit-quad triangles of one
+    /// sample and one of four (13 samples, 10 triangles: over 0.7) become ten samples; a
+    /// threshold of 1 keeps 13; forcing maps a fine layout directly.
+    #[test]
+    fn tiles_near_one_sample_per_triangle_are_mapped_directly() {
+        let mut p = Vec::new();
+        let mut t = Vec::new();
+        for k in 0..9 {
+            let o = Vec3::new(2.0 * k as f32, 0.0, 0.0);
+            let base = p.len() as u32;
+            p.extend([o, o + Vec3::X, o + Vec3::Z]);
+            t.push([base, base + 1, base + 2]);
+        }
+        let base = p.len() as u32;
+        p.extend([Vec3::new(0.0, 0.0, 5.0), Vec3::new(2.0, 0.0, 5.0), Vec3::new(0.0, 0.0, 7.0)]);
+        t.push([base, base + 1, base + 2]);
+        let with = |unit: f32, force: bool, threshold: f32| {
+            let s = SurfelSettings {
+                force_direct_tile_mapping: force,
+                direct_tile_mapping_threshold: threshold,
+                ..settings(SurfelType::Tiles, unit, 64)
+            };
+            build(&p, &t, &s, u64::MAX).expect("fits")
+        };
+        assert_eq!(with(1.5, false, 1.0).sample_count, 13);
+        let direct = with(1.5, false, 0.7);
+        assert_eq!((direct.sample_count, direct.max_resolution), (10, 1));
+        assert_eq!(direct.words.chunks(2).map(|w| w[0]).collect::<Vec<_>>(), (0..10).collect::<Vec<u32>>(), "sample = triangle");
+        assert!(with(0.2, false, 0.7).sample_count > 100, "a fine layout is kept");
+        assert_eq!(with(0.2, true, 0.7).sample_count, 10);
+        // Mesh colors ignore both.
+        let colors = SurfelSettings { force_direct_tile_mapping: true, ..settings(SurfelType::MeshColors, 0.2, 64) };
+        assert!(build(&p, &t, &colors, u64::MAX).expect("fits").sample_count > 10);
     }
 
     #[test]

@@ -57,7 +57,9 @@ impl Recorder<'_> {
                 SurfelType::MeshColors => surfel_layout::mesh_colors_fits(max_groups, t, v),
             };
             if on_gpu {
-                let limit = limit.unwrap_or(surfels.tile_resolution_limit.clamp(1, layout::MAX_RESOLUTION));
+                // Forced direct tile mapping: one sample per triangle from the start.
+                let first = if surfels.maps_directly(t, u64::MAX) { 1 } else { surfels.tile_resolution_limit };
+                let limit = limit.unwrap_or(first.clamp(1, layout::MAX_RESOLUTION));
                 plans.push(self.plan_gpu_layout(h, build_id, copy_address, l, surfels, limit)?);
                 continue;
             }
@@ -333,7 +335,23 @@ impl State {
                         .map(|b| (u32::from_le_bytes([b[0], b[1], b[2], b[3]]), u32::from_le_bytes([b[4], b[5], b[6], b[7]])));
                     memory.destroy_buffer(result);
                     let current = self.scene.geometries.get(h).is_ok_and(|g| g.build_id == build_id);
+                    // Triangles outnumbering the threshold times the samples: map the geometry
+                    // directly instead, one sample per triangle (built again at limit 1).
+                    let direct = |samples: u32| {
+                        self.scene
+                            .geometries
+                            .get(h)
+                            .ok()
+                            .and_then(|g| g.layout.map(|l| (g.input.surfels, l.primitive_count)))
+                            .is_some_and(|(s, triangles)| {
+                                limit > 1 && samples > 0 && s.maps_directly(triangles as u64, samples as u64)
+                            })
+                    };
                     match counted {
+                        Some((samples, _)) if current && direct(samples) => {
+                            self.scene.relayout.push((h, 1));
+                            memory.destroy_buffer(words);
+                        }
                         Some((samples, max_resolution)) if current && samples > 0 && samples as u64 <= max_samples => {
                             self.install_gpu_layout(h, words, surfel_type, samples, max_resolution);
                         }

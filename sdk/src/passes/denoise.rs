@@ -36,6 +36,9 @@ pub(crate) struct DenoiseConstantsGpu {
     jitter_delta: [f32; 4],
     history: [f32; 4],
     stops: [f32; 4],
+    /// The viewport the history was made in (x, y, width, height): with dynamic resolution it
+    /// differs from this frame's, and reprojection lands in it.
+    prev_viewport: [f32; 4],
     light: LightGpu,
 }
 
@@ -142,15 +145,15 @@ impl DenoiserState {
         )
     }
 
-    /// Whether a task starts over: asked to, nothing recorded yet, spatial only, another
-    /// viewport, or a history its view's guide no longer describes (the context skipped the
-    /// view's previous frame).
-    fn must_reset(&self, c: &DenoisingCommon, guide_frame: u64, viewport: [u32; 4]) -> bool {
+    /// Whether a task starts over: asked to, nothing recorded yet, spatial only, or a history
+    /// its view's guide no longer describes (the context skipped the view's previous frame).
+    /// A viewport that changed (dynamic resolution) keeps the history: reprojection maps this
+    /// frame's pixels into the previous viewport, where the history lies.
+    fn must_reset(&self, c: &DenoisingCommon, guide_frame: u64) -> bool {
         c.reset_history
             || !self.initialized
             || self.guide_frame + 1 != guide_frame
             || self.input.method == DenoisingMethod::SpatialOnly
-            || self.previous_viewport != viewport
     }
 
     /// After a task: its history now continues from `guide_frame`, `c`'s camera and `viewport`.
@@ -346,9 +349,10 @@ impl DenoisePass {
         let c = &job.common;
         let extent = (c.viewport.width, c.viewport.height);
         let viewport = [c.viewport.x, c.viewport.y, c.viewport.width, c.viewport.height];
-        let reset = state.must_reset(c, guide_frame, viewport);
+        let reset = state.must_reset(c, guide_frame);
         let previous = c.previous_camera.or(state.previous_camera).unwrap_or(c.camera);
-        let constants = constants(job, &previous, state.previous_jitter, r.seed, reset);
+        let previous_viewport = if reset { viewport } else { state.previous_viewport };
+        let constants = constants(job, &previous, state.previous_jitter, previous_viewport, r.seed, reset);
         let ubo = r.ring.push(bytemuck::bytes_of(&constants), r.device.ubo_alignment);
 
         let shadow = is_shadow(job.signal);
@@ -525,7 +529,14 @@ fn initialize_images(r: &mut Recording<'_>, state: &DenoiserState, guide: &mut G
     }
 }
 
-fn constants(job: &DenoiseJob, previous: &Camera, previous_jitter: [f32; 2], seed: u32, reset: bool) -> DenoiseConstantsGpu {
+fn constants(
+    job: &DenoiseJob,
+    previous: &Camera,
+    previous_jitter: [f32; 2],
+    previous_viewport: [u32; 4],
+    seed: u32,
+    reset: bool,
+) -> DenoiseConstantsGpu {
     let c = &job.common;
     let trace = c.as_trace_common();
     let eye = c.camera.world_to_view.inverse().w_axis;
@@ -570,6 +581,7 @@ fn constants(job: &DenoiseJob, previous: &Camera, previous_jitter: [f32; 2], see
         jitter_delta: [previous_jitter[0] - c.camera_jitter[0], previous_jitter[1] - c.camera_jitter[1], 0.0, 0.0],
         history: [s.max_history_frames as f32, s.fast_history_frames as f32, s.history_clamp_sigma, MIN_RADIUS_SCALE],
         stops: [s.luminance_sigma, s.normal_power, s.plane_distance_sigma, s.max_shadow_blur_radius],
+        prev_viewport: previous_viewport.map(|v| v as f32),
         light: LightGpu::new(&job.light),
     }
 }
@@ -633,7 +645,8 @@ mod tests {
         assert_eq!(offset_of!(DenoiseConstantsGpu, eye), 512);
         assert_eq!(offset_of!(DenoiseConstantsGpu, flags), 544);
         assert_eq!(offset_of!(DenoiseConstantsGpu, stops), 624);
-        assert_eq!(offset_of!(DenoiseConstantsGpu, light), 640);
-        assert_eq!(size_of::<DenoiseConstantsGpu>(), 704);
+        assert_eq!(offset_of!(DenoiseConstantsGpu, prev_viewport), 640);
+        assert_eq!(offset_of!(DenoiseConstantsGpu, light), 656);
+        assert_eq!(size_of::<DenoiseConstantsGpu>(), 720);
     }
 }

@@ -87,11 +87,35 @@ pub struct SurfelSettings {
     pub tile_unit_length: f32,
     /// Most samples along one edge. Default 64.
     pub tile_resolution_limit: u32,
+    /// Tiles only: one sample per triangle, whatever the triangles' size (Kickstart RT's
+    /// direct tile mapping) — for dense meshes, whose triangles are near a tile's size anyway.
+    /// Default false.
+    pub force_direct_tile_mapping: bool,
+    /// Tiles only: a layout whose triangles outnumber `threshold` x its samples (they are
+    /// nearly one sample each) is mapped directly instead, one sample per triangle. A layout
+    /// never has fewer samples than triangles, so 1.0 or more turns this off, 0 maps every
+    /// tiles geometry directly. Default 0.7 (Kickstart RT's).
+    pub direct_tile_mapping_threshold: f32,
 }
 
 impl Default for SurfelSettings {
     fn default() -> Self {
-        SurfelSettings { surfel_type: SurfelType::MeshColors, tile_unit_length: 1.0, tile_resolution_limit: 64 }
+        SurfelSettings {
+            surfel_type: SurfelType::MeshColors,
+            tile_unit_length: 1.0,
+            tile_resolution_limit: 64,
+            force_direct_tile_mapping: false,
+            direct_tile_mapping_threshold: 0.7,
+        }
+    }
+}
+
+impl SurfelSettings {
+    /// Whether a tiles layout of `triangles` triangles and `samples` samples is (to be) mapped
+    /// directly: one sample per triangle.
+    pub(crate) fn maps_directly(&self, triangles: u64, samples: u64) -> bool {
+        self.surfel_type == SurfelType::Tiles
+            && (self.force_direct_tile_mapping || triangles as f64 > self.direct_tile_mapping_threshold as f64 * samples as f64)
     }
 }
 

@@ -31,6 +31,9 @@ pub(crate) fn geometry_input(device: &Device, input: &GeometryInput) -> Result<(
     if !(t.tile_unit_length.is_finite() && t.tile_unit_length > 0.0) {
         return Err(Error::invalid("SurfelSettings.tile_unit_length", "must be finite and > 0"));
     }
+    if !(t.direct_tile_mapping_threshold.is_finite() && t.direct_tile_mapping_threshold >= 0.0) {
+        return Err(Error::invalid("SurfelSettings.direct_tile_mapping_threshold", "must be finite and >= 0"));
+    }
     if t.tile_resolution_limit == 0 || t.tile_resolution_limit > crate::cache::layout::MAX_RESOLUTION {
         return Err(Error::invalid(
             "SurfelSettings.tile_resolution_limit",
