@@ -21,15 +21,14 @@ const float WHOLE_CHANGE = 0.4;
 const float SHARP_EDGE_RADIUS = 2.0;
 
 // The previous frame's history texel at q: the prep pass copied it into the intermediate for
-// this frame's viewport; outside it (the viewport shrank: dynamic resolution) the kept image
-// still holds it, since this pass overwrites only the viewport's texels.
-vec2 history_at(ivec2 q) {
-    return hrt_in_viewport(q) ? hrt_load_temp(0u, q).zw : hrt_load_shadow_history(q);
+// this frame's viewport; outside it (`resized`: the viewport shrank, dynamic resolution) the
+// kept image still holds it, since this pass overwrites only the viewport's texels.
+vec2 history_at(ivec2 q, bool resized) {
+    return resized && !hrt_in_viewport(q) ? hrt_load_shadow_history(q) : hrt_load_temp(0u, q).zw;
 }
 
-void main() {
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
-    if (!hrt_in_viewport(pixel)) return;
+// The pass for one pixel; `resized`: the viewport changed since the history was made.
+void temporal(ivec2 pixel, bool resized) {
     vec3 p, n;
     if (!hrt_surface_at(imageLoad(u_gbuf_cur, pixel).xy, u_d.c.clip_to_world, u_d.eye.xyz, pixel, p, n)) {
         hrt_store_shadow_history(pixel, vec2(0.0));
@@ -49,7 +48,7 @@ void main() {
         // pixel) rather than read from one.
         resampled = max(max(w.x, w.y), max(w.z, w.w)) < 0.99 * wsum;
         if (wsum > 1e-3) {
-            for (int i = 0; i < 4; ++i) if (w[i] > 0.0) hist += w[i] * history_at(taps[i]);
+            for (int i = 0; i < 4; ++i) if (w[i] > 0.0) hist += w[i] * history_at(taps[i], resized);
             hist /= wsum;
         }
     }
@@ -75,12 +74,14 @@ void main() {
     // One pixel of this frame spans `step` pixels of the history's viewport (dynamic
     // resolution; 1 otherwise): the history's 3x3 covers the same part of the scene.
     vec2 step = u_d.prev_viewport.zw / vec2(u_d.c.viewport.zw);
+    ivec2 was = ivec2(floor(previous));
     bool settled = hi - lo < 1e-3 && abs(hist.x - v) < 1e-3;
     if (u_d.flags.z == 0u && hist.y > 0.0 && !settled) {
         [[unroll]] for (int i = 0; i < 9; ++i) {
-            ivec2 r = ivec2(floor(previous + vec2(i % 3 - 1, i / 3 - 1) * step));
-            if (t[i] < 0.0 || !hrt_in_prev_viewport(r)) continue;
-            vec2 hq = history_at(r);
+            ivec2 d = ivec2(i % 3 - 1, i / 3 - 1);
+            ivec2 r = resized ? ivec2(floor(previous + vec2(d) * step)) : was + d;
+            if (t[i] < 0.0 || !(resized ? hrt_in_prev_viewport(r) : hrt_in_viewport(r))) continue;
+            vec2 hq = history_at(r, resized);
             if (hq.y <= 0.0) continue;
             float hv = clamp(hq.x, 0.0, 1.0);
             sum += t[i];
@@ -136,4 +137,17 @@ void main() {
     }
     hrt_store_shadow_history(pixel, vec2(result, len));
     hrt_store_output(0u, pixel, vec4(result, result, result, 1.0));
+}
+
+void main() {
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy) + ivec2(u_d.c.viewport.xy);
+    if (!hrt_in_viewport(pixel)) return;
+    // Two copies of the pass, chosen per dispatch (a uniform branch): the one for an unchanged
+    // viewport, every frame but a resolution change, reads the history from the intermediate
+    // alone and keeps the unscaled 3x3.
+    if (hrt_viewport_changed()) {
+        temporal(pixel, true);
+    } else {
+        temporal(pixel, false);
+    }
 }
