@@ -493,6 +493,28 @@ pub fn diffuse_reference(
     strata: u32,
     weight: impl Fn(Vec3, Vec3, Vec3) -> f32,
 ) -> Vec<[f32; 3]> {
+    diffuse_reference_with(
+        tracer,
+        g,
+        eye,
+        |hit| hit.map_or(sky, |(_, instance)| colours[instance as usize]),
+        ray_length,
+        strata,
+        weight,
+    )
+}
+
+/// `diffuse_reference` with each sample's radiance from `radiance(hit)`: the hit point and
+/// instance, or None for a miss.
+pub fn diffuse_reference_with(
+    tracer: &Tracer,
+    g: &GBuffer,
+    eye: Vec3,
+    radiance: impl Fn(Option<(Vec3, u32)>) -> [f32; 3],
+    ray_length: f32,
+    strata: u32,
+    weight: impl Fn(Vec3, Vec3, Vec3) -> f32,
+) -> Vec<[f32; 3]> {
     let offset = hybrid_rt::RayOffset::default();
     let mut rng = Rng::new(3);
     (0..g.depth.len())
@@ -510,7 +532,7 @@ pub fn diffuse_reference(
                     let u2 = (sy as f32 + rng.next_f32()) / strata as f32;
                     let (r, phi) = (u1.sqrt(), 2.0 * std::f32::consts::PI * u2);
                     let dir = (t * r * phi.cos() + b * r * phi.sin() + n * (1.0 - u1).max(0.0).sqrt()).normalize();
-                    let c = tracer.closest_hit(origin, dir, 0.0, ray_length).map_or(sky, |h| colours[h.instance as usize]);
+                    let c = radiance(tracer.closest_hit(origin, dir, 0.0, ray_length).map(|h| (origin + dir * h.t, h.instance)));
                     let w = weight(n, dir, (eye - p).normalize());
                     for k in 0..3 {
                         sum[k] += c[k] * w / (strata * strata) as f32;
