@@ -21,7 +21,8 @@
 //!     let mesh = ctx.create_geometry_handles(1)[0];
 //!     let inst = ctx.create_instance_handles(1)[0];
 //!     let mut frame = ctx.create_task_container(); // Send; one per thread; reuse it
-//!     frame.schedule_geometry(&GeometryTask { handle: mesh, input: mesh_data, ..Default::default() })?;
+//!     // SAFETY: the buffers in `mesh_data` are alive (and stay so until the ticket is back).
+//!     unsafe { frame.schedule_geometry(&GeometryTask { handle: mesh, input: mesh_data, ..Default::default() }) }?;
 //!     frame.schedule_instance(&InstanceTask {
 //!         handle: inst,
 //!         input: InstanceInput { geometry: mesh, transform, ..Default::default() },
@@ -29,7 +30,8 @@
 //!     })?;
 //!     frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 4, ..Default::default() })?;
 //!     frame.schedule_ambient_occlusion(ao)?;
-//!     ctx.build_gpu_task(&mut frame, cmd) // records into *your* command buffer
+//!     // SAFETY: `cmd` is recording; the images and buffers the tasks name outlive the ticket.
+//!     unsafe { ctx.build_gpu_task(&mut frame, cmd) } // records into *your* command buffer
 //! }
 //!
 //! fn frame_done(ctx: &ExecuteContext, ticket: GpuTicket) -> hybrid_rt::Result<()> {

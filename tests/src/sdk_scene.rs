@@ -77,8 +77,8 @@ impl SceneOnGpu {
                 surfels,
                 ..Default::default()
             };
-            container
-                .schedule_geometry(&GeometryTask { handle, operation: TaskOperation::Register, input })
+            // SAFETY: the buffers were just made and live in `SceneOnGpu` until it is destroyed.
+            unsafe { container.schedule_geometry(&GeometryTask { handle, operation: TaskOperation::Register, input }) }
                 .map_err(|e| e.to_string())?;
             buffers.push((vb, ib));
         }
@@ -180,7 +180,8 @@ pub fn run_frame(host: &Host, ctx: &ExecuteContext, container: &mut TaskContaine
     let cmd = host.allocate_command_buffer()?;
     host.begin(cmd)?;
     host.full_barrier(cmd);
-    let ticket = match ctx.build_gpu_task(container, cmd) {
+    // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+    let ticket = match unsafe { ctx.build_gpu_task(container, cmd) } {
         Ok(t) => t,
         Err(e) => {
             // Leave the command buffer submittable-free: end it and drop it.

@@ -178,7 +178,8 @@ fn trace(kind: Kind, g: &GBuffer, sun: LightInfo) -> Images {
     if alpha {
         let gh = ctx.create_geometry_handles(1)[0];
         let input = if kind == Kind::Cut { grate.input() } else { grate.input_unorm16() };
-        frame.schedule_geometry(&GeometryTask { handle: gh, operation: TaskOperation::Register, input }).unwrap();
+        // SAFETY: the engine's buffers the task names are alive.
+        unsafe { frame.schedule_geometry(&GeometryTask { handle: gh, operation: TaskOperation::Register, input }) }.unwrap();
         let ih = ctx.create_instance_handles(1)[0];
         let input = InstanceInput { geometry: gh, initial_tile_color: RED, ..Default::default() };
         frame.schedule_instance(&InstanceTask { handle: ih, operation: InstanceOperation::Register, input }).unwrap();
@@ -318,7 +319,8 @@ fn bad_alpha_inputs_are_refused() {
     let handle = ctx.create_geometry_handles(1)[0];
     let good = grate.input();
     let schedule = |frame: &mut TaskContainer, input: GeometryInput| {
-        frame.schedule_geometry(&GeometryTask { handle, operation: TaskOperation::Register, input })
+        // SAFETY: the engine's buffers the task names are alive.
+        unsafe { frame.schedule_geometry(&GeometryTask { handle, operation: TaskOperation::Register, input }) }
     };
     schedule(&mut frame, good.clone()).unwrap();
     frame.clear();

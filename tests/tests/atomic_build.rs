@@ -126,18 +126,21 @@ impl<'h> World<'h> {
         match f {
             0 => {
                 for i in 0..n {
-                    c.schedule_geometry(&self.geometry_task(i, TaskOperation::Register)).unwrap();
+                    // SAFETY: the engine's buffers the task names are alive.
+                    unsafe { c.schedule_geometry(&self.geometry_task(i, TaskOperation::Register)) }.unwrap();
                     c.schedule_instance(&self.instance_task(i, InstanceOperation::Register, 0.0)).unwrap();
                 }
             }
             1 => c.schedule_instance(&self.instance_task(1, InstanceOperation::Update, 0.3)).unwrap(),
             2 => {
-                c.schedule_geometry(&self.geometry_task(4, TaskOperation::Update)).unwrap();
+                // SAFETY: the engine's buffers the task names are alive.
+                unsafe { c.schedule_geometry(&self.geometry_task(4, TaskOperation::Update)) }.unwrap();
                 c.schedule_instance(&self.instance_task(2, InstanceOperation::Remove, 0.0)).unwrap();
             }
             _ => {
                 c.schedule_instance(&self.instance_task(2, InstanceOperation::Register, 0.0)).unwrap();
-                c.schedule_geometry(&self.geometry_task(3, TaskOperation::Update)).unwrap();
+                // SAFETY: the engine's buffers the task names are alive.
+                unsafe { c.schedule_geometry(&self.geometry_task(3, TaskOperation::Update)) }.unwrap();
                 c.schedule_clear_cache(&ClearCacheTask { instance: self.instances[0] }).unwrap();
             }
         }
@@ -201,7 +204,8 @@ fn a_build_failing_at_any_allocation_changes_nothing() {
         let mut c = twin.container(f);
         let cmd = host.allocate_command_buffer().unwrap();
         host.begin(cmd).unwrap();
-        let ticket = twin.ctx.build_gpu_task(&mut c, cmd).unwrap();
+        // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+        let ticket = unsafe { twin.ctx.build_gpu_task(&mut c, cmd) }.unwrap();
         expected.push(twin.finish(cmd, ticket));
     }
     twin.destroy();
@@ -222,7 +226,8 @@ fn a_build_failing_at_any_allocation_changes_nothing() {
             // SAFETY: the buffer holds MAX_ATTEMPTS words; cmd is recording.
             unsafe { host.device.cmd_fill_buffer(cmd, engine_marks.buffer, failures * 4, 4, failures as u32 + 1) };
             w.ctx.inject_allocation_failure(Some(failures));
-            let built = w.ctx.build_gpu_task(&mut c, cmd);
+            // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+            let built = unsafe { w.ctx.build_gpu_task(&mut c, cmd) };
             w.ctx.inject_allocation_failure(None);
             match built {
                 Ok(ticket) => break ticket,

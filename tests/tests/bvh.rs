@@ -251,9 +251,11 @@ fn updating_a_deformable_geometry_refits_its_blas() {
     let geo = ctx.create_geometry_handles(1)[0];
     let inst = ctx.create_instance_handles(1)[0];
     let mut frame = ctx.create_task_container();
-    frame
-        .schedule_geometry(&GeometryTask { handle: geo, operation: TaskOperation::Register, input: input(vb_low.buffer) })
-        .unwrap();
+    // SAFETY: the engine's buffers the task names are alive.
+    unsafe {
+        frame.schedule_geometry(&GeometryTask { handle: geo, operation: TaskOperation::Register, input: input(vb_low.buffer) })
+    }
+    .unwrap();
     frame
         .schedule_instance(&InstanceTask {
             handle: inst,
@@ -280,9 +282,11 @@ fn updating_a_deformable_geometry_refits_its_blas() {
 
     let high = ceiling(3.0);
     let vb_high = host.buffer_with_data(bytemuck::cast_slice(&high.positions), usage).unwrap();
-    frame
-        .schedule_geometry(&GeometryTask { handle: geo, operation: TaskOperation::Update, input: input(vb_high.buffer) })
-        .unwrap();
+    // SAFETY: the engine's buffers the task names are alive.
+    unsafe {
+        frame.schedule_geometry(&GeometryTask { handle: geo, operation: TaskOperation::Update, input: input(vb_high.buffer) })
+    }
+    .unwrap();
     frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 0, ..Default::default() }).unwrap();
     frame.schedule_ambient_occlusion(&images.ao_task(&camera, 1.0, RAYS)).unwrap();
     run_frame(&host, &ctx, &mut frame).unwrap();
@@ -292,8 +296,9 @@ fn updating_a_deformable_geometry_refits_its_blas() {
 
     // Changing the triangle count of an updatable geometry is refused at build time.
     let tri = host.buffer_with_data(bytemuck::cast_slice(&high.positions[..3]), usage).unwrap();
-    frame
-        .schedule_geometry(&GeometryTask {
+    // SAFETY: the engine's buffers the task names are alive.
+    unsafe {
+        frame.schedule_geometry(&GeometryTask {
             handle: geo,
             operation: TaskOperation::Update,
             input: GeometryInput {
@@ -302,7 +307,8 @@ fn updating_a_deformable_geometry_refits_its_blas() {
                 ..Default::default()
             },
         })
-        .unwrap();
+    }
+    .unwrap();
     assert!(matches!(run_frame(&host, &ctx, &mut frame), Err(e) if e.contains("refitted")));
     frame.clear();
 
@@ -329,7 +335,8 @@ fn fast_first_builds_are_rebuilt_for_fast_trace_later() {
             ..Default::default()
         };
         let task = GeometryTask { handle: f.gpu_scene.geometries[k], operation: TaskOperation::Update, input };
-        f.frame.schedule_geometry(&task).unwrap();
+        // SAFETY: the engine's buffers the task names are alive.
+        unsafe { f.frame.schedule_geometry(&task) }.unwrap();
     }
     // (in TLAS, pending builds: queued registrations + quality rebuilds) after each build.
     for (k, (in_tlas, pending)) in [(2usize, 4usize), (4, 4), (4, 2), (4, 0)].into_iter().enumerate() {
@@ -369,7 +376,8 @@ fn destruction_is_deferred_until_tickets_return() {
     f.frame.schedule_ambient_occlusion(&f.images.ao_task(&f.b.camera, 1.0, RAYS)).unwrap();
     let cmd = host.allocate_command_buffer().unwrap();
     host.begin(cmd).unwrap();
-    let ticket = ctx.build_gpu_task(&mut f.frame, cmd).unwrap();
+    // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+    let ticket = unsafe { ctx.build_gpu_task(&mut f.frame, cmd) }.unwrap();
     // The AO recorded above still reads both BLASes: destroying now must not free them.
     assert!(matches!(ctx.destroy_geometry_handles(&f.gpu_scene.geometries), Err(Error::GeometryInUse { .. })));
     ctx.destroy_instance_handles(&f.gpu_scene.instances).unwrap();

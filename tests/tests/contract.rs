@@ -181,15 +181,18 @@ fn scheduling_does_not_wait_for_a_build_or_completion_in_progress() {
     let ib = f.host.buffer_with_data(bytemuck::cast_slice(&quad.indices), usage).unwrap();
     let g = ctx.create_geometry_handles(1)[0];
     let mut c = ctx.create_task_container();
-    c.schedule_geometry(&GeometryTask {
-        handle: g,
-        operation: TaskOperation::Register,
-        input: GeometryInput {
-            vertices: VertexBufferInput { buffer: vb.buffer, count: quad.positions.len() as u32, ..Default::default() },
-            indices: IndexBufferInput { buffer: ib.buffer, count: quad.indices.len() as u32, ..Default::default() },
-            ..Default::default()
-        },
-    })
+    // SAFETY: the engine's buffers the task names are alive.
+    unsafe {
+        c.schedule_geometry(&GeometryTask {
+            handle: g,
+            operation: TaskOperation::Register,
+            input: GeometryInput {
+                vertices: VertexBufferInput { buffer: vb.buffer, count: quad.positions.len() as u32, ..Default::default() },
+                indices: IndexBufferInput { buffer: ib.buffer, count: quad.indices.len() as u32, ..Default::default() },
+                ..Default::default()
+            },
+        })
+    }
     .unwrap();
     c.schedule_bvh_build(&Default::default()).unwrap();
     run_frame(&f.host, &ctx, &mut c).unwrap();
@@ -210,7 +213,8 @@ fn scheduling_does_not_wait_for_a_build_or_completion_in_progress() {
         let c = &mut c;
         let slow = s.spawn(move || {
             let t = Instant::now();
-            let ticket = ctx.build_gpu_task(c, cmd).unwrap();
+            // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+            let ticket = unsafe { ctx.build_gpu_task(c, cmd) }.unwrap();
             (t.elapsed(), ticket)
         });
         let schedulers: Vec<_> = (0..8)
@@ -261,7 +265,8 @@ fn the_context_is_not_destroyed_under_the_gpu() {
     c.schedule_ambient_occlusion(&f.images.ao_task(&f.camera, 1.0, 1)).unwrap();
     let cmd = f.host.allocate_command_buffer().unwrap();
     f.host.begin(cmd).unwrap();
-    let ticket = ctx.build_gpu_task(&mut c, cmd).unwrap();
+    // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+    let ticket = unsafe { ctx.build_gpu_task(&mut c, cmd) }.unwrap();
     let (ctx, e) = ctx.destroy().expect_err("refused: the ticket has not run");
     assert!(matches!(&e, Error::TicketsInFlight { serials } if serials == &[ticket.serial()]), "{e}");
     assert_eq!(ctx.unfinished_tickets(), vec![ticket.serial()]);
@@ -338,7 +343,8 @@ fn bvh_work_on_an_async_compute_queue_then_tracing_on_graphics() {
         None => host.allocate_command_buffer().unwrap(),
     };
     host.begin(cmd_bvh).unwrap();
-    let t_bvh = ctx.build_gpu_task(&mut bvh, cmd_bvh).unwrap();
+    // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+    let t_bvh = unsafe { ctx.build_gpu_task(&mut bvh, cmd_bvh) }.unwrap();
     let semaphore = unsafe { d.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }.unwrap();
     unsafe {
         d.end_command_buffer(cmd_bvh).unwrap();
@@ -351,7 +357,8 @@ fn bvh_work_on_an_async_compute_queue_then_tracing_on_graphics() {
     trace.schedule_ambient_occlusion(&f.images.ao_task(&f.camera, 1.0, 2)).unwrap();
     let cmd = host.allocate_command_buffer().unwrap();
     host.begin(cmd).unwrap();
-    let t_trace = ctx.build_gpu_task(&mut trace, cmd).unwrap();
+    // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+    let t_trace = unsafe { ctx.build_gpu_task(&mut trace, cmd) }.unwrap();
     host.full_barrier(cmd);
     unsafe {
         d.end_command_buffer(cmd).unwrap();

@@ -62,50 +62,66 @@ fn bad_geometry_inputs_are_refused() {
         ),
     ];
     for (what, input) in cases {
-        let e = c.schedule_geometry(&task(input)).unwrap_err();
+        // SAFETY: the engine's buffers the task names are alive.
+        let e = unsafe { c.schedule_geometry(&task(input)) }.unwrap_err();
         assert!(matches!(e, Error::InvalidInput { .. }), "{what}: {e}");
     }
-    let e = c
-        .schedule_geometry(&task(GeometryInput {
+    // SAFETY: the engine's buffers the task names are alive.
+    let e = unsafe {
+        c.schedule_geometry(&task(GeometryInput {
             vertices: VertexBufferInput { format: vk::Format::R16G16B16A16_SFLOAT, ..good.vertices },
             ..good.clone()
         }))
-        .unwrap_err();
+    }
+    .unwrap_err();
     assert!(matches!(e, Error::UnsupportedFormat { .. }), "{e}");
-    let e = c
-        .schedule_geometry(&task(GeometryInput {
+    // SAFETY: the engine's buffers the task names are alive.
+    let e = unsafe {
+        c.schedule_geometry(&task(GeometryInput {
             indices: IndexBufferInput { format: vk::Format::R8_UINT, ..good.indices },
             ..good.clone()
         }))
-        .unwrap_err();
+    }
+    .unwrap_err();
     assert!(matches!(e, Error::UnsupportedFormat { .. }), "{e}");
     // 3 vertices of 12 bytes fit; a million do not.
-    let e = c
-        .schedule_geometry(&task(GeometryInput {
+    // SAFETY: the engine's buffers the task names are alive.
+    let e = unsafe {
+        c.schedule_geometry(&task(GeometryInput {
             vertices: VertexBufferInput { count: 999_999, ..good.vertices },
             indices: IndexBufferInput { buffer: vk::Buffer::null(), ..good.indices },
             ..good.clone()
         }))
-        .unwrap_err();
+    }
+    .unwrap_err();
     assert!(matches!(e, Error::BufferTooSmall { .. }), "{e}");
-    let e = c
-        .schedule_geometry(&task(GeometryInput { indices: IndexBufferInput { offset: 1 << 20, ..good.indices }, ..good.clone() }))
-        .unwrap_err();
+    // SAFETY: the engine's buffers the task names are alive.
+    let e = unsafe {
+        c.schedule_geometry(&task(GeometryInput {
+            indices: IndexBufferInput { offset: 1 << 20, ..good.indices },
+            ..good.clone()
+        }))
+    }
+    .unwrap_err();
     assert!(matches!(e, Error::BufferTooSmall { .. }), "{e}");
     assert!(c.is_empty(), "refused tasks are not scheduled");
 
     // Registering twice: the second register is refused when the container is built, and
     // the failed build leaves the container (and the context) as they were.
-    c.schedule_geometry(&task(good.clone())).unwrap();
+    // SAFETY: the engine's buffers the task names are alive.
+    unsafe { c.schedule_geometry(&task(good.clone())) }.unwrap();
     run_frame(&host, &ctx, &mut c).unwrap();
-    c.schedule_geometry(&task(good.clone())).unwrap();
+    // SAFETY: the engine's buffers the task names are alive.
+    unsafe { c.schedule_geometry(&task(good.clone())) }.unwrap();
     let e = run_frame(&host, &ctx, &mut c).unwrap_err();
     assert!(e.contains("already registered"), "{e}");
     assert_eq!(c.len(), 1, "a failed build keeps the tasks");
     c.clear();
     // An update of a never-registered handle.
     let fresh = ctx.create_geometry_handles(1)[0];
-    c.schedule_geometry(&GeometryTask { handle: fresh, operation: TaskOperation::Update, input: good.clone() }).unwrap();
+    // SAFETY: the engine's buffers the task names are alive.
+    unsafe { c.schedule_geometry(&GeometryTask { handle: fresh, operation: TaskOperation::Update, input: good.clone() }) }
+        .unwrap();
     assert!(run_frame(&host, &ctx, &mut c).unwrap_err().contains("not registered"));
     c.clear();
 
@@ -133,10 +149,13 @@ fn stale_foreign_and_null_handles_are_refused() {
         e => panic!("expected InvalidHandle, got {e}"),
     };
     let t = |handle| GeometryTask { handle, operation: TaskOperation::Register, input: input.clone() };
-    assert_eq!(problem(c.schedule_geometry(&t(stale)).unwrap_err()), HandleProblem::Destroyed);
-    assert_eq!(problem(c.schedule_geometry(&t(hybrid_rt::GeometryHandle::NULL)).unwrap_err()), HandleProblem::Null);
+    // SAFETY: the engine's buffers the task names are alive.
+    assert_eq!(problem(unsafe { c.schedule_geometry(&t(stale)) }.unwrap_err()), HandleProblem::Destroyed);
+    // SAFETY: the engine's buffers the task names are alive.
+    assert_eq!(problem(unsafe { c.schedule_geometry(&t(hybrid_rt::GeometryHandle::NULL)) }.unwrap_err()), HandleProblem::Null);
     let foreign = other.create_geometry_handles(1)[0];
-    assert_eq!(problem(c.schedule_geometry(&t(foreign)).unwrap_err()), HandleProblem::Foreign);
+    // SAFETY: the engine's buffers the task names are alive.
+    assert_eq!(problem(unsafe { c.schedule_geometry(&t(foreign)) }.unwrap_err()), HandleProblem::Foreign);
     assert_eq!(problem(ctx.destroy_geometry_handles(&[stale]).unwrap_err()), HandleProblem::Destroyed);
     // Destroying a handle twice in one call is refused, and destroys nothing.
     let a = ctx.create_geometry_handles(1)[0];
@@ -145,7 +164,8 @@ fn stale_foreign_and_null_handles_are_refused() {
 
     // A handle destroyed after scheduling is caught when the container is built.
     let late = ctx.create_geometry_handles(1)[0];
-    c.schedule_geometry(&t(late)).unwrap();
+    // SAFETY: the engine's buffers the task names are alive.
+    unsafe { c.schedule_geometry(&t(late)) }.unwrap();
     ctx.destroy_geometry_handles(&[late]).unwrap();
     assert!(run_frame(&host, &ctx, &mut c).unwrap_err().contains("destroyed"));
     c.clear();
@@ -170,8 +190,10 @@ fn stale_foreign_and_null_handles_are_refused() {
     let mut foreign_container = other.create_task_container();
     let cmd = host.allocate_command_buffer().unwrap();
     host.begin(cmd).unwrap();
-    assert!(matches!(ctx.build_gpu_task(&mut foreign_container, cmd), Err(Error::ForeignContainer)));
-    assert!(matches!(ctx.build_gpu_task(&mut c, vk::CommandBuffer::null()), Err(Error::InvalidInput { .. })));
+    // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+    assert!(matches!(unsafe { ctx.build_gpu_task(&mut foreign_container, cmd) }, Err(Error::ForeignContainer)));
+    // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+    assert!(matches!(unsafe { ctx.build_gpu_task(&mut c, vk::CommandBuffer::null()) }, Err(Error::InvalidInput { .. })));
     unsafe { host.device.end_command_buffer(cmd).unwrap() };
 
     ctx.destroy_instance_handles(&[i]).unwrap();
@@ -336,14 +358,16 @@ fn tickets_working_sets_and_settings() {
     c.schedule_bvh_build(&BvhBuildTask::default()).unwrap();
     let cmd = host.allocate_command_buffer().unwrap();
     host.begin(cmd).unwrap();
-    let ticket = ctx.build_gpu_task(&mut c, cmd).unwrap();
+    // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+    let ticket = unsafe { ctx.build_gpu_task(&mut c, cmd) }.unwrap();
     assert!(c.is_empty());
 
     // The only working set is in flight: the next build is refused and records nothing.
     c.schedule_bvh_build(&BvhBuildTask::default()).unwrap();
     let cmd2 = host.allocate_command_buffer().unwrap();
     host.begin(cmd2).unwrap();
-    assert!(matches!(ctx.build_gpu_task(&mut c, cmd2), Err(Error::WorkingSetsExhausted { in_flight: 1 })));
+    // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+    assert!(matches!(unsafe { ctx.build_gpu_task(&mut c, cmd2) }, Err(Error::WorkingSetsExhausted { in_flight: 1 })));
     assert_eq!(c.len(), 1, "the refused container keeps its tasks for the next try");
     assert_eq!(ctx.tickets_in_flight(), vec![ticket.serial()]);
 
@@ -357,7 +381,8 @@ fn tickets_working_sets_and_settings() {
     assert!(matches!(ctx.mark_gpu_task_completed(GpuTicket::from_raw(raw + 7)), Err(Error::UnknownTicket { .. })));
 
     // Now the retry goes through.
-    let ticket = ctx.build_gpu_task(&mut c, cmd2).unwrap();
+    // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+    let ticket = unsafe { ctx.build_gpu_task(&mut c, cmd2) }.unwrap();
     let fence = host.submit(cmd2).unwrap();
     host.wait(fence).unwrap();
     ctx.mark_gpu_task_completed(ticket).unwrap();
@@ -383,7 +408,8 @@ fn a_lost_device_tears_the_context_down_without_its_tickets() {
     // command buffer never finishes.
     let cmd = host.allocate_command_buffer().unwrap();
     host.begin(cmd).unwrap();
-    let _ticket = ctx.build_gpu_task(&mut frame, cmd).unwrap();
+    // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+    let _ticket = unsafe { ctx.build_gpu_task(&mut frame, cmd) }.unwrap();
     unsafe { host.device.end_command_buffer(cmd) }.unwrap();
     let (ctx, e) = ctx.destroy().unwrap_err();
     assert!(matches!(e, Error::TicketsInFlight { .. }), "{e}");

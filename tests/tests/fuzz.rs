@@ -343,7 +343,8 @@ fn scene_tasks_refuse_hostile_inputs_by_name() {
             }
         }
         let task = GeometryTask { handle: geometry, operation: TaskOperation::Register, input };
-        if let Err(e) = frame.schedule_geometry(&task) {
+        // SAFETY: the engine's buffers the task names are alive.
+        if let Err(e) = unsafe { frame.schedule_geometry(&task) } {
             check_refusal(&e)?;
         }
         let placed = InstanceInput { geometry, transform, ..Default::default() };

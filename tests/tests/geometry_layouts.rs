@@ -170,7 +170,8 @@ fn every_engine_layout_traces_the_same_ao() {
     let mut copy_bytes = Vec::new();
     for (l, &h) in layouts.iter().zip(&geometries) {
         let before = ctx.resource_allocations().geometry_copies.bytes;
-        frame.schedule_geometry(&GeometryTask { handle: h, input: l.input.clone(), ..Default::default() }).unwrap();
+        // SAFETY: the engine's buffers the task names are alive.
+        unsafe { frame.schedule_geometry(&GeometryTask { handle: h, input: l.input.clone(), ..Default::default() }) }.unwrap();
         frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 8, ..Default::default() }).unwrap();
         run_frame(&host, &ctx, &mut frame).unwrap();
         copy_bytes.push(ctx.resource_allocations().geometry_copies.bytes - before);
@@ -243,20 +244,25 @@ fn parts_and_ranges_are_checked() {
     let message = |e: Error| e.to_string();
 
     let bad_part = GeometryComponent { vertices: VertexBufferInput { stride: 6, ..good.input.vertices }, ..Default::default() };
-    let e = frame.schedule_geometry(&with(GeometryInput { extra_components: vec![bad_part], ..good.input.clone() })).unwrap_err();
+    // SAFETY: the engine's buffers the task names are alive.
+    let e = unsafe { frame.schedule_geometry(&with(GeometryInput { extra_components: vec![bad_part], ..good.input.clone() })) }
+        .unwrap_err();
     let text = message(e);
     assert!(text.contains("part 0") && text.contains("stride"), "{text}");
     let range = Some(VertexRange { first: 2, last: 9 });
-    let e = frame.schedule_geometry(&with(GeometryInput { vertex_range: range, ..good.input.clone() })).unwrap_err();
+    // SAFETY: the engine's buffers the task names are alive.
+    let e = unsafe { frame.schedule_geometry(&with(GeometryInput { vertex_range: range, ..good.input.clone() })) }.unwrap_err();
     assert!(message(e).contains("vertex range"));
     let nan = Some(Affine3A::from_translation(Vec3::new(f32::NAN, 0.0, 0.0)));
-    let e = frame.schedule_geometry(&with(GeometryInput { transform: nan, ..good.input.clone() })).unwrap_err();
+    // SAFETY: the engine's buffers the task names are alive.
+    let e = unsafe { frame.schedule_geometry(&with(GeometryInput { transform: nan, ..good.input.clone() })) }.unwrap_err();
     assert!(matches!(e, Error::InvalidTransform { .. }));
     assert!(frame.is_empty());
 
     // The grid's 4 vertices with a range of the first 3: the triangle using vertex 3 is bad.
     let range = Some(VertexRange { first: 0, last: 2 });
-    frame.schedule_geometry(&with(GeometryInput { vertex_range: range, ..good.input.clone() })).unwrap();
+    // SAFETY: the engine's buffers the task names are alive.
+    unsafe { frame.schedule_geometry(&with(GeometryInput { vertex_range: range, ..good.input.clone() })) }.unwrap();
     frame.schedule_bvh_build(&Default::default()).unwrap();
     run_frame(&host, &ctx, &mut frame).unwrap();
     let uses_last = m.indices.chunks(3).filter(|t| t.contains(&3)).count() as u32;
@@ -264,7 +270,8 @@ fn parts_and_ranges_are_checked() {
 
     // A named geometry is quoted in the errors about it.
     ctx.set_geometry_name(h, "grid").unwrap();
-    frame.schedule_geometry(&with(good.input.clone())).unwrap();
+    // SAFETY: the engine's buffers the task names are alive.
+    unsafe { frame.schedule_geometry(&with(good.input.clone())) }.unwrap();
     let e = run_frame(&host, &ctx, &mut frame).unwrap_err();
     assert!(e.contains("\"grid\"") && e.contains("already registered"), "{e}");
     frame.clear();

@@ -35,30 +35,36 @@ fn sizes_and_counts_past_the_device_limits_are_refused() {
 
     // A stride of 2^63: stride x (count - 1) once overflowed, the region check passed, and a
     // debug build panicked ("attempt to multiply with overflow"). Strides are now below 4 GiB.
-    let e = c
-        .schedule_geometry(&register(GeometryInput {
+    // SAFETY: the engine's buffers the task names are alive.
+    let e = unsafe {
+        c.schedule_geometry(&register(GeometryInput {
             vertices: VertexBufferInput { stride: 1 << 63, ..good.vertices },
             ..good.clone()
         }))
-        .unwrap_err();
+    }
+    .unwrap_err();
     assert!(matches!(e, Error::InvalidInput { .. }) && message(&e).contains("stride"), "{e}");
     // An offset near 2^64 plus the vertex range's start overflows: refused, named.
-    let e = c
-        .schedule_geometry(&register(GeometryInput {
+    // SAFETY: the engine's buffers the task names are alive.
+    let e = unsafe {
+        c.schedule_geometry(&register(GeometryInput {
             vertices: VertexBufferInput { offset: u64::MAX - 4, ..good.vertices },
             vertex_range: Some(hybrid_rt::VertexRange { first: 1, last: 2 }),
             ..good.clone()
         }))
-        .unwrap_err();
+    }
+    .unwrap_err();
     assert!(matches!(e, Error::InvalidInput { .. }) && message(&e).contains("overflow"), "{e}");
 
     // More triangles than any BLAS may hold (checked before the buffers' sizes).
-    let e = c
-        .schedule_geometry(&register(GeometryInput {
+    // SAFETY: the engine's buffers the task names are alive.
+    let e = unsafe {
+        c.schedule_geometry(&register(GeometryInput {
             indices: IndexBufferInput { count: u32::MAX / 3 * 3, ..good.indices },
             ..good.clone()
         }))
-        .unwrap_err();
+    }
+    .unwrap_err();
     assert!(message(&e).contains("maxPrimitiveCount"), "{e}");
     assert!(c.is_empty());
 
@@ -146,7 +152,9 @@ fn triangles_with_out_of_range_indices_are_dropped_and_reported() {
             indices: IndexBufferInput { buffer: ib.buffer, count: count as u32, format, ..Default::default() },
             ..Default::default()
         };
-        c.schedule_geometry(&GeometryTask { handle: geometries[k], operation: TaskOperation::Register, input }).unwrap();
+        // SAFETY: the engine's buffers the task names are alive.
+        unsafe { c.schedule_geometry(&GeometryTask { handle: geometries[k], operation: TaskOperation::Register, input }) }
+            .unwrap();
         let transform = Affine3A::from_translation(Vec3::new(2.0 * k as f32 - 1.0, 0.5, 0.0));
         c.schedule_instance(&InstanceTask {
             handle: instances[k],
@@ -212,7 +220,9 @@ fn big_caches_fill_completely_and_oversized_ones_are_coarsened() {
             },
             ..Default::default()
         };
-        c.schedule_geometry(&GeometryTask { handle: geometries[k], operation: TaskOperation::Register, input }).unwrap();
+        // SAFETY: the engine's buffers the task names are alive.
+        unsafe { c.schedule_geometry(&GeometryTask { handle: geometries[k], operation: TaskOperation::Register, input }) }
+            .unwrap();
         let input = InstanceInput {
             geometry: geometries[k],
             transform: Affine3A::from_translation(Vec3::new(0.0, -10.0 * k as f32, 0.0)),
@@ -284,7 +294,8 @@ fn a_ticket_returned_before_its_commands_ran_is_refused() {
     c.schedule_ambient_occlusion(&images.ao_task(&camera, 1.0, 1)).unwrap();
     let cmd = host.allocate_command_buffer().unwrap();
     host.begin(cmd).unwrap();
-    let ticket = ctx.build_gpu_task(&mut c, cmd).unwrap();
+    // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+    let ticket = unsafe { ctx.build_gpu_task(&mut c, cmd) }.unwrap();
     let serial = ticket.serial();
     // Recorded, not submitted.
     let raw = match ctx.mark_gpu_task_completed(ticket) {
@@ -346,7 +357,8 @@ fn a_denoising_context_destroyed_in_flight_outlives_its_ticket() {
     .unwrap();
     let cmd = host.allocate_command_buffer().unwrap();
     host.begin(cmd).unwrap();
-    let ticket = ctx.build_gpu_task(&mut c, cmd).unwrap();
+    // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+    let ticket = unsafe { ctx.build_gpu_task(&mut c, cmd) }.unwrap();
     ctx.destroy_denoising_context(dn).unwrap();
     assert!(ctx.resource_allocations().denoiser.bytes > before.bytes, "history waits for the ticket");
     host.full_barrier(cmd);

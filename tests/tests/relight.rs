@@ -343,7 +343,8 @@ fn vertex_colours_and_textures_give_the_relit_albedo() {
         ..Default::default()
     };
     let task = hybrid_rt::GeometryTask { handle: f.gpu_scene.geometries[0], operation: hybrid_rt::TaskOperation::Update, input };
-    f.frame.schedule_geometry(&task).unwrap();
+    // SAFETY: the engine's buffers the task names are alive.
+    unsafe { f.frame.schedule_geometry(&task) }.unwrap();
     for _ in 0..2 {
         f.frame.schedule_bvh_build(&Default::default()).unwrap();
         run_frame(&f.host, &f.ctx, &mut f.frame).unwrap();
@@ -427,7 +428,8 @@ fn bad_albedo_sources_are_refused() {
     let handle = ctx.create_geometry_handles(1)[0];
     for input in bad {
         let task = hybrid_rt::GeometryTask { handle, operation: hybrid_rt::TaskOperation::Register, input: input.clone() };
-        let e = frame.schedule_geometry(&task).expect_err("refused");
+        // SAFETY: the engine's buffers the task names are alive.
+        let e = unsafe { frame.schedule_geometry(&task) }.expect_err("refused");
         assert!(
             matches!(
                 e,
@@ -439,7 +441,8 @@ fn bad_albedo_sources_are_refused() {
         );
     }
     let task = hybrid_rt::GeometryTask { handle, operation: hybrid_rt::TaskOperation::Register, input: good };
-    frame.schedule_geometry(&task).unwrap();
+    // SAFETY: the engine's buffers the task names are alive.
+    unsafe { frame.schedule_geometry(&task) }.unwrap();
     frame.schedule_bvh_build(&Default::default()).unwrap();
     run_frame(&host, &ctx, &mut frame).unwrap();
     ctx.destroy_geometry_handles(&[handle]).unwrap();

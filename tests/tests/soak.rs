@@ -120,14 +120,18 @@ fn two_thousand_frames_of_churn_keep_memory_flat() {
                 let deforming = pick(3) == 0;
                 let h = ctx.create_geometry_handles(1)[0];
                 let input = geometry_input(&shapes[shape], deforming);
-                frame.schedule_geometry(&GeometryTask { handle: h, operation: TaskOperation::Register, input }).unwrap();
+                // SAFETY: the engine's buffers the task names are alive.
+                unsafe { frame.schedule_geometry(&GeometryTask { handle: h, operation: TaskOperation::Register, input }) }
+                    .unwrap();
                 geometries.push(Live { geometry: h, shape, deforming });
             }
             3 if !geometries.is_empty() => {
                 // An update: a refit for deforming geometry, a queued rebuild otherwise.
                 let g = &geometries[pick(geometries.len())];
                 let input = geometry_input(&shapes[g.shape], g.deforming);
-                frame.schedule_geometry(&GeometryTask { handle: g.geometry, operation: TaskOperation::Update, input }).unwrap();
+                // SAFETY: the engine's buffers the task names are alive.
+                unsafe { frame.schedule_geometry(&GeometryTask { handle: g.geometry, operation: TaskOperation::Update, input }) }
+                    .unwrap();
             }
             _ => {}
         }
@@ -198,7 +202,8 @@ fn two_thousand_frames_of_churn_keep_memory_flat() {
         let cmd = host.allocate_command_buffer().unwrap();
         host.begin(cmd).unwrap();
         host.full_barrier(cmd);
-        let ticket = ctx.build_gpu_task(&mut frame, cmd).unwrap_or_else(|e| panic!("frame {f}: {e}"));
+        // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+        let ticket = unsafe { ctx.build_gpu_task(&mut frame, cmd) }.unwrap_or_else(|e| panic!("frame {f}: {e}"));
         host.full_barrier(cmd);
         in_flight.push_back((ticket, host.submit(cmd).unwrap(), cmd));
         totals.push(ctx.resource_allocations().total_bytes());

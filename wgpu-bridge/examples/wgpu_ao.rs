@@ -152,7 +152,8 @@ pub fn run(out: Option<&std::path::Path>) -> Result<Report, Box<dyn std::error::
             indices: IndexBufferInput { buffer: rt.buffer(&index_buffer)?, count: 6, ..Default::default() },
             ..Default::default()
         };
-        tasks.schedule_geometry(&GeometryTask { handle: geometries[k], input, ..Default::default() })?;
+        // SAFETY: the engine's buffers the task names are alive.
+        unsafe { tasks.schedule_geometry(&GeometryTask { handle: geometries[k], input, ..Default::default() }) }?;
         let input = InstanceInput { geometry: geometries[k], transform: Affine3A::IDENTITY, ..Default::default() };
         tasks.schedule_instance(&InstanceTask { handle: instances[k], input, ..Default::default() })?;
     }
@@ -183,7 +184,9 @@ pub fn run(out: Option<&std::path::Path>) -> Result<Report, Box<dyn std::error::
     let mut before = device.create_command_encoder(&Default::default());
     let copies: Vec<&wgpu::Buffer> = vertex_buffers.iter().chain([&index_buffer]).collect();
     prepare(&mut before, &[&depth, &normals], &[&ao], &copies);
-    let (sdk_commands, ticket) = rt.record(&mut tasks, Some("hybrid-rt"))?;
+    // SAFETY: the textures and buffers the tasks name live until the end of `main`, after the
+    // ticket is back.
+    let (sdk_commands, ticket) = unsafe { rt.record(&mut tasks, Some("hybrid-rt")) }?;
     let mut after = device.create_command_encoder(&Default::default());
     show(device, &mut after, &ao_view, &shown_view);
     let readback = |bytes_per_texel: u32| {

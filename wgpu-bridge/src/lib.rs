@@ -33,7 +33,8 @@
 //! let rt = RtDevice::new(adapter, &wgpu::DeviceDescriptor::default(), &hybrid_rt::InitSettings::default())?;
 //! let mut tasks = rt.context().create_task_container();
 //! // ... schedule geometry, instances, a BVH build and traces, with inputs from rt.image() ...
-//! let (sdk_commands, ticket) = rt.record(&mut tasks, Some("hybrid-rt"))?;
+//! // SAFETY: the textures and buffers the tasks name outlive the ticket.
+//! let (sdk_commands, ticket) = unsafe { rt.record(&mut tasks, Some("hybrid-rt")) }?;
 //! let index = rt.queue.submit([sdk_commands]);
 //! rt.device.poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: None }).ok();
 //! rt.context().mark_gpu_task_completed(ticket)?;
@@ -232,7 +233,12 @@ impl RtDevice {
     /// and returns it with the SDK's ticket. Submit it on [`RtDevice::queue`] after the
     /// commands that [`prepare`]d its resources. On error nothing was scheduled on the GPU and
     /// the container keeps its tasks.
-    pub fn record(
+    ///
+    /// # Safety
+    /// The wgpu textures and buffers whose handles the container's tasks hold (from
+    /// [`RtDevice::image`] and [`RtDevice::buffer`]) stay alive until the ticket has come back
+    /// (`ExecuteContext::build_gpu_task`'s contract; wgpu cannot see the SDK's use of them).
+    pub unsafe fn record(
         &self,
         container: &mut TaskContainer,
         label: Option<&str>,
@@ -244,6 +250,7 @@ impl RtDevice {
             encoder.as_hal_mut::<Vulkan, _, _>(|e| -> Result<GpuTicket, BridgeError> {
                 let cmd = e.ok_or(BridgeError::NotVulkan("command encoder"))?.raw_handle();
                 full_barrier(&self.raw, cmd);
+                // The encoder's buffer is recording; the tasks' resources: this function's contract.
                 let ticket = self.context.build_gpu_task(container, cmd)?;
                 full_barrier(&self.raw, cmd);
                 Ok(ticket)

@@ -202,7 +202,8 @@ impl<'h> Renderer<'h> {
         for (i, &handle) in geometries.iter().enumerate() {
             let input = sdk_geometry_input(&scene, &meshes, i, Some(i) == deformed_mesh);
             let task = GeometryTask { handle, operation: TaskOperation::Register, input };
-            schedule::schedule(&mut container, schedule::BVH_LABEL, |c| c.schedule_geometry(&task))?;
+            // SAFETY: the engine's buffers the task names are alive.
+            schedule::schedule(&mut container, schedule::BVH_LABEL, |c| unsafe { c.schedule_geometry(&task) })?;
         }
         let instances = ctx.create_instance_handles(scene.scene.instances.len());
         for (i, &handle) in instances.iter().enumerate() {
@@ -372,7 +373,8 @@ impl<'h> Renderer<'h> {
 
         // --- The SDK: one container for everything of this frame.
         self.schedule_frame(slot, &transforms, deformed, &cameras, debug)?;
-        let ticket = self.ctx.build_gpu_task(&mut self.container, cmd).map_err(sdk_err)?;
+        // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+        let ticket = unsafe { self.ctx.build_gpu_task(&mut self.container, cmd) }.map_err(sdk_err)?;
         let s = &mut self.slots[slot];
         s.ticket = Some(ticket);
         s.timer.mark(host, cmd, "SDK (all tasks)");

@@ -87,7 +87,8 @@ impl Renderer<'_> {
             let base = super::sdk_geometry_input(&self.scene, &self.meshes, mesh, true);
             let input = GeometryInput { vertices: VertexBufferInput { buffer, ..base.vertices }, ..base };
             let task = GeometryTask { handle: self.geometries[mesh], operation: TaskOperation::Update, input };
-            schedule(c, BVH_LABEL, |c| c.schedule_geometry(&task))?;
+            // SAFETY: the engine's buffers the task names are alive.
+            schedule(c, BVH_LABEL, |c| unsafe { c.schedule_geometry(&task) })?;
         }
         let build = BvhBuildTask {
             max_blas_build_count: self.settings.max_blas_build_count,

@@ -375,7 +375,8 @@ pub unsafe extern "C" fn hrt_build_gpu_task(
         let c = context(ctx)?;
         let k = container_mut(container)?;
         let out = get_mut(ticket, "ticket")?;
-        let t = c.ctx.build_gpu_task(&mut k.inner, vk::CommandBuffer::from_raw(command_buffer as u64))?;
+        // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
+        let t = unsafe { c.ctx.build_gpu_task(&mut k.inner, vk::CommandBuffer::from_raw(command_buffer as u64)) }?;
         *out = t.into_raw();
         Ok(())
     })

@@ -316,8 +316,14 @@ pub extern "C" fn hrt_geometry_task_default() -> HrtGeometryTask {
 
 #[no_mangle]
 pub unsafe extern "C" fn hrt_schedule_geometry(container: *mut HrtTaskContainer, task: *const HrtGeometryTask) -> HrtStatus {
-    // SAFETY: the header says extra_components points to extra_component_count parts.
-    schedule(container, task, |t| unsafe { geometry_task(t) }, rt::TaskContainer::schedule_geometry)
+    schedule(
+        container,
+        task,
+        // SAFETY: the header says extra_components points to extra_component_count parts.
+        |t| unsafe { geometry_task(t) },
+        // SAFETY: the header asks for live buffers and images, alive until the ticket is back.
+        |c, t| unsafe { c.schedule_geometry(t) },
+    )
 }
 
 /// The VkBuildAccelerationStructureFlagsKHR a BLAS of `build_hint` (an HrtBuildHint) is built

@@ -41,7 +41,14 @@ impl TaskContainer {
     }
 
     /// Registers or updates a geometry (its data is checked against the buffers and device limits now).
-    pub fn schedule_geometry(&mut self, task: &GeometryTask) -> Result<()> {
+    ///
+    /// # Safety
+    /// Every buffer and image the task names (vertices, indices, UVs, colours, the albedo and
+    /// alpha textures, extra components') is a live object of the context's device, and stays
+    /// alive until the ticket of the build that records this task has come back: scheduling
+    /// asks the driver for the buffers' sizes, and the build copies from them. (The SDK checks
+    /// every value it can; it cannot tell a destroyed handle from a live one.)
+    pub unsafe fn schedule_geometry(&mut self, task: &GeometryTask) -> Result<()> {
         let shared = self.shared()?;
         shared.check_geometry_alive(task.handle, "GeometryTask.handle")?;
         validate::geometry_input(&shared.device, &task.input)?;

@@ -131,7 +131,8 @@ impl ExecuteContext {
         if settings.max_timed_tasks == 0 || settings.max_timed_tasks > 4096 {
             return Err(Error::invalid("InitSettings.max_timed_tasks", "must be in 1..=4096"));
         }
-        let device = Device::new(desc)?;
+        // SAFETY: this function's contract is `Device::new`'s.
+        let device = unsafe { Device::new(desc) }?;
         let max_buffer = device.limits.max_buffer_size;
         if settings.upload_ring_bytes > max_buffer {
             return Err(Error::invalid(

@@ -21,7 +21,20 @@ impl ExecuteContext {
     /// as before — and the container keeps its tasks, so the same build can be tried again.
     /// Whatever the engine recorded into `cmd` before or after the failed call stays valid:
     /// the engine can go on recording, end and submit it as if the call had not been made.
-    pub fn build_gpu_task(&self, container: &mut TaskContainer, cmd: vk::CommandBuffer) -> Result<GpuTicket> {
+    ///
+    /// # Safety
+    /// - `cmd` is a command buffer of the context's device, in the recording state, outside a
+    ///   render pass, from a pool whose queue family supports compute (and the families of
+    ///   `InitSettings::queue_family_indices` where several are given);
+    /// - every image, view and buffer the container's tasks name is a live object of that
+    ///   device, created with the usage flags the task declares, and in the declared layout
+    ///   when the commands execute, with the engine's writes to them made visible by its own
+    ///   barriers (the integration guide's barriers section); each stays alive until this
+    ///   ticket has come back.
+    ///
+    /// Every other property of the inputs — formats, sizes, ranges, handles the SDK issued —
+    /// is checked, and refused with an error; the handles of Vulkan objects cannot be.
+    pub unsafe fn build_gpu_task(&self, container: &mut TaskContainer, cmd: vk::CommandBuffer) -> Result<GpuTicket> {
         if !std::ptr::eq(container.shared.as_ptr(), Arc::as_ptr(&self.shared)) {
             return Err(Error::ForeignContainer);
         }
@@ -117,6 +130,7 @@ impl ExecuteContext {
         }
         if !ws.compactions.is_empty() {
             let mut sizes = vec![0u64; ws.compactions.len()];
+            // SAFETY: the ticket's marker says its commands completed, so the compaction queries are written.
             let r = unsafe { d.raw.get_query_pool_results(ws.compaction_pool, 0, &mut sizes, vk::QueryResultFlags::TYPE_64) };
             let compactions = std::mem::take(&mut ws.compactions);
             if r.is_ok() {

@@ -119,6 +119,7 @@ impl WorkingSet {
             return Ok(());
         }
         if self.compaction_pool != vk::QueryPool::null() {
+            // SAFETY: no ticket of this working set is in flight (its owner checked); destroyed once.
             unsafe { d.destroy_query_pool(self.compaction_pool, None) };
             self.compaction_pool = vk::QueryPool::null();
             self.compaction_slots = 0;
@@ -127,6 +128,7 @@ impl WorkingSet {
         let info = vk::QueryPoolCreateInfo::default()
             .query_type(vk::QueryType::ACCELERATION_STRUCTURE_COMPACTED_SIZE_KHR)
             .query_count(slots);
+        // SAFETY: valid create info; destroyed in `destroy` or when replaced.
         self.compaction_pool = unsafe { d.create_query_pool(&info, None) }.map_err(Error::vk("vkCreateQueryPool"))?;
         self.compaction_slots = slots;
         Ok(())
@@ -155,6 +157,7 @@ impl WorkingSet {
         }
         self.timer.destroy(&device.raw);
         if self.compaction_pool != vk::QueryPool::null() {
+            // SAFETY: the context is being destroyed after its tickets came back; destroyed once.
             unsafe { device.raw.destroy_query_pool(self.compaction_pool, None) };
         }
     }

@@ -167,7 +167,7 @@ impl Commands {
     pub unsafe fn replay(&self, device: &Device, cmd: vk::CommandBuffer) {
         let d = &device.raw;
         for c in self.list.borrow_mut().drain(..) {
-            // SAFETY (each call): the caller's contract above; every pointer passed is into
+            // SAFETY: each call — the caller's contract above; every pointer passed is into
             // the command's own data, alive for the call.
             unsafe {
                 match c {

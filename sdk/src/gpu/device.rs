@@ -42,6 +42,7 @@ pub fn query_device_support(instance: &ash::Instance, pdev: vk::PhysicalDevice) 
     {
         missing.push("Vulkan 1.3".to_string());
     }
+    // SAFETY: a plain query on a physical device of this instance.
     let exts = unsafe { instance.enumerate_device_extension_properties(pdev) }.unwrap_or_default();
     let has = |name: &CStr| exts.iter().any(|e| e.extension_name_as_c_str() == Ok(name));
     for name in REQUIRED_DEVICE_EXTENSIONS {
@@ -217,7 +218,8 @@ impl Device {
         if desc.enabled_features.is_null() {
             missing.push("DeviceDesc.enabled_features (null: give the pNext chain vkCreateDevice was given)".into());
         } else {
-            let enabled = crate::gpu::features::enabled_in(desc.enabled_features);
+            // SAFETY: `enabled_features` is the chain vkCreateDevice was given (`new`'s contract).
+            let enabled = unsafe { crate::gpu::features::enabled_in(desc.enabled_features) };
             for f in crate::gpu::features::Feature::REQUIRED {
                 if !enabled.contains(&f) {
                     missing.push(format!("feature {} (not enabled on the VkDevice)", f.name()));
@@ -226,7 +228,8 @@ impl Device {
         }
         if missing.is_empty() {
             for name in DEVICE_FUNCTIONS {
-                if desc.instance.get_device_proc_addr(desc.device.handle(), name.as_ptr()).is_none() {
+                // SAFETY: the engine's live device of this instance; a NUL-terminated name.
+                if unsafe { desc.instance.get_device_proc_addr(desc.device.handle(), name.as_ptr()) }.is_none() {
                     missing.push(format!("device function {} (not loaded)", name.to_string_lossy()));
                 }
             }
@@ -234,8 +237,9 @@ impl Device {
         if !missing.is_empty() {
             return Err(Error::MissingDeviceSupport { missing });
         }
+        // SAFETY: as above (null was refused).
         let rq_feature =
-            crate::gpu::features::enabled_in(desc.enabled_features).contains(&crate::gpu::features::Feature::RayQuery);
+            unsafe { crate::gpu::features::enabled_in(desc.enabled_features) }.contains(&crate::gpu::features::Feature::RayQuery);
         let ray_query = support.ray_query && rq_feature && desc.enabled_extensions.contains(&khr::ray_query::NAME);
 
         let mut rt_props = vk::PhysicalDeviceRayTracingPipelinePropertiesKHR::default();
@@ -243,6 +247,7 @@ impl Device {
         let mut props13 = vk::PhysicalDeviceVulkan13Properties::default();
         let mut props2 =
             vk::PhysicalDeviceProperties2::default().push_next(&mut rt_props).push_next(&mut as_props).push_next(&mut props13);
+        // SAFETY: a well-formed property chain on the engine's physical device, alive for the call.
         unsafe { desc.instance.get_physical_device_properties2(desc.physical_device, &mut props2) };
         let limits = props2.properties.limits;
         let device_name = props2.properties.device_name_as_c_str().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();

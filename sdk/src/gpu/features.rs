@@ -61,45 +61,51 @@ unsafe fn visit(s: *mut vk::BaseOutStructure<'_>, set: &[Feature], found: &mut V
             found.push(f);
         }
     };
-    match (*s).s_type {
-        T::PHYSICAL_DEVICE_FEATURES_2 => {
-            let s = &mut *(s as *mut vk::PhysicalDeviceFeatures2<'_>);
-            mark(Feature::ShaderStorageImageWriteWithoutFormat, &mut s.features.shader_storage_image_write_without_format);
+    // SAFETY: the caller's contract: `s` is a valid struct of the type its `s_type` names,
+    // so the cast matches the memory behind it.
+    unsafe {
+        match (*s).s_type {
+            T::PHYSICAL_DEVICE_FEATURES_2 => {
+                let s = &mut *(s as *mut vk::PhysicalDeviceFeatures2<'_>);
+                mark(Feature::ShaderStorageImageWriteWithoutFormat, &mut s.features.shader_storage_image_write_without_format);
+            }
+            T::PHYSICAL_DEVICE_VULKAN_1_2_FEATURES => mark(
+                Feature::BufferDeviceAddress,
+                &mut (*(s as *mut vk::PhysicalDeviceVulkan12Features<'_>)).buffer_device_address,
+            ),
+            T::PHYSICAL_DEVICE_BUFFER_DEVICE_ADDRESS_FEATURES => mark(
+                Feature::BufferDeviceAddress,
+                &mut (*(s as *mut vk::PhysicalDeviceBufferDeviceAddressFeatures<'_>)).buffer_device_address,
+            ),
+            T::PHYSICAL_DEVICE_VULKAN_1_3_FEATURES => {
+                let s = &mut *(s as *mut vk::PhysicalDeviceVulkan13Features<'_>);
+                mark(Feature::Synchronization2, &mut s.synchronization2);
+                mark(Feature::Maintenance4, &mut s.maintenance4);
+            }
+            T::PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES => mark(
+                Feature::Synchronization2,
+                &mut (*(s as *mut vk::PhysicalDeviceSynchronization2Features<'_>)).synchronization2,
+            ),
+            T::PHYSICAL_DEVICE_MAINTENANCE_4_FEATURES => {
+                mark(Feature::Maintenance4, &mut (*(s as *mut vk::PhysicalDeviceMaintenance4Features<'_>)).maintenance4)
+            }
+            T::PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_FEATURES_KHR => mark(
+                Feature::AccelerationStructure,
+                &mut (*(s as *mut vk::PhysicalDeviceAccelerationStructureFeaturesKHR<'_>)).acceleration_structure,
+            ),
+            T::PHYSICAL_DEVICE_RAY_TRACING_PIPELINE_FEATURES_KHR => mark(
+                Feature::RayTracingPipeline,
+                &mut (*(s as *mut vk::PhysicalDeviceRayTracingPipelineFeaturesKHR<'_>)).ray_tracing_pipeline,
+            ),
+            T::PHYSICAL_DEVICE_SHADER_ATOMIC_FLOAT_FEATURES_EXT => mark(
+                Feature::ShaderBufferFloat32AtomicAdd,
+                &mut (*(s as *mut vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT<'_>)).shader_buffer_float32_atomic_add,
+            ),
+            T::PHYSICAL_DEVICE_RAY_QUERY_FEATURES_KHR => {
+                mark(Feature::RayQuery, &mut (*(s as *mut vk::PhysicalDeviceRayQueryFeaturesKHR<'_>)).ray_query)
+            }
+            _ => {}
         }
-        T::PHYSICAL_DEVICE_VULKAN_1_2_FEATURES => {
-            mark(Feature::BufferDeviceAddress, &mut (*(s as *mut vk::PhysicalDeviceVulkan12Features<'_>)).buffer_device_address)
-        }
-        T::PHYSICAL_DEVICE_BUFFER_DEVICE_ADDRESS_FEATURES => mark(
-            Feature::BufferDeviceAddress,
-            &mut (*(s as *mut vk::PhysicalDeviceBufferDeviceAddressFeatures<'_>)).buffer_device_address,
-        ),
-        T::PHYSICAL_DEVICE_VULKAN_1_3_FEATURES => {
-            let s = &mut *(s as *mut vk::PhysicalDeviceVulkan13Features<'_>);
-            mark(Feature::Synchronization2, &mut s.synchronization2);
-            mark(Feature::Maintenance4, &mut s.maintenance4);
-        }
-        T::PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES => {
-            mark(Feature::Synchronization2, &mut (*(s as *mut vk::PhysicalDeviceSynchronization2Features<'_>)).synchronization2)
-        }
-        T::PHYSICAL_DEVICE_MAINTENANCE_4_FEATURES => {
-            mark(Feature::Maintenance4, &mut (*(s as *mut vk::PhysicalDeviceMaintenance4Features<'_>)).maintenance4)
-        }
-        T::PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_FEATURES_KHR => mark(
-            Feature::AccelerationStructure,
-            &mut (*(s as *mut vk::PhysicalDeviceAccelerationStructureFeaturesKHR<'_>)).acceleration_structure,
-        ),
-        T::PHYSICAL_DEVICE_RAY_TRACING_PIPELINE_FEATURES_KHR => mark(
-            Feature::RayTracingPipeline,
-            &mut (*(s as *mut vk::PhysicalDeviceRayTracingPipelineFeaturesKHR<'_>)).ray_tracing_pipeline,
-        ),
-        T::PHYSICAL_DEVICE_SHADER_ATOMIC_FLOAT_FEATURES_EXT => mark(
-            Feature::ShaderBufferFloat32AtomicAdd,
-            &mut (*(s as *mut vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT<'_>)).shader_buffer_float32_atomic_add,
-        ),
-        T::PHYSICAL_DEVICE_RAY_QUERY_FEATURES_KHR => {
-            mark(Feature::RayQuery, &mut (*(s as *mut vk::PhysicalDeviceRayQueryFeaturesKHR<'_>)).ray_query)
-        }
-        _ => {}
     }
 }
 
@@ -112,8 +118,11 @@ pub(crate) unsafe fn enabled_in(chain: *const c_void) -> Vec<Feature> {
     let mut s = chain as *mut vk::BaseOutStructure<'_>;
     let mut guard = 0;
     while !s.is_null() && guard < 256 {
-        visit(s, &[], &mut found);
-        s = (*s).p_next;
+        // SAFETY: the caller's contract: `s` is a node of a valid chain.
+        unsafe {
+            visit(s, &[], &mut found);
+            s = (*s).p_next;
+        }
         guard += 1;
     }
     found
@@ -248,9 +257,12 @@ impl DeviceFeatures {
         let mut s = features2 as *mut _ as *mut vk::BaseOutStructure<'_>;
         let mut tail = s;
         while !s.is_null() {
-            visit(s, &wants, &mut covered);
             tail = s;
-            s = (*s).p_next;
+            // SAFETY: the caller's contract: `s` is a node of a valid chain.
+            unsafe {
+                visit(s, &wants, &mut covered);
+                s = (*s).p_next;
+            }
         }
         // Append per-extension structs for the rest: unlike Vulkan12/13Features they never
         // clash with what the chain holds (a chain may not mix VkPhysicalDeviceVulkan13Features
@@ -267,9 +279,13 @@ impl DeviceFeatures {
         ];
         for (feature, node) in nodes {
             if wants.contains(&feature) && !covered.contains(&feature) {
-                (*tail).p_next = node as *mut vk::BaseOutStructure<'_>;
-                tail = node as *mut vk::BaseOutStructure<'_>;
-                (*tail).p_next = std::ptr::null_mut();
+                // SAFETY: `tail` is the chain's last node (valid, the caller's contract) or one
+                // of `self`'s structs, which outlive the chain's use (the caller's contract).
+                unsafe {
+                    (*tail).p_next = node as *mut vk::BaseOutStructure<'_>;
+                    tail = node as *mut vk::BaseOutStructure<'_>;
+                    (*tail).p_next = std::ptr::null_mut();
+                }
             }
         }
     }
@@ -289,10 +305,12 @@ mod tests {
         let mut bda = vk::PhysicalDeviceBufferDeviceAddressFeatures::default();
         let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut v13).push_next(&mut bda);
         let mut sdk = DeviceFeatures::required(false);
+        // SAFETY: the chain is made of live structs above; `sdk` outlives its use.
         unsafe { sdk.merge_into(&mut f2) };
         let mut types = Vec::new();
         let mut s = &f2 as *const _ as *const vk::BaseInStructure<'_>;
         while !s.is_null() {
+            // SAFETY: `s` walks the chain built above.
             unsafe {
                 types.push((*s).s_type);
                 s = (*s).p_next;
@@ -306,6 +324,7 @@ mod tests {
             !types.contains(&vk::StructureType::PHYSICAL_DEVICE_VULKAN_1_2_FEATURES),
             "no Vulkan12Features beside the per-extension struct"
         );
+        // SAFETY: the chain built above.
         let enabled = unsafe { enabled_in(&f2 as *const _ as *const c_void) };
         for f in Feature::REQUIRED {
             assert!(enabled.contains(&f), "{} enabled", f.name());
@@ -319,6 +338,7 @@ mod tests {
     fn push_to_chains_every_required_feature() {
         let mut sdk = DeviceFeatures::required(true);
         let info = sdk.push_to(vk::DeviceCreateInfo::default());
+        // SAFETY: `push_to` chained live structs of `sdk`.
         let enabled = unsafe { enabled_in(info.p_next) };
         for f in Feature::REQUIRED.iter().chain([&Feature::RayQuery]) {
             assert!(enabled.contains(f), "{}", f.name());

@@ -66,6 +66,7 @@ impl MaskFormats {
     pub(crate) fn query(instance: &ash::Instance, pdev: vk::PhysicalDevice) -> MaskFormats {
         const _: () = assert!(FLOAT_READABLE_FORMATS.len() <= 64);
         let sampled = |f: vk::Format| {
+            // SAFETY: a plain query on the engine's physical device.
             let props = unsafe { instance.get_physical_device_format_properties(pdev, f) };
             props.optimal_tiling_features.contains(vk::FormatFeatureFlags::SAMPLED_IMAGE)
         };

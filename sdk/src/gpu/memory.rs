@@ -256,6 +256,7 @@ impl Memory {
         };
         // SAFETY: valid create info; the buffer is destroyed in `destroy_buffer`.
         let raw = unsafe { self.device.create_buffer(&info, None) }.map_err(Error::vk("vkCreateBuffer"))?;
+        // SAFETY: `raw` was just created on this device.
         let requirements = unsafe { self.device.get_buffer_memory_requirements(raw) };
         let allocation = {
             let mut guard = self.allocator.lock();
@@ -271,15 +272,19 @@ impl Memory {
         let allocation = match allocation {
             Ok(a) => a,
             Err(e) => {
+                // SAFETY: `raw` was never bound or used.
                 unsafe { self.device.destroy_buffer(raw, None) };
                 return Err(Error::OutOfMemory { what: name, detail: e.to_string() });
             }
         };
+        // SAFETY: the allocation was made for `raw`'s requirements and is unbound.
         if let Err(e) = unsafe { self.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) } {
+            // SAFETY: `raw` was never used.
             unsafe { self.device.destroy_buffer(raw, None) };
             let _ = self.allocator.lock().as_mut().map(|a| a.free(allocation));
             return Err(Error::Vulkan { call: "vkBindBufferMemory", result: e });
         }
+        // SAFETY: `raw` is bound and was created with SHADER_DEVICE_ADDRESS usage.
         let address = unsafe { self.device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(raw)) };
         crate::gpu::device::name_object(self.debug.as_ref(), raw, name);
         self.note("alloc", kind, name, allocation.size());
@@ -328,6 +333,7 @@ impl Memory {
         };
         // SAFETY: valid create info; destroyed in `destroy_image`.
         let raw = unsafe { self.device.create_image(&info, None) }.map_err(Error::vk("vkCreateImage"))?;
+        // SAFETY: `raw` was just created on this device.
         let requirements = unsafe { self.device.get_image_memory_requirements(raw) };
         let allocation = self.allocator.lock().as_mut().ok_or_else(|| Error::Internal("allocator gone".into())).and_then(|a| {
             a.allocate(&AllocationCreateDesc {
@@ -342,10 +348,12 @@ impl Memory {
         let allocation = match allocation {
             Ok(a) => a,
             Err(e) => {
+                // SAFETY: `raw` was never bound or used.
                 unsafe { self.device.destroy_image(raw, None) };
                 return Err(e);
             }
         };
+        // SAFETY: the allocation was made for `raw`'s requirements and is unbound.
         let bound = unsafe { self.device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }
             .map_err(Error::vk("vkBindImageMemory"))
             .and_then(|_| {
@@ -354,11 +362,13 @@ impl Memory {
                     .view_type(vk::ImageViewType::TYPE_2D)
                     .format(format)
                     .subresource_range(COLOR_RANGE);
+                // SAFETY: `raw` is bound to memory; the view matches its format and one subresource.
                 unsafe { self.device.create_image_view(&view_info, None) }.map_err(Error::vk("vkCreateImageView"))
             });
         let view = match bound {
             Ok(v) => v,
             Err(e) => {
+                // SAFETY: `raw` was never used (its view failed or was never made).
                 unsafe { self.device.destroy_image(raw, None) };
                 let _ = self.allocator.lock().as_mut().map(|a| a.free(allocation));
                 return Err(e);

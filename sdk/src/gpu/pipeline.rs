@@ -12,6 +12,7 @@ pub(crate) fn shader_module(device: &ash::Device, spirv: &[u8]) -> Result<vk::Sh
     let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
         .map_err(|e| Error::Internal(format!("embedded SPIR-V unreadable: {e}")))?;
     let info = vk::ShaderModuleCreateInfo::default().code(&words);
+    // SAFETY: the words are SPIR-V the build compiled and validated (`spirv` test).
     unsafe { device.create_shader_module(&info, None) }.map_err(Error::vk("vkCreateShaderModule"))
 }
 
@@ -42,6 +43,7 @@ fn push_set_layout(device: &ash::Device, bindings: &[Binding], stages: vk::Shade
     let info = vk::DescriptorSetLayoutCreateInfo::default()
         .flags(vk::DescriptorSetLayoutCreateFlags::PUSH_DESCRIPTOR_KHR)
         .bindings(&vk_bindings);
+    // SAFETY: valid create info; destroyed with the arena.
     unsafe { device.create_descriptor_set_layout(&info, None) }.map_err(Error::vk("vkCreateDescriptorSetLayout"))
 }
 
@@ -59,6 +61,7 @@ fn pipeline_layout(
         .into_iter()
         .collect();
     let info = vk::PipelineLayoutCreateInfo::default().set_layouts(&sets).push_constant_ranges(&ranges);
+    // SAFETY: valid create info; the set layouts outlive the call; destroyed with the arena.
     unsafe { device.create_pipeline_layout(&info, None) }.map_err(Error::vk("vkCreatePipelineLayout"))
 }
 
@@ -97,6 +100,7 @@ fn rt_pipeline(
         match shader_module(d, m) {
             Ok(m) => modules.push(m),
             Err(e) => {
+                // SAFETY: the modules were just created and no pipeline uses them.
                 modules.iter().for_each(|&m| unsafe { d.destroy_shader_module(m, None) });
                 return Err(e);
             }
@@ -152,9 +156,11 @@ fn rt_pipeline(
         .groups(&groups)
         .max_pipeline_ray_recursion_depth(1)
         .layout(layout);
+    // SAFETY: valid create info: stages, groups and layout made on this device; the modules outlive the call.
     let result = unsafe {
         device.rt.create_ray_tracing_pipelines(vk::DeferredOperationKHR::null(), cache, std::slice::from_ref(&info), None)
     };
+    // SAFETY: pipeline creation is over; the modules are no longer needed.
     modules.iter().for_each(|&m| unsafe { d.destroy_shader_module(m, None) });
     let pipeline = result.map_err(|(_, e)| Error::Vulkan { call: "vkCreateRayTracingPipelinesKHR", result: e })?[0];
 
@@ -165,10 +171,12 @@ fn rt_pipeline(
     let stride = align_up(handle_size, props.shader_group_handle_alignment as u64);
     let base = props.shader_group_base_alignment as u64;
     let group_count = groups.len();
+    // SAFETY: the pipeline has `group_count` groups; the buffer holds a handle for each.
     let handles = unsafe {
         device.rt.get_ray_tracing_shader_group_handles(pipeline, 0, group_count as u32, group_count * handle_size as usize)
     }
     .map_err(|e| {
+        // SAFETY: the pipeline was just created and is not used yet.
         unsafe { d.destroy_pipeline(pipeline, None) };
         Error::Vulkan { call: "vkGetRayTracingShaderGroupHandlesKHR", result: e }
     })?;
@@ -185,6 +193,7 @@ fn rt_pipeline(
     ) {
         Ok(b) => b,
         Err(e) => {
+            // SAFETY: the pipeline was just created and is not used yet.
             unsafe { d.destroy_pipeline(pipeline, None) };
             return Err(e);
         }
@@ -238,7 +247,9 @@ fn compute_pipeline(
         stage = stage.specialization_info(&specialization);
     }
     let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
+    // SAFETY: valid create info; the module and layout outlive the call.
     let result = unsafe { device.create_compute_pipelines(cache, &[info], None) };
+    // SAFETY: pipeline creation is over; the module is no longer needed.
     unsafe { device.destroy_shader_module(module, None) };
     result.map(|p| p[0]).map_err(|(_, e)| Error::Vulkan { call: "vkCreateComputePipelines", result: e })
 }

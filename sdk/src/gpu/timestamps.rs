@@ -45,6 +45,7 @@ impl Timer {
         let per_task = if time_passes { 2 + 2 * PASSES_PER_TASK } else { 2 };
         let slots = max_timed_tasks.saturating_mul(per_task).saturating_add(4);
         let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(slots);
+        // SAFETY: valid create info; destroyed in `destroy`.
         let pool = unsafe { device.create_query_pool(&info, None) }.map_err(Error::vk("vkCreateQueryPool"))?;
         Ok(Timer { pool, slots, next: 0, intervals: Vec::new(), enabled, time_passes })
     }
@@ -106,6 +107,7 @@ impl Timer {
             return Ok((tasks, passes));
         }
         let mut stamps = vec![0u64; self.next as usize];
+        // SAFETY: called on a completed ticket: its queries were written.
         unsafe { device.get_query_pool_results(self.pool, 0, &mut stamps, vk::QueryResultFlags::TYPE_64) }?;
         for i in &self.intervals {
             let Some(end) = i.end else { continue };
@@ -120,6 +122,7 @@ impl Timer {
     }
 
     pub fn destroy(&self, device: &ash::Device) {
+        // SAFETY: the owning working set is idle; destroyed once.
         unsafe { device.destroy_query_pool(self.pool, None) };
     }
 }

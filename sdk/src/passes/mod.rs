@@ -144,6 +144,7 @@ impl Passes {
             Ok(passes) => Ok(Passes { arena, ..passes }),
             Err(e) => {
                 arena.destroy(device, memory);
+                // SAFETY: the sampler was just created and is not used yet.
                 unsafe { device.raw.destroy_sampler(sampler, None) };
                 Err(e)
             }
@@ -153,6 +154,7 @@ impl Passes {
     /// Destroys every pass (no recording may still use them).
     pub fn destroy(&mut self, device: &Device, memory: &Memory) {
         self.arena.destroy(device, memory);
+        // SAFETY: the context is destroyed after its tickets came back; destroyed once.
         unsafe { device.raw.destroy_sampler(self.sampler, None) };
         self.sampler = vk::Sampler::null();
     }

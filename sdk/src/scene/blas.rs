@@ -103,6 +103,7 @@ pub(crate) fn create(
         kind,
     )?;
     let info = vk::AccelerationStructureCreateInfoKHR::default().buffer(buffer.raw).size(size).ty(ty);
+    // SAFETY: the buffer is bound and large enough for `size` (the build-size query's).
     let accel = match unsafe { device.accel.create_acceleration_structure(&info, None) } {
         Ok(a) => a,
         Err(e) => {
@@ -110,6 +111,7 @@ pub(crate) fn create(
             return Err(Error::Vulkan { call: "vkCreateAccelerationStructureKHR", result: e });
         }
     };
+    // SAFETY: `accel` was just created on this device.
     let address = unsafe {
         device.accel.get_acceleration_structure_device_address(
             &vk::AccelerationStructureDeviceAddressInfoKHR::default().acceleration_structure(accel),

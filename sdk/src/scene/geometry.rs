@@ -479,6 +479,7 @@ pub(crate) fn create_copy(memory: &Memory, layout: &GeometryLayout) -> Result<Bu
 /// The bytes a buffer can hold at most (its memory requirement, which is >= its size). Used to
 /// catch regions that surely overrun an engine buffer; Vulkan offers no exact size query.
 pub(crate) fn buffer_capacity(device: &ash::Device, buffer: vk::Buffer) -> u64 {
+    // SAFETY: the engine's buffer is live: the contract of the entry points that take it.
     unsafe { device.get_buffer_memory_requirements(buffer) }.size
 }
 

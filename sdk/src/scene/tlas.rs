@@ -114,6 +114,7 @@ impl Tlas {
 
     pub fn destroy(&mut self, device: &Device, memory: &Memory) {
         if let Some(a) = self.accel.take() {
+            // SAFETY: the working set is idle (no ticket in flight); destroyed once.
             unsafe { device.accel.destroy_acceleration_structure(a.accel, None) };
             memory.destroy_buffer(a.buffer);
         }

@@ -129,7 +129,9 @@ impl Bench<'_> {
         let (mut blas, mut bvh, mut compaction, mut floor_ms) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for i in 0..6 {
             let operation = if i == 0 { TaskOperation::Register } else { TaskOperation::Update };
-            self.frame.schedule_geometry(&GeometryTask { handle: geo, operation, input: input.clone() }).map_err(sdk)?;
+            // SAFETY: the engine's buffers the task names are alive.
+            unsafe { self.frame.schedule_geometry(&GeometryTask { handle: geo, operation, input: input.clone() }) }
+                .map_err(sdk)?;
             self.frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: 1, ..Default::default() }).map_err(sdk)?;
             let done = run_frame(host, self.ctx, &mut self.frame)?;
             // The compaction of a fast-trace build happens in the next build's frame (its size
@@ -203,7 +205,9 @@ impl Bench<'_> {
                     indices: IndexBufferInput { buffer: ib.buffer, count: mesh.indices.len() as u32, ..Default::default() },
                     ..Default::default()
                 };
-                self.frame.schedule_geometry(&GeometryTask { handle, operation: TaskOperation::Update, input }).map_err(sdk)?;
+                // SAFETY: the engine's buffers the task names are alive.
+                unsafe { self.frame.schedule_geometry(&GeometryTask { handle, operation: TaskOperation::Update, input }) }
+                    .map_err(sdk)?;
             }
             self.frame.schedule_bvh_build(&BvhBuildTask { max_blas_build_count: u32::MAX, ..Default::default() }).map_err(sdk)?;
             let done = run_frame(self.host, self.ctx, &mut self.frame)?;
