@@ -423,17 +423,12 @@ impl Host {
 
     /// What `hybrid_rt::ExecuteContext::new` takes.
     pub fn device_desc(&self) -> DeviceDesc<'_> {
-        DeviceDesc::new(
-            &self.entry,
-            &self.instance,
-            self.physical_device,
-            &self.device,
-            &self.enabled_extensions,
-            API_VERSION,
-            self.features.chain(),
-        )
-        // HRT_DEBUG_UTILS=0: the SDK names nothing and labels nothing (diagnosis).
-        .with_debug_utils(self.debug.is_some() && env_flag("HRT_DEBUG_UTILS", true))
+        DeviceDesc::new(&self.entry, &self.instance, self.physical_device, &self.device)
+            .enabled_extensions(&self.enabled_extensions)
+            .instance_api_version(API_VERSION)
+            .enabled_features(self.features.chain())
+            // HRT_DEBUG_UTILS=0: the SDK names nothing and labels nothing (diagnosis).
+            .with_debug_utils(self.debug.is_some() && env_flag("HRT_DEBUG_UTILS", true))
     }
 
     /// An SDK context on this host's device.

@@ -97,6 +97,8 @@ impl Mode {
             Mode::Debug(DebugOutput::HitT) => "debug_hit_t",
             Mode::Debug(DebugOutput::Barycentrics) => "debug_barycentrics",
             Mode::Debug(DebugOutput::Default) => "debug_none",
+            // A visualisation this sample does not list yet.
+            Mode::Debug(_) => "debug_other",
         }
     }
 

@@ -511,7 +511,10 @@ const READ: vk::ImageLayout = vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL;
 fn run(out: &str) -> Result<(), Failure> {
     let gpu = Gpu::new()?;
     let chain = gpu.features.chain();
-    let desc = DeviceDesc::new(&gpu.entry, &gpu.instance, gpu.pdev, &gpu.device, &gpu.extensions, vk::API_VERSION_1_3, chain)
+    let desc = DeviceDesc::new(&gpu.entry, &gpu.instance, gpu.pdev, &gpu.device)
+        .enabled_extensions(&gpu.extensions)
+        .instance_api_version(vk::API_VERSION_1_3)
+        .enabled_features(chain)
         .with_debug_utils(gpu.debug_utils);
     // SAFETY: the handles are this program's live instance, physical device and device, made
     // with these extensions and this feature chain; the context is destroyed before them.

@@ -183,7 +183,11 @@ impl RtDevice {
         let (device, queue) = unsafe { adapter.create_device_from_hal(open, desc) }?;
 
         let debug_utils = shared_has_debug_utils(adapter);
-        let dd = DeviceDesc::new(&entry, &instance, pdev, &raw, &extensions, api_version, chain).with_debug_utils(debug_utils);
+        let dd = DeviceDesc::new(&entry, &instance, pdev, &raw)
+            .enabled_extensions(&extensions)
+            .instance_api_version(api_version)
+            .enabled_features(chain)
+            .with_debug_utils(debug_utils);
         // SAFETY: the handles are the live instance, physical device and device wgpu now owns,
         // made with `extensions` and the chain `features2` heads (alive until this returns);
         // the context is dropped before the wgpu device (field order).

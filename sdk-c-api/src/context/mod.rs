@@ -220,16 +220,11 @@ pub unsafe extern "C" fn hrt_context_create(desc: *const HrtContextDesc, out: *m
         // SAFETY: the caller promises (header) that the handles are valid and belong together,
         // and that the device was created with these extensions and this feature chain.
         let ctx = rt::ExecuteContext::new(
-            &rt::DeviceDesc::new(
-                &entry,
-                &instance,
-                vk::PhysicalDevice::from_raw(desc.physical_device as u64),
-                &device,
-                &exts,
-                desc.instance_api_version,
-                desc.enabled_features,
-            )
-            .with_debug_utils(desc.debug_utils),
+            &rt::DeviceDesc::new(&entry, &instance, vk::PhysicalDevice::from_raw(desc.physical_device as u64), &device)
+                .enabled_extensions(&exts)
+                .instance_api_version(desc.instance_api_version)
+                .enabled_features(desc.enabled_features)
+                .with_debug_utils(desc.debug_utils),
             &(&desc.settings).into(),
         )?;
         let p = Box::into_raw(Box::new(HrtContext { ctx, _entry: entry }));

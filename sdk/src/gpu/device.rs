@@ -101,14 +101,17 @@ pub struct DeviceDesc<'a> {
     /// The engine's device.
     pub device: &'a ash::Device,
     /// The device extensions the engine enabled: the SDK checks its needs against this list
-    /// and uses ray queries only when VK_KHR_ray_query is here.
+    /// and uses ray queries only when VK_KHR_ray_query is here. Default none (`new` then names
+    /// every required one missing).
     pub enabled_extensions: &'a [&'a CStr],
     /// `VkApplicationInfo::apiVersion` of the instance: 1.3 or later (the SDK records Vulkan
-    /// 1.3 commands; with a 1.2 instance their function pointers may be missing).
+    /// 1.3 commands; with a 1.2 instance their function pointers may be missing). Default 0:
+    /// unknown, refused by `ExecuteContext::new` — say what the instance was made with.
     pub instance_api_version: u32,
     /// The `pNext` chain given to `vkCreateDevice` (its feature structs), read during
     /// `ExecuteContext::new` only: [`DeviceFeatures::chain`](crate::DeviceFeatures::chain)
     /// after `push_to`, or the engine's own `VkPhysicalDeviceFeatures2` after `merge_into`.
+    /// Default null (refused by `new`, naming the field).
     pub enabled_features: *const std::ffi::c_void,
     /// VK_EXT_debug_utils is enabled on the instance: the SDK then names every object it
     /// creates ("hybrid-rt ...") and labels every task in the command buffer, so RenderDoc,
@@ -137,26 +140,54 @@ pub(crate) struct Limits {
 }
 
 impl<'a> DeviceDesc<'a> {
-    /// The engine's objects and how it made them (see the fields); `debug_utils` starts off.
+    /// The engine's objects; then say how it made them:
+    ///
+    /// ```no_run
+    /// # use ash::vk;
+    /// # fn f(entry: &ash::Entry, instance: &ash::Instance, pdev: vk::PhysicalDevice, device: &ash::Device,
+    /// #      extensions: &[&std::ffi::CStr], chain: *const std::ffi::c_void) {
+    /// let desc = hybrid_rt::DeviceDesc::new(entry, instance, pdev, device)
+    ///     .enabled_extensions(extensions) // what vkCreateDevice was given
+    ///     .instance_api_version(vk::API_VERSION_1_3) // VkApplicationInfo::apiVersion
+    ///     .enabled_features(chain) // the pNext chain of vkCreateDevice
+    ///     .with_debug_utils(true); // VK_EXT_debug_utils is on the instance
+    /// # }
+    /// ```
     pub fn new(
         entry: &'a ash::Entry,
         instance: &'a ash::Instance,
         physical_device: vk::PhysicalDevice,
         device: &'a ash::Device,
-        enabled_extensions: &'a [&'a CStr],
-        instance_api_version: u32,
-        enabled_features: *const std::ffi::c_void,
     ) -> DeviceDesc<'a> {
         DeviceDesc {
             entry,
             instance,
             physical_device,
             device,
-            enabled_extensions,
-            instance_api_version,
-            enabled_features,
+            enabled_extensions: &[],
+            instance_api_version: 0,
+            enabled_features: std::ptr::null(),
             debug_utils: false,
         }
+    }
+
+    /// The device extensions the engine enabled (`enabled_extensions`).
+    pub fn enabled_extensions(mut self, names: &'a [&'a CStr]) -> DeviceDesc<'a> {
+        self.enabled_extensions = names;
+        self
+    }
+
+    /// The instance's `VkApplicationInfo::apiVersion` (`instance_api_version`).
+    pub fn instance_api_version(mut self, version: u32) -> DeviceDesc<'a> {
+        self.instance_api_version = version;
+        self
+    }
+
+    /// The `pNext` chain `vkCreateDevice` was given (`enabled_features`); read only by
+    /// `ExecuteContext::new`, whose contract covers it.
+    pub fn enabled_features(mut self, chain: *const std::ffi::c_void) -> DeviceDesc<'a> {
+        self.enabled_features = chain;
+        self
     }
 
     /// Says VK_EXT_debug_utils is enabled on the instance (object names and task labels).

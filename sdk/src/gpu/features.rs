@@ -241,7 +241,10 @@ impl DeviceFeatures {
     ///     info.p_next = &features2 as *const _ as *const std::ffi::c_void;
     ///     let device = instance.create_device(pdev, &info, None)?;
     ///     let chain = &features2 as *const _ as *const std::ffi::c_void;
-    ///     let desc = DeviceDesc::new(entry, instance, pdev, &device, REQUIRED_DEVICE_EXTENSIONS, vk::API_VERSION_1_3, chain);
+    ///     let desc = DeviceDesc::new(entry, instance, pdev, &device)
+    ///         .enabled_extensions(REQUIRED_DEVICE_EXTENSIONS)
+    ///         .instance_api_version(vk::API_VERSION_1_3)
+    ///         .enabled_features(chain);
     ///     let ctx = ExecuteContext::new(&desc, &InitSettings::default())?;
     ///     Ok((device, ctx))
     /// }

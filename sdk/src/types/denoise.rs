@@ -42,6 +42,7 @@ use ash::vk;
 /// Which filter chain a denoising context runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[repr(u32)]
+#[non_exhaustive]
 pub enum DenoisingMethod {
     /// Temporal accumulation with reprojection, then spatial filtering (see the
     /// [module documentation](crate::types::denoise)). Default.
@@ -55,6 +56,7 @@ pub enum DenoisingMethod {
 /// What a denoising context filters; each denoise task needs a context of its signal.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[repr(u32)]
+#[non_exhaustive]
 pub enum SignalType {
     /// `TraceSpecularTask` output (RGB radiance, A = hit distance).
     Specular = 0,

@@ -297,6 +297,7 @@ impl Default for SpecularInput {
 /// viewport; the G-buffer is not read), into an output with four channels.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[repr(u32)]
+#[non_exhaustive]
 pub enum DebugOutput {
     /// The task's normal output.
     #[default]

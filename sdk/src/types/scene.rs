@@ -209,6 +209,7 @@ pub const MAX_ALBEDO_TEXTURE_SIZE: u32 = 256;
 /// How a geometry's BLAS is built (Vulkan's build-preference flags).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
 #[repr(u32)]
+#[non_exhaustive]
 pub enum BuildHint {
     /// Static geometry: prefer fast trace, then compact. `allow_update` geometry: prefer fast
     /// build (it is refitted often). Default.

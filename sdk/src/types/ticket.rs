@@ -42,9 +42,11 @@ macro_rules! task_kinds {
             }
         )* }
     ) => {
-        /// Which kind of work a timing covers.
-        #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+        /// Which kind of work a timing covers. New tasks bring new kinds: match with a
+        /// wildcard arm (or use `name`).
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[repr(u32)]
+        #[non_exhaustive]
         pub enum TaskKind {
             $( $(#[$om])* $OKind = $on, )*
             $( $( $(#[$km])* $Kind = $n, )+ )*

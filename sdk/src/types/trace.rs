@@ -36,6 +36,7 @@ impl Default for TraceAmbientOcclusionTask {
 /// The kind of a light.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[repr(u32)]
+#[non_exhaustive]
 pub enum LightType {
     /// Parallel rays (the sun). Default.
     #[default]
