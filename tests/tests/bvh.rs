@@ -516,3 +516,17 @@ fn the_allocation_log_accounts_for_every_byte() {
     }
     f.finish();
 }
+
+/// The single-handle helpers are the `Vec` ones for one handle: each call makes a new handle,
+/// destroying it once works and twice is refused.
+#[test]
+fn single_handle_helpers_make_and_destroy_one_handle() {
+    let f = fixture(1, false);
+    let (g, i) = (f.ctx.create_geometry_handle(), f.ctx.create_instance_handle());
+    assert_ne!(g, f.ctx.create_geometry_handle(), "each call makes a new handle");
+    f.ctx.destroy_instance_handle(i).unwrap();
+    assert!(matches!(f.ctx.destroy_instance_handle(i), Err(Error::InvalidHandle { .. })));
+    f.ctx.destroy_geometry_handle(g).unwrap();
+    assert!(matches!(f.ctx.destroy_geometry_handle(g), Err(Error::InvalidHandle { .. })));
+    f.finish();
+}

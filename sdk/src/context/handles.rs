@@ -46,6 +46,26 @@ impl ExecuteContext {
         handles
     }
 
+    /// One new geometry handle (`create_geometry_handles(1)`'s).
+    pub fn create_geometry_handle(&self) -> GeometryHandle {
+        self.create_geometry_handles(1)[0]
+    }
+
+    /// One new instance handle (`create_instance_handles(1)`'s).
+    pub fn create_instance_handle(&self) -> InstanceHandle {
+        self.create_instance_handles(1)[0]
+    }
+
+    /// Destroys one geometry (`destroy_geometry_handles(&[handle])`).
+    pub fn destroy_geometry_handle(&self, handle: GeometryHandle) -> Result<()> {
+        self.destroy_geometry_handles(&[handle])
+    }
+
+    /// Destroys one instance (`destroy_instance_handles(&[handle])`).
+    pub fn destroy_instance_handle(&self, handle: InstanceHandle) -> Result<()> {
+        self.destroy_instance_handles(&[handle])
+    }
+
     /// Destroys geometries. All-or-nothing: if any handle is invalid or still used by a
     /// registered instance, nothing is destroyed. GPU memory is freed once the tickets in
     /// flight now have come back.
