@@ -530,3 +530,19 @@ fn single_handle_helpers_make_and_destroy_one_handle() {
     assert!(matches!(f.ctx.destroy_geometry_handle(g), Err(Error::InvalidHandle { .. })));
     f.finish();
 }
+
+/// Every public type prints something useful with `{:?}`: the context its device and tickets,
+/// a container its tasks, a device description its handles and features.
+#[test]
+fn public_handles_print_what_they_hold() {
+    let f = fixture(1, false);
+    let ctx = format!("{:?}", f.ctx);
+    assert!(ctx.starts_with("ExecuteContext") && ctx.contains("tickets_in_flight: 0"), "{ctx}");
+    let frame = format!("{:?}", f.frame);
+    assert!(frame.contains("TaskContainer") && frame.contains("context_alive: true"), "{frame}");
+    let desc = format!("{:?}", f.host.device_desc());
+    assert!(desc.contains("instance_api_version") && desc.contains("VK_KHR_acceleration_structure"), "{desc}");
+    let features = format!("{:?}", hybrid_rt::DeviceFeatures::required(false));
+    assert!(features.contains("rayTracingPipeline"), "{features}");
+    f.finish();
+}

@@ -21,7 +21,7 @@ fn missing(e: Error) -> Vec<String> {
 fn a_device_without_what_the_sdk_needs_is_refused_naming_it() {
     let host = Host::new().expect("a Vulkan device with ray tracing (run scripts/setup.sh)");
     let settings = InitSettings::default();
-    let make = |desc: DeviceDesc<'_>| unsafe { ExecuteContext::new(&desc, &settings) }.err().expect("refused");
+    let make = |desc: DeviceDesc<'_>| unsafe { ExecuteContext::new(&desc, &settings) }.expect_err("refused");
     // The host's description with one thing changed (the fields are public; the struct is
     // non-exhaustive, so it is made by `DeviceDesc::new`).
     let with = |change: &dyn Fn(&mut DeviceDesc<'_>)| {

@@ -70,7 +70,7 @@ fn sizes_and_counts_past_the_device_limits_are_refused() {
 
     // An upload ring larger than any buffer the device can make.
     let settings = InitSettings { upload_ring_bytes: u64::MAX / 2, ..Default::default() };
-    let e = host.create_context(&settings).err().expect("refused");
+    let e = host.create_context(&settings).expect_err("refused");
     assert!(matches!(e, Error::InvalidInput { .. }) && message(&e).contains("maxBufferSize"), "{e}");
 
     // A launch past the ray-dispatch and compute-group limits (the images are checked after).

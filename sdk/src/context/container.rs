@@ -35,6 +35,18 @@ pub struct TaskContainer {
     pub(crate) frame_index: Option<u64>,
 }
 
+/// The tasks scheduled (how many), their labels and the frame index.
+impl std::fmt::Debug for TaskContainer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("TaskContainer")
+            .field("tasks", &self.tasks.len())
+            .field("labels", &self.labels)
+            .field("frame_index", &self.frame_index)
+            .field("context_alive", &(self.shared.strong_count() > 0))
+            .finish()
+    }
+}
+
 impl TaskContainer {
     fn shared(&self) -> Result<Arc<Shared>> {
         self.shared.upgrade().ok_or(crate::Error::ContextDestroyed)
@@ -173,12 +185,6 @@ macro_rules! schedule_functions {
     };
 }
 crate::tasks::task_table!(schedule_functions);
-
-impl std::fmt::Debug for TaskContainer {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("TaskContainer").field("tasks", &self.tasks.len()).finish()
-    }
-}
 
 // Containers are filled on the engine's threads: keep them Send.
 const _: fn() = || {

@@ -53,6 +53,21 @@ pub struct ExecuteContext {
     shared: Arc<Shared>,
 }
 
+/// The context's id, device and tickets in flight (without waiting for a recording that holds
+/// the state: then "busy").
+impl std::fmt::Debug for ExecuteContext {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let s = &self.shared;
+        let mut d = f.debug_struct("ExecuteContext");
+        d.field("id", &s.id).field("device", &s.device.device_name);
+        match s.state.try_lock() {
+            Some(st) => d.field("tickets_in_flight", &st.in_flight().count()),
+            None => d.field("tickets_in_flight", &"busy"),
+        };
+        d.finish_non_exhaustive()
+    }
+}
+
 /// What the context and its containers share (containers hold it weakly).
 pub(crate) struct Shared {
     pub id: u16,

@@ -139,6 +139,22 @@ pub(crate) struct Limits {
     pub mask_formats: MaskFormats,
 }
 
+/// The handles and what the engine says it made them with (the loader and function tables
+/// are left out).
+impl std::fmt::Debug for DeviceDesc<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("DeviceDesc")
+            .field("instance", &self.instance.handle())
+            .field("physical_device", &self.physical_device)
+            .field("device", &self.device.handle())
+            .field("enabled_extensions", &self.enabled_extensions)
+            .field("instance_api_version", &self.instance_api_version)
+            .field("enabled_features", &self.enabled_features)
+            .field("debug_utils", &self.debug_utils)
+            .finish()
+    }
+}
+
 impl<'a> DeviceDesc<'a> {
     /// The engine's objects; then say how it made them:
     ///

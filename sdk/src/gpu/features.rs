@@ -158,6 +158,13 @@ pub struct DeviceFeatures {
     pub maintenance4: vk::PhysicalDeviceMaintenance4Features<'static>,
 }
 
+/// The features it enables, by name.
+impl std::fmt::Debug for DeviceFeatures {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("DeviceFeatures").field("enables", &self.wanted_names()).finish()
+    }
+}
+
 impl DeviceFeatures {
     /// The features to enable. `with_ray_query` adds `rayQuery` (only if the device has
     /// VK_KHR_ray_query: see [`DeviceSupport`](crate::DeviceSupport)).
@@ -176,6 +183,11 @@ impl DeviceFeatures {
             synchronization2: vk::PhysicalDeviceSynchronization2Features::default().synchronization2(true),
             maintenance4: vk::PhysicalDeviceMaintenance4Features::default().maintenance4(true),
         }
+    }
+
+    /// The features this set enables, by their Vulkan names.
+    fn wanted_names(&self) -> Vec<&'static str> {
+        self.wants().into_iter().map(Feature::name).collect()
     }
 
     fn wants(&self) -> Vec<Feature> {
