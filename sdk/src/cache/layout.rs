@@ -34,7 +34,7 @@ pub(crate) fn resolution(tri: [Vec3; 3], s: &SurfelSettings) -> u32 {
 pub(crate) fn build(positions: &[Vec3], triangles: &[[u32; 3]], s: &SurfelSettings, max_samples: u64) -> Option<SurfelLayout> {
     let max_samples = max_samples.min(u32::MAX as u64);
     let mut settings = *s;
-    if s.maps_directly(triangles.len() as u64, u64::MAX) {
+    if s.maps_directly_from_start() {
         // Forced: one sample per triangle from the start.
         settings.tile_resolution_limit = 1;
     }

@@ -58,7 +58,7 @@ impl Recorder<'_> {
             };
             if on_gpu {
                 // Forced direct tile mapping: one sample per triangle from the start.
-                let first = if surfels.maps_directly(t, u64::MAX) { 1 } else { surfels.tile_resolution_limit };
+                let first = if surfels.maps_directly_from_start() { 1 } else { surfels.tile_resolution_limit };
                 let limit = limit.unwrap_or(first.clamp(1, layout::MAX_RESOLUTION));
                 plans.push(self.plan_gpu_layout(h, build_id, copy_address, l, surfels, limit)?);
                 continue;

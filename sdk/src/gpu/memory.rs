@@ -74,22 +74,25 @@ pub struct ResourceAllocations {
 }
 
 impl ResourceAllocations {
+    /// Every row with its kind, in `MemoryKind` order (the kinds the allocation log names).
+    pub fn by_kind(&self) -> [(MemoryKind, AllocationCount); MEMORY_KIND_COUNT] {
+        use MemoryKind::*;
+        [
+            (GeometryCopy, self.geometry_copies),
+            (Blas, self.blas),
+            (BuildScratch, self.build_scratch),
+            (Tlas, self.tlas),
+            (UploadRing, self.upload_rings),
+            (Pipeline, self.pipelines),
+            (Cache, self.cache),
+            (Readback, self.readback),
+            (Denoiser, self.denoiser),
+        ]
+    }
+
     /// Bytes over every kind.
     pub fn total_bytes(&self) -> u64 {
-        [
-            self.geometry_copies,
-            self.blas,
-            self.build_scratch,
-            self.tlas,
-            self.upload_rings,
-            self.pipelines,
-            self.cache,
-            self.readback,
-            self.denoiser,
-        ]
-        .iter()
-        .map(|c| c.bytes)
-        .sum()
+        self.by_kind().iter().map(|(_, c)| c.bytes).sum()
     }
 }
 
@@ -287,7 +290,7 @@ impl Memory {
         // SAFETY: `raw` is bound and was created with SHADER_DEVICE_ADDRESS usage.
         let address = unsafe { self.device.get_buffer_device_address(&vk::BufferDeviceAddressInfo::default().buffer(raw)) };
         crate::gpu::device::name_object(self.debug.as_ref(), raw, name);
-        self.note("alloc", kind, name, allocation.size());
+        self.note(true, kind, name, allocation.size());
         Ok(Buffer { raw, size, address, kind, name, allocation: Some(allocation) })
     }
 
@@ -296,7 +299,7 @@ impl Memory {
         // SAFETY: the caller guarantees no pending GPU use (deferred destruction).
         unsafe { self.device.destroy_buffer(buffer.raw, None) };
         if let Some(allocation) = buffer.allocation.take() {
-            self.note("free", buffer.kind, buffer.name, allocation.size());
+            self.note(false, buffer.kind, buffer.name, allocation.size());
             if let Some(a) = self.allocator.lock().as_mut() {
                 if let Err(e) = a.free(allocation) {
                     log::error!("freeing a buffer failed: {e}");
@@ -376,7 +379,7 @@ impl Memory {
         };
         crate::gpu::device::name_object(self.debug.as_ref(), raw, name);
         crate::gpu::device::name_object(self.debug.as_ref(), view, name);
-        self.note("alloc", kind, name, allocation.size());
+        self.note(true, kind, name, allocation.size());
         Ok(Image { raw, view, format, width, height, kind, name, allocation: Some(allocation) })
     }
 
@@ -388,7 +391,7 @@ impl Memory {
             self.device.destroy_image(image.raw, None);
         }
         if let Some(allocation) = image.allocation.take() {
-            self.note("free", image.kind, image.name, allocation.size());
+            self.note(false, image.kind, image.name, allocation.size());
             if let Some(a) = self.allocator.lock().as_mut() {
                 if let Err(e) = a.free(allocation) {
                     log::error!("freeing an image failed: {e}");
@@ -397,13 +400,13 @@ impl Memory {
         }
     }
 
-    /// Counts an allocation (`alloc`) or a free of `bytes` of `kind`, and logs it when a log
-    /// is open.
-    fn note(&self, event: &str, kind: MemoryKind, name: &str, bytes: u64) {
+    /// Counts an allocation (`allocated`) or a free of `bytes` of `kind`, and logs it when a
+    /// log is open.
+    fn note(&self, allocated: bool, kind: MemoryKind, name: &str, bytes: u64) {
         let live = {
             let mut counts = self.counts.lock();
             let c = &mut counts[kind as usize];
-            if event == "alloc" {
+            if allocated {
                 c.count += 1;
                 c.bytes += bytes;
             } else {
@@ -413,7 +416,7 @@ impl Memory {
             c.bytes
         };
         if let Some(log) = self.log.lock().as_mut() {
-            log.event(event, kind, name, bytes, live);
+            log.event(if allocated { "alloc" } else { "free" }, kind, name, bytes, live);
         }
     }
 

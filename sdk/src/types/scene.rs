@@ -114,8 +114,15 @@ impl SurfelSettings {
     /// Whether a tiles layout of `triangles` triangles and `samples` samples is (to be) mapped
     /// directly: one sample per triangle.
     pub(crate) fn maps_directly(&self, triangles: u64, samples: u64) -> bool {
-        self.surfel_type == SurfelType::Tiles
-            && (self.force_direct_tile_mapping || triangles as f64 > self.direct_tile_mapping_threshold as f64 * samples as f64)
+        self.maps_directly_from_start()
+            || (self.surfel_type == SurfelType::Tiles
+                && triangles as f64 > self.direct_tile_mapping_threshold as f64 * samples as f64)
+    }
+
+    /// Whether a tiles layout is mapped directly whatever its size: forced, or a threshold of
+    /// 0 (every layout has more triangles than 0 x its samples).
+    pub(crate) fn maps_directly_from_start(&self) -> bool {
+        self.surfel_type == SurfelType::Tiles && (self.force_direct_tile_mapping || self.direct_tile_mapping_threshold == 0.0)
     }
 }
 
