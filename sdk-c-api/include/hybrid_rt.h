@@ -1721,6 +1721,26 @@ enum HrtStatus hrt_destroy_instance_handles(struct HrtContext *ctx,
                                             const HrtInstanceHandle *handles,
                                             uint32_t count);
 
+/**
+ * One new geometry handle (`hrt_create_geometry_handles` with a count of 1).
+ */
+enum HrtStatus hrt_create_geometry_handle(struct HrtContext *ctx, HrtGeometryHandle *out);
+
+/**
+ * One new instance handle (`hrt_create_instance_handles` with a count of 1).
+ */
+enum HrtStatus hrt_create_instance_handle(struct HrtContext *ctx, HrtInstanceHandle *out);
+
+/**
+ * Destroys one geometry (`hrt_destroy_geometry_handles` with a count of 1).
+ */
+enum HrtStatus hrt_destroy_geometry_handle(struct HrtContext *ctx, HrtGeometryHandle handle);
+
+/**
+ * Destroys one instance (`hrt_destroy_instance_handles` with a count of 1).
+ */
+enum HrtStatus hrt_destroy_instance_handle(struct HrtContext *ctx, HrtInstanceHandle handle);
+
 enum HrtStatus hrt_destroy_all_instance_handles(struct HrtContext *ctx);
 
 /**

@@ -201,6 +201,30 @@ pub unsafe extern "C" fn hrt_destroy_instance_handles(
     destroy_handles(ctx, handles, count, rt::InstanceHandle, rt::ExecuteContext::destroy_instance_handles)
 }
 
+/// One new geometry handle (`hrt_create_geometry_handles` with a count of 1).
+#[no_mangle]
+pub unsafe extern "C" fn hrt_create_geometry_handle(ctx: *mut HrtContext, out: *mut HrtGeometryHandle) -> HrtStatus {
+    create_handles(ctx, 1, out, rt::ExecuteContext::create_geometry_handles, |h| h.0)
+}
+
+/// One new instance handle (`hrt_create_instance_handles` with a count of 1).
+#[no_mangle]
+pub unsafe extern "C" fn hrt_create_instance_handle(ctx: *mut HrtContext, out: *mut HrtInstanceHandle) -> HrtStatus {
+    create_handles(ctx, 1, out, rt::ExecuteContext::create_instance_handles, |h| h.0)
+}
+
+/// Destroys one geometry (`hrt_destroy_geometry_handles` with a count of 1).
+#[no_mangle]
+pub unsafe extern "C" fn hrt_destroy_geometry_handle(ctx: *mut HrtContext, handle: HrtGeometryHandle) -> HrtStatus {
+    destroy_handles(ctx, &handle, 1, rt::GeometryHandle, rt::ExecuteContext::destroy_geometry_handles)
+}
+
+/// Destroys one instance (`hrt_destroy_instance_handles` with a count of 1).
+#[no_mangle]
+pub unsafe extern "C" fn hrt_destroy_instance_handle(ctx: *mut HrtContext, handle: HrtInstanceHandle) -> HrtStatus {
+    destroy_handles(ctx, &handle, 1, rt::InstanceHandle, rt::ExecuteContext::destroy_instance_handles)
+}
+
 #[no_mangle]
 pub unsafe extern "C" fn hrt_destroy_all_instance_handles(ctx: *mut HrtContext) -> HrtStatus {
     guard(|| {
