@@ -1,14 +1,16 @@
 /*
- * hybrid-rt from C: the smallest complete integration.
+ * hybrid-rt from C: a checked tour of every entry point (samples/c/ao.c is the page-long
+ * integration; start there).
  *
- * The "engine" here creates its own Vulkan instance and device (enabling what the SDK asks
- * for), registers a ground quad and a small ceiling quad with the SDK, fills a 32x32
- * G-buffer (a camera looking straight down at the ground: constant depth, normals +Y),
+ * The engine (engine.c) creates its own Vulkan instance and device (enabling what the SDK asks
+ * for); this program registers a ground quad and a small ceiling quad with the SDK, fills a
+ * 32x32 G-buffer (a camera looking straight down at the ground: constant depth, normals +Y),
  * records the SDK's BVH and AO work into its own command buffer, submits it, waits on its
  * own fence and hands the ticket back. Then it checks the AO: dark under the ceiling, open
- * elsewhere, open everywhere once the ceiling instance is removed; and that bad input gets
- * the right status codes. Exit code 0 = all checks passed. With the Khronos validation
- * layer installed, any validation error fails the run.
+ * elsewhere, open everywhere once the ceiling instance is removed; shadows, GI, mirrors,
+ * injection, denoising and the debug views; and that bad input gets the right status codes.
+ * Exit code 0 = all checks passed. With the Khronos validation layer installed, any
+ * validation error fails the run.
  */
 #include "engine.h"
 #include <math.h>
@@ -222,6 +224,20 @@ int main(void) {
     printf("AO under the ceiling %.3f, at the corner %.3f\n", centre, corner);
     EXPECT(centre < 0.6f, "the ceiling occludes the centre (%f)", centre);
     EXPECT(corner > 0.999f, "nothing occludes the corner (%f)", corner);
+
+    /* ---- The rays' random numbers: blue noise (or white) for image-quality comparisons
+     * traces the same occlusion; a value outside HrtRandomNumbers is refused. */
+    {
+        HrtTraceAmbientOcclusionTask blue = ao;
+        blue.common.random_numbers = HRT_RANDOM_NUMBERS_BLUE_NOISE;
+        CHECK_HRT(hrt_schedule_ambient_occlusion(frame, &blue));
+        float blue_result[W * H];
+        run_frame(ctx, frame, &out, 4, blue_result);
+        float c = blue_result[(H / 2) * W + W / 2];
+        EXPECT(c < 0.6f && blue_result[0] > 0.999f, "blue noise: occluded centre %f, open corner %f", c, blue_result[0]);
+        blue.common.random_numbers = 3;
+        EXPECT(hrt_schedule_ambient_occlusion(frame, &blue) == HRT_ERROR_INVALID_INPUT, "an unknown generator");
+    }
 
     /* ---- G-buffer conventions: normals in an engine basis (custom 3x3, here a scaled
      * identity) trace the same; an input mask covering the image leaves AO 1 (background)

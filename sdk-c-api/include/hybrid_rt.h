@@ -220,6 +220,44 @@ typedef enum HrtDebugOutput {
   HRT_DEBUG_BARYCENTRICS = 5,
 } HrtDebugOutput;
 
+/**
+ * Checkerboard tracing (`HalfResolutionMode`): half the pixels per ticket, alternating with
+ * the frame.
+ */
+typedef enum HrtHalfResolutionMode {
+  /**
+   * Every pixel.
+   */
+  HRT_HALF_RESOLUTION_OFF = 0,
+  /**
+   * The pixels where x + y + frame is even.
+   */
+  HRT_HALF_RESOLUTION_CHECKERBOARD = 1,
+  /**
+   * The pixels where x + y + frame is odd.
+   */
+  HRT_HALF_RESOLUTION_CHECKERBOARD_INVERTED = 2,
+} HrtHalfResolutionMode;
+
+/**
+ * The rays' random numbers (`RandomNumbers`): the default, or white or blue noise for
+ * image-quality comparisons.
+ */
+typedef enum HrtRandomNumbers {
+  /**
+   * Per-pixel low-discrepancy sequences across frames, what the denoisers are tuned for.
+   */
+  HRT_RANDOM_NUMBERS_DEFAULT = 0,
+  /**
+   * Independent for every pixel, frame and ray (Kickstart RT's XORShift).
+   */
+  HRT_RANDOM_NUMBERS_WHITE_NOISE = 1,
+  /**
+   * A blue-noise tile shifted per frame (Kickstart RT's BlueNoiseTexture).
+   */
+  HRT_RANDOM_NUMBERS_BLUE_NOISE = 2,
+} HrtRandomNumbers;
+
 typedef enum HrtLightType {
   HRT_LIGHT_DIRECTIONAL = 0,
   HRT_LIGHT_POINT = 1,
@@ -1133,6 +1171,10 @@ typedef struct HrtTraceCommon {
    * alternating. Default HRT_HALF_RESOLUTION_OFF.
    */
   uint32_t half_resolution_mode;
+  /**
+   * An HrtRandomNumbers. Default HRT_RANDOM_NUMBERS_DEFAULT.
+   */
+  uint32_t random_numbers;
 } HrtTraceCommon;
 
 typedef struct HrtTraceAmbientOcclusionTask {

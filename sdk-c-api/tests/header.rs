@@ -56,3 +56,32 @@ fn every_task_kind_has_its_constant() {
         .collect();
     assert!(missing.is_empty(), "the header lacks {missing:?}");
 }
+
+/// Every C enum of the ABI is in the header with its values: cbindgen leaves out an enum no
+/// function or struct names by type (the structs carry enums as u32), unless cbindgen.toml
+/// exports it.
+#[test]
+fn every_enum_is_in_the_header() {
+    let header = generate();
+    let src = concat!(env!("CARGO_MANIFEST_DIR"), "/src");
+    let mut missing = Vec::new();
+    let mut stack = vec![std::path::PathBuf::from(src)];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+                continue;
+            }
+            let text = std::fs::read_to_string(&path).unwrap();
+            for line in text.lines() {
+                if let Some(name) = line.strip_prefix("pub enum ").and_then(|r| r.strip_suffix(" {")) {
+                    if !header.contains(&format!("enum {name} {{")) && !header.contains(&format!("enum {name}\n")) {
+                        missing.push(name.to_string());
+                    }
+                }
+            }
+        }
+    }
+    assert!(missing.is_empty(), "the header lacks the enums {missing:?} (add them to cbindgen.toml's [export] include)");
+}

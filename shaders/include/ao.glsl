@@ -4,6 +4,7 @@
 #ifndef HRT_AO_GLSL
 #define HRT_AO_GLSL
 #include "common.glsl"
+#include "random.glsl"
 
 layout(set = 0, binding = 0) uniform accelerationStructureEXT u_tlas;
 layout(set = 0, binding = 1) uniform sampler2D u_depth;
@@ -40,6 +41,7 @@ void hrt_ao_main(uvec2 local) {
     uint rays = u_c.ao_counts.x;
     // A new rotation every frame (see hrt_independent_frames).
     HrtSequence seq = hrt_sequence(0u, false, pixel, hrt_independent_frames(c.frame.x, 0xa0u), rays);
+    seq = hrt_with_generator(seq, c, pixel, 0xa0u, rays);
 
     float visibility = 0.0;
     for (uint i = 0u; i < rays; ++i) {

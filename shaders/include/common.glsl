@@ -1,4 +1,5 @@
-// Shared helpers for every hybrid-rt pass: random numbers, G-buffer decoding, ray offsets.
+// Shared helpers for every hybrid-rt pass: hashing, G-buffer decoding, ray offsets (the rays'
+// sample sequences are in random.glsl).
 // The constants mirrored here live in sdk/src/passes/constants.rs (a test checks the layout).
 #ifndef HRT_COMMON_GLSL
 #define HRT_COMMON_GLSL
@@ -29,7 +30,7 @@ struct TraceCommon {
     vec4 viewport;        // x, y, width, height in pixels
     vec4 depth_range;     // viewport min depth, max depth, background depth texel, has input mask (0/1)
     uvec4 modes;          // depth type, normal type, normals need normal_to_world (0/1), ray offset type
-    vec4 offset_world;    // threshold, float scale, int scale, unused
+    vec4 offset_world;    // threshold, float scale, int scale; w: RandomNumbers (random.glsl)
     vec4 offset_camera;   // constant, linear, quadratic; w: the roughness remap's multiplier (see below)
     uvec4 frame;          // random seed, TLAS instance mask, half-resolution checkerboard (0/1), has direct-lighting image (0/1)
     mat4 world_to_clip;   // view_to_clip * world_to_view
@@ -46,66 +47,6 @@ uint hrt_pcg(uint v) {
 }
 
 float hrt_u01(uint bits) { return float(bits >> 8) * (1.0 / 16777216.0); }
-
-// A pixel's samples across frames: one R2 sequence (Roberts 2018) per pixel, rotated by a
-// hash of the pixel alone (Cranley-Patterson), whose sample `first + i` is this frame's ray i,
-// first = frame x rays (frames of this pixel: half as many in checkerboard mode). Within a
-// frame that is the low-discrepancy set the rays always had; across frames the denoiser's
-// temporal mean of a static pixel is then a stratified estimate, not a mean of independent
-// ones: a 0.2 rad sun's penumbra, 32 one-ray frames, has a raw mean 7.3% off instead of 13.6%
-// and denoises to 6.6% (tests/tests/denoise.rs). Neighbouring pixels stay decorrelated by their rotations. Fixed
-// point, so the sequence wraps exactly (mod 1) instead of losing float precision with time.
-struct HrtSequence {
-    uvec2 shift;
-    uint first;
-};
-
-HrtSequence hrt_sequence(uint frame, bool checkerboard, uvec2 pixel, uint salt, uint rays) {
-    uint h = hrt_pcg(pixel.x ^ hrt_pcg(pixel.y ^ salt));
-    uint pixel_frame = checkerboard ? frame >> 1u : frame;
-    return HrtSequence(uvec2(h, hrt_pcg(h)), pixel_frame * rays);
-}
-
-// Diffuse GI's and reflections' samples: hrt_sequence's, but each 8x8 tile of pixels shares
-// one rotation and its pixels sit apart on a 64-point lattice (rank-1, generator (1, 10),
-// visited in bit-reversed Morton order, so the tile and each aligned 2x2 and 4x4 block of it
-// hold evenly spread points). A pixel's own points across frames are R2's, as before; within a
-// frame a tile's pixels sample a shifted lattice, a stratified set, so a frame's error is
-// higher in frequency and the spatial passes remove more of it. The quality program's static
-// views, 8 / 32 frames: GI 0.034 / 0.023 -> 0.029 / 0.021 and its flicker 0.71% -> 0.42% of
-// the mean a frame; glossy reflections 0.046 / 0.027 -> 0.044 / 0.025. Not AO (0.042 / 0.021
-// -> 0.050 / 0.036: its frames are independent, and a fixed lattice between neighbours
-// correlates their errors frame after frame) nor shadows (a 0.03 rad sun's penumbra after 32
-// frames 0.083 -> 0.096).
-HrtSequence hrt_tile_sequence(uint frame, bool checkerboard, uvec2 pixel, uint salt, uint rays) {
-    // The tile's sequence is hrt_sequence's for the tile as if it were one pixel.
-    HrtSequence seq = hrt_sequence(frame, checkerboard, pixel >> 3u, salt, rays);
-    uvec2 q = pixel & 7u;
-    uint morton = (q.x & 1u) | ((q.y & 1u) << 1u) | ((q.x & 2u) << 1u) | ((q.y & 2u) << 2u) | ((q.x & 4u) << 2u) | ((q.y & 4u) << 3u);
-    uint k = bitfieldReverse(morton) >> 26u;
-    seq.shift += uvec2(k, (k * 10u) & 63u) << 26u;
-    return seq;
-}
-
-// The salt for a sequence rotated anew every frame (frame 0 of it each time): frames are then
-// independent. AO keeps this: its crease rule estimates noise from frame-to-frame differences,
-// which a stratified sequence makes smaller than the noise of one frame (measured: creases 1%
-// too bright). Shadows, diffuse GI and reflections run their pixel's sequence on across
-// frames: their anti-lag tests take one sample's variance from this frame's 5x5 neighbours
-// where that is larger than the history's, and a light switched on still leaves GI within 15%
-// of its new value after 4 frames (8% while neighbours' rotations were independent: a
-// stratified window's mean is steadier than the test assumes, so it waits for a larger
-// change). The quality program's static views, 8 / 32 frames: GI 0.057 / 0.037 -> 0.034 /
-// 0.023, glossy reflections 0.060 / 0.038 -> 0.046 / 0.027.
-uint hrt_independent_frames(uint frame, uint salt) {
-    return hrt_pcg(frame ^ salt);
-}
-
-vec2 hrt_sample(HrtSequence s, uint i) {
-    const uvec2 alpha = uvec2(3242174889u, 2447445413u); // (0.7548777, 0.5698403) x 2^32
-    uvec2 bits = s.shift + alpha * (s.first + i);
-    return vec2(bits >> 8u) * (1.0 / 16777216.0);
-}
 
 vec3 hrt_cosine_hemisphere(vec2 u) {
     float r = sqrt(u.x);

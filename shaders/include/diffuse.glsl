@@ -8,6 +8,7 @@
 // multiply by its albedo — with the mean hit distance (misses count as the ray length) in A,
 // for the denoiser.
 #include "common.glsl"
+#include "random.glsl"
 #include "cache.glsl"
 #include "trace_push.glsl"
 #include "environment.glsl"
@@ -64,6 +65,7 @@ void hrt_diffuse_main() {
     float ray_length = u_c.miss.w;
     // The pixel's sequence runs on across frames (see hrt_independent_frames).
     HrtSequence seq = hrt_tile_sequence(c.frame.x, c.frame.z != 0u, pixel, 0xd1ffu, rays);
+    seq = hrt_with_generator(seq, c, pixel, 0xd1ffu, rays);
 
     vec3 sum = vec3(0.0);
     float dist = 0.0;

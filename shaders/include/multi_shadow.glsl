@@ -13,6 +13,7 @@
 //  - up to 4 per-light outputs in the single-light task's format (R = closest occluder
 //    distance, negative if visible; G = visible fraction), for DenoiseShadowTask.
 #include "common.glsl"
+#include "random.glsl"
 #include "light_sampling.glsl"
 
 #define HRT_LIGHT_OUTPUTS 4
@@ -72,6 +73,7 @@ void hrt_multi_shadow_main() {
     uint rays = u_c.counts.x;
     // The same per-pixel sequence as the single-light task, so one light gives its image.
     HrtSequence seq = hrt_sequence(c.frame.x, c.frame.z != 0u, pixel, 0x5badu, rays);
+    seq = hrt_with_generator(seq, c, pixel, 0x5badu, rays);
     uvec4 words[2] = uvec4[2](uvec4(0u), uvec4(0u));
     float vis_sum = 0.0, weight_sum = 0.0, width_sum = 0.0, dist_min = 1e30;
     uint occluded = 0u;

@@ -8,6 +8,7 @@
 // (shared/seeds/003). Output (the integration guide's format): R = closest occluder distance,
 // negative where every ray reached the light; G (if present) = the fraction of rays that did.
 #include "common.glsl"
+#include "random.glsl"
 
 #include "light_sampling.glsl"
 
@@ -42,6 +43,7 @@ void hrt_shadow_main() {
     vec3 origin = hrt_offset_ray(c, p, n);
     uint rays = u_c.counts.x;
     HrtSequence seq = hrt_sequence(c.frame.x, c.frame.z != 0u, pixel, 0x5badu, rays);
+    seq = hrt_with_generator(seq, c, pixel, 0x5badu, rays);
 
     float closest = 1e30;
     uint visible = 0u;

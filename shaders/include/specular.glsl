@@ -10,6 +10,7 @@
 // the ray length). An optional firefly clamp limits each sample's luminance (seeds/003).
 // With hit lighting, hits of pixels up to a roughness are lit from the engine's lights.
 #include "common.glsl"
+#include "random.glsl"
 #include "cache.glsl"
 #include "trace_push.glsl"
 #include "environment.glsl"
@@ -134,6 +135,7 @@ void hrt_specular_main() {
     float clamp_lum = u_c.params.y;
     // The pixel's sequence runs on across frames (see hrt_independent_frames).
     HrtSequence seq = hrt_tile_sequence(c.frame.x, c.frame.z != 0u, pixel, 0x5bec7u, rays);
+    seq = hrt_with_generator(seq, c, pixel, 0x5bec7u, rays);
     bool hit_lit = u_c.hit_lighting.x > 0u && roughness <= u_c.hit_params.x;
     uint h = hrt_pcg(pixel.x ^ hrt_pcg(pixel.y ^ hrt_pcg(c.frame.x ^ 0x4c1u)));
 

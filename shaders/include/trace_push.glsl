@@ -1,5 +1,6 @@
 // Every trace program's push constants (sdk/src/passes/program.rs `TracePush`): the instance
-// table, and the usage flags the cache budget reads (InitSettings::cache_budget_bytes).
+// table, the usage flags the cache budget reads (InitSettings::cache_budget_bytes), and the
+// blue-noise tile.
 #ifndef HRT_TRACE_PUSH_GLSL
 #define HRT_TRACE_PUSH_GLSL
 #extension GL_EXT_buffer_reference : require
@@ -8,6 +9,7 @@
 layout(push_constant) uniform HrtTracePush {
     uvec2 instance_table;
     uvec2 usage;          // one uint per instance slot, 0 when the context has no cache budget
+    uvec2 blue_noise;     // RandomNumbers::BlueNoise's 64x64 ranks (random.glsl), 0 when unused
 } u_trace_push;
 
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer HrtUsage { uint used[]; };

@@ -130,6 +130,19 @@ pub enum HrtHalfResolutionMode {
     HRT_HALF_RESOLUTION_CHECKERBOARD_INVERTED = 2,
 }
 
+/// The rays' random numbers (`RandomNumbers`): the default, or white or blue noise for
+/// image-quality comparisons.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HrtRandomNumbers {
+    /// Per-pixel low-discrepancy sequences across frames, what the denoisers are tuned for.
+    HRT_RANDOM_NUMBERS_DEFAULT = 0,
+    /// Independent for every pixel, frame and ray (Kickstart RT's XORShift).
+    HRT_RANDOM_NUMBERS_WHITE_NOISE = 1,
+    /// A blue-noise tile shifted per frame (Kickstart RT's BlueNoiseTexture).
+    HRT_RANDOM_NUMBERS_BLUE_NOISE = 2,
+}
+
 /// An HrtHalfResolutionMode read from the field `what`.
 pub(crate) fn half_resolution_mode(what: &str, v: u32) -> Result<rt::HalfResolutionMode, Failure> {
     use rt::HalfResolutionMode as M;
@@ -191,6 +204,8 @@ pub struct HrtTraceCommon {
     /// An HrtHalfResolutionMode: checkerboard tracing, half the pixels per ticket,
     /// alternating. Default HRT_HALF_RESOLUTION_OFF.
     pub half_resolution_mode: u32,
+    /// An HrtRandomNumbers. Default HRT_RANDOM_NUMBERS_DEFAULT.
+    pub random_numbers: u32,
 }
 
 #[repr(C)]
@@ -302,6 +317,11 @@ pub(crate) fn trace_common(c: &HrtTraceCommon) -> Result<rt::TraceCommon, Failur
             ],
         )?,
         half_resolution_mode: half_resolution_mode("HrtTraceCommon.half_resolution_mode", c.half_resolution_mode)?,
+        random_numbers: pick(
+            "HrtTraceCommon.random_numbers",
+            c.random_numbers,
+            &[rt::RandomNumbers::Default, rt::RandomNumbers::WhiteNoise, rt::RandomNumbers::BlueNoise],
+        )?,
     })
 }
 
@@ -346,6 +366,7 @@ pub extern "C" fn hrt_trace_common_default() -> HrtTraceCommon {
         enable_bilinear_sampling: d.enable_bilinear_sampling,
         debug_output: d.debug_output as u32,
         half_resolution_mode: d.half_resolution_mode as u32,
+        random_numbers: d.random_numbers as u32,
     }
 }
 

@@ -15,9 +15,9 @@ use crate::gpu::device::Device;
 use crate::gpu::memory::Memory;
 use crate::gpu::sync::{self, Hazards};
 use crate::gpu::timestamps::Span;
-use crate::passes::{Recording, RenderTask, World};
+use crate::passes::{blue_noise, Recording, RenderTask, World};
 use crate::scene::table;
-use crate::types::TaskKind;
+use crate::types::{RandomNumbers, TaskKind};
 use ash::vk;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -137,7 +137,12 @@ impl Recorder<'_> {
         }
         let align = self.device.ubo_alignment;
         let task_bytes: u64 = renders.iter().map(|(_, t)| t.upload_bytes() + align).sum();
-        self.ensure_ring(table::instance_table_bytes(&self.st.scene) + 16 + task_bytes)?;
+        // The blue-noise tile travels in the ring, and only in recordings that ask for it.
+        let wants_blue_noise = renders
+            .iter()
+            .any(|(_, t)| t.describe().trace_common().is_some_and(|c| c.random_numbers == RandomNumbers::BlueNoise));
+        let blue_noise_bytes = if wants_blue_noise { std::mem::size_of_val(blue_noise::tile()) as u64 + 16 } else { 0 };
+        self.ensure_ring(table::instance_table_bytes(&self.st.scene) + 16 + task_bytes + blue_noise_bytes)?;
         // With a cache budget: per-instance usage flags, cleared, set by the shaders that use
         // an instance, copied for the host when the ticket comes back (see `budget`).
         let usage = if self.st.cache_budget > 0 {
@@ -158,6 +163,8 @@ impl Recorder<'_> {
         let st = &mut *self.st;
         let ws = &mut st.working_sets[self.ws];
         let instance_table = ws.ring.push(bytemuck::cast_slice(&table::instance_table(&st.scene)), 16).address;
+        let blue_noise =
+            if wants_blue_noise { ws.ring.push(bytemuck::cast_slice(blue_noise::tile().as_slice()), 16).address } else { 0 };
         let tlas = ws.tlas_handle();
         let mut world = World {
             scene: &st.scene,
@@ -193,6 +200,7 @@ impl Recorder<'_> {
                 seed,
                 instance_table,
                 usage: usage.map_or(0, |u| u.1),
+                blue_noise,
                 inline: wants_inline && device.ray_query,
                 floor: st.passes.floor,
                 task_timer: Some((&mut ws.timer, kind, index)),

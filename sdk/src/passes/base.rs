@@ -31,6 +31,9 @@ pub(crate) struct Recording<'a> {
     pub instance_table: u64,
     /// Device address of the per-instance usage flags (0 without a cache budget).
     pub usage: u64,
+    /// Device address of the blue-noise tile (0 unless a task asked for
+    /// `RandomNumbers::BlueNoise`).
+    pub blue_noise: u64,
     /// The task asked for inline ray queries and the device has them (see `program`).
     pub inline: bool,
     /// Bench only: trace with the programs' floor pipelines (empty hit and miss shaders).
@@ -59,6 +62,7 @@ impl<'a> Recording<'a> {
             seed,
             instance_table: 0,
             usage: 0,
+            blue_noise: 0,
             inline: false,
             floor: false,
             task_timer: None,

@@ -84,7 +84,7 @@ impl TraceCommonGpu {
                     RayOffsetType::CameraDistance => 2,
                 },
             ],
-            offset_world: [o.world_threshold, o.world_float_scale, o.world_int_scale, 0.0],
+            offset_world: [o.world_threshold, o.world_float_scale, o.world_int_scale, c.random_numbers as u32 as f32],
             offset_camera: [o.cam_constant, o.cam_linear, o.cam_quadratic, r.roughness_multiplier],
             frame: [seed, mask as u32, c.half_resolution_mode as u32, (c.direct_lighting.image != ash::vk::Image::null()) as u32],
             world_to_clip: (c.camera.view_to_clip * c.camera.world_to_view).to_cols_array(),

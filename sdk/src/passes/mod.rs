@@ -10,6 +10,7 @@
 //! label). The recorder (`context::record`) only walks `RenderTask`s and has no per-kind match.
 pub(crate) mod ao;
 pub(crate) mod base;
+pub(crate) mod blue_noise;
 pub(crate) mod cache_ops;
 pub(crate) mod constants;
 pub(crate) mod debug;

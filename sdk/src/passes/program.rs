@@ -68,12 +68,14 @@ pub(crate) enum Writes {
 
 /// The push constants of every trace program (`HrtTracePush` in shaders/include/trace_push.glsl):
 /// the instance table, which the alpha test of any-hit shaders and ray-query loops reads, and
-/// the per-instance usage flags of the cache budget (0: none).
+/// the per-instance usage flags of the cache budget (0: none), and the blue-noise tile of
+/// `RandomNumbers::BlueNoise` (0 when no task of the recording asked for it).
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 struct TracePush {
     instance_table: u64,
     usage: u64,
+    blue_noise: u64,
 }
 
 pub(crate) struct RtProgram {
@@ -160,7 +162,7 @@ impl RtProgram {
             Writes::Atomics => sync::shader_atomic(stage),
         };
         r.hazards.read_write(r.cmd, sync::shader_read(stage), write);
-        let push = TracePush { instance_table: r.instance_table, usage: r.usage };
+        let push = TracePush { instance_table: r.instance_table, usage: r.usage, blue_noise: r.blue_noise };
         r.cmd.push_constants(self.layout, self.push_stages, bytemuck::bytes_of(&push));
         match variant {
             Variant::Inline(p) => {

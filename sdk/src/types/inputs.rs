@@ -338,6 +338,28 @@ impl HalfResolutionMode {
     }
 }
 
+/// The random numbers a trace draws its rays from. The default is what the denoisers are tuned
+/// for; the others are for comparing image quality (Kickstart RT's
+/// `DebugParameters::randomNumberGenerator`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[non_exhaustive]
+#[repr(u32)]
+pub enum RandomNumbers {
+    /// Each pixel runs a low-discrepancy sequence (R2) across frames, rotated per pixel (per
+    /// 8x8 tile, on a lattice, for diffuse and specular rays): the temporal mean of a static
+    /// pixel is a stratified estimate, and the denoisers' statistics assume it. AO takes a new
+    /// rotation every frame. Default.
+    #[default]
+    Default = 0,
+    /// Independent numbers for every pixel, frame and ray (a hash; Kickstart RT's `XORShift`):
+    /// white noise in space and time, the baseline the others are measured against.
+    WhiteNoise = 1,
+    /// A 64x64 blue-noise tile (void and cluster), shifted per frame and per dimension by an R2
+    /// step (Kickstart RT's `BlueNoiseTexture`, whose texture is 128x128x64): a frame's error is
+    /// high in spatial frequency, so a small blur removes more of it; frames are independent.
+    BlueNoise = 2,
+}
+
 /// Inputs every trace task shares.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TraceCommon {
@@ -383,6 +405,8 @@ pub struct TraceCommon {
     /// previous contents, for the denoiser to fill. Successive tickets alternate the halves.
     /// Default `Off`.
     pub half_resolution_mode: HalfResolutionMode,
+    /// Where the rays' random numbers come from. Default `RandomNumbers::Default`.
+    pub random_numbers: RandomNumbers,
 }
 
 impl Default for TraceCommon {
@@ -401,6 +425,7 @@ impl Default for TraceCommon {
             enable_bilinear_sampling: true,
             debug_output: DebugOutput::Default,
             half_resolution_mode: HalfResolutionMode::Off,
+            random_numbers: RandomNumbers::Default,
         }
     }
 }
