@@ -7,6 +7,11 @@
 //! Perspective cameras (with their roll) are kept for `--camera`. The camera path, lights,
 //! surfel size and AO length are fitted to the scene's bounds.
 //!
+//! `alphaMode: MASK` materials cut their meshes where the base-colour texture's alpha x the
+//! factor's is below `alphaCutoff`, in the raster pass and in the SDK's rays (`BLEND` is drawn
+//! masked at 0.5). What a file uses that the loader does not read (skins, animations, morph
+//! targets, other extensions...) is named once each in `SampleScene::warnings`, and printed.
+//!
 //! Any file gives a scene or an error that names the file and what is wrong in it — the node,
 //! the primitive, the extension — and never hangs or panics: a node that is its own ancestor
 //! (or has two parents) is refused, extensions the file requires and this loader lacks (Draco,
@@ -16,7 +21,7 @@ use crate::gltf_textures::TextureCache;
 use crate::gltf_uri::read_uri;
 use crate::lighting::Lights;
 use crate::raster::{Material, MaterialTextures};
-use crate::scene::{vertex_normals, CameraPath, Motion, SampleScene};
+use crate::scene::{vertex_normals, CameraPath, Cutout, Motion, SampleScene};
 use glam::{Affine3A, Mat4, Vec3, Vec4};
 use hybrid_rt_host::scene::{Mesh, Scene};
 use std::collections::HashMap;
@@ -69,6 +74,79 @@ fn material_textures_of(
         normal: get(normal.map(|n| n.texture()), true)?,
         emissive: get(m.emissive_texture().map(|i| i.texture()), false)?,
     })
+}
+
+/// Mesh cut-outs of a material, from its base-colour texture (our index; None: it has none):
+/// `Ok(None)` opaque, `Err(())` every texel a hole (the primitive is not drawn). The texture's
+/// alpha is multiplied by the factor's, so the cutoff is divided by it instead.
+fn cutout(m: &gltf::Material, base_color: Option<usize>, warnings: &mut Warnings) -> Result<Option<Cutout>, ()> {
+    let cutoff = match m.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => return Ok(None),
+        gltf::material::AlphaMode::Mask => m.alpha_cutoff().unwrap_or(0.5),
+        gltf::material::AlphaMode::Blend => {
+            warnings.add("alphaMode BLEND (drawn as MASK with a cutoff of 0.5)");
+            0.5
+        }
+    };
+    let factor = m.pbr_metallic_roughness().base_color_factor()[3];
+    let cutoff = if factor > 0.0 { cutoff / factor } else { f32::INFINITY };
+    match base_color {
+        _ if cutoff <= 0.0 => Ok(None),
+        _ if cutoff > 1.0 => Err(()),
+        None => Ok(None),
+        Some(texture) => Ok(Some(Cutout { texture, cutoff })),
+    }
+}
+
+/// What the file uses that the loader does not read, each named once.
+#[derive(Default)]
+struct Warnings(Vec<String>);
+
+impl Warnings {
+    fn add(&mut self, what: &str) {
+        if !self.0.iter().any(|w| w == what) {
+            self.0.push(what.to_string());
+        }
+    }
+}
+
+/// Extensions the loader reads (beyond the core), or that change nothing it draws.
+const READ_EXTENSIONS: &[&str] = &["KHR_materials_emissive_strength"];
+
+/// The file-wide features the loader ignores.
+fn unread_features(doc: &gltf::Document, warnings: &mut Warnings) {
+    for x in doc.extensions_used().filter(|x| !READ_EXTENSIONS.contains(x)) {
+        warnings.add(&format!("the extension {x}"));
+    }
+    if doc.animations().next().is_some() {
+        warnings.add("animations (drawn at rest)");
+    }
+    if doc.skins().next().is_some() {
+        warnings.add("skins (drawn in the bind pose)");
+    }
+    for m in doc.meshes() {
+        for p in m.primitives() {
+            if p.morph_targets().next().is_some() {
+                warnings.add("morph targets (drawn without them)");
+            }
+            if p.get(&gltf::Semantic::Colors(0)).is_some() {
+                warnings.add("vertex colours COLOR_0");
+            }
+        }
+    }
+    for m in doc.materials() {
+        let pbr = m.pbr_metallic_roughness();
+        let sets = [
+            pbr.base_color_texture().map(|t| t.tex_coord()),
+            pbr.metallic_roughness_texture().map(|t| t.tex_coord()),
+            m.normal_texture().map(|t| t.tex_coord()),
+            m.emissive_texture().map(|t| t.tex_coord()),
+            m.occlusion_texture().map(|t| t.tex_coord()),
+        ];
+        if sets.iter().flatten().any(|&set| set > 0) {
+            warnings.add("textures on TEXCOORD_1 or above (sampled with TEXCOORD_0)");
+        }
+    }
 }
 
 /// Extensions a file may require that this loader reads (beyond positions, indices and the
@@ -130,7 +208,9 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
     let file = name.to_string();
     let mut scene = Scene::default();
     let dir = path.parent().unwrap_or(Path::new("."));
-    let (mut normals, mut uvs, mut tangents) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut normals, mut uvs, mut tangents, mut cutouts) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut warnings = Warnings::default();
+    unread_features(&document, &mut warnings);
     let mut materials = Vec::new();
     let (mut textures, mut material_textures) = (TextureCache::default(), Vec::new());
     // (glTF mesh, primitive) -> our mesh, so instanced glTF meshes share one BLAS.
@@ -211,9 +291,17 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
                 skipped += 1;
                 continue;
             };
+            let textures_of = material_textures_of(&prim.material(), &mut textures, &data, dir, &file)?;
+            // A mesh's cut-out is its material's (one material per glTF primitive).
+            let Ok(cut) = cutout(&prim.material(), textures_of.base_color, &mut warnings) else {
+                warnings.add("masked materials whose alpha is below their cutoff everywhere (not drawn)");
+                continue;
+            };
+            cutouts.resize(scene.meshes.len(), None);
+            cutouts[ours] = cut;
             scene.add_instance(ours, Affine3A::from_mat4(world));
             materials.push(material(&prim.material()));
-            material_textures.push(material_textures_of(&prim.material(), &mut textures, &data, dir, &file)?);
+            material_textures.push(textures_of);
         }
     }
     if scene.instances.is_empty() {
@@ -221,7 +309,13 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
     }
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let mut s = fitted(name, scene, normals, materials);
-    (s.uvs, s.tangents, s.textures, s.material_textures) = (uvs, tangents, textures.textures, material_textures);
+    cutouts.resize(s.scene.meshes.len(), None);
+    (s.uvs, s.tangents, s.textures, s.material_textures, s.cutouts) =
+        (uvs, tangents, textures.textures, material_textures, cutouts);
+    for w in &warnings.0 {
+        eprintln!("{file}: uses {w}, which this loader does not read");
+    }
+    s.warnings = warnings.0;
     // A glTF camera looks down its node's -Z with +Y up; the path's target sits a bounding
     // radius ahead (the near and far planes follow from that distance).
     let (lo, hi) = s.bounds();
@@ -253,7 +347,8 @@ fn fitted(name: String, scene: Scene, normals: Vec<Vec<Vec3>>, materials: Vec<Ma
         tangents: Vec::new(),
         textures: Vec::new(),
         material_textures: Vec::new(),
-        alpha_textures: Vec::new(),
+        cutouts: Vec::new(),
+        warnings: Vec::new(),
         materials,
         motions,
         deformer: None,

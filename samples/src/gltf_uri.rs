@@ -11,6 +11,10 @@ pub(crate) fn read_uri(uri: &str, dir: &Path) -> Result<Vec<u8>, String> {
             .ok_or_else(|| format!("unsupported data URI {}", uri.chars().take(40).collect::<String>()))?;
         return base64::engine::general_purpose::STANDARD.decode(payload).map_err(|e| format!("data URI: {e}"));
     }
-    let path = dir.join(uri.replace("%20", " "));
+    // A relative reference: percent-escapes decoded (bytes, so any escaped UTF-8 name).
+    let decoded = percent_encoding::percent_decode_str(uri)
+        .decode_utf8()
+        .map_err(|_| format!("the URI {uri} escapes bytes that are not UTF-8"))?;
+    let path = dir.join(decoded.as_ref());
     std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))
 }

@@ -44,6 +44,14 @@ impl Deformer {
     }
 }
 
+/// An alpha-tested mesh's holes: where its texture's alpha is below `cutoff`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cutout {
+    pub texture: usize,
+    /// In [0, 1].
+    pub cutoff: f32,
+}
+
 /// A camera moving from `from` to `to` (eye positions) while looking at `target`.
 #[derive(Clone, Copy, Debug)]
 pub struct CameraPath {
@@ -83,9 +91,10 @@ pub struct SampleScene {
     /// empty: none).
     pub textures: Vec<Texture>,
     pub material_textures: Vec<MaterialTextures>,
-    /// Alpha-tested meshes (foliage): per mesh, the texture whose alpha (< 0.5: a hole) cuts
-    /// it, in the raster pass and in every ray the SDK traces (one list per mesh, or empty).
-    pub alpha_textures: Vec<Option<usize>>,
+    /// Alpha-tested meshes (foliage, glTF's `MASK` materials): per mesh, the texture and
+    /// cutoff that cut it, in the raster pass and in every ray the SDK traces (one per mesh,
+    /// or empty).
+    pub cutouts: Vec<Option<Cutout>>,
     /// One per instance of `scene`.
     pub materials: Vec<Material>,
     /// One per instance of `scene`.
@@ -108,6 +117,9 @@ pub struct SampleScene {
     pub tile_unit_length: f32,
     /// Longest AO ray (world units).
     pub ao_ray_length: f32,
+    /// What the scene's file uses that its loader does not read, one line each (empty for
+    /// the built-in scenes).
+    pub warnings: Vec<String>,
 }
 
 impl SampleScene {

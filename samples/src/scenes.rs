@@ -1,7 +1,7 @@
 //! Built-in scenes.
 use crate::lighting::Lights;
 use crate::raster::{Material, MaterialTextures, Texture};
-use crate::scene::{vertex_normals, CameraPath, Deformer, Motion, SampleScene};
+use crate::scene::{vertex_normals, CameraPath, Cutout, Deformer, Motion, SampleScene};
 use glam::{Affine3A, Quat, Vec3};
 use hybrid_rt_host::scene::{Camera, Mesh, Rng, Scene};
 
@@ -116,7 +116,7 @@ pub fn cornell_room() -> SampleScene {
         tangents: Vec::new(),
         textures: Vec::new(),
         material_textures: Vec::new(),
-        alpha_textures: Vec::new(),
+        cutouts: Vec::new(),
         normals: scene.meshes.iter().map(|m| vertex_normals(&m.positions, &m.indices)).collect(),
         scene,
         materials,
@@ -142,6 +142,7 @@ pub fn cornell_room() -> SampleScene {
         lidar_eye: Vec3::new(0.0, 2.0, 0.5),
         tile_unit_length: 0.08,
         ao_ray_length: 0.6,
+        warnings: Vec::new(),
     }
 }
 
@@ -281,8 +282,8 @@ pub fn forest() -> SampleScene {
     material_textures.push(MaterialTextures::default());
     let mut uvs = vec![Vec::new(); scene.meshes.len()];
     uvs[fern] = fern_uvs;
-    let mut alpha_textures = vec![None; scene.meshes.len()];
-    alpha_textures[fern] = Some(0);
+    let mut cutouts = vec![None; scene.meshes.len()];
+    cutouts[fern] = Some(Cutout { texture: 0, cutoff: 0.5 });
     SampleScene {
         name: "forest".into(),
         file_cameras: Vec::new(),
@@ -290,7 +291,7 @@ pub fn forest() -> SampleScene {
         tangents: Vec::new(),
         textures: vec![leaf_texture()],
         material_textures,
-        alpha_textures,
+        cutouts,
         normals: scene.meshes.iter().map(|m| vertex_normals(&m.positions, &m.indices)).collect(),
         scene,
         materials,
@@ -316,6 +317,7 @@ pub fn forest() -> SampleScene {
         lidar_eye: Vec3::new(0.0, 4.0, 24.0),
         tile_unit_length: 0.3,
         ao_ray_length: 1.0,
+        warnings: Vec::new(),
     }
 }
 

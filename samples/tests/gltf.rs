@@ -32,14 +32,20 @@ impl Default for File {
 }
 
 impl File {
-    /// Writes `name` in the test directory; returns its path.
-    fn write(&self, name: &str) -> PathBuf {
+    /// The buffer: the four corners, then the indices.
+    fn bytes(&self) -> Vec<u8> {
         let positions: [[f32; 3]; 4] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
         let mut bytes: Vec<u8> = positions.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
         bytes.extend(self.indices.iter().flat_map(|i| i.to_le_bytes()));
         while bytes.len() & 3 != 0 {
             bytes.push(0);
         }
+        bytes
+    }
+
+    /// Writes `name` in the test directory; returns its path.
+    fn write(&self, name: &str) -> PathBuf {
+        let bytes = self.bytes();
         let uri = match self.buffer_uri {
             Some(u) => u.to_string(),
             None => format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bytes)),
@@ -334,11 +340,17 @@ fn material_textures_tangents_and_camera_roll_are_read() {
     assert!((up - glam::Vec3::NEG_X).length() < 1e-5, "a camera rolled 90 degrees about its view: up {up}");
 }
 
-/// Renders `file` headless and returns each mode's EXR texels.
+/// Renders `file` headless at 48x32 and returns each mode's EXR texels.
 fn render_modes(file: &std::path::Path, out: &str, modes: &str) -> Vec<Vec<[f32; 4]>> {
+    render_modes_sized(file, out, modes, 48, 32)
+}
+
+/// Renders `file` headless at `width` x `height` and returns each mode's EXR texels.
+fn render_modes_sized(file: &std::path::Path, out: &str, modes: &str, width: u32, height: u32) -> Vec<Vec<[f32; 4]>> {
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(out);
+    let (width, height) = (width.to_string(), height.to_string());
     let run = std::process::Command::new(env!("CARGO_BIN_EXE_sample"))
-        .args(["--headless", file.to_str().unwrap(), "--width", "48", "--height", "32", "--frames", "2", "--modes", modes])
+        .args(["--headless", file.to_str().unwrap(), "--width", &width, "--height", &height, "--frames", "2", "--modes", modes])
         .arg("--out")
         .arg(&out)
         .env_remove("DISPLAY")
@@ -378,4 +390,129 @@ fn a_gltf_with_every_texture_renders_them() {
             }
         }
     }
+}
+
+/// A 4x4 ground (grey) under a 2x2 quad at height 0.5 whose base-colour texture is 2x1 texels,
+/// transparent on the left and opaque on the right, times a base-colour factor of alpha
+/// `factor`, with material `quad_material` (JSON members beside its pbrMetallicRoughness).
+fn write_cutout_scene(name: &str, factor: f32, quad_material: &str) -> PathBuf {
+    let b64 = |b: &[u8]| base64::engine::general_purpose::STANDARD.encode(b);
+    let mut png_bytes = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut png_bytes, 2, 1);
+        enc.set_color(png::ColorType::Rgba);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.write_header().unwrap().write_image_data(&[255, 255, 255, 0, 255, 255, 255, 255]).unwrap();
+    }
+    let ground: [[f32; 3]; 4] = [[-2.0, 0.0, -2.0], [2.0, 0.0, -2.0], [-2.0, 0.0, 2.0], [2.0, 0.0, 2.0]];
+    let quad: [[f32; 3]; 4] = [[-1.0, 0.5, -1.0], [1.0, 0.5, -1.0], [-1.0, 0.5, 1.0], [1.0, 0.5, 1.0]];
+    let uvs: [[f32; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]];
+    let indices: [u16; 6] = [0, 1, 2, 2, 1, 3];
+    let mut bytes: Vec<u8> = ground.iter().chain(&quad).flatten().flat_map(|v| v.to_le_bytes()).collect();
+    bytes.extend(uvs.iter().flatten().flat_map(|v| v.to_le_bytes()));
+    bytes.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0, 1]}}], "nodes": [{{"mesh": 0}}, {{"mesh": 1}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 3, "material": 0}}]}},
+    {{"primitives": [{{"attributes": {{"POSITION": 1, "TEXCOORD_0": 2}}, "indices": 3, "material": 1}}]}}],
+  "materials": [{{"pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0}}}},
+    {{"pbrMetallicRoughness": {{"baseColorTexture": {{"index": 0}}, "baseColorFactor": [1, 1, 1, {factor}], "metallicFactor": 0}}{quad_material}}}],
+  "textures": [{{"source": 0}}], "images": [{{"uri": "data:image/png;base64,{png}"}}],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-2, 0, -2], "max": [2, 0, 2]}},
+    {{"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-1, 0.5, -1], "max": [1, 0.5, 1]}},
+    {{"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC2"}},
+    {{"bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR"}}],
+  "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 48}}, {{"buffer": 0, "byteOffset": 48, "byteLength": 48}},
+    {{"buffer": 0, "byteOffset": 96, "byteLength": 32}}, {{"buffer": 0, "byteOffset": 128, "byteLength": 12}}],
+  "buffers": [{{"byteLength": {len}, "uri": "data:application/octet-stream;base64,{data}"}}]}}"#,
+        png = b64(&png_bytes),
+        len = bytes.len(),
+        data = b64(&bytes),
+    );
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    std::fs::write(&path, json).unwrap();
+    path
+}
+
+/// `alphaMode: MASK` cuts the mesh where texture alpha x factor alpha < `alphaCutoff` (the
+/// cutoff the SDK and the raster pass compare the texture with is divided by the factor);
+/// `BLEND` is drawn masked, with a warning; a factor below the cutoff hides the mesh.
+#[test]
+fn masked_materials_become_cutouts() {
+    use hybrid_rt_samples::scene::Cutout;
+    let mask = r#", "alphaMode": "MASK", "alphaCutoff": 0.3"#;
+    let masked = gltf_scene::load(&write_cutout_scene("mask.gltf", 1.0, mask)).unwrap();
+    // (Which of the two meshes is the quad is the loader's business.)
+    let cut = |s: &hybrid_rt_samples::scene::SampleScene| s.cutouts.iter().flatten().copied().collect::<Vec<Cutout>>();
+    assert_eq!(masked.cutouts.len(), 2);
+    assert_eq!(cut(&masked), [Cutout { texture: 0, cutoff: 0.3 }]);
+    assert!(masked.warnings.is_empty(), "{:?}", masked.warnings);
+    let half = gltf_scene::load(&write_cutout_scene("mask-factor.gltf", 0.5, mask)).unwrap();
+    assert_eq!(cut(&half), [Cutout { texture: 0, cutoff: 0.6 }]);
+    let hidden = gltf_scene::load(&write_cutout_scene("mask-hidden.gltf", 0.2, mask)).unwrap();
+    assert_eq!(hidden.scene.instances.len(), 1, "only the ground is drawn");
+    assert!(hidden.warnings.iter().any(|w| w.contains("not drawn")), "{:?}", hidden.warnings);
+    let blend = gltf_scene::load(&write_cutout_scene("blend.gltf", 1.0, r#", "alphaMode": "BLEND""#)).unwrap();
+    assert_eq!(cut(&blend), [Cutout { texture: 0, cutoff: 0.5 }]);
+    assert!(blend.warnings.iter().any(|w| w.contains("BLEND")), "{:?}", blend.warnings);
+    let opaque = gltf_scene::load(&write_cutout_scene("opaque.gltf", 1.0, "")).unwrap();
+    assert_eq!(opaque.cutouts, [None, None]);
+}
+
+/// Rendered, a masked quad's holes are holes: half of it is drawn, and its shadow on the
+/// ground (the SDK's sun shadow rays run the alpha test) is half the opaque quad's.
+#[test]
+fn a_masked_quad_casts_the_cut_out_shadow() {
+    let mut counts = Vec::new();
+    for (name, material) in [("opaque", ""), ("masked", r#", "alphaMode": "MASK""#)] {
+        let file = write_cutout_scene(&format!("cutout-render-{name}.gltf"), 1.0, material);
+        let images = render_modes_sized(&file, &format!("sample-cutout-{name}"), "albedo,sun_shadow_noisy,normals", 192, 128);
+        let [albedo, shadow, normals] = &images[..] else { unreachable!() };
+        // The quad is white, the ground grey, the sky has no normal.
+        let quad = albedo.iter().filter(|t| t[0] > 0.9).count();
+        let surface = |i: usize| (0..3).map(|c| (2.0 * normals[i][c] - 1.0).powi(2)).sum::<f32>() > 0.25;
+        let shadowed = (0..shadow.len()).filter(|&i| surface(i) && albedo[i][0] < 0.9 && shadow[i][0] < 0.5).count();
+        eprintln!("{name}: {quad} quad pixels, {shadowed} shadowed ground pixels");
+        counts.push((quad as f32, shadowed as f32));
+    }
+    let ((quad, shade), (masked_quad, masked_shade)) = (counts[0], counts[1]);
+    assert!(quad > 100.0 && shade > 50.0, "the opaque quad and its shadow are in view: {quad}, {shade}");
+    let (drawn, cast) = (masked_quad / quad, masked_shade / shade);
+    assert!((0.3..0.7).contains(&drawn), "the masked quad draws {drawn} of the opaque one's pixels");
+    assert!((0.3..0.7).contains(&cast), "the masked quad's shadow is {cast} of the opaque one's");
+}
+
+/// URIs are percent-decoded: a buffer named "quad data+1.bin" is "quad%20data%2B1.bin".
+#[test]
+fn percent_escaped_uris_load() {
+    let file = File { buffer_uri: Some("quad%20data%2B1.bin"), ..Default::default() };
+    std::fs::write(PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("quad data+1.bin"), file.bytes()).unwrap();
+    let scene = gltf_scene::load(&file.write("escaped.gltf")).unwrap();
+    assert_eq!(scene.scene.meshes[0].indices, [0, 1, 2, 2, 1, 3]);
+}
+
+/// What a file uses that the loader does not read is named, once each.
+#[test]
+fn unread_features_are_named_once() {
+    let extra = r#""animations": [{"channels": [{"sampler": 0, "target": {"node": 0, "path": "translation"}}],
+      "samplers": [{"input": 2, "output": 3}]}],"#;
+    let file = File { extra, ..Default::default() };
+    // Two more accessors for the animation's times and translations, over the index data
+    // (valid for the parser; the loader never reads them).
+    let path = file.write("animated.gltf");
+    let json = std::fs::read_to_string(&path).unwrap().replace(
+        r#""type": "SCALAR"}],"#,
+        r#""type": "SCALAR"},
+    {"bufferView": 1, "componentType": 5126, "count": 1, "type": "SCALAR", "min": [0], "max": [0]},
+    {"bufferView": 1, "componentType": 5126, "count": 1, "type": "VEC3"}],"#,
+    );
+    let json = json.replace(r#""extensionsUsed": []"#, r#""extensionsUsed": ["KHR_texture_transform", "KHR_texture_transform"]"#);
+    std::fs::write(&path, json).unwrap();
+    let scene = gltf_scene::load(&path).unwrap();
+    assert_eq!(
+        scene.warnings,
+        ["the extension KHR_texture_transform", "animations (drawn at rest)"],
+        "each feature once, in the order found"
+    );
 }

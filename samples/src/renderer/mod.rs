@@ -170,13 +170,13 @@ fn sdk_err(e: hybrid_rt::Error) -> String {
 /// test, and the base-colour texture relighting and hit lighting read (texture x the
 /// instance's tint), with the texture coordinates either needs.
 fn sdk_geometry_input(scene: &SampleScene, meshes: &MeshBuffers, i: usize, allow_update: bool) -> GeometryInput {
-    let cutout = scene.alpha_textures.get(i).copied().flatten().and_then(|k| meshes.texture_input(k));
+    let cutout = scene.cutouts.get(i).copied().flatten().and_then(|c| Some((meshes.texture_input(c.texture)?, c.cutoff)));
     let albedo = scene.mesh_albedo_texture(i).and_then(|k| meshes.texture_input(k));
     GeometryInput {
         allow_update,
         surfels: SurfelSettings { tile_unit_length: scene.tile_unit_length, ..Default::default() },
-        uvs: cutout.or(albedo).map(|_| meshes.uv_input(i)),
-        alpha_test: cutout.map(|texture| AlphaTestInput { texture, ..Default::default() }),
+        uvs: (cutout.is_some() || albedo.is_some()).then(|| meshes.uv_input(i)),
+        alpha_test: cutout.map(|(texture, cutoff)| AlphaTestInput { texture, cutoff, ..Default::default() }),
         albedo_texture: albedo.map(|texture| AlbedoTextureInput { texture }),
         ..meshes.geometry_input(i)
     }
@@ -426,10 +426,7 @@ impl<'h> Renderer<'h> {
                 material: scene.materials[i],
                 vertex_buffer: deformed.filter(|(m, _)| *m == scene.scene.instances[i].mesh).map(|(_, b)| b),
                 textures: scene.material_textures.get(i).copied().unwrap_or_default(),
-                alpha_cutoff: match scene.alpha_textures.get(scene.scene.instances[i].mesh) {
-                    Some(Some(_)) => AlphaTestInput::default().cutoff,
-                    _ => 0.0,
-                },
+                alpha_cutoff: scene.cutouts.get(scene.scene.instances[i].mesh).copied().flatten().map_or(0.0, |c| c.cutoff),
             })
             .collect();
         let (host, s) = (self.host, &self.slots[slot]);
