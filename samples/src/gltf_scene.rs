@@ -17,11 +17,13 @@
 //! (or has two parents) is refused, extensions the file requires and this loader lacks (Draco,
 //! meshopt, quantized meshes) are named before validation buries them under its own errors,
 //! and validation errors are summed up to the first three.
+use crate::gltf_rig;
 use crate::gltf_textures::TextureCache;
 use crate::gltf_uri::read_uri;
 use crate::lighting::Lights;
 use crate::raster::{Material, MaterialTextures};
 use crate::scene::{vertex_normals, CameraPath, Cutout, Motion, SampleScene};
+use crate::skin::SkinnedMesh;
 use glam::{Affine3A, Mat4, Vec3, Vec4};
 use hybrid_rt_host::scene::{Mesh, Scene};
 use std::collections::HashMap;
@@ -118,12 +120,6 @@ fn unread_features(doc: &gltf::Document, warnings: &mut Warnings) {
     for x in doc.extensions_used().filter(|x| !READ_EXTENSIONS.contains(x)) {
         warnings.add(&format!("the extension {x}"));
     }
-    if doc.animations().next().is_some() {
-        warnings.add("animations (drawn at rest)");
-    }
-    if doc.skins().next().is_some() {
-        warnings.add("skins (drawn in the bind pose)");
-    }
     for m in doc.meshes() {
         for p in m.primitives() {
             if p.morph_targets().next().is_some() {
@@ -211,6 +207,9 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
     let (mut normals, mut uvs, mut tangents, mut cutouts) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut warnings = Warnings::default();
     unread_features(&document, &mut warnings);
+    let mut rig = gltf_rig::rig(&document, &data, &mut |w| warnings.add(w)).map_err(|e| format!("{name}: {e}"))?;
+    let animated = gltf_rig::animated_nodes(&rig);
+    let mut motions = Vec::new();
     let mut materials = Vec::new();
     let (mut textures, mut material_textures) = (TextureCache::default(), Vec::new());
     // (glTF mesh, primitive) -> our mesh, so instanced glTF meshes share one BLAS.
@@ -245,11 +244,15 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
             }
         }
         let Some(mesh) = node.mesh() else { continue };
+        // A skinned node's joints place it (its own transform is ignored, as glTF says).
+        let skin = node.skin().map(|s| s.index()).filter(|&s| s < rig.skins.len());
         for prim in mesh.primitives() {
             let key = (mesh.index(), prim.index());
             let at = || format!("{name}: mesh {} primitive {}", mesh.index(), prim.index());
-            let ours = match meshes.get(&key) {
-                Some(&m) => Some(m),
+            // A skinned primitive bends on its own: its mesh is not shared.
+            let shared = if skin.is_some() { None } else { meshes.get(&key).copied() };
+            let ours = match shared {
+                Some(m) => Some(m),
                 None => {
                     let reader = prim.reader(|b| data.get(b.index()).map(|d| d.as_slice()));
                     let positions: Vec<Vec3> =
@@ -281,8 +284,29 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
                                 .filter(|t| t.len() == positions.len() && t.iter().all(|v| v.is_finite()))
                                 .unwrap_or_default(),
                         );
+                        let vertex_count = positions.len();
                         let m = scene.add_mesh(Mesh { positions, indices });
-                        meshes.insert(key, m);
+                        match skin {
+                            Some(skin) => {
+                                let joints: Option<Vec<[u32; 4]>> =
+                                    reader.read_joints(0).map(|j| j.into_u16().map(|j| j.map(u32::from)).collect());
+                                let weights: Option<Vec<[f32; 4]>> = reader.read_weights(0).map(|w| w.into_f32().collect());
+                                let (Some(joints), Some(weights)) = (joints, weights) else {
+                                    return Err(format!("{}: skinned without JOINTS_0 and WEIGHTS_0", at()));
+                                };
+                                let count = rig.skins[skin].joints.len() as u32;
+                                if joints.len() != vertex_count || weights.len() != vertex_count {
+                                    return Err(format!("{}: JOINTS_0 or WEIGHTS_0 is not one per vertex", at()));
+                                }
+                                if let Some(bad) = joints.iter().flatten().find(|&&j| j >= count) {
+                                    return Err(format!("{}: joint {bad} past its skin's {count}", at()));
+                                }
+                                rig.skinned.push(SkinnedMesh { mesh: m, skin, joints, weights });
+                            }
+                            None => {
+                                meshes.insert(key, m);
+                            }
+                        }
                         Some(m)
                     }
                 }
@@ -299,7 +323,15 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
             };
             cutouts.resize(scene.meshes.len(), None);
             cutouts[ours] = cut;
-            scene.add_instance(ours, Affine3A::from_mat4(world));
+            let (transform, motion) = match skin {
+                Some(_) => (Affine3A::IDENTITY, Motion::Static),
+                None if animated.get(node.index()).copied().unwrap_or(false) => {
+                    (Affine3A::from_mat4(world), Motion::Node(node.index()))
+                }
+                None => (Affine3A::from_mat4(world), Motion::Static),
+            };
+            scene.add_instance(ours, transform);
+            motions.push(motion);
             materials.push(material(&prim.material()));
             material_textures.push(textures_of);
         }
@@ -309,6 +341,8 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
     }
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let mut s = fitted(name, scene, normals, materials);
+    s.motions = motions;
+    s.rig = rig;
     cutouts.resize(s.scene.meshes.len(), None);
     (s.uvs, s.tangents, s.textures, s.material_textures, s.cutouts) =
         (uvs, tangents, textures.textures, material_textures, cutouts);
@@ -352,6 +386,7 @@ fn fitted(name: String, scene: Scene, normals: Vec<Vec<Vec3>>, materials: Vec<Ma
         materials,
         motions,
         deformer: None,
+        rig: Default::default(),
         lights: Lights {
             sun_direction: Vec3::new(0.45, 1.0, 0.6),
             sun_intensity: 3.0,

@@ -2,6 +2,8 @@
 //! output, progress.
 //! The engine side (device, images, submission, the triangle scenes) is `hybrid_rt_host`; the
 //! G-buffer comes from `raster` (a Vulkan graphics pass, as an engine's).
+pub mod figure;
+mod gltf_rig;
 pub mod gltf_scene;
 pub mod gltf_textures;
 mod gltf_uri;
@@ -16,4 +18,6 @@ pub mod renderer;
 pub mod report;
 pub mod scene;
 pub mod scenes;
+pub mod skin;
+pub mod skinning;
 pub mod window;

@@ -3,6 +3,7 @@
 //! Built by `scenes::cornell_room` or loaded from glTF (`gltf_scene`).
 use crate::lighting::Lights;
 use crate::raster::{Material, MaterialTextures, Texture, VertexAttributes};
+use crate::skin::Rig;
 use glam::{Affine3A, Quat, Vec3, Vec4};
 use hybrid_rt_host::scene::{Camera, Scene};
 
@@ -16,6 +17,8 @@ pub enum Motion {
         radius: f32,
         period: f32,
     },
+    /// Where node `n` of the scene's rig is (an animated glTF node).
+    Node(usize),
 }
 
 /// A mesh whose vertices move every frame (cloth, skinning): its BLAS is refit each frame.
@@ -100,6 +103,8 @@ pub struct SampleScene {
     /// One per instance of `scene`.
     pub motions: Vec<Motion>,
     pub deformer: Option<Deformer>,
+    /// Animated nodes and skinned meshes (empty: none).
+    pub rig: Rig,
     pub lights: Lights,
     /// Angular diameter of the sun (radians) and radius of the point light (world units): the
     /// SDK's shadow rays sample them, so penumbrae widen with distance to the occluder.
@@ -123,6 +128,43 @@ pub struct SampleScene {
 }
 
 impl SampleScene {
+    /// A scene of untextured meshes (smooth normals computed), one material and motion per
+    /// instance, seen along `camera_path` and lit by `lights`; nothing deforms. The built-in
+    /// scenes start here and set what differs.
+    pub fn of_meshes(
+        name: &str,
+        scene: Scene,
+        materials: Vec<Material>,
+        motions: Vec<Motion>,
+        lights: Lights,
+        camera_path: CameraPath,
+    ) -> SampleScene {
+        SampleScene {
+            name: name.into(),
+            normals: scene.meshes.iter().map(|m| vertex_normals(&m.positions, &m.indices)).collect(),
+            scene,
+            uvs: Vec::new(),
+            tangents: Vec::new(),
+            textures: Vec::new(),
+            material_textures: Vec::new(),
+            cutouts: Vec::new(),
+            materials,
+            motions,
+            deformer: None,
+            rig: Rig::default(),
+            lights,
+            sun_angular_extent: 0.03,
+            point_radius: 0.1,
+            sky: [0.35, 0.45, 0.6],
+            camera_path,
+            file_cameras: Vec::new(),
+            lidar_eye: camera_path.target,
+            tile_unit_length: 0.1,
+            ao_ray_length: 0.5,
+            warnings: Vec::new(),
+        }
+    }
+
     /// Instance `i`'s diffuse albedo as the SDK's relighting and hit lighting take it
     /// (`InstanceInput::albedo`): its material's albedo x (1 - metalness) (metals have no
     /// diffuse) — a tint of the base-colour texture its geometry hands the SDK
@@ -166,11 +208,23 @@ impl SampleScene {
         VertexAttributes { normals: of(&self.normals, k), uvs: of(&self.uvs, k), tangents: of(&self.tangents, k) }
     }
 
+    /// Every instance's transform at `time` seconds (the rig posed once).
+    pub fn transforms(&self, time: f32) -> Vec<Affine3A> {
+        let pose = if self.motions.iter().any(|m| matches!(m, Motion::Node(_))) { self.rig.pose(time) } else { Vec::new() };
+        (0..self.scene.instances.len())
+            .map(|i| match self.motions[i] {
+                Motion::Node(n) => Affine3A::from_mat4(pose.get(n).copied().unwrap_or(glam::Mat4::IDENTITY)),
+                _ => self.transform(i, time),
+            })
+            .collect()
+    }
+
     /// The transform of instance `i` at `time` seconds.
     pub fn transform(&self, i: usize, time: f32) -> Affine3A {
         let rest = self.scene.instances[i].transform;
         match self.motions[i] {
             Motion::Static => rest,
+            Motion::Node(n) => self.rig.node_transform(n, time),
             Motion::Orbit { center, radius, period } => {
                 let a = std::f32::consts::TAU * time / period;
                 let offset = Vec3::new(a.cos(), 0.0, a.sin()) * radius;
@@ -183,16 +237,30 @@ impl SampleScene {
     /// at `time` rasterizes and the SDK traces; tests trace it on the CPU).
     pub fn at(&self, time: f32) -> Scene {
         let mut s = self.scene.clone();
-        for (i, inst) in s.instances.iter_mut().enumerate() {
-            inst.transform = self.transform(i, time);
+        for (inst, t) in s.instances.iter_mut().zip(self.transforms(time)) {
+            inst.transform = t;
         }
         if let Some(d) = &self.deformer {
             let mesh = s.instances[d.instance].mesh;
             s.meshes[mesh].positions = d.positions(time);
         }
+        if !self.rig.skinned.is_empty() {
+            let pose = self.rig.pose(time);
+            for m in &self.rig.skinned {
+                let joints = self.rig.joint_matrices(m.skin, &pose);
+                s.meshes[m.mesh].positions = Rig::skin_positions(m, &joints, &self.scene.meshes[m.mesh].positions);
+            }
+        }
         s
     }
 
+    /// Whether mesh `k` changes shape over time (the flag, a skinned mesh): its BLAS is refit.
+    pub fn is_deforming(&self, k: usize) -> bool {
+        self.deformer.as_ref().is_some_and(|d| self.scene.instances[d.instance].mesh == k)
+            || self.rig.skinned.iter().any(|m| m.mesh == k)
+    }
+
+    /// Whether instance `i` moves (its transform changes over time).
     pub fn is_dynamic(&self, i: usize) -> bool {
         self.motions[i] != Motion::Static
     }

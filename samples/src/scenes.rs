@@ -1,7 +1,7 @@
 //! Built-in scenes.
 use crate::lighting::Lights;
 use crate::raster::{Material, MaterialTextures, Texture};
-use crate::scene::{vertex_normals, CameraPath, Cutout, Deformer, Motion, SampleScene};
+use crate::scene::{CameraPath, Cutout, Deformer, Motion, SampleScene};
 use glam::{Affine3A, Quat, Vec3};
 use hybrid_rt_host::scene::{Camera, Mesh, Rng, Scene};
 
@@ -109,40 +109,27 @@ pub fn cornell_room() -> SampleScene {
         Material { albedo: [0.8, 0.15, 0.3], roughness: 0.7, metalness: 0.0, ..Default::default() },
         Motion::Static,
     );
+    let lights = Lights {
+        sun_direction: Vec3::new(0.3, 1.0, -0.35),
+        sun_intensity: 2.2,
+        point_position: Vec3::new(0.8, 3.2, 0.6),
+        point_intensity: 3.5,
+        ambient: 0.0,
+    };
+    let camera_path = CameraPath {
+        from: Vec3::new(-1.6, 2.1, 2.6),
+        to: Vec3::new(1.6, 1.7, 2.6),
+        target: Vec3::new(0.0, 1.2, -1.5),
+        up: Vec3::Y,
+        fov_y_radians: 65f32.to_radians(),
+    };
     SampleScene {
-        name: "cornell room".into(),
-        file_cameras: Vec::new(),
-        uvs: Vec::new(),
-        tangents: Vec::new(),
-        textures: Vec::new(),
-        material_textures: Vec::new(),
-        cutouts: Vec::new(),
-        normals: scene.meshes.iter().map(|m| vertex_normals(&m.positions, &m.indices)).collect(),
-        scene,
-        materials,
-        motions,
         deformer: Some(Deformer { instance: flag_instance, rest, amplitude: 0.15 }),
-        lights: Lights {
-            sun_direction: Vec3::new(0.3, 1.0, -0.35),
-            sun_intensity: 2.2,
-            point_position: Vec3::new(0.8, 3.2, 0.6),
-            point_intensity: 3.5,
-            ambient: 0.0,
-        },
-        sun_angular_extent: 0.03,
         point_radius: 0.15,
-        sky: [0.35, 0.45, 0.6],
-        camera_path: CameraPath {
-            from: Vec3::new(-1.6, 2.1, 2.6),
-            to: Vec3::new(1.6, 1.7, 2.6),
-            target: Vec3::new(0.0, 1.2, -1.5),
-            up: Vec3::Y,
-            fov_y_radians: 65f32.to_radians(),
-        },
         lidar_eye: Vec3::new(0.0, 2.0, 0.5),
         tile_unit_length: 0.08,
         ao_ray_length: 0.6,
-        warnings: Vec::new(),
+        ..SampleScene::of_meshes("cornell room", scene, materials, motions, lights, camera_path)
     }
 }
 
@@ -284,40 +271,30 @@ pub fn forest() -> SampleScene {
     uvs[fern] = fern_uvs;
     let mut cutouts = vec![None; scene.meshes.len()];
     cutouts[fern] = Some(Cutout { texture: 0, cutoff: 0.5 });
+    let lights = Lights {
+        sun_direction: Vec3::new(0.5, 0.45, 0.3),
+        sun_intensity: 2.5,
+        point_position: flag_at + Vec3::new(0.0, 1.5, 1.0),
+        point_intensity: 4.0,
+        ambient: 0.0,
+    };
+    let camera_path = CameraPath {
+        from: Vec3::new(-8.0, 3.0, 31.0),
+        to: Vec3::new(8.0, 2.5, 31.0),
+        target: Vec3::new(0.0, 1.0, 18.0),
+        up: Vec3::Y,
+        fov_y_radians: 60f32.to_radians(),
+    };
     SampleScene {
-        name: "forest".into(),
-        file_cameras: Vec::new(),
         uvs,
-        tangents: Vec::new(),
         textures: vec![leaf_texture()],
         material_textures,
         cutouts,
-        normals: scene.meshes.iter().map(|m| vertex_normals(&m.positions, &m.indices)).collect(),
-        scene,
-        materials,
-        motions,
         deformer: Some(Deformer { instance: flag_instance, rest, amplitude: 0.15 }),
-        lights: Lights {
-            sun_direction: Vec3::new(0.5, 0.45, 0.3),
-            sun_intensity: 2.5,
-            point_position: flag_at + Vec3::new(0.0, 1.5, 1.0),
-            point_intensity: 4.0,
-            ambient: 0.0,
-        },
-        sun_angular_extent: 0.03,
-        point_radius: 0.1,
-        sky: [0.35, 0.45, 0.6],
-        camera_path: CameraPath {
-            from: Vec3::new(-8.0, 3.0, 31.0),
-            to: Vec3::new(8.0, 2.5, 31.0),
-            target: Vec3::new(0.0, 1.0, 18.0),
-            up: Vec3::Y,
-            fov_y_radians: 60f32.to_radians(),
-        },
         lidar_eye: Vec3::new(0.0, 4.0, 24.0),
         tile_unit_length: 0.3,
         ao_ray_length: 1.0,
-        warnings: Vec::new(),
+        ..SampleScene::of_meshes("forest", scene, materials, motions, lights, camera_path)
     }
 }
 

@@ -24,6 +24,8 @@ window keys: Tab / Shift+Tab next / previous mode, 1-9 first modes, W A S D Q E 
 enum Builtin {
     Room,
     Forest,
+    /// A skinned figure waving (GPU skinning and a BLAS refit every frame).
+    Figure,
 }
 
 /// The hybrid-rt sample: a rasterizing renderer with the SDK's ray-traced shadows, AO,
@@ -34,9 +36,8 @@ struct Cli {
     /// A glTF file (.gltf or .glb) to render instead of a built-in scene.
     #[arg(conflicts_with = "builtin")]
     scene: Option<PathBuf>,
-    /// The built-in scene: the cornell room, or a forest of 2,500 instances (alpha-tested ferns
-    /// among them) on a 1M-triangle
-    /// terrain.
+    /// The built-in scene: the cornell room, a forest of 2,500 instances (alpha-tested ferns
+    /// among them) on a 1M-triangle terrain, or a skinned figure waving.
     #[arg(long = "scene", value_enum, default_value_t = Builtin::Room)]
     builtin: Builtin,
     /// Render without a window (the default when no display is set), write the last frame's
@@ -158,6 +159,7 @@ fn run() -> Result<(), String> {
         None => match cli.builtin {
             Builtin::Room => scenes::cornell_room(),
             Builtin::Forest => scenes::forest(),
+            Builtin::Figure => hybrid_rt_samples::figure::waving_figure(),
         },
     };
     if let Some(k) = cli.camera {

@@ -23,10 +23,11 @@
 //! starts with a barrier on the previous one's writes.
 use crate::gpu::{spirv, ComputePass};
 use crate::lighting::{LightingPass, Visibility};
-use crate::mesh_buffers::Vertex;
+use crate::mesh_buffers::{Vertex, VERTEX_STRIDE};
 use crate::modes::Mode;
 use crate::raster::{self, Draw, GBufferPass, MeshBuffers, VertexAttributes};
 use crate::scene::SampleScene;
+use crate::skinning::SkinningPass;
 use ash::vk;
 use glam::Vec3;
 use hybrid_rt::*;
@@ -149,6 +150,7 @@ pub struct Renderer<'h> {
     meshes: MeshBuffers,
     gbuffer: GBufferPass,
     lighting: LightingPass,
+    skinning: SkinningPass,
     composite: ComputePass,
     view: ComputePass,
     slots: Vec<Slot>,
@@ -198,9 +200,8 @@ impl<'h> Renderer<'h> {
         let meshes = MeshBuffers::upload(host, &scene.scene, &attributes, &scene.textures)?;
         // Register every mesh and instance (one BLAS per mesh; the flag's may be refit).
         let geometries = ctx.create_geometry_handles(scene.scene.meshes.len());
-        let deformed_mesh = scene.deformer.as_ref().map(|d| scene.scene.instances[d.instance].mesh);
         for (i, &handle) in geometries.iter().enumerate() {
-            let input = sdk_geometry_input(&scene, &meshes, i, Some(i) == deformed_mesh);
+            let input = sdk_geometry_input(&scene, &meshes, i, scene.is_deforming(i));
             let task = GeometryTask { handle, operation: TaskOperation::Register, input };
             // SAFETY: the engine's buffers the task names are alive.
             schedule::schedule(&mut container, schedule::BVH_LABEL, |c| unsafe { c.schedule_geometry(&task) })?;
@@ -219,10 +220,12 @@ impl<'h> Renderer<'h> {
             let task = InstanceTask { handle, operation: InstanceOperation::Register, input };
             schedule::schedule(&mut container, schedule::BVH_LABEL, |c| c.schedule_instance(&task))?;
         }
+        let skinning = SkinningPass::new(host, &scene)?;
         let mut slots = Vec::new();
         for _ in 0..SLOTS {
             let rest = scene.deformer.as_ref().map(|d| deformed_vertices(&scene, d, 0.0));
-            slots.push(Slot::new(host, w, h, settings.lidar_size, rest.as_deref(), scene.camera_path.at(0.0))?);
+            let posed = skinning.posed_buffers(host, &scene)?;
+            slots.push(Slot::new(host, w, h, settings.lidar_size, rest.as_deref(), posed, scene.camera_path.at(0.0))?);
         }
         let work = Work::new(host, w, h, settings.lidar_size)?;
         let context = |signal| {
@@ -242,7 +245,7 @@ impl<'h> Renderer<'h> {
             ao: context(SignalType::DiffuseOcclusion).map_err(sdk_err)?,
             radiance: context(SignalType::SpecularAndDiffuse).map_err(sdk_err)?,
         };
-        let prev_transforms = (0..scene.scene.instances.len()).map(|i| scene.transform(i, 0.0)).collect();
+        let prev_transforms = scene.transforms(0.0);
         let (lo, hi) = scene.bounds();
         let reach = (hi - lo).length().max(1.0);
         Ok(Renderer {
@@ -256,6 +259,7 @@ impl<'h> Renderer<'h> {
             meshes,
             gbuffer: GBufferPass::new(host)?,
             lighting: LightingPass::new(host)?,
+            skinning,
             composite: ComputePass::new(host, spirv::COMPOSITE_COMP, 7, 1)?,
             view: ComputePass::new(host, spirv::VIEW_COMP, 1, 2)?,
             slots,
@@ -365,14 +369,20 @@ impl<'h> Renderer<'h> {
         // The previous frame's writes (this queue's last submission) before anything of this one.
         host.full_barrier(cmd);
 
-        // --- The engine's scene: animate, then rasterize both views.
-        let transforms: Vec<_> = (0..self.scene.scene.instances.len()).map(|i| self.scene.transform(i, time)).collect();
-        let deformed = self.write_deformed(slot, time)?;
-        self.record_gbuffers(slot, &transforms, deformed, &cameras)?;
+        // --- The engine's scene: animate and skin, then rasterize both views.
+        let transforms = self.scene.transforms(time);
+        let mut deformed: Vec<(usize, vk::Buffer)> = self.write_deformed(slot, time)?.into_iter().collect();
+        if !self.scene.rig.skinned.is_empty() {
+            let s = &self.slots[slot];
+            deformed.extend(self.skinning.record(host, cmd, slot, &self.scene, time, &s.posed)?);
+            host.full_barrier(cmd);
+            self.slots[slot].timer.mark(host, cmd, "skinning");
+        }
+        self.record_gbuffers(slot, &transforms, &deformed, &cameras)?;
         self.slots[slot].timer.mark(host, cmd, "raster G-buffers (main + lidar)");
 
         // --- The SDK: one container for everything of this frame.
-        self.schedule_frame(slot, &transforms, deformed, &cameras, debug)?;
+        self.schedule_frame(slot, &transforms, &deformed, &cameras, debug)?;
         // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
         let ticket = unsafe { self.ctx.build_gpu_task(&mut self.container, cmd) }.map_err(sdk_err)?;
         let s = &mut self.slots[slot];
@@ -414,7 +424,7 @@ impl<'h> Renderer<'h> {
         &mut self,
         slot: usize,
         transforms: &[glam::Affine3A],
-        deformed: Option<(usize, vk::Buffer)>,
+        deformed: &[(usize, vk::Buffer)],
         cameras: &FrameCameras,
     ) -> HostResult<()> {
         let scene = &self.scene;
@@ -424,7 +434,7 @@ impl<'h> Renderer<'h> {
                 transform: transforms[i],
                 prev_transform: self.prev_transforms[i],
                 material: scene.materials[i],
-                vertex_buffer: deformed.filter(|(m, _)| *m == scene.scene.instances[i].mesh).map(|(_, b)| b),
+                vertex_buffer: deformed.iter().find(|(m, _)| *m == scene.scene.instances[i].mesh).map(|&(_, b)| b),
                 textures: scene.material_textures.get(i).copied().unwrap_or_default(),
                 alpha_cutoff: scene.cutouts.get(scene.scene.instances[i].mesh).copied().flatten().map_or(0.0, |c| c.cutoff),
             })
@@ -582,6 +592,42 @@ impl<'h> Renderer<'h> {
         Ok(())
     }
 
+    /// After `finish`: skinned mesh `mesh`'s vertices as the last frame's skinning pass wrote
+    /// them (None: the mesh is not skinned).
+    pub fn posed_vertices(&self, mesh: usize) -> HostResult<Option<Vec<Vertex>>> {
+        let Some(k) = self.scene.rig.skinned.iter().position(|m| m.mesh == mesh) else { return Ok(None) };
+        let bytes = self.skinning.posed_bytes(mesh).ok_or("not skinned")?;
+        let host = self.host;
+        let readback = host.create_buffer(
+            bytes,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT | vk::MemoryPropertyFlags::HOST_CACHED,
+        )?;
+        let source = self.slots[self.last_slot].posed[k].buffer;
+        let copied = host.run(|cmd| {
+            host.full_barrier(cmd);
+            // SAFETY: cmd is recording; both buffers hold `bytes`.
+            unsafe {
+                host.device.cmd_copy_buffer(
+                    cmd,
+                    source,
+                    readback.buffer,
+                    &[vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes }],
+                )
+            };
+            host.full_barrier(cmd);
+        });
+        let vertices = copied.map(|()| {
+            let bytes = readback.mapped_bytes().unwrap_or_default();
+            bytes
+                .chunks_exact(VERTEX_STRIDE as usize)
+                .map(|v| std::array::from_fn(|i| f32::from_le_bytes([v[4 * i], v[4 * i + 1], v[4 * i + 2], v[4 * i + 3]])))
+                .collect()
+        });
+        host.destroy_buffer(readback);
+        vertices.map(Some)
+    }
+
     /// After `finish`: `mode` of the last frame as linear RGBA (EXR) and sRGB RGBA8 (PNG).
     pub fn capture(&mut self, mode: Mode) -> HostResult<(Vec<[f32; 4]>, Vec<u8>)> {
         let slot = self.last_slot;
@@ -643,6 +689,7 @@ impl<'h> Renderer<'h> {
         }
         self.work.destroy(host);
         self.meshes.destroy(host);
+        self.skinning.destroy(host);
         self.gbuffer.destroy(host);
         self.lighting.destroy(host);
         self.composite.destroy(host);

@@ -43,6 +43,9 @@ pub(super) struct Slot {
     pub(super) lidar: View,
     /// The flag's vertices of this slot's frame (host-visible: the CPU writes them).
     pub(super) deformed: Option<HostBuffer>,
+    /// The skinned meshes' vertices of this slot's frame (device-local: the skinning pass
+    /// writes them), in `SkinningPass`'s order.
+    pub(super) posed: Vec<HostBuffer>,
     pub(super) camera: Camera,
     pub(super) lidar_camera: Camera,
     pub(super) frame: u64,
@@ -77,6 +80,7 @@ impl Slot {
         height: u32,
         lidar_size: u32,
         deformer_rest: Option<&[crate::mesh_buffers::Vertex]>,
+        posed: Vec<HostBuffer>,
         camera: Camera,
     ) -> HostResult<Slot> {
         let deformed = match deformer_rest {
@@ -96,6 +100,7 @@ impl Slot {
             main: View::new(host, width, height)?,
             lidar: View::new(host, lidar_size, lidar_size)?,
             deformed,
+            posed,
             camera,
             lidar_camera: camera,
             frame: 0,
@@ -111,6 +116,9 @@ impl Slot {
         self.main.destroy(host);
         self.lidar.destroy(host);
         if let Some(b) = self.deformed {
+            host.destroy_buffer(b);
+        }
+        for b in self.posed {
             host.destroy_buffer(b);
         }
     }

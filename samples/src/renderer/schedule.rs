@@ -36,7 +36,7 @@ impl Renderer<'_> {
         &mut self,
         slot: usize,
         transforms: &[Affine3A],
-        deformed: Option<(usize, ash::vk::Buffer)>,
+        deformed: &[(usize, ash::vk::Buffer)],
         cameras: &FrameCameras,
         debug: &[DebugOutput],
     ) -> HostResult<()> {
@@ -67,7 +67,7 @@ impl Renderer<'_> {
 
     /// The scene's changes (the moving instances, the deforming mesh) and a throttled BVH
     /// build.
-    fn schedule_scene_changes(&mut self, transforms: &[Affine3A], deformed: Option<(usize, ash::vk::Buffer)>) -> HostResult<()> {
+    fn schedule_scene_changes(&mut self, transforms: &[Affine3A], deformed: &[(usize, ash::vk::Buffer)]) -> HostResult<()> {
         let c = &mut self.container;
         for (i, t) in transforms.iter().enumerate() {
             if self.scene.is_dynamic(i) {
@@ -83,7 +83,7 @@ impl Renderer<'_> {
                 schedule(c, BVH_LABEL, |c| c.schedule_instance(&task))?;
             }
         }
-        if let Some((mesh, buffer)) = deformed {
+        for &(mesh, buffer) in deformed {
             let base = super::sdk_geometry_input(&self.scene, &self.meshes, mesh, true);
             let input = GeometryInput { vertices: VertexBufferInput { buffer, ..base.vertices }, ..base };
             let task = GeometryTask { handle: self.geometries[mesh], operation: TaskOperation::Update, input };

@@ -1,0 +1,198 @@
+//! Skins and animation from glTF, end to end: a strip written by the test, skinned to two
+//! joints whose second bends 90 degrees and back, played by the sample. The GPU skinning
+//! matches the CPU skinning of the same mesh, the SDK's rays see the bent strip where the
+//! raster pass draws it (its BLAS was refit), and the file's animation is read as written.
+use base64::Engine;
+use glam::{Quat, Vec3};
+use hybrid_rt::DebugOutput;
+use hybrid_rt_host::Host;
+use hybrid_rt_samples::gltf_scene;
+use hybrid_rt_samples::modes::Mode;
+use hybrid_rt_samples::renderer::{Renderer, Settings};
+use hybrid_rt_samples::skin::{Interpolation, Property};
+use std::path::PathBuf;
+
+/// A 2 x 0.2 strip along +X in the XY plane, four quads; vertices at x <= 1 follow joint 0
+/// (the root, at the origin), the others joint 1 (at x = 1), which the animation turns about
+/// Z: 0 degrees at t = 0, 90 at t = 1, 0 again at t = 2 (linear). The same mesh, unskinned,
+/// on a second node that the animation moves up 2 and back (a rigid animated node).
+fn write_skinned_strip(name: &str) -> PathBuf {
+    let xs = [0.0f32, 0.5, 1.0, 1.5, 2.0];
+    let positions: Vec<[f32; 3]> = xs.iter().flat_map(|&x| [[x, 0.0, 0.0], [x, 0.2, 0.0]]).collect();
+    let joints: Vec<[u16; 4]> = xs.iter().flat_map(|&x| [[u16::from(x > 1.0), 0, 0, 0]; 2]).collect();
+    let weights: Vec<[f32; 4]> = vec![[1.0, 0.0, 0.0, 0.0]; 10];
+    let indices: Vec<u16> = (0..4u16).flat_map(|q| [2 * q, 2 * q + 2, 2 * q + 1, 2 * q + 1, 2 * q + 2, 2 * q + 3]).collect();
+    let inverse_bind: [[f32; 16]; 2] =
+        [glam::Mat4::IDENTITY.to_cols_array(), glam::Mat4::from_translation(Vec3::new(-1.0, 0.0, 0.0)).to_cols_array()];
+    let times = [0.0f32, 1.0, 2.0];
+    let quarter = Quat::from_rotation_z(std::f32::consts::FRAC_PI_2).to_array();
+    let rotations = [[0.0f32, 0.0, 0.0, 1.0], quarter, [0.0, 0.0, 0.0, 1.0]];
+    let lifts = [[0.0f32, 0.0, 1.0], [0.0, 2.0, 1.0], [0.0, 0.0, 1.0]];
+    let mut bytes: Vec<u8> = Vec::new();
+    let mut views = Vec::new();
+    let mut push = |data: Vec<u8>| {
+        views.push((bytes.len(), data.len()));
+        bytes.extend(data);
+    };
+    let f32s = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+    push(f32s(positions.as_flattened()));
+    push(joints.as_flattened().iter().flat_map(|j| j.to_le_bytes()).collect());
+    push(f32s(weights.as_flattened()));
+    push(indices.iter().flat_map(|i| i.to_le_bytes()).collect());
+    push(f32s(inverse_bind.as_flattened()));
+    push(f32s(&times));
+    push(f32s(rotations.as_flattened()));
+    push(f32s(lifts.as_flattened()));
+    let views: Vec<String> =
+        views.iter().map(|(o, l)| format!(r#"{{"buffer": 0, "byteOffset": {o}, "byteLength": {l}}}"#)).collect();
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0, 1, 3]}}],
+  "nodes": [{{"mesh": 0, "skin": 0}}, {{"children": [2]}}, {{"translation": [1, 0, 0]}}, {{"mesh": 0, "translation": [0, 0, 1]}}],
+  "skins": [{{"joints": [1, 2], "inverseBindMatrices": 4}}],
+  "animations": [{{"channels": [{{"sampler": 0, "target": {{"node": 2, "path": "rotation"}}}},
+      {{"sampler": 1, "target": {{"node": 3, "path": "translation"}}}}],
+    "samplers": [{{"input": 5, "output": 6, "interpolation": "LINEAR"}}, {{"input": 5, "output": 7}}]}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "JOINTS_0": 1, "WEIGHTS_0": 2}}, "indices": 3}}]}}],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 10, "type": "VEC3", "min": [0, 0, 0], "max": [2, 0.2, 0]}},
+    {{"bufferView": 1, "componentType": 5123, "count": 10, "type": "VEC4"}},
+    {{"bufferView": 2, "componentType": 5126, "count": 10, "type": "VEC4"}},
+    {{"bufferView": 3, "componentType": 5123, "count": 24, "type": "SCALAR"}},
+    {{"bufferView": 4, "componentType": 5126, "count": 2, "type": "MAT4"}},
+    {{"bufferView": 5, "componentType": 5126, "count": 3, "type": "SCALAR", "min": [0], "max": [2]}},
+    {{"bufferView": 6, "componentType": 5126, "count": 3, "type": "VEC4"}},
+    {{"bufferView": 7, "componentType": 5126, "count": 3, "type": "VEC3"}}],
+  "bufferViews": [{views}],
+  "buffers": [{{"byteLength": {len}, "uri": "data:application/octet-stream;base64,{data}"}}]}}"#,
+        views = views.join(", "),
+        len = bytes.len(),
+        data = base64::engine::general_purpose::STANDARD.encode(&bytes),
+    );
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    std::fs::write(&path, json).unwrap();
+    path
+}
+
+#[test]
+fn the_skin_and_its_animation_are_read() {
+    let scene = gltf_scene::load(&write_skinned_strip("strip-read.gltf")).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let rig = &scene.rig;
+    assert_eq!(rig.skins.len(), 1);
+    assert_eq!(rig.skins[0].joints, [1, 2]);
+    assert_eq!(rig.skinned.len(), 1);
+    assert_eq!(rig.skinned[0].joints[9], [1, 0, 0, 0]);
+    assert_eq!(rig.channels.len(), 2);
+    let c = &rig.channels[0];
+    assert_eq!((c.node, c.property, c.interpolation), (2, Property::Rotation, Interpolation::Linear));
+    // The rigid node: its own mesh (the skinned primitive bends alone), moved by the animation.
+    assert_eq!((scene.scene.meshes.len(), scene.scene.instances.len()), (2, 2));
+    let rigid = (0..2).find(|&i| scene.scene.instances[i].mesh != rig.skinned[0].mesh).unwrap();
+    assert_eq!(scene.motions[rigid], hybrid_rt_samples::scene::Motion::Node(3));
+    let lifted = scene.transforms(1.0)[rigid].translation;
+    assert!((Vec3::from(lifted) - Vec3::new(0.0, 2.0, 1.0)).length() < 1e-6, "{lifted}");
+    assert!(scene.is_dynamic(rigid));
+    assert_eq!(rig.duration(), 2.0);
+    // The tip at three times: flat, bent up, and halfway back at 1.5 (45 degrees).
+    let tip = |t: f32| scene.at(t).meshes[rig.skinned[0].mesh].positions[8];
+    assert!((tip(0.0) - Vec3::new(2.0, 0.0, 0.0)).length() < 1e-5, "{}", tip(0.0));
+    assert!((tip(1.0) - Vec3::new(1.0, 1.0, 0.0)).length() < 1e-5, "{}", tip(1.0));
+    let h = std::f32::consts::FRAC_1_SQRT_2;
+    assert!((tip(1.5) - Vec3::new(1.0 + h, h, 0.0)).length() < 1e-5, "{}", tip(1.5));
+}
+
+/// Rendered at the bent pose: the GPU's skinned vertices are the CPU's within 1e-4 of the
+/// scene's size, and the pixels where the SDK's primary rays hit the strip (its random mesh
+/// colour debug view, traced through the refit BLAS) are the pixels the raster pass drew.
+#[test]
+fn the_gpu_skins_and_the_sdk_traces_the_pose() {
+    let host = Host::new().expect("a Vulkan device with ray tracing");
+    let scene = gltf_scene::load(&write_skinned_strip("strip-render.gltf")).unwrap();
+    let mesh = scene.rig.skinned[0].mesh;
+    let size = {
+        let (lo, hi) = scene.bounds();
+        (hi - lo).length()
+    };
+    for time in [0.0f32, 1.0] {
+        let settings = Settings { width: 96, height: 64, ..Default::default() };
+        let mut r = Renderer::new(&host, gltf_scene::load(&write_skinned_strip("strip-render.gltf")).unwrap(), settings).unwrap();
+        let camera = r.scene.camera_path.at(0.5);
+        for _ in 0..2 {
+            r.render(camera, time, &[DebugOutput::RandomMeshColor], None).unwrap();
+        }
+        r.finish().unwrap();
+        let gpu = r.posed_vertices(mesh).unwrap().expect("the strip is skinned");
+        let cpu = &scene.at(time).meshes[mesh].positions;
+        let worst = gpu.iter().zip(cpu).map(|(g, c)| (Vec3::new(g[0], g[1], g[2]) - *c).length()).fold(0.0, f32::max);
+        assert!(worst <= 1e-4 * size, "t = {time}: GPU skinning {worst} from the CPU's (scene size {size})");
+        let (normals, _) = r.capture(Mode::Normals).unwrap();
+        let (traced, _) = r.capture(Mode::Debug(DebugOutput::RandomMeshColor)).unwrap();
+        r.destroy().unwrap();
+        let drawn: Vec<bool> = normals.iter().map(|t| (0..3).map(|c| (2.0 * t[c] - 1.0).powi(2)).sum::<f32>() > 0.25).collect();
+        let hit: Vec<bool> = traced.iter().map(|t| t[0] + t[1] + t[2] > 0.0).collect();
+        let (both, either) = (
+            drawn.iter().zip(&hit).filter(|(d, h)| **d && **h).count(),
+            drawn.iter().zip(&hit).filter(|(d, h)| **d || **h).count(),
+        );
+        eprintln!(
+            "t = {time}: GPU skinning within {worst:.2e}; raster {} px, SDK rays {} px, both {both}",
+            drawn.iter().filter(|d| **d).count(),
+            hit.iter().filter(|h| **h).count()
+        );
+        assert!(both > 100, "t = {time}: the strip is in view ({both} pixels)");
+        assert!(both as f32 >= 0.95 * either as f32, "t = {time}: raster and SDK agree on {both} of {either} pixels");
+    }
+    assert_eq!(Host::validation_errors(), 0, "{:#?}", Host::validation_messages());
+}
+
+/// The built-in waving figure: every frame its vertices come from the skinning pass (the
+/// CPU's skinning within 1e-4 of the scene's size at two times of the wave), its hand moves,
+/// and the SDK's rays see the figure where the raster pass draws it.
+#[test]
+fn the_waving_figure_is_skinned_on_the_gpu_and_traced_as_drawn() {
+    let host = Host::new().expect("a Vulkan device with ray tracing");
+    let reference = hybrid_rt_samples::figure::waving_figure();
+    let mesh = reference.rig.skinned[0].mesh;
+    let size = {
+        let (lo, hi) = reference.bounds();
+        (hi - lo).length()
+    };
+    let mut hands = Vec::new();
+    for time in [0.0f32, 0.5] {
+        let settings = Settings { width: 128, height: 72, ..Default::default() };
+        let mut r = Renderer::new(&host, hybrid_rt_samples::figure::waving_figure(), settings).unwrap();
+        let camera = r.scene.camera_path.at(0.5);
+        for _ in 0..2 {
+            r.render(camera, time, &[DebugOutput::RandomMeshColor], None).unwrap();
+        }
+        r.finish().unwrap();
+        let gpu = r.posed_vertices(mesh).unwrap().expect("the figure is skinned");
+        let cpu = &reference.at(time).meshes[mesh].positions;
+        let worst = gpu.iter().zip(cpu).map(|(g, c)| (Vec3::new(g[0], g[1], g[2]) - *c).length()).fold(0.0, f32::max);
+        assert!(worst <= 1e-4 * size, "t = {time}: GPU skinning {worst} from the CPU's");
+        // The right hand: the figure's vertex furthest along +X at rest.
+        let rest = &reference.scene.meshes[mesh].positions;
+        let hand = (0..rest.len()).max_by(|&a, &b| rest[a].x.total_cmp(&rest[b].x)).unwrap();
+        hands.push(cpu[hand]);
+        // The figure is orange, the floor and wall grey: its raster pixels. The SDK's view gives
+        // each instance a colour: the figure's is the one most of those pixels show.
+        let (albedo, _) = r.capture(Mode::Albedo).unwrap();
+        let (traced, _) = r.capture(Mode::Debug(DebugOutput::RandomMeshColor)).unwrap();
+        r.destroy().unwrap();
+        let drawn: Vec<bool> = albedo.iter().map(|t| t[0] - t[2] > 0.3).collect();
+        let key = |t: &[f32; 4]| t.map(|c| (c * 1000.0) as i32);
+        let mut votes = std::collections::HashMap::new();
+        for (t, _) in traced.iter().zip(&drawn).filter(|(_, d)| **d) {
+            *votes.entry(key(t)).or_insert(0) += 1;
+        }
+        let figure = votes.into_iter().max_by_key(|(_, n)| *n).map(|(k, _)| k).expect("the figure is in view");
+        let hit: Vec<bool> = traced.iter().map(|t| key(t) == figure).collect();
+        let both = drawn.iter().zip(&hit).filter(|(d, h)| **d && **h).count();
+        let either = drawn.iter().zip(&hit).filter(|(d, h)| **d || **h).count();
+        eprintln!("t = {time}: GPU skinning within {worst:.2e}; the figure: raster and SDK agree on {both} of {either} pixels");
+        assert!(both > 200, "t = {time}: the figure is in view ({both} pixels)");
+        assert!(both as f32 >= 0.95 * either as f32, "t = {time}: raster and SDK agree on {both} of {either} pixels");
+    }
+    assert!((hands[0] - hands[1]).length() > 0.1, "the hand waves: {} -> {}", hands[0], hands[1]);
+    assert_eq!(Host::validation_errors(), 0, "{:#?}", Host::validation_messages());
+}
