@@ -19,6 +19,12 @@ const float WHOLE_CHANGE = 0.4;
 // 0.065 and 0.037 on the H200, from 0.097 and 0.042 without the rule); one frame instead of two
 // gave 0.075 / 0.063, four 0.104 / 0.043 (at 0.5 pixels).
 const float SHARP_EDGE_RADIUS = 2.0;
+// While the view moves, a pixel keeps at most 1 + EDGE_FRAMES r² frames, r the penumbra's
+// half-width in pixels: where the blur found no penumbra (r under a sixth of a pixel: a hard
+// edge, or a lit or umbra pixel beside one) the frame's own visibility is right and every
+// resampled history only softens it. (Smaller factors also shorten real penumbrae's
+// histories and make them noisier; docs/benchmarks.md has the measurements.)
+const float EDGE_FRAMES = 36.0;
 
 // The previous frame's history texel at q: the prep pass copied it into the intermediate for
 // this frame's viewport; outside it (`resized`: the viewport shrank, dynamic resolution) the
@@ -118,6 +124,7 @@ void temporal(ivec2 pixel, bool resized) {
     // pixel keeps at most two frames (the edge pixel's noise halved, one frame's softening).
     // Still views read single texels and keep everything.
     if (radius_here < SHARP_EDGE_RADIUS && resampled) len = min(len, 2.0);
+    if (resampled) len = min(len, 1.0 + EDGE_FRAMES * radius_here * radius_here);
     // The box is widened by the noise a 3x3 of one-ray visibilities has where the history
     // says the visibility is h: 3 deviations of a mean of 9 Bernoulli samples. Without it a
     // penumbra pixel at 0.93 whose 9 neighbours all happened to be lit this frame (half the
