@@ -24,6 +24,7 @@ use crate::lighting::Lights;
 use crate::raster::{Material, MaterialTextures};
 use crate::scene::{vertex_normals, CameraPath, Cutout, Motion, SampleScene};
 use crate::skin::SkinnedMesh;
+use crate::tangents;
 use glam::{Affine3A, Mat4, Vec3, Vec4};
 use hybrid_rt_host::scene::{Mesh, Scene};
 use std::collections::HashMap;
@@ -100,6 +101,45 @@ fn cutout(m: &gltf::Material, base_color: Option<usize>, warnings: &mut Warnings
     }
 }
 
+/// The texture coordinates a material's textures are sampled with: the set and the
+/// KHR_texture_transform of its base-colour texture (else of its metallic-roughness, emissive
+/// or normal texture). The sample draws every texture of a material with one set of
+/// coordinates; a material whose textures use different sets or transforms is named.
+fn uv_mapping(m: &gltf::Material, warnings: &mut Warnings) -> (u32, Option<glam::Mat3>) {
+    let pbr = m.pbr_metallic_roughness();
+    // (set, transform) of each texture the material has.
+    let mapping = |info: gltf::texture::Info| {
+        let t = info.texture_transform();
+        let set = t.as_ref().and_then(|t| t.tex_coord()).unwrap_or(info.tex_coord());
+        let matrix = t.map(|t| {
+            let ([ox, oy], r, [sx, sy]) = (t.offset(), t.rotation(), t.scale());
+            // KHR_texture_transform: translation x rotation x scale, the rotation
+            // counter-clockwise in UV space.
+            let rotation = glam::Mat3::from_cols(
+                glam::Vec3::new(r.cos(), -r.sin(), 0.0),
+                glam::Vec3::new(r.sin(), r.cos(), 0.0),
+                glam::Vec3::Z,
+            );
+            glam::Mat3::from_translation(glam::Vec2::new(ox, oy)) * rotation * glam::Mat3::from_scale(glam::Vec2::new(sx, sy))
+        });
+        (set, matrix)
+    };
+    let mut all: Vec<(u32, Option<glam::Mat3>)> =
+        [pbr.base_color_texture(), pbr.metallic_roughness_texture(), m.emissive_texture()]
+            .into_iter()
+            .flatten()
+            .map(mapping)
+            .collect();
+    if let Some(n) = m.normal_texture() {
+        all.push((n.tex_coord(), None));
+    }
+    let Some(&lead) = all.first() else { return (0, None) };
+    if all.iter().any(|&(set, matrix)| set != lead.0 || (matrix.is_some() && matrix != lead.1)) {
+        warnings.add("materials whose textures use different UV sets or transforms (the base colour's is used)");
+    }
+    lead
+}
+
 /// What the file uses that the loader does not read, each named once.
 #[derive(Default)]
 struct Warnings(Vec<String>);
@@ -113,7 +153,7 @@ impl Warnings {
 }
 
 /// Extensions the loader reads (beyond the core), or that change nothing it draws.
-const READ_EXTENSIONS: &[&str] = &["KHR_materials_emissive_strength"];
+const READ_EXTENSIONS: &[&str] = &["KHR_materials_emissive_strength", "KHR_texture_transform"];
 
 /// The file-wide features the loader ignores.
 fn unread_features(doc: &gltf::Document, warnings: &mut Warnings) {
@@ -130,24 +170,11 @@ fn unread_features(doc: &gltf::Document, warnings: &mut Warnings) {
             }
         }
     }
-    for m in doc.materials() {
-        let pbr = m.pbr_metallic_roughness();
-        let sets = [
-            pbr.base_color_texture().map(|t| t.tex_coord()),
-            pbr.metallic_roughness_texture().map(|t| t.tex_coord()),
-            m.normal_texture().map(|t| t.tex_coord()),
-            m.emissive_texture().map(|t| t.tex_coord()),
-            m.occlusion_texture().map(|t| t.tex_coord()),
-        ];
-        if sets.iter().flatten().any(|&set| set > 0) {
-            warnings.add("textures on TEXCOORD_1 or above (sampled with TEXCOORD_0)");
-        }
-    }
 }
 
 /// Extensions a file may require that this loader reads (beyond positions, indices and the
 /// core metallic-roughness material).
-const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &["KHR_materials_emissive_strength"];
+const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &["KHR_materials_emissive_strength", "KHR_texture_transform"];
 
 /// Validation errors shown in full; the rest are counted.
 const SHOWN_ERRORS: usize = 3;
@@ -194,6 +221,90 @@ fn triangle_list(mode: gltf::mesh::Mode, indices: &[u32]) -> Vec<u32> {
         Mode::TriangleFan => (1..n.saturating_sub(1)).flat_map(|i| [indices[0], indices[i], indices[i + 1]]).collect(),
         _ => Vec::new(),
     }
+}
+
+/// One primitive's triangles and vertex attributes, as the sample keeps a mesh.
+struct Primitive {
+    mesh: Mesh,
+    normals: Vec<Vec3>,
+    uvs: Vec<[f32; 2]>,
+    tangents: Vec<Vec4>,
+    /// A skinned primitive's joints and weights per vertex.
+    influences: Option<(Vec<[u32; 4]>, Vec<[f32; 4]>)>,
+}
+
+/// Reads a primitive (None: no triangles): its indices as a triangle list, its normals (the
+/// file's, else computed), its texture coordinates (the material's set and transform), its
+/// tangents (the file's, else MikkTSpace's where a normal map needs them) and, when it is
+/// skinned by a skin of `skin_joints` joints, its JOINTS_0 and WEIGHTS_0.
+fn read_primitive(
+    prim: &gltf::Primitive,
+    data: &[Vec<u8>],
+    skin_joints: Option<usize>,
+    warnings: &mut Warnings,
+) -> Result<Option<Primitive>, String> {
+    let reader = prim.reader(|b| data.get(b.index()).map(|d| d.as_slice()));
+    let positions: Vec<Vec3> = reader.read_positions().ok_or("no positions")?.map(Vec3::from).collect();
+    let n = positions.len();
+    let listed: Vec<u32> = match reader.read_indices() {
+        Some(i) => i.into_u32().collect(),
+        None => (0..n as u32).collect(),
+    };
+    if let Some(&bad) = listed.iter().find(|&&i| i as usize >= n) {
+        return Err(format!("index {bad} past its {n} vertices"));
+    }
+    let indices = triangle_list(prim.mode(), &listed);
+    if indices.is_empty() {
+        return Ok(None);
+    }
+    // The file's normals where it has them (one per vertex, finite).
+    let file_normals: Option<Vec<Vec3>> = reader.read_normals().map(|n| n.map(Vec3::from).collect());
+    let normals = match file_normals {
+        Some(f) if f.len() == n && f.iter().all(|v| v.is_finite()) => {
+            f.into_iter().map(|v| v.try_normalize().unwrap_or(Vec3::Y)).collect()
+        }
+        _ => vertex_normals(&positions, &indices),
+    };
+    let (set, transform) = uv_mapping(&prim.material(), warnings);
+    let uvs: Vec<[f32; 2]> = reader
+        .read_tex_coords(set)
+        .map(|t| {
+            t.into_f32()
+                .map(|uv| match transform {
+                    Some(m) => m.transform_point2(glam::Vec2::from(uv)).to_array(),
+                    None => uv,
+                })
+                .collect::<Vec<_>>()
+        })
+        .filter(|t| t.len() == n)
+        .unwrap_or_default();
+    let file_tangents: Option<Vec<Vec4>> = reader.read_tangents().map(|t| t.map(Vec4::from).collect());
+    let tangents = match file_tangents.filter(|t| t.len() == n && t.iter().all(|v| v.is_finite())) {
+        Some(t) => t,
+        // A normal map without the file's tangents: MikkTSpace's, as glTF asks.
+        None if prim.material().normal_texture().is_some() && !uvs.is_empty() => {
+            tangents::mikktspace(&positions, &normals, &uvs, &indices)
+        }
+        None => Vec::new(),
+    };
+    let influences = match skin_joints {
+        None => None,
+        Some(count) => {
+            let joints: Option<Vec<[u32; 4]>> = reader.read_joints(0).map(|j| j.into_u16().map(|j| j.map(u32::from)).collect());
+            let weights: Option<Vec<[f32; 4]>> = reader.read_weights(0).map(|w| w.into_f32().collect());
+            let (Some(joints), Some(weights)) = (joints, weights) else {
+                return Err("skinned without JOINTS_0 and WEIGHTS_0".into());
+            };
+            if joints.len() != n || weights.len() != n {
+                return Err("JOINTS_0 or WEIGHTS_0 is not one per vertex".into());
+            }
+            if let Some(bad) = joints.iter().flatten().find(|&&j| j as usize >= count) {
+                return Err(format!("joint {bad} past its skin's {count}"));
+            }
+            Some((joints, weights))
+        }
+    };
+    Ok(Some(Primitive { mesh: Mesh { positions, indices }, normals, uvs, tangents, influences }))
 }
 
 /// Loads `path` into a `SampleScene`.
@@ -253,63 +364,26 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
             let shared = if skin.is_some() { None } else { meshes.get(&key).copied() };
             let ours = match shared {
                 Some(m) => Some(m),
-                None => {
-                    let reader = prim.reader(|b| data.get(b.index()).map(|d| d.as_slice()));
-                    let positions: Vec<Vec3> =
-                        reader.read_positions().ok_or_else(|| format!("{}: no positions", at()))?.map(Vec3::from).collect();
-                    let listed: Vec<u32> = match reader.read_indices() {
-                        Some(i) => i.into_u32().collect(),
-                        None => (0..positions.len() as u32).collect(),
-                    };
-                    if let Some(&bad) = listed.iter().find(|&&i| i as usize >= positions.len()) {
-                        return Err(format!("{}: index {bad} past its {} vertices", at(), positions.len()));
-                    }
-                    let indices = triangle_list(prim.mode(), &listed);
-                    if indices.is_empty() {
-                        None
-                    } else {
-                        // The file's normals where it has them (one per vertex, finite).
-                        let file_normals: Option<Vec<Vec3>> = reader.read_normals().map(|n| n.map(Vec3::from).collect());
-                        normals.push(match file_normals {
-                            Some(n) if n.len() == positions.len() && n.iter().all(|v| v.is_finite()) => {
-                                n.into_iter().map(|v| v.try_normalize().unwrap_or(Vec3::Y)).collect()
+                None => match read_primitive(&prim, &data, skin.map(|k| rig.skins[k].joints.len()), &mut warnings)
+                    .map_err(|e| format!("{}: {e}", at()))?
+                {
+                    None => None,
+                    Some(p) => {
+                        normals.push(p.normals);
+                        tangents.push(p.tangents);
+                        uvs.push(p.uvs);
+                        let m = scene.add_mesh(p.mesh);
+                        match (skin, p.influences) {
+                            (Some(skin), Some((joints, weights))) => {
+                                rig.skinned.push(SkinnedMesh { mesh: m, skin, joints, weights })
                             }
-                            _ => vertex_normals(&positions, &indices),
-                        });
-                        let coords: Option<Vec<[f32; 2]>> = reader.read_tex_coords(0).map(|t| t.into_f32().collect());
-                        uvs.push(coords.filter(|t| t.len() == positions.len()).unwrap_or_default());
-                        let file_tangents: Option<Vec<Vec4>> = reader.read_tangents().map(|t| t.map(Vec4::from).collect());
-                        tangents.push(
-                            file_tangents
-                                .filter(|t| t.len() == positions.len() && t.iter().all(|v| v.is_finite()))
-                                .unwrap_or_default(),
-                        );
-                        let vertex_count = positions.len();
-                        let m = scene.add_mesh(Mesh { positions, indices });
-                        match skin {
-                            Some(skin) => {
-                                let joints: Option<Vec<[u32; 4]>> =
-                                    reader.read_joints(0).map(|j| j.into_u16().map(|j| j.map(u32::from)).collect());
-                                let weights: Option<Vec<[f32; 4]>> = reader.read_weights(0).map(|w| w.into_f32().collect());
-                                let (Some(joints), Some(weights)) = (joints, weights) else {
-                                    return Err(format!("{}: skinned without JOINTS_0 and WEIGHTS_0", at()));
-                                };
-                                let count = rig.skins[skin].joints.len() as u32;
-                                if joints.len() != vertex_count || weights.len() != vertex_count {
-                                    return Err(format!("{}: JOINTS_0 or WEIGHTS_0 is not one per vertex", at()));
-                                }
-                                if let Some(bad) = joints.iter().flatten().find(|&&j| j >= count) {
-                                    return Err(format!("{}: joint {bad} past its skin's {count}", at()));
-                                }
-                                rig.skinned.push(SkinnedMesh { mesh: m, skin, joints, weights });
-                            }
-                            None => {
+                            _ => {
                                 meshes.insert(key, m);
                             }
                         }
                         Some(m)
                     }
-                }
+                },
             };
             let Some(ours) = ours else {
                 skipped += 1;

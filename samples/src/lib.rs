@@ -20,4 +20,5 @@ pub mod scene;
 pub mod scenes;
 pub mod skin;
 pub mod skinning;
+pub mod tangents;
 pub mod window;

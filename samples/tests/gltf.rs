@@ -498,13 +498,67 @@ fn unread_features_are_named_once() {
     let path = File::default().write("unread.gltf");
     let json = std::fs::read_to_string(&path)
         .unwrap()
-        .replace(r#""extensionsUsed": []"#, r#""extensionsUsed": ["KHR_texture_transform", "KHR_texture_transform"]"#)
+        .replace(r#""extensionsUsed": []"#, r#""extensionsUsed": ["KHR_materials_clearcoat", "KHR_materials_clearcoat"]"#)
         .replace(r#""mode": 4}"#, r#""mode": 4, "targets": [{"POSITION": 0}, {"POSITION": 0}]}"#);
     std::fs::write(&path, json).unwrap();
     let scene = gltf_scene::load(&path).unwrap();
     assert_eq!(
         scene.warnings,
-        ["the extension KHR_texture_transform", "morph targets (drawn without them)"],
+        ["the extension KHR_materials_clearcoat", "morph targets (drawn without them)"],
         "each feature once, in the order found"
     );
+}
+
+/// A normal-mapped quad whose file has no tangents gets MikkTSpace's: +X along u, as the
+/// file's own would say (the render test above draws the same normal either way).
+#[test]
+fn missing_tangents_are_mikktspace() {
+    let scene = gltf_scene::load(&write_material_quad("material-no-tangents.gltf", false)).unwrap();
+    assert_eq!(scene.tangents[0].len(), 4);
+    for t in &scene.tangents[0] {
+        assert!((*t - glam::Vec4::new(1.0, 0.0, 0.0, 1.0)).length() < 1e-5, "{t}");
+    }
+}
+
+/// A base-colour texture on TEXCOORD_1 with a KHR_texture_transform (offset, rotation, scale):
+/// the quad's coordinates are set 1's, transformed (translation x rotation x scale, the
+/// rotation counter-clockwise: u' = cos u + sin v, v' = -sin u + cos v).
+#[test]
+fn texture_transforms_and_the_second_uv_set_are_read() {
+    let b64 = |b: &[u8]| base64::engine::general_purpose::STANDARD.encode(b);
+    let positions: [[f32; 3]; 4] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
+    let set0: [[f32; 2]; 4] = [[9.0, 9.0]; 4];
+    let set1: [[f32; 2]; 4] = [[0.0, 1.0], [1.0, 1.0], [0.0, 0.0], [1.0, 0.0]];
+    let indices: [u16; 6] = [0, 1, 2, 2, 1, 3];
+    let mut bytes: Vec<u8> = positions.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    bytes.extend(set0.iter().chain(&set1).flatten().flat_map(|v| v.to_le_bytes()));
+    bytes.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}],
+  "extensionsUsed": ["KHR_texture_transform"],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "TEXCOORD_0": 1, "TEXCOORD_1": 2}}, "indices": 3, "material": 0}}]}}],
+  "materials": [{{"pbrMetallicRoughness": {{"baseColorTexture": {{"index": 0, "texCoord": 1,
+    "extensions": {{"KHR_texture_transform": {{"offset": [0.5, 0.25], "rotation": 1.5707964, "scale": [2, 3]}}}}}}}}}}],
+  "textures": [{{"source": 0}}], "images": [{{"uri": "data:image/png;base64,{png}"}}],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}},
+    {{"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"}},
+    {{"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC2"}},
+    {{"bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR"}}],
+  "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 48}}, {{"buffer": 0, "byteOffset": 48, "byteLength": 32}},
+    {{"buffer": 0, "byteOffset": 80, "byteLength": 32}}, {{"buffer": 0, "byteOffset": 112, "byteLength": 12}}],
+  "buffers": [{{"byteLength": {len}, "uri": "data:application/octet-stream;base64,{data}"}}]}}"#,
+        png = b64(&png_of(2, 2, [200, 100, 50])),
+        len = bytes.len(),
+        data = b64(&bytes),
+    );
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("transformed.gltf");
+    std::fs::write(&path, json).unwrap();
+    let scene = gltf_scene::load(&path).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    // Scaled (2u, 3v), turned 90 degrees (u' = v, v' = -u), offset (0.5, 0.25).
+    let expected: Vec<[f32; 2]> = set1.iter().map(|&[u, v]| [3.0 * v + 0.5, -2.0 * u + 0.25]).collect();
+    for (got, want) in scene.uvs[0].iter().zip(&expected) {
+        assert!((got[0] - want[0]).abs() < 1e-5 && (got[1] - want[1]).abs() < 1e-5, "{got:?} vs {want:?}");
+    }
 }
