@@ -223,14 +223,19 @@ fn triangle_list(mode: gltf::mesh::Mode, indices: &[u32]) -> Vec<u32> {
     }
 }
 
+/// A skinned primitive's joints and weights, one of each per vertex.
+struct Influences {
+    joints: Vec<[u32; 4]>,
+    weights: Vec<[f32; 4]>,
+}
+
 /// One primitive's triangles and vertex attributes, as the sample keeps a mesh.
 struct Primitive {
     mesh: Mesh,
     normals: Vec<Vec3>,
     uvs: Vec<[f32; 2]>,
     tangents: Vec<Vec4>,
-    /// A skinned primitive's joints and weights per vertex.
-    influences: Option<(Vec<[u32; 4]>, Vec<[f32; 4]>)>,
+    influences: Option<Influences>,
 }
 
 /// Reads a primitive (None: no triangles): its indices as a triangle list, its normals (the
@@ -301,7 +306,7 @@ fn read_primitive(
             if let Some(bad) = joints.iter().flatten().find(|&&j| j as usize >= count) {
                 return Err(format!("joint {bad} past its skin's {count}"));
             }
-            Some((joints, weights))
+            Some(Influences { joints, weights })
         }
     };
     Ok(Some(Primitive { mesh: Mesh { positions, indices }, normals, uvs, tangents, influences }))
@@ -374,7 +379,7 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
                         uvs.push(p.uvs);
                         let m = scene.add_mesh(p.mesh);
                         match (skin, p.influences) {
-                            (Some(skin), Some((joints, weights))) => {
+                            (Some(skin), Some(Influences { joints, weights })) => {
                                 rig.skinned.push(SkinnedMesh { mesh: m, skin, joints, weights })
                             }
                             _ => {

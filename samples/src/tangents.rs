@@ -1,5 +1,6 @@
 //! Tangents for normal-mapped meshes that do not store them. glTF asks for MikkTSpace, the
-//! frame normal maps are baked in (the `mikktspace` crate: the reference implementation).
+//! frame normal maps are baked in (the `bevy_mikktspace` crate: a safe port of the reference
+//! implementation).
 //! MikkTSpace gives each triangle corner its tangent; the sample's vertices are shared by the
 //! triangles around them, so the corners' tangents are averaged per vertex (the same where
 //! the mesh's texture coordinates are continuous, as at every vertex off a UV seam).
@@ -21,7 +22,7 @@ impl Mesh<'_> {
     }
 }
 
-impl mikktspace::Geometry for Mesh<'_> {
+impl bevy_mikktspace::Geometry for Mesh<'_> {
     fn num_faces(&self) -> usize {
         self.indices.len() / 3
     }
@@ -40,7 +41,9 @@ impl mikktspace::Geometry for Mesh<'_> {
         let [u, v] = self.uvs[self.vertex(face, vert)];
         [u, 1.0 - v]
     }
-    fn set_tangent_encoded(&mut self, tangent: [f32; 4], face: usize, vert: usize) {
+    fn set_tangent(&mut self, tangent_space: Option<bevy_mikktspace::TangentSpace>, face: usize, vert: usize) {
+        let Some(tangent_space) = tangent_space else { return };
+        let tangent = tangent_space.tangent_encoded();
         let v = self.vertex(face, vert);
         if self.sum[v] == Vec3::ZERO {
             self.sign[v] = tangent[3];
@@ -53,11 +56,11 @@ impl mikktspace::Geometry for Mesh<'_> {
 /// length, an index is out of range, or MikkTSpace fails.
 pub fn mikktspace(positions: &[Vec3], normals: &[Vec3], uvs: &[[f32; 2]], indices: &[u32]) -> Vec<Vec4> {
     let n = positions.len();
-    if normals.len() != n || uvs.len() != n || indices.iter().any(|&i| i as usize >= n) || indices.len() % 3 != 0 {
+    if normals.len() != n || uvs.len() != n || indices.iter().any(|&i| i as usize >= n) || !indices.len().is_multiple_of(3) {
         return Vec::new();
     }
     let mut mesh = Mesh { positions, normals, uvs, indices, sum: vec![Vec3::ZERO; n], sign: vec![1.0; n] };
-    if !mikktspace::generate_tangents(&mut mesh) {
+    if bevy_mikktspace::generate_tangents(&mut mesh).is_err() {
         return Vec::new();
     }
     // A vertex no triangle uses, or whose corners cancel, gets none (zero: the raster pass
