@@ -18,6 +18,7 @@ fn mistakes_are_errors_that_name_the_flag() {
     refused(SAMPLE, &["--headless", "--window"], "cannot be used with");
     refused(SAMPLE, &["a.glb", "b.glb"], "unexpected argument 'b.glb'");
     refused(SAMPLE, &["--camera", "x"], "--camera");
+    refused(SAMPLE, &["--random-numbers", "purple"], "blue-noise");
 }
 
 #[test]

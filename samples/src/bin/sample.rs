@@ -20,6 +20,14 @@ const AFTER_HELP: &str = "modes: composite direct albedo normals roughness metal
 window keys: Tab / Shift+Tab next / previous mode, 1-9 first modes, W A S D Q E move, arrows look,
        Space pause the animation, P write the current mode to --out, Esc quit";
 
+/// `--random-numbers`: `TraceCommon::random_numbers`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq)]
+enum RandomNumbersArg {
+    Default,
+    WhiteNoise,
+    BlueNoise,
+}
+
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq)]
 enum Builtin {
     Room,
@@ -67,6 +75,10 @@ struct Cli {
     /// Trace half the pixels each frame (checkerboard).
     #[arg(long)]
     checkerboard: bool,
+    /// The rays' random numbers: the default sequences, or white or blue noise to compare
+    /// image quality.
+    #[arg(long, value_enum, default_value_t = RandomNumbersArg::Default)]
+    random_numbers: RandomNumbersArg,
     /// BLAS builds per frame (the SDK's max_blas_build_count; 0: no limit).
     #[arg(long, default_value_t = 4)]
     blas_per_frame: u32,
@@ -144,6 +156,11 @@ fn run() -> Result<(), String> {
         max_blas_build_count: cli.blas_per_frame,
         rays_per_pixel: cli.rays,
         checkerboard: cli.checkerboard,
+        random_numbers: match cli.random_numbers {
+            RandomNumbersArg::Default => hybrid_rt::RandomNumbers::Default,
+            RandomNumbersArg::WhiteNoise => hybrid_rt::RandomNumbers::WhiteNoise,
+            RandomNumbersArg::BlueNoise => hybrid_rt::RandomNumbers::BlueNoise,
+        },
         exposure: cli.exposure.unwrap_or(1.0),
         ..Default::default()
     };

@@ -84,6 +84,9 @@ pub struct Settings {
     /// Trace half the pixels each frame (checkerboard) and let the denoisers fill the rest.
     /// Default false.
     pub checkerboard: bool,
+    /// Where every trace's random numbers come from (`TraceCommon::random_numbers`). Default
+    /// the SDK's default sequences.
+    pub random_numbers: RandomNumbers,
     /// Frames over which injection averages a cache sample. Default 24 (the guide's 200
     /// suits a static level; the sample's cube moves and its shadow with it).
     pub injection_window: f32,
@@ -128,6 +131,7 @@ impl Default for Settings {
             tlas_max_refits: 15,
             rays_per_pixel: 1,
             checkerboard: false,
+            random_numbers: RandomNumbers::Default,
             injection_window: 24.0,
             injection_stride: 0,
             exposure: 1.0,

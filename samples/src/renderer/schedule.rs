@@ -133,6 +133,7 @@ impl Renderer<'_> {
         let mut common = main.common;
         common.half_resolution_mode =
             if self.settings.checkerboard { HalfResolutionMode::Checkerboard } else { HalfResolutionMode::Off };
+        common.random_numbers = self.settings.random_numbers;
         for (light, noisy, out, context, labels) in [
             (sun, &wk.sun_noisy, &wk.sun, self.denoisers.sun, ["shadow sun", "denoise shadow sun"]),
             (point, &wk.point_noisy, &wk.point, self.denoisers.point, ["shadow point", "denoise shadow point"]),
@@ -176,6 +177,7 @@ impl Renderer<'_> {
         let mut common = main.common;
         common.half_resolution_mode =
             if self.settings.checkerboard { HalfResolutionMode::Checkerboard } else { HalfResolutionMode::Off };
+        common.random_numbers = self.settings.random_numbers;
         let ao = TraceAmbientOcclusionTask {
             common,
             output: wk.ao_noisy.input(GENERAL),
