@@ -210,7 +210,12 @@ impl SampleScene {
 
     /// Every instance's transform at `time` seconds (the rig posed once).
     pub fn transforms(&self, time: f32) -> Vec<Affine3A> {
-        let pose = if self.motions.iter().any(|m| matches!(m, Motion::Node(_))) { self.rig.pose(time) } else { Vec::new() };
+        self.transforms_posed(time, &self.rig.pose(time))
+    }
+
+    /// Every instance's transform at `time` seconds, the rig's nodes at `pose`
+    /// (`rig.pose(time)`, computed once a frame for the instances and the skinning alike).
+    pub fn transforms_posed(&self, time: f32, pose: &[glam::Mat4]) -> Vec<Affine3A> {
         (0..self.scene.instances.len())
             .map(|i| match self.motions[i] {
                 Motion::Node(n) => Affine3A::from_mat4(pose.get(n).copied().unwrap_or(glam::Mat4::IDENTITY)),
@@ -237,7 +242,8 @@ impl SampleScene {
     /// at `time` rasterizes and the SDK traces; tests trace it on the CPU).
     pub fn at(&self, time: f32) -> Scene {
         let mut s = self.scene.clone();
-        for (inst, t) in s.instances.iter_mut().zip(self.transforms(time)) {
+        let pose = self.rig.pose(time);
+        for (inst, t) in s.instances.iter_mut().zip(self.transforms_posed(time, &pose)) {
             inst.transform = t;
         }
         if let Some(d) = &self.deformer {
@@ -245,7 +251,6 @@ impl SampleScene {
             s.meshes[mesh].positions = d.positions(time);
         }
         if !self.rig.skinned.is_empty() {
-            let pose = self.rig.pose(time);
             for m in &self.rig.skinned {
                 let joints = self.rig.joint_matrices(m.skin, &pose);
                 s.meshes[m.mesh].positions = Rig::skin_positions(m, &joints, &self.scene.meshes[m.mesh].positions);

@@ -136,7 +136,7 @@ impl SkinningPass {
         Ok(out)
     }
 
-    /// Records the skinning of every skinned mesh at `time` into `posed` (this slot's
+    /// Records the skinning of every skinned mesh, the rig's nodes at `pose`, into `posed` (this slot's
     /// buffers, as `posed_buffers` made them); returns (mesh, buffer) for each. The caller
     /// puts a barrier between these writes and the draws and BLAS refits that read them.
     pub fn record(
@@ -145,18 +145,17 @@ impl SkinningPass {
         cmd: vk::CommandBuffer,
         slot: usize,
         scene: &SampleScene,
-        time: f32,
+        pose: &[glam::Mat4],
         posed: &[HostBuffer],
     ) -> HostResult<Vec<(usize, vk::Buffer)>> {
         if self.meshes.is_empty() {
             return Ok(Vec::new());
         }
-        let pose = scene.rig.pose(time);
         let mut joints: Vec<glam::Mat4> = Vec::new();
         let mut offsets = Vec::new();
         for m in &scene.rig.skinned {
             offsets.push((joints.len() as u32, scene.rig.skins[m.skin].joints.len() as u32));
-            joints.extend(scene.rig.joint_matrices(m.skin, &pose));
+            joints.extend(scene.rig.joint_matrices(m.skin, pose));
         }
         let joint_buffer = self.joints.write(host, slot, bytemuck::cast_slice(&joints))?;
         let mut out = Vec::new();

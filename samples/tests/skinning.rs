@@ -9,6 +9,7 @@ use hybrid_rt_host::Host;
 use hybrid_rt_samples::gltf_scene;
 use hybrid_rt_samples::modes::Mode;
 use hybrid_rt_samples::renderer::{Renderer, Settings};
+use hybrid_rt_samples::scene::SampleScene;
 use hybrid_rt_samples::skin::{Interpolation, Property};
 use std::path::PathBuf;
 
@@ -73,6 +74,33 @@ fn write_skinned_strip(name: &str) -> PathBuf {
     path
 }
 
+/// Renders `scene` at `time` (two frames, the SDK's random-mesh-colour view on) at `size`;
+/// returns how far the GPU's skinning of `mesh` is from `reference`'s CPU skinning at worst,
+/// and the `modes` of the last frame.
+fn render_posed(
+    host: &Host,
+    scene: SampleScene,
+    reference: &SampleScene,
+    mesh: usize,
+    time: f32,
+    size: (u32, u32),
+    modes: &[Mode],
+) -> (f32, Vec<Vec<[f32; 4]>>) {
+    let settings = Settings { width: size.0, height: size.1, ..Default::default() };
+    let mut r = Renderer::new(host, scene, settings).unwrap();
+    let camera = r.scene.camera_path.at(0.5);
+    for _ in 0..2 {
+        r.render(camera, time, &[DebugOutput::RandomMeshColor], None).unwrap();
+    }
+    r.finish().unwrap();
+    let gpu = r.posed_vertices(mesh).unwrap().expect("the mesh is skinned");
+    let cpu = &reference.at(time).meshes[mesh].positions;
+    let worst = gpu.iter().zip(cpu).map(|(g, c)| (Vec3::new(g[0], g[1], g[2]) - *c).length()).fold(0.0, f32::max);
+    let images = modes.iter().map(|&m| r.capture(m).unwrap().0).collect();
+    r.destroy().unwrap();
+    (worst, images)
+}
+
 #[test]
 fn the_skin_and_its_animation_are_read() {
     let scene = gltf_scene::load(&write_skinned_strip("strip-read.gltf")).unwrap();
@@ -114,20 +142,11 @@ fn the_gpu_skins_and_the_sdk_traces_the_pose() {
         (hi - lo).length()
     };
     for time in [0.0f32, 1.0] {
-        let settings = Settings { width: 96, height: 64, ..Default::default() };
-        let mut r = Renderer::new(&host, gltf_scene::load(&write_skinned_strip("strip-render.gltf")).unwrap(), settings).unwrap();
-        let camera = r.scene.camera_path.at(0.5);
-        for _ in 0..2 {
-            r.render(camera, time, &[DebugOutput::RandomMeshColor], None).unwrap();
-        }
-        r.finish().unwrap();
-        let gpu = r.posed_vertices(mesh).unwrap().expect("the strip is skinned");
-        let cpu = &scene.at(time).meshes[mesh].positions;
-        let worst = gpu.iter().zip(cpu).map(|(g, c)| (Vec3::new(g[0], g[1], g[2]) - *c).length()).fold(0.0, f32::max);
+        let strip = gltf_scene::load(&write_skinned_strip("strip-render.gltf")).unwrap();
+        let modes = [Mode::Normals, Mode::Debug(DebugOutput::RandomMeshColor)];
+        let (worst, images) = render_posed(&host, strip, &scene, mesh, time, (96, 64), &modes);
         assert!(worst <= 1e-4 * size, "t = {time}: GPU skinning {worst} from the CPU's (scene size {size})");
-        let (normals, _) = r.capture(Mode::Normals).unwrap();
-        let (traced, _) = r.capture(Mode::Debug(DebugOutput::RandomMeshColor)).unwrap();
-        r.destroy().unwrap();
+        let [normals, traced] = &images[..] else { unreachable!() };
         let drawn: Vec<bool> = normals.iter().map(|t| (0..3).map(|c| (2.0 * t[c] - 1.0).powi(2)).sum::<f32>() > 0.25).collect();
         let hit: Vec<bool> = traced.iter().map(|t| t[0] + t[1] + t[2] > 0.0).collect();
         let (both, either) = (
@@ -159,26 +178,18 @@ fn the_waving_figure_is_skinned_on_the_gpu_and_traced_as_drawn() {
     };
     let mut hands = Vec::new();
     for time in [0.0f32, 0.5] {
-        let settings = Settings { width: 128, height: 72, ..Default::default() };
-        let mut r = Renderer::new(&host, hybrid_rt_samples::figure::waving_figure(), settings).unwrap();
-        let camera = r.scene.camera_path.at(0.5);
-        for _ in 0..2 {
-            r.render(camera, time, &[DebugOutput::RandomMeshColor], None).unwrap();
-        }
-        r.finish().unwrap();
-        let gpu = r.posed_vertices(mesh).unwrap().expect("the figure is skinned");
-        let cpu = &reference.at(time).meshes[mesh].positions;
-        let worst = gpu.iter().zip(cpu).map(|(g, c)| (Vec3::new(g[0], g[1], g[2]) - *c).length()).fold(0.0, f32::max);
+        let modes = [Mode::Albedo, Mode::Debug(DebugOutput::RandomMeshColor)];
+        let figure = hybrid_rt_samples::figure::waving_figure();
+        let (worst, images) = render_posed(&host, figure, &reference, mesh, time, (128, 72), &modes);
         assert!(worst <= 1e-4 * size, "t = {time}: GPU skinning {worst} from the CPU's");
+        let cpu = &reference.at(time).meshes[mesh].positions;
         // The right hand: the figure's vertex furthest along +X at rest.
         let rest = &reference.scene.meshes[mesh].positions;
         let hand = (0..rest.len()).max_by(|&a, &b| rest[a].x.total_cmp(&rest[b].x)).unwrap();
         hands.push(cpu[hand]);
         // The figure is orange, the floor and wall grey: its raster pixels. The SDK's view gives
         // each instance a colour: the figure's is the one most of those pixels show.
-        let (albedo, _) = r.capture(Mode::Albedo).unwrap();
-        let (traced, _) = r.capture(Mode::Debug(DebugOutput::RandomMeshColor)).unwrap();
-        r.destroy().unwrap();
+        let [albedo, traced] = &images[..] else { unreachable!() };
         let drawn: Vec<bool> = albedo.iter().map(|t| t[0] - t[2] > 0.3).collect();
         let key = |t: &[f32; 4]| t.map(|c| (c * 1000.0) as i32);
         let mut votes = std::collections::HashMap::new();

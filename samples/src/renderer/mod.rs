@@ -374,11 +374,13 @@ impl<'h> Renderer<'h> {
         host.full_barrier(cmd);
 
         // --- The engine's scene: animate and skin, then rasterize both views.
-        let transforms = self.scene.transforms(time);
+        // The rig posed once: its animated instances and its skins.
+        let pose = self.scene.rig.pose(time);
+        let transforms = self.scene.transforms_posed(time, &pose);
         let mut deformed: Vec<(usize, vk::Buffer)> = self.write_deformed(slot, time)?.into_iter().collect();
         if !self.scene.rig.skinned.is_empty() {
             let s = &self.slots[slot];
-            deformed.extend(self.skinning.record(host, cmd, slot, &self.scene, time, &s.posed)?);
+            deformed.extend(self.skinning.record(host, cmd, slot, &self.scene, &pose, &s.posed)?);
             host.full_barrier(cmd);
             self.slots[slot].timer.mark(host, cmd, "skinning");
         }
