@@ -4,8 +4,10 @@
 //! triangles where the file has none), its first texture coordinates and tangents, and its
 //! metallic-roughness material: base colour, metallic, roughness, normal and emissive factors
 //! with their PNG or JPEG textures (`gltf_textures`), and KHR_materials_emissive_strength.
-//! Perspective cameras (with their roll) are kept for `--camera`. The camera path, lights,
-//! surfel size and AO length are fitted to the scene's bounds.
+//! Perspective cameras (with their roll) are kept for `--camera`; `KHR_lights_punctual` lights
+//! become the scene's lights (`gltf_lights`). The camera path, surfel size and AO length are
+//! fitted to the scene's bounds, and so are a sun and a point light where the file has no
+//! lights of its own.
 //!
 //! `alphaMode: MASK` materials cut their meshes where the base-colour texture's alpha x the
 //! factor's is below `alphaCutoff`, in the raster pass and in the SDK's rays (`BLEND` is drawn
@@ -17,6 +19,7 @@
 //! (or has two parents) is refused, extensions the file requires and this loader lacks (Draco,
 //! meshopt, quantized meshes) are named before validation buries them under its own errors,
 //! and validation errors are summed up to the first three.
+use crate::gltf_lights;
 use crate::gltf_rig;
 use crate::gltf_textures::TextureCache;
 use crate::gltf_uri::read_uri;
@@ -153,7 +156,7 @@ impl Warnings {
 }
 
 /// Extensions the loader reads (beyond the core), or that change nothing it draws.
-const READ_EXTENSIONS: &[&str] = &["KHR_materials_emissive_strength", "KHR_texture_transform"];
+const READ_EXTENSIONS: &[&str] = &["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_texture_transform"];
 
 /// The file-wide features the loader ignores.
 fn unread_features(doc: &gltf::Document, warnings: &mut Warnings) {
@@ -174,7 +177,8 @@ fn unread_features(doc: &gltf::Document, warnings: &mut Warnings) {
 
 /// Extensions a file may require that this loader reads (beyond positions, indices and the
 /// core metallic-roughness material).
-const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &["KHR_materials_emissive_strength", "KHR_texture_transform"];
+const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] =
+    &["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_texture_transform"];
 
 /// Validation errors shown in full; the rest are counted.
 const SHOWN_ERRORS: usize = 3;
@@ -338,6 +342,7 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
     let mut skipped = 0usize;
     // Perspective cameras: (eye, forward, up, vertical field of view).
     let mut cameras: Vec<(Vec3, Vec3, Vec3, f32)> = Vec::new();
+    let mut placed_lights: Vec<gltf_lights::PlacedLight> = Vec::new();
     while let Some((node, parent)) = stack.pop() {
         if std::mem::replace(&mut seen[node.index()], true) {
             return Err(format!("{name}: node {} is its own ancestor or has two parents", node.index()));
@@ -357,6 +362,12 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
             if let (true, Some(forward)) = (eye.is_finite() && yfov > 0.0 && yfov < 3.1, forward.try_normalize()) {
                 let up = (up - forward * up.dot(forward)).try_normalize().unwrap_or(Vec3::Y);
                 cameras.push((eye, forward, up, yfov));
+            }
+        }
+        if let Some(light) = node.light() {
+            match gltf_lights::PlacedLight::new(&light, world) {
+                Some(p) => placed_lights.push(p),
+                None => warnings.add("lights whose node transform is degenerate (not drawn)"),
             }
         }
         let Some(mesh) = node.mesh() else { continue };
@@ -423,6 +434,11 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
     s.motions = motions;
     s.rig = rig;
     cutouts.resize(s.scene.meshes.len(), None);
+    s.file_lights = gltf_lights::lights(&placed_lights, s.sun_angular_extent, s.point_radius, &mut |w| warnings.add(w));
+    if !s.file_lights.is_empty() {
+        // The file's lights replace the fitted ones.
+        (s.lights.sun_intensity, s.lights.point_intensity) = (0.0, 0.0);
+    }
     (s.uvs, s.tangents, s.textures, s.material_textures, s.cutouts) =
         (uvs, tangents, textures.textures, material_textures, cutouts);
     for w in &warnings.0 {
@@ -466,6 +482,7 @@ fn fitted(name: String, scene: Scene, normals: Vec<Vec<Vec3>>, materials: Vec<Ma
         motions,
         deformer: None,
         rig: Default::default(),
+        file_lights: Vec::new(),
         lights: Lights {
             sun_direction: Vec3::new(0.45, 1.0, 0.6),
             sun_intensity: 3.0,

@@ -3,6 +3,7 @@
 //! The engine side (device, images, submission, the triangle scenes) is `hybrid_rt_host`; the
 //! G-buffer comes from `raster` (a Vulkan graphics pass, as an engine's).
 pub mod figure;
+mod gltf_lights;
 mod gltf_rig;
 pub mod gltf_scene;
 pub mod gltf_textures;

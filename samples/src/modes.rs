@@ -22,6 +22,11 @@ pub enum Mode {
     SunShadow,
     PointShadowNoisy,
     PointShadow,
+    /// The file's lights' shadows (glTF `KHR_lights_punctual`): the multi-light trace's
+    /// weighted mean visibility, raw and denoised (both the sun's denoised shadow in a scene
+    /// without such lights).
+    LightsShadowNoisy,
+    LightsShadow,
     AoNoisy,
     Ao,
     DiffuseNoisy,
@@ -34,7 +39,7 @@ pub enum Mode {
     Debug(DebugOutput),
 }
 
-pub const ALL: [Mode; 24] = [
+pub const ALL: [Mode; 26] = [
     Mode::Composite,
     Mode::Direct,
     Mode::Albedo,
@@ -47,6 +52,8 @@ pub const ALL: [Mode; 24] = [
     Mode::SunShadow,
     Mode::PointShadowNoisy,
     Mode::PointShadow,
+    Mode::LightsShadowNoisy,
+    Mode::LightsShadow,
     Mode::AoNoisy,
     Mode::Ao,
     Mode::DiffuseNoisy,
@@ -84,6 +91,8 @@ impl Mode {
             Mode::SunShadow => "sun_shadow",
             Mode::PointShadowNoisy => "point_shadow_noisy",
             Mode::PointShadow => "point_shadow",
+            Mode::LightsShadowNoisy => "lights_shadow_noisy",
+            Mode::LightsShadow => "lights_shadow",
             Mode::AoNoisy => "ao_noisy",
             Mode::Ao => "ao",
             Mode::DiffuseNoisy => "diffuse_noisy",
@@ -129,6 +138,8 @@ impl Mode {
             Mode::Motion => (Mat4::from_diagonal(Vec4::new(0.05, 0.05, 0.0, 0.0)), Vec4::new(0.5, 0.5, 0.0, 1.0), false),
             // A raw shadow trace keeps the visible fraction in G; denoised ones in every channel.
             Mode::SunShadowNoisy | Mode::PointShadowNoisy => (grey(1), Vec4::W, false),
+            // The multi-light trace's packed output: the weighted visibility in R.
+            Mode::LightsShadowNoisy => (grey(0), Vec4::W, false),
             Mode::Debug(DebugOutput::HitT) => (grey(0) * 0.1, Vec4::W, false),
             _ => (Mat4::IDENTITY, Vec4::ZERO, false),
         };

@@ -106,6 +106,11 @@ pub struct SampleScene {
     /// Animated nodes and skinned meshes (empty: none).
     pub rig: Rig,
     pub lights: Lights,
+    /// The file's own lights (glTF `KHR_lights_punctual`; empty for the built-in scenes): up
+    /// to the SDK's 32 shadowed lights, shaded by the lighting pass and shadowed through one
+    /// multi-light shadow task and its denoiser. Where there are any, `lights`' sun and point
+    /// light are off (intensity 0).
+    pub file_lights: Vec<hybrid_rt::LightInfo>,
     /// Angular diameter of the sun (radians) and radius of the point light (world units): the
     /// SDK's shadow rays sample them, so penumbrae widen with distance to the occluder.
     pub sun_angular_extent: f32,
@@ -153,6 +158,7 @@ impl SampleScene {
             deformer: None,
             rig: Rig::default(),
             lights,
+            file_lights: Vec::new(),
             sun_angular_extent: 0.03,
             point_radius: 0.1,
             sky: [0.35, 0.45, 0.6],

@@ -562,3 +562,219 @@ fn texture_transforms_and_the_second_uv_set_are_read() {
         assert!((got[0] - want[0]).abs() < 1e-5 && (got[1] - want[1]).abs() < 1e-5, "{got:?} vs {want:?}");
     }
 }
+
+/// The spot light of `write_spot_scene`: 2 units above the middle of the ground, pointing
+/// down, and its cones.
+const SPOT: [f32; 3] = [0.0, 2.0, 0.0];
+const SPOT_INTENSITY: f32 = 10.0;
+const SPOT_INNER: f32 = 0.45;
+const SPOT_OUTER: f32 = 0.6;
+/// The occluder: a quad at height 1 over x in 0..0.7, z in -0.35..0.35.
+const OCCLUDER: [[f32; 2]; 2] = [[0.0, 0.7], [-0.35, 0.35]];
+/// The camera: 5 units above the ground's middle, looking down, this vertical field of view.
+const TOP_CAMERA_HEIGHT: f32 = 5.0;
+const TOP_CAMERA_FOV: f32 = 0.9;
+
+/// A 4x4 grey ground (albedo 0.5) and a white quad over it, lit only by a KHR_lights_punctual
+/// spot light pointing down and seen by a camera looking straight down (its up is -Z). With
+/// `extra_lights`, a directional and a point light follow the spot in the file's light list,
+/// and after them `ring` dim point lights on a circle above the ground.
+fn write_spot_scene(name: &str, extra_lights: bool, ring: usize) -> PathBuf {
+    let b64 = |b: &[u8]| base64::engine::general_purpose::STANDARD.encode(b);
+    let [[x0, x1], [z0, z1]] = OCCLUDER;
+    let ground: [[f32; 3]; 4] = [[-2.0, 0.0, -2.0], [2.0, 0.0, -2.0], [-2.0, 0.0, 2.0], [2.0, 0.0, 2.0]];
+    // Wound so that the face normal is +Y (towards the light and the camera).
+    let quad: [[f32; 3]; 4] = [[x0, 1.0, z0], [x1, 1.0, z0], [x0, 1.0, z1], [x1, 1.0, z1]];
+    let indices: [u16; 6] = [0, 2, 1, 1, 2, 3];
+    let mut bytes: Vec<u8> = ground.iter().chain(&quad).flatten().flat_map(|v| v.to_le_bytes()).collect();
+    bytes.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    // Looking down: a rotation of -90 degrees about X takes -Z to -Y.
+    let down = format!("[{}, 0, 0, {}]", -std::f32::consts::FRAC_1_SQRT_2, std::f32::consts::FRAC_1_SQRT_2);
+    let more = if extra_lights {
+        r#", {"type": "directional", "intensity": 2, "color": [1, 0.5, 0.25]}, {"type": "point", "intensity": 3, "range": 10}"#
+    } else {
+        ""
+    };
+    let more_nodes = if extra_lights {
+        r#", {"rotation": [-0.3, 0, 0, 0.954], "extensions": {"KHR_lights_punctual": {"light": 1}}},
+            {"translation": [1, 1, 1], "extensions": {"KHR_lights_punctual": {"light": 2}}}"#
+    } else {
+        ""
+    };
+    let first = if extra_lights { 3 } else { 1 };
+    let more = more.to_string()
+        + &(0..ring).map(|k| format!(r#", {{"type": "point", "intensity": 0.01, "name": "ring {k}"}}"#)).collect::<String>();
+    let more_nodes = more_nodes.to_string()
+        + &(0..ring)
+            .map(|k| {
+                let a = k as f32 / ring as f32 * std::f32::consts::TAU;
+                let (x, z) = (1.5 * a.cos(), 1.5 * a.sin());
+                format!(
+                    r#", {{"translation": [{x}, 1.5, {z}], "extensions": {{"KHR_lights_punctual": {{"light": {}}}}}}}"#,
+                    first + k
+                )
+            })
+            .collect::<String>();
+    let nodes = 4 + if extra_lights { 2 } else { 0 } + ring;
+    let roots = format!("[{}]", (0..nodes).map(|n| n.to_string()).collect::<Vec<_>>().join(", "));
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": {roots}}}],
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {{"KHR_lights_punctual": {{"lights": [
+    {{"type": "spot", "intensity": {SPOT_INTENSITY}, "spot": {{"innerConeAngle": {SPOT_INNER}, "outerConeAngle": {SPOT_OUTER}}}}}{more}]}}}},
+  "nodes": [{{"mesh": 0}}, {{"mesh": 1}},
+    {{"translation": [{sx}, {sy}, {sz}], "rotation": {down}, "extensions": {{"KHR_lights_punctual": {{"light": 0}}}}}},
+    {{"translation": [0, {TOP_CAMERA_HEIGHT}, 0], "rotation": {down}, "camera": 0}}{more_nodes}],
+  "cameras": [{{"type": "perspective", "perspective": {{"yfov": {TOP_CAMERA_FOV}, "znear": 0.1}}}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 2, "material": 0}}]}},
+    {{"primitives": [{{"attributes": {{"POSITION": 1}}, "indices": 2, "material": 1}}]}}],
+  "materials": [{{"pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0}}}},
+    {{"pbrMetallicRoughness": {{"baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0}}}}],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-2, 0, -2], "max": [2, 0, 2]}},
+    {{"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3", "min": [{x0}, 1, {z0}], "max": [{x1}, 1, {z1}]}},
+    {{"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}}],
+  "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 48}}, {{"buffer": 0, "byteOffset": 48, "byteLength": 48}},
+    {{"buffer": 0, "byteOffset": 96, "byteLength": 12}}],
+  "buffers": [{{"byteLength": {len}, "uri": "data:application/octet-stream;base64,{data}"}}]}}"#,
+        sx = SPOT[0],
+        sy = SPOT[1],
+        sz = SPOT[2],
+        len = bytes.len(),
+        data = b64(&bytes),
+    );
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    std::fs::write(&path, json).unwrap();
+    path
+}
+
+/// KHR_lights_punctual lights are read where their nodes put them (a light shines down its
+/// node's -Z), with their colour, intensity, range and cones; they replace the fitted lights.
+#[test]
+fn punctual_lights_are_read() {
+    use hybrid_rt::LightType;
+    let scene = gltf_scene::load(&write_spot_scene("lights.gltf", true, 0)).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!((scene.lights.sun_intensity, scene.lights.point_intensity), (0.0, 0.0), "the fitted lights are off");
+    assert_eq!(scene.file_lights.len(), 3);
+    let of = |t: LightType| scene.file_lights.iter().find(|l| l.light_type == t).unwrap();
+    let (spot, sun, point) = (of(LightType::Spot), of(LightType::Directional), of(LightType::Point));
+    assert_eq!(spot.light_type, LightType::Spot);
+    assert!(spot.position.distance(glam::Vec3::from(SPOT)) < 1e-5, "{}", spot.position);
+    assert!(spot.direction.normalize().distance(glam::Vec3::NEG_Y) < 1e-5, "{}", spot.direction);
+    assert_eq!((spot.inner_cone, spot.outer_cone, spot.intensity, spot.range), (SPOT_INNER, SPOT_OUTER, SPOT_INTENSITY, 0.0));
+    assert!(spot.radius > 0.0, "a sized light: soft shadows");
+    assert_eq!((sun.light_type, sun.intensity, sun.color), (LightType::Directional, 2.0, [1.0, 0.5, 0.25]));
+    assert!(sun.angular_extent > 0.0);
+    // A rotation of -2 asin(0.3) about X turns -Z towards -Y.
+    let angle = 2.0 * 0.3f32.asin();
+    assert!(sun.direction.normalize().distance(glam::Vec3::new(0.0, -angle.sin(), -angle.cos())) < 1e-2, "{}", sun.direction);
+    assert_eq!((point.light_type, point.position, point.intensity, point.range), (LightType::Point, glam::Vec3::ONE, 3.0, 10.0));
+    // A file without lights keeps the fitted ones.
+    let fitted = gltf_scene::load(&write_cutout_scene("no-lights.gltf", 1.0, "")).unwrap();
+    assert!(fitted.file_lights.is_empty() && fitted.lights.sun_intensity > 0.0);
+}
+
+/// Rendered through the file's camera, the spot light from the file lights the ground inside
+/// its cone as the lighting pass's falloffs say (irradiance I cos / d² x the smoothstep from the
+/// outer to the inner cone, times the albedo), nothing outside it, and the occluder's shadow
+/// (the SDK's multi-light trace, denoised) lies where the light's geometry puts it. Pixels
+/// within a penumbra's width (plus a pixel) of an edge are not judged.
+#[test]
+fn a_punctual_spot_light_casts_its_shadow() {
+    let (w, h) = (128u32, 96u32);
+    let file = write_spot_scene("spot-render.gltf", false, 0);
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("sample-spot");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_sample"))
+        .args(["--headless", file.to_str().unwrap(), "--camera", "0", "--width", &w.to_string(), "--height", &h.to_string()])
+        .args(["--frames", "2", "--modes", "direct,albedo,lights_shadow"])
+        .arg("--out")
+        .arg(&out)
+        .env_remove("DISPLAY")
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}{}", String::from_utf8_lossy(&run.stdout), String::from_utf8_lossy(&run.stderr));
+    let read = |m: &str| hybrid_rt_samples::images::read_exr_rgba(&out.join(format!("{m}.exr"))).unwrap().2;
+    let (direct, albedo, shadow) = (read("direct"), read("albedo"), read("lights_shadow"));
+    let [[x0, x1], [z0, z1]] = OCCLUDER;
+    // World units per pixel on the ground, and the penumbra's half-width there (the light's
+    // radius, as large at the ground as at the light: the occluder is halfway).
+    let half = TOP_CAMERA_HEIGHT * (0.5 * TOP_CAMERA_FOV).tan();
+    let pixel = 2.0 * half / h as f32;
+    let scene = gltf_scene::load(&file).unwrap();
+    let margin = scene.file_lights[0].radius + pixel;
+    let (mut lit, mut shade, mut dark, mut quad) = (0, 0, 0, 0);
+    for py in 0..h {
+        for px in 0..w {
+            let i = (py * w + px) as usize;
+            let ndc = [(px as f32 + 0.5) / w as f32 * 2.0 - 1.0, (py as f32 + 0.5) / h as f32 * 2.0 - 1.0];
+            // The camera's right is +X, its up -Z.
+            let g = [half * w as f32 / h as f32 * ndc[0], half * ndc[1]];
+            // Seen through the quad's plane (height 1, 4/5 of the way down) the pixel is on the quad.
+            let v = [0.8 * g[0], 0.8 * g[1]];
+            let inside = |p: [f32; 2], m: f32| p[0] > x0 + m && p[0] < x1 - m && p[1] > z0 + m && p[1] < z1 - m;
+            let on_quad = inside(v, 0.0);
+            let near_quad = inside(v, -0.8 * margin) && !inside(v, 0.8 * margin);
+            if near_quad {
+                continue;
+            }
+            let off_ground = g[0].abs().max(g[1].abs()) > 2.0 - margin;
+            if off_ground && !on_quad {
+                continue;
+            }
+            if on_quad {
+                assert!(albedo[i][0] > 0.99, "pixel {px},{py} sees the white quad: albedo {:?}", albedo[i]);
+                quad += 1;
+                continue;
+            }
+            assert!((albedo[i][0] - 0.5).abs() < 0.01, "pixel {px},{py} sees the grey ground: albedo {:?}", albedo[i]);
+            // The ray to the light crosses the quad's plane halfway, at g / 2.
+            let s = [0.5 * g[0], 0.5 * g[1]];
+            let (umbra, penumbra) = (inside(s, 0.5 * margin), inside(s, -0.5 * margin));
+            let to_light = glam::Vec3::from(SPOT) - glam::Vec3::new(g[0], 0.0, g[1]);
+            let d = to_light.length();
+            let c = to_light.y / d;
+            let (cos_outer, cos_inner) = (SPOT_OUTER.cos(), SPOT_INNER.cos());
+            let t = ((c - cos_outer) / (cos_inner - cos_outer)).clamp(0.0, 1.0);
+            let expected = 0.5 * SPOT_INTENSITY * c / (d * d) * t * t * (3.0 - 2.0 * t);
+            let e = direct[i][0];
+            if (c - cos_outer).abs() < 0.01 || (penumbra && !umbra) {
+                continue;
+            }
+            if umbra && c > cos_outer {
+                // (Within a few pixels of the cone's edge, where the light fades out, the
+                // denoiser blurs in the visibility 1 the trace reports where no light reaches:
+                // a few percent of a light that is nearly gone there. Judged against the
+                // spot's peak, 1/4 x I x albedo under the light, that is under 0.4%.)
+                let peak = 0.5 * SPOT_INTENSITY / 4.0;
+                assert!(e < 0.004 * peak, "pixel {px},{py} in the umbra: {e} (lit {expected})");
+                shade += 1;
+            } else if c < cos_outer {
+                assert!(e < 1e-4, "pixel {px},{py} outside the cone: {e}");
+                dark += 1;
+            } else {
+                assert!((e - expected).abs() < 0.02 * expected + 2e-3, "pixel {px},{py} lit: {e}, expected {expected}");
+                assert!(shadow[i][0] > 0.98, "pixel {px},{py} lit: visibility {}", shadow[i][0]);
+                lit += 1;
+            }
+        }
+    }
+    eprintln!("{lit} lit, {shade} umbra, {dark} outside the cone, {quad} on the occluder");
+    assert!(lit > 1000 && shade > 50 && dark > 1000 && quad > 50, "{lit} lit, {shade} umbra, {dark} dark, {quad} quad");
+}
+
+/// A file with more lights than the SDK shadows in one task: the first 32 are drawn (the
+/// visibility of lights 16.. in the trace's second image) with a warning; the frame renders.
+#[test]
+fn more_than_32_lights_draw_the_first_32() {
+    let file = write_spot_scene("many-lights.gltf", true, 31);
+    let scene = gltf_scene::load(&file).unwrap();
+    assert_eq!(scene.file_lights.len(), 32);
+    assert!(scene.warnings.iter().any(|w| w.contains("more than 32 lights")), "{:?}", scene.warnings);
+    let images = render_modes_sized(&file, "sample-many-lights", "direct,lights_shadow_noisy,normals", 64, 48);
+    // Every surface is lit (the ring's lights are all around), and every value is a number.
+    let surface = images[2].iter().filter(|t| (0..3).map(|c| (2.0 * t[c] - 1.0).powi(2)).sum::<f32>() > 0.25).count();
+    let lit = images[0].iter().filter(|t| t[0] > 0.0).count();
+    assert!(surface > 100 && lit as f32 > 0.95 * surface as f32, "{lit} lit pixels of {surface}");
+    assert!(images.iter().flatten().all(|t| t.iter().all(|c| c.is_finite())));
+}

@@ -178,7 +178,7 @@ fn deferred_lighting_with_sdk_shadows_matches_the_reference_lit_frame() {
         point_intensity: 0.0,
         ambient: 0.08,
     };
-    host.run(|cmd| lighting.record(&host, cmd, 0, &targets, &camera, &lights, Visibility::same(&visibility, general), &lit))
+    host.run(|cmd| lighting.record(&host, cmd, 0, &targets, &camera, &lights, &[], Visibility::same(&visibility, general), &lit))
         .unwrap()
         .unwrap();
 

@@ -14,9 +14,9 @@ use hybrid_rt_samples::renderer::{Renderer, Settings};
 use hybrid_rt_samples::{gltf_scene, images, report, scenes, window};
 use std::path::PathBuf;
 
-const AFTER_HELP: &str = "modes: composite direct albedo normals roughness metalness motion sun_shadow_noisy sun_shadow
-       point_shadow_noisy point_shadow ao_noisy ao diffuse_noisy diffuse specular_noisy specular
-       lidar debug_cache debug_random_tile debug_random_mesh debug_hit_t debug_barycentrics
+const AFTER_HELP: &str = "modes: composite direct albedo normals roughness metalness motion emissive sun_shadow_noisy
+       sun_shadow point_shadow_noisy point_shadow lights_shadow_noisy lights_shadow ao_noisy ao diffuse_noisy
+       diffuse specular_noisy specular lidar debug_cache debug_random_tile debug_random_mesh debug_hit_t debug_barycentrics
 window keys: Tab / Shift+Tab next / previous mode, 1-9 first modes, W A S D Q E move, arrows look,
        Space pause the animation, P write the current mode to --out, Esc quit";
 

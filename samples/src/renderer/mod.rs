@@ -231,7 +231,7 @@ impl<'h> Renderer<'h> {
             let posed = skinning.posed_buffers(host, &scene)?;
             slots.push(Slot::new(host, w, h, settings.lidar_size, rest.as_deref(), posed, scene.camera_path.at(0.0))?);
         }
-        let work = Work::new(host, w, h, settings.lidar_size)?;
+        let work = Work::new(host, w, h, settings.lidar_size, scene.file_lights.len())?;
         let context = |signal| {
             // One view: the four contexts of the main camera share one denoiser guide.
             let view_id = MAIN_VIEW;
@@ -248,6 +248,10 @@ impl<'h> Renderer<'h> {
             point: context(SignalType::Shadow).map_err(sdk_err)?,
             ao: context(SignalType::DiffuseOcclusion).map_err(sdk_err)?,
             radiance: context(SignalType::SpecularAndDiffuse).map_err(sdk_err)?,
+            lights: match scene.file_lights.is_empty() {
+                true => None,
+                false => Some(context(SignalType::MultiShadow).map_err(sdk_err)?),
+            },
         };
         let prev_transforms = scene.transforms(0.0);
         let (lo, hi) = scene.bounds();
@@ -456,10 +460,24 @@ impl<'h> Renderer<'h> {
     /// view's denoised, the lidar view's raw traces).
     fn record_lighting(&mut self, slot: usize, cameras: &FrameCameras) -> HostResult<()> {
         let (host, lights, wk, s) = (self.host, self.scene.lights, &self.work, &self.slots[slot]);
-        let main_vis = Visibility { sun: &wk.sun, point: &wk.point, layout: GENERAL, raw_trace: false };
-        self.lighting.record(host, s.cmd, 2 * slot, &s.main.targets, &cameras.main, &lights, main_vis, &s.main.lit)?;
-        let lidar_vis = Visibility { sun: &wk.lidar_sun, point: &wk.lidar_point, layout: GENERAL, raw_trace: true };
-        self.lighting.record(host, s.cmd, 2 * slot + 1, &s.lidar.targets, &cameras.lidar, &lights, lidar_vis, &s.lidar.lit)
+        let file = &self.scene.file_lights;
+        let main_vis = Visibility {
+            sun: &wk.sun,
+            point: &wk.point,
+            file_lights: wk.lights.as_ref().map(|l| &l.denoised),
+            layout: GENERAL,
+            raw_trace: false,
+        };
+        self.lighting.record(host, s.cmd, 2 * slot, &s.main.targets, &cameras.main, &lights, file, main_vis, &s.main.lit)?;
+        let lidar_vis = Visibility {
+            sun: &wk.lidar_sun,
+            point: &wk.lidar_point,
+            file_lights: wk.lights.as_ref().map(|l| &l.lidar.packed),
+            layout: GENERAL,
+            raw_trace: true,
+        };
+        let lidar_targets = &s.lidar.targets;
+        self.lighting.record(host, s.cmd, 2 * slot + 1, lidar_targets, &cameras.lidar, &lights, file, lidar_vis, &s.lidar.lit)
     }
 
     /// The sun and the point light as the SDK's shadow and relight tasks take them: their
@@ -481,6 +499,14 @@ impl<'h> Renderer<'h> {
             ..Default::default()
         };
         (sun, point)
+    }
+
+    /// Every light that shines, as the SDK's relighting and hit lighting take them: the sun
+    /// and the point light where they are on, and the file's lights.
+    fn shining_lights(&self) -> Vec<LightInfo> {
+        let (sun, point) = self.lights();
+        let file = self.scene.file_lights.iter().copied();
+        [sun, point].into_iter().filter(|l| l.intensity > 0.0).chain(file).take(MAX_SHADOW_LIGHTS).collect()
     }
 
     fn record_composite(&mut self, slot: usize, camera: &Camera) -> HostResult<()> {
@@ -685,7 +711,8 @@ impl<'h> Renderer<'h> {
     pub fn destroy(mut self) -> HostResult<()> {
         self.finish()?;
         let host = self.host;
-        for d in [self.denoisers.sun, self.denoisers.point, self.denoisers.ao, self.denoisers.radiance] {
+        let d = &self.denoisers;
+        for d in [Some(d.sun), Some(d.point), Some(d.ao), Some(d.radiance), d.lights].into_iter().flatten() {
             self.ctx.destroy_denoising_context(d).map_err(sdk_err)?;
         }
         drop(self.container);

@@ -67,6 +67,8 @@ pub(super) struct Work {
     pub(super) composite: HostImage,
     pub(super) lidar_sun: HostImage,
     pub(super) lidar_point: HostImage,
+    /// The file's lights' shadows (a scene with `file_lights` only).
+    pub(super) lights: Option<FileLightImages>,
     pub(super) debug: HashMap<DebugOutput, HostImage>,
     /// The view pass's outputs: linear RGBA32F and tone-mapped sRGB RGBA8.
     pub(super) linear: HostImage,
@@ -124,8 +126,46 @@ impl Slot {
     }
 }
 
+/// One view's multi-light shadow trace: per-light visibility (lights 0..16 and 16..32) and the
+/// weighted mean the denoiser takes (`TraceMultiShadowTask`).
+pub(super) struct MultiShadowImages {
+    pub(super) visibility: HostImage,
+    pub(super) visibility_high: Option<HostImage>,
+    pub(super) packed: HostImage,
+}
+
+impl MultiShadowImages {
+    /// For `lights` lights (1..=32) at `w` x `h`.
+    fn new(host: &Host, w: u32, h: u32, lights: usize) -> HostResult<MultiShadowImages> {
+        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+        // Four lights fit one 32-bit texel, 16 four.
+        let format = |n: usize| if n <= 4 { vk::Format::R32_UINT } else { vk::Format::R32G32B32A32_UINT };
+        let high = lights.saturating_sub(16);
+        Ok(MultiShadowImages {
+            visibility: host.image_cleared(format(lights.min(16)), w, h, usage, GENERAL)?,
+            visibility_high: if high > 0 { Some(host.image_cleared(format(high), w, h, usage, GENERAL)?) } else { None },
+            packed: work_image(host, w, h)?,
+        })
+    }
+
+    fn destroy(self, host: &Host) {
+        for i in [Some(self.visibility), self.visibility_high, Some(self.packed)].into_iter().flatten() {
+            host.destroy_image(i);
+        }
+    }
+}
+
+/// The file's lights' shadows: the main view's trace and its denoised mean visibility, the
+/// lidar view's trace (raw, as its other shadows).
+pub(super) struct FileLightImages {
+    pub(super) main: MultiShadowImages,
+    pub(super) denoised: HostImage,
+    pub(super) lidar: MultiShadowImages,
+}
+
 impl Work {
-    pub(super) fn new(host: &Host, w: u32, h: u32, lidar_size: u32) -> HostResult<Work> {
+    /// `file_lights`: how many lights the scene's file brings (0: none).
+    pub(super) fn new(host: &Host, w: u32, h: u32, lidar_size: u32, file_lights: usize) -> HostResult<Work> {
         let ls = lidar_size;
         let out = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
         Ok(Work {
@@ -142,6 +182,14 @@ impl Work {
             composite: work_image(host, w, h)?,
             lidar_sun: work_image(host, ls, ls)?,
             lidar_point: work_image(host, ls, ls)?,
+            lights: match file_lights {
+                0 => None,
+                n => Some(FileLightImages {
+                    main: MultiShadowImages::new(host, w, h, n)?,
+                    denoised: work_image(host, w, h)?,
+                    lidar: MultiShadowImages::new(host, ls, ls, n)?,
+                }),
+            },
             debug: HashMap::new(),
             linear: host.image_cleared(vk::Format::R32G32B32A32_SFLOAT, w, h, out, GENERAL)?,
             display: host.image_cleared(vk::Format::R8G8B8A8_UNORM, w, h, out, GENERAL)?,
@@ -170,6 +218,11 @@ impl Work {
         for i in fixed.into_iter().chain(self.debug.into_values()) {
             host.destroy_image(i);
         }
+        if let Some(l) = self.lights {
+            l.main.destroy(host);
+            l.lidar.destroy(host);
+            host.destroy_image(l.denoised);
+        }
     }
 }
 
@@ -178,6 +231,8 @@ pub(super) struct Denoisers {
     pub(super) point: DenoisingContextHandle,
     pub(super) ao: DenoisingContextHandle,
     pub(super) radiance: DenoisingContextHandle,
+    /// The file's lights' shadows (a scene with `file_lights` only).
+    pub(super) lights: Option<DenoisingContextHandle>,
 }
 
 /// An RGBA16F image the SDK writes (STORAGE) and the sample's passes read (SAMPLED), in GENERAL.
@@ -200,6 +255,9 @@ pub(super) fn source<'a>(wk: &'a Work, s: &'a Slot, mode: Mode) -> (&'a HostImag
         Mode::SunShadow => (&wk.sun, GENERAL),
         Mode::PointShadowNoisy => (&wk.point_noisy, GENERAL),
         Mode::PointShadow => (&wk.point, GENERAL),
+        // A scene without lights of its own shows the sun's (denoised: the visibility in R).
+        Mode::LightsShadowNoisy => (wk.lights.as_ref().map_or(&wk.sun, |l| &l.main.packed), GENERAL),
+        Mode::LightsShadow => (wk.lights.as_ref().map_or(&wk.sun, |l| &l.denoised), GENERAL),
         Mode::AoNoisy => (&wk.ao_noisy, GENERAL),
         Mode::Ao => (&wk.ao, GENERAL),
         Mode::DiffuseNoisy => (&wk.diffuse_noisy, GENERAL),

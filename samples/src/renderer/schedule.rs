@@ -48,9 +48,10 @@ impl Renderer<'_> {
         // Surfaces no camera has injected (the column's back, seen only in the mirror) take
         // the sun's and the point light's direct light and a bounce of the caches' light (the
         // walls', the sky's), before anything reads the cache.
-        if self.settings.relight_samples > 0 {
+        let shining = self.shining_lights();
+        if self.settings.relight_samples > 0 && !shining.is_empty() {
             let task = RelightCacheTask {
-                lights: vec![sun, point],
+                lights: shining.clone(),
                 max_samples: self.settings.relight_samples,
                 bounce: true,
                 sky: self.scene.sky,
@@ -61,7 +62,8 @@ impl Renderer<'_> {
         let main = Inputs::of(&self.slots[slot].main.targets, &cameras.main);
         let lidar = Inputs::of(&self.slots[slot].lidar.targets, &cameras.lidar);
         self.schedule_shadows(&main, &lidar, sun, point)?;
-        self.schedule_gi_and_reflections(&main, sun, point)?;
+        self.schedule_file_light_shadows(&main, &lidar)?;
+        self.schedule_gi_and_reflections(&main, shining)?;
         self.schedule_debug_views(&main, debug)
     }
 
@@ -125,8 +127,9 @@ impl Renderer<'_> {
         Ok(())
     }
 
-    /// Shadows: the main view 1 ray (or the settings' rays) and denoised, the lidar view its
-    /// own rays, undenoised (its image only feeds the cache's running average).
+    /// Shadows of the sun and the point light where they shine: the main view 1 ray (or the
+    /// settings' rays) and denoised, the lidar view its own rays, undenoised (its image only
+    /// feeds the cache's running average).
     fn schedule_shadows(&mut self, main: &Inputs, lidar: &Inputs, sun: LightInfo, point: LightInfo) -> HostResult<()> {
         let wk = &self.work;
         let c = &mut self.container;
@@ -137,7 +140,10 @@ impl Renderer<'_> {
         for (light, noisy, out, context, labels) in [
             (sun, &wk.sun_noisy, &wk.sun, self.denoisers.sun, ["shadow sun", "denoise shadow sun"]),
             (point, &wk.point_noisy, &wk.point, self.denoisers.point, ["shadow point", "denoise shadow point"]),
-        ] {
+        ]
+        .into_iter()
+        .filter(|l| l.0.intensity > 0.0)
+        {
             let trace = TraceShadowTask {
                 common,
                 light,
@@ -156,7 +162,7 @@ impl Renderer<'_> {
             schedule(c, labels[1], |c| c.schedule_denoise_shadow(&denoise))?;
         }
         let lidar_rays = self.settings.lidar_rays;
-        for (light, out) in [(sun, &wk.lidar_sun), (point, &wk.lidar_point)] {
+        for (light, out) in [(sun, &wk.lidar_sun), (point, &wk.lidar_point)].into_iter().filter(|l| l.0.intensity > 0.0) {
             let trace = TraceShadowTask {
                 common: lidar.common,
                 light,
@@ -169,9 +175,41 @@ impl Renderer<'_> {
         Ok(())
     }
 
+    /// The file's lights' shadows, all in one multi-light trace per view: the main view's
+    /// denoised (the mean visibility weighted by each light's unshadowed irradiance, which the
+    /// lighting pass multiplies into their summed light), the lidar view's raw.
+    fn schedule_file_light_shadows(&mut self, main: &Inputs, lidar: &Inputs) -> HostResult<()> {
+        let (Some(images), Some(context)) = (&self.work.lights, self.denoisers.lights) else { return Ok(()) };
+        let c = &mut self.container;
+        let mut common = main.common;
+        common.half_resolution_mode =
+            if self.settings.checkerboard { HalfResolutionMode::Checkerboard } else { HalfResolutionMode::Off };
+        common.random_numbers = self.settings.random_numbers;
+        let trace = |common: TraceCommon, out: &super::resources::MultiShadowImages, rays: u32| TraceMultiShadowTask {
+            common,
+            lights: self.scene.file_lights.clone(),
+            visibility: out.visibility.input(GENERAL),
+            visibility_high: out.visibility_high.as_ref().map_or_else(Default::default, |i| i.input(GENERAL)),
+            packed: out.packed.input(GENERAL),
+            rays_per_pixel: rays,
+            ..Default::default()
+        };
+        let main_trace = trace(common, &images.main, self.settings.rays_per_pixel);
+        schedule(c, "shadow file lights", |c| c.schedule_multi_shadow(&main_trace))?;
+        let denoise = DenoiseMultiShadowTask {
+            context,
+            common: main.denoising,
+            input: images.main.packed.input(GENERAL),
+            output: images.denoised.input(GENERAL),
+        };
+        schedule(c, "denoise shadow file lights", |c| c.schedule_denoise_multi_shadow(&denoise))?;
+        let lidar_trace = trace(lidar.common, &images.lidar, self.settings.lidar_rays);
+        schedule(c, "shadow lidar", |c| c.schedule_multi_shadow(&lidar_trace))
+    }
+
     /// AO, diffuse GI and reflections of the main view with their denoisers (specular and
     /// diffuse in one task).
-    fn schedule_gi_and_reflections(&mut self, main: &Inputs, sun: LightInfo, point: LightInfo) -> HostResult<()> {
+    fn schedule_gi_and_reflections(&mut self, main: &Inputs, shining: Vec<LightInfo>) -> HostResult<()> {
         let (wk, rays, reach, sky) = (&self.work, self.settings.rays_per_pixel, self.reach, self.scene.sky);
         let c = &mut self.container;
         let mut common = main.common;
@@ -216,7 +254,7 @@ impl Renderer<'_> {
             firefly_clamp: 8.0,
             // The mirror shows the column's shadow edges as sharp as the lights make them.
             hit_lighting: if self.settings.hit_lighting {
-                HitLighting { lights: vec![sun, point], ..Default::default() }
+                HitLighting { lights: shining, ..Default::default() }
             } else {
                 HitLighting::default()
             },
