@@ -1,7 +1,7 @@
 //! glTF 2.0 scenes (`.gltf` with `.bin` or data-URI buffers, or `.glb`), parsed by the `gltf`
 //! crate: every triangle primitive (lists, strips and fans) of every node of the default scene
 //! becomes an instance with the node's world transform, its normals (computed from the
-//! triangles where the file has none), its first texture coordinates and tangents, and its
+//! triangles where the file has none), its texture coordinates, tangents and vertex colours, and its
 //! metallic-roughness material: base colour, metallic, roughness, normal and emissive factors
 //! with their PNG or JPEG textures (`gltf_textures`), and KHR_materials_emissive_strength.
 //! Perspective cameras (with their roll) are kept for `--camera`; `KHR_lights_punctual` lights
@@ -168,9 +168,6 @@ fn unread_features(doc: &gltf::Document, warnings: &mut Warnings) {
             if p.morph_targets().next().is_some() {
                 warnings.add("morph targets (drawn without them)");
             }
-            if p.get(&gltf::Semantic::Colors(0)).is_some() {
-                warnings.add("vertex colours COLOR_0");
-            }
         }
     }
 }
@@ -239,12 +236,14 @@ struct Primitive {
     normals: Vec<Vec3>,
     uvs: Vec<[f32; 2]>,
     tangents: Vec<Vec4>,
+    colors: Vec<Vec4>,
     influences: Option<Influences>,
 }
 
 /// Reads a primitive (None: no triangles): its indices as a triangle list, its normals (the
 /// file's, else computed), its texture coordinates (the material's set and transform), its
-/// tangents (the file's, else MikkTSpace's where a normal map needs them) and, when it is
+/// tangents (the file's, else MikkTSpace's where a normal map needs them), its `COLOR_0`
+/// (linear RGBA; empty: none) and, when it is
 /// skinned by a skin of `skin_joints` joints, its JOINTS_0 and WEIGHTS_0.
 fn read_primitive(
     prim: &gltf::Primitive,
@@ -296,6 +295,11 @@ fn read_primitive(
         }
         None => Vec::new(),
     };
+    let colors: Vec<Vec4> = reader
+        .read_colors(0)
+        .map(|c| c.into_rgba_f32().map(Vec4::from).collect::<Vec<_>>())
+        .filter(|c| c.len() == n && c.iter().all(|v| v.is_finite()))
+        .unwrap_or_default();
     let influences = match skin_joints {
         None => None,
         Some(count) => {
@@ -313,7 +317,7 @@ fn read_primitive(
             Some(Influences { joints, weights })
         }
     };
-    Ok(Some(Primitive { mesh: Mesh { positions, indices }, normals, uvs, tangents, influences }))
+    Ok(Some(Primitive { mesh: Mesh { positions, indices }, normals, uvs, tangents, colors, influences }))
 }
 
 /// Loads `path` into a `SampleScene`.
@@ -324,7 +328,8 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
     let file = name.to_string();
     let mut scene = Scene::default();
     let dir = path.parent().unwrap_or(Path::new("."));
-    let (mut normals, mut uvs, mut tangents, mut cutouts) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut normals, mut uvs, mut tangents, mut colors, mut cutouts) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut warnings = Warnings::default();
     unread_features(&document, &mut warnings);
     let mut rig = gltf_rig::rig(&document, &data, &mut |w| warnings.add(w)).map_err(|e| format!("{name}: {e}"))?;
@@ -387,6 +392,7 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
                     Some(p) => {
                         normals.push(p.normals);
                         tangents.push(p.tangents);
+                        colors.push(p.colors);
                         uvs.push(p.uvs);
                         let m = scene.add_mesh(p.mesh);
                         match (skin, p.influences) {
@@ -439,8 +445,8 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
         // The file's lights replace the fitted ones.
         (s.lights.sun_intensity, s.lights.point_intensity) = (0.0, 0.0);
     }
-    (s.uvs, s.tangents, s.textures, s.material_textures, s.cutouts) =
-        (uvs, tangents, textures.textures, material_textures, cutouts);
+    (s.uvs, s.tangents, s.colors, s.textures, s.material_textures, s.cutouts) =
+        (uvs, tangents, colors, textures.textures, material_textures, cutouts);
     for w in &warnings.0 {
         eprintln!("{file}: uses {w}, which this loader does not read");
     }
@@ -474,6 +480,7 @@ fn fitted(name: String, scene: Scene, normals: Vec<Vec<Vec3>>, materials: Vec<Ma
         normals,
         uvs: Vec::new(),
         tangents: Vec::new(),
+        colors: Vec::new(),
         textures: Vec::new(),
         material_textures: Vec::new(),
         cutouts: Vec::new(),

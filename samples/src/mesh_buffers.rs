@@ -8,9 +8,11 @@ use glam::{Vec3, Vec4};
 use hybrid_rt_host::scene::Scene;
 use hybrid_rt_host::{Host, HostBuffer, HostImage, HostResult};
 
-/// One vertex: a position, a shading normal (RGB32F each), a texture coordinate (RG32F) and a
-/// tangent (RGBA32F: xyz and the bitangent's sign, glTF's convention), interleaved.
-pub type Vertex = [f32; 12];
+/// One vertex: a position, a shading normal (RGB32F each), a texture coordinate (RG32F), a
+/// tangent (RGBA32F: xyz and the bitangent's sign, glTF's convention) and a colour (RGBA32F,
+/// linear, multiplying the base colour as glTF's `COLOR_0`), interleaved: 64 bytes, all
+/// floats, which the skinning pass copies as they are.
+pub type Vertex = [f32; 16];
 
 /// Bytes per [`Vertex`]. The SDK reads the positions out of the same buffer
 /// (`VertexBufferInput::stride`), as an engine's.
@@ -19,17 +21,20 @@ pub const VERTEX_STRIDE: u32 = std::mem::size_of::<Vertex>() as u32;
 pub const UV_OFFSET: u32 = 24;
 /// Where the tangent sits in a vertex.
 pub const TANGENT_OFFSET: u32 = 32;
+/// Where the colour sits in a vertex.
+pub const COLOR_OFFSET: u32 = 48;
 
 /// Per-vertex attributes of one mesh besides its positions. Empty lists, or lists shorter
 /// than the positions, leave the missing vertices' entries at zero: a zero normal shades
 /// flat (the triangle's plane, as the CPU reference does); a zero tangent makes a normal map
 /// use a tangent frame from the screen derivatives of position and texture coordinate;
-/// a missing coordinate is (0, 0).
+/// a missing coordinate is (0, 0), a missing colour white.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct VertexAttributes<'a> {
     pub normals: &'a [Vec3],
     pub uvs: &'a [[f32; 2]],
     pub tangents: &'a [Vec4],
+    pub colors: &'a [Vec4],
 }
 
 /// Interleaves positions with their attributes into vertices.
@@ -37,12 +42,14 @@ pub fn interleave(positions: &[Vec3], a: VertexAttributes) -> Vec<Vertex> {
     let normals = a.normals.iter().copied().chain(std::iter::repeat(Vec3::ZERO));
     let uvs = a.uvs.iter().copied().chain(std::iter::repeat([0.0; 2]));
     let tangents = a.tangents.iter().copied().chain(std::iter::repeat(Vec4::ZERO));
+    let colors = a.colors.iter().copied().chain(std::iter::repeat(Vec4::ONE));
     positions
         .iter()
         .zip(normals)
         .zip(uvs)
         .zip(tangents)
-        .map(|(((p, n), t), g)| [p.x, p.y, p.z, n.x, n.y, n.z, t[0], t[1], g.x, g.y, g.z, g.w])
+        .zip(colors)
+        .map(|((((p, n), t), g), c)| [p.x, p.y, p.z, n.x, n.y, n.z, t[0], t[1], g.x, g.y, g.z, g.w, c.x, c.y, c.z, c.w])
         .collect()
 }
 

@@ -7,7 +7,7 @@
 //! emissive textures.
 use crate::gpu::{self, spirv, UploadSlots};
 pub use crate::mesh_buffers::{interleave, MaterialTextures, MeshBuffers, Texture, VertexAttributes, VERTEX_STRIDE};
-use crate::mesh_buffers::{TANGENT_OFFSET, TEXTURE_SLOTS, UV_OFFSET};
+use crate::mesh_buffers::{COLOR_OFFSET, TANGENT_OFFSET, TEXTURE_SLOTS, UV_OFFSET};
 use ash::vk;
 use glam::{Affine3A, Mat4};
 use hybrid_rt_host::scene::{Camera, Scene};
@@ -167,6 +167,7 @@ impl GBufferPass {
                 attribute(1, vk::Format::R32G32B32_SFLOAT, 12),
                 attribute(2, vk::Format::R32G32_SFLOAT, UV_OFFSET),
                 attribute(3, vk::Format::R32G32B32A32_SFLOAT, TANGENT_OFFSET),
+                attribute(4, vk::Format::R32G32B32A32_SFLOAT, COLOR_OFFSET),
             ];
             let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
                 .vertex_binding_descriptions(&vertex_bindings)

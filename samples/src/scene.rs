@@ -90,6 +90,8 @@ pub struct SampleScene {
     /// Tangents (xyz, bitangent sign), one list per mesh: the file's where it has them (empty:
     /// none; normal maps then take their frame from screen derivatives).
     pub tangents: Vec<Vec<Vec4>>,
+    /// Vertex colours (linear RGBA, glTF's `COLOR_0`), one list per mesh (empty: white).
+    pub colors: Vec<Vec<Vec4>>,
     /// Material textures, and which each instance's material samples (one per instance, or
     /// empty: none).
     pub textures: Vec<Texture>,
@@ -150,6 +152,7 @@ impl SampleScene {
             scene,
             uvs: Vec::new(),
             tangents: Vec::new(),
+            colors: Vec::new(),
             textures: Vec::new(),
             material_textures: Vec::new(),
             cutouts: Vec::new(),
@@ -175,7 +178,7 @@ impl SampleScene {
     /// (`InstanceInput::albedo`): its material's albedo x (1 - metalness) (metals have no
     /// diffuse) — a tint of the base-colour texture its geometry hands the SDK
     /// (`mesh_albedo_texture`) — or, when its material's texture is not its geometry's, times
-    /// that texture's mean (in linear light).
+    /// that texture's mean (in linear light); times the mean of its mesh's vertex colours.
     pub fn diffuse_albedo(&self, i: usize) -> [f32; 3] {
         let Some(m) = self.materials.get(i) else { return [0.5; 3] };
         let own = self.material_textures.get(i).and_then(|t| t.base_color);
@@ -186,7 +189,10 @@ impl SampleScene {
             }
             _ => Vec3::ONE,
         };
-        let a = Vec3::from(m.albedo) * (1.0 - m.metalness.clamp(0.0, 1.0)) * mean;
+        // The SDK takes no per-vertex colour: a mesh's vertex colours tint it by their mean.
+        let colors = mesh.and_then(|k| self.colors.get(k)).filter(|c| !c.is_empty());
+        let tint = colors.map_or(Vec3::ONE, |c| c.iter().map(|v| v.truncate()).sum::<Vec3>() / c.len() as f32);
+        let a = Vec3::from(m.albedo) * (1.0 - m.metalness.clamp(0.0, 1.0)) * mean * tint;
         a.clamp(Vec3::ZERO, Vec3::ONE).to_array()
     }
 
@@ -211,7 +217,12 @@ impl SampleScene {
         fn of<T>(lists: &[Vec<T>], k: usize) -> &[T] {
             lists.get(k).map_or(&[][..], |l| l.as_slice())
         }
-        VertexAttributes { normals: of(&self.normals, k), uvs: of(&self.uvs, k), tangents: of(&self.tangents, k) }
+        VertexAttributes {
+            normals: of(&self.normals, k),
+            uvs: of(&self.uvs, k),
+            tangents: of(&self.tangents, k),
+            colors: of(&self.colors, k),
+        }
     }
 
     /// Every instance's transform at `time` seconds (the rig posed once).

@@ -778,3 +778,44 @@ fn more_than_32_lights_draw_the_first_32() {
     assert!(surface > 100 && lit as f32 > 0.95 * surface as f32, "{lit} lit pixels of {surface}");
     assert!(images.iter().flatten().all(|t| t.iter().all(|c| c.is_finite())));
 }
+
+/// `COLOR_0` tints the base colour in the raster pass (the albedo target reads factor x colour)
+/// and, by its mean, the albedo the SDK relights the mesh with.
+#[test]
+fn vertex_colours_tint_the_base_colour() {
+    let b64 = |b: &[u8]| base64::engine::general_purpose::STANDARD.encode(b);
+    let quad: [[f32; 3]; 4] = [[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [-1.0, 1.0, 0.0], [1.0, 1.0, 0.0]];
+    let color = [0.25f32, 0.5, 1.0];
+    let indices: [u16; 6] = [0, 1, 2, 2, 1, 3];
+    let mut bytes: Vec<u8> = quad.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    bytes.extend([color; 4].iter().flatten().flat_map(|v| v.to_le_bytes()));
+    bytes.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "COLOR_0": 1}}, "indices": 2, "material": 0}}]}}],
+  "materials": [{{"pbrMetallicRoughness": {{"baseColorFactor": [0.8, 0.8, 0.8, 1], "metallicFactor": 0}}}}],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-1, -1, 0], "max": [1, 1, 0]}},
+    {{"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3"}},
+    {{"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}}],
+  "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 48}}, {{"buffer": 0, "byteOffset": 48, "byteLength": 48}},
+    {{"buffer": 0, "byteOffset": 96, "byteLength": 12}}],
+  "buffers": [{{"byteLength": {len}, "uri": "data:application/octet-stream;base64,{data}"}}]}}"#,
+        len = bytes.len(),
+        data = b64(&bytes),
+    );
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("colours.gltf");
+    std::fs::write(&path, json).unwrap();
+    let scene = gltf_scene::load(&path).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let expected = color.map(|c| 0.8 * c);
+    let sdk = scene.diffuse_albedo(0);
+    assert!((0..3).all(|c| (sdk[c] - expected[c]).abs() < 1e-6), "the SDK's albedo {sdk:?}, expected {expected:?}");
+    let images = render_modes(&path, "sample-colours", "albedo");
+    let on: Vec<&[f32; 4]> = images[0].iter().filter(|t| t[2] > 0.1).collect();
+    assert!(on.len() > 200, "{} pixels see the quad", on.len());
+    for t in on {
+        // The albedo target is RGBA8: within a level.
+        assert!((0..3).all(|c| (t[c] - expected[c]).abs() < 0.006), "albedo {t:?}, expected {expected:?}");
+    }
+}

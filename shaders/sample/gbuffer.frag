@@ -12,6 +12,7 @@ layout(location = 2) in vec4 v_prev_clip;
 layout(location = 3) in vec3 v_normal;
 layout(location = 4) in vec2 v_uv;
 layout(location = 5) in vec4 v_tangent;
+layout(location = 6) in vec4 v_color;
 // Base colour (sRGB, so sampled linear), metallic-roughness (G roughness, B metalness),
 // tangent-space normal, emissive (sRGB).
 layout(set = 0, binding = 2) uniform sampler2D u_textures[4];
@@ -63,7 +64,9 @@ void main() {
     }
     vec4 mr = texture(u_textures[1], v_uv);
     o_normal_roughness = vec4(n, i.material.w * mr.g);
-    o_albedo_metalness = vec4(i.material.rgb * base.rgb, i.extra.x * mr.b);
+    // The vertex colour tints the base colour (its alpha is not used: the cut-out is the
+    // texture's, which the SDK's rays test too).
+    o_albedo_metalness = vec4(i.material.rgb * base.rgb * v_color.rgb, i.extra.x * mr.b);
     o_emissive = vec4(i.emissive.rgb * texture(u_textures[3], v_uv).rgb, 0.0);
     vec2 cur = v_clip.xy / v_clip.w;
     vec2 prev = v_prev_clip.xy / v_prev_clip.w;

@@ -1,8 +1,8 @@
 #version 460
 // Linear-blend skinning (samples/src/skinning.rs): each vertex of a skinned mesh, bent by up
 // to four weighted joint matrices, written where the raster pass draws it and the SDK refits
-// its BLAS from. Vertices are the sample's interleaved 12 floats (position, normal, texture
-// coordinate, tangent with its bitangent sign).
+// its BLAS from. Vertices are the sample's interleaved 16 floats (position, normal, texture
+// coordinate, tangent with its bitangent sign, colour).
 layout(local_size_x = 64) in;
 
 struct Influence {
@@ -41,7 +41,7 @@ void main() {
     float sum = dot(inf.weights, vec4(1.0));
     vec4 w = sum > 0.0 ? inf.weights / sum : vec4(1.0, 0.0, 0.0, 0.0);
     mat4 m = w.x * joint(inf.joints.x) + w.y * joint(inf.joints.y) + w.z * joint(inf.joints.z) + w.w * joint(inf.joints.w);
-    uint b = 12u * v;
+    uint b = 16u * v;
     vec3 p = (m * vec4(rest[b], rest[b + 1u], rest[b + 2u], 1.0)).xyz;
     vec3 n = bend(mat3(m), vec3(rest[b + 3u], rest[b + 4u], rest[b + 5u]));
     vec3 t = bend(mat3(m), vec3(rest[b + 8u], rest[b + 9u], rest[b + 10u]));
@@ -57,4 +57,5 @@ void main() {
     posed[b + 9u] = t.y;
     posed[b + 10u] = t.z;
     posed[b + 11u] = rest[b + 11u];
+    for (uint c = 12u; c < 16u; ++c) posed[b + c] = rest[b + c];
 }
