@@ -140,7 +140,7 @@ pub fn waving_figure() -> SampleScene {
     // Inverse bind matrices: the joints' world transforms at rest, inverted.
     let rest = rig.pose(0.0);
     rig.skins.push(Skin { joints: (0..rig.nodes.len()).collect(), inverse_bind: rest.iter().map(Mat4::inverse).collect() });
-    rig.skinned.push(SkinnedMesh { mesh: figure, skin: 0, joints: body.joints, weights: body.weights });
+    rig.skinned.push(SkinnedMesh { mesh: figure, skin: Some(0), joints: body.joints, weights: body.weights, morph: None });
     let deg = |d: f32| d.to_radians();
     rig.channels = vec![
         // The body turns a little towards the camera path and back.

@@ -11,8 +11,9 @@
 //!
 //! `alphaMode: MASK` materials cut their meshes where the base-colour texture's alpha x the
 //! factor's is below `alphaCutoff`, in the raster pass and in the SDK's rays (`BLEND` is drawn
-//! masked at 0.5). What a file uses that the loader does not read (skins, animations, morph
-//! targets, other extensions...) is named once each in `SampleScene::warnings`, and printed.
+//! masked at 0.5). Skins, morph targets and the first animation make a `Rig`. What a file uses
+//! that the loader does not read (other extensions, more animations...) is named once each in
+//! `SampleScene::warnings`, and printed.
 //!
 //! Any file gives a scene or an error that names the file and what is wrong in it — the node,
 //! the primitive, the extension — and never hangs or panics: a node that is its own ancestor
@@ -26,7 +27,7 @@ use crate::gltf_uri::read_uri;
 use crate::lighting::Lights;
 use crate::raster::{Material, MaterialTextures};
 use crate::scene::{vertex_normals, CameraPath, Cutout, Motion, SampleScene};
-use crate::skin::SkinnedMesh;
+use crate::skin::{Morph, MorphTarget, SkinnedMesh};
 use crate::tangents;
 use glam::{Affine3A, Mat4, Vec3, Vec4};
 use hybrid_rt_host::scene::{Mesh, Scene};
@@ -163,13 +164,6 @@ fn unread_features(doc: &gltf::Document, warnings: &mut Warnings) {
     for x in doc.extensions_used().filter(|x| !READ_EXTENSIONS.contains(x)) {
         warnings.add(&format!("the extension {x}"));
     }
-    for m in doc.meshes() {
-        for p in m.primitives() {
-            if p.morph_targets().next().is_some() {
-                warnings.add("morph targets (drawn without them)");
-            }
-        }
-    }
 }
 
 /// Extensions a file may require that this loader reads (beyond positions, indices and the
@@ -238,6 +232,7 @@ struct Primitive {
     tangents: Vec<Vec4>,
     colors: Vec<Vec4>,
     influences: Option<Influences>,
+    morph_targets: Vec<MorphTarget>,
 }
 
 /// Reads a primitive (None: no triangles): its indices as a triangle list, its normals (the
@@ -317,7 +312,19 @@ fn read_primitive(
             Some(Influences { joints, weights })
         }
     };
-    Ok(Some(Primitive { mesh: Mesh { positions, indices }, normals, uvs, tangents, colors, influences }))
+    let morph_targets = reader
+        .read_morph_targets()
+        .map(|(dp, dn, dt)| {
+            // An attribute's displacements, one per vertex, or none.
+            let list = |d: Option<Vec<Vec3>>| d.filter(|d| d.len() == n && d.iter().all(|v| v.is_finite())).unwrap_or_default();
+            MorphTarget {
+                positions: list(dp.map(|i| i.map(Vec3::from).collect())),
+                normals: list(dn.map(|i| i.map(Vec3::from).collect())),
+                tangents: list(dt.map(|i| i.map(Vec3::from).collect())),
+            }
+        })
+        .collect();
+    Ok(Some(Primitive { mesh: Mesh { positions, indices }, normals, uvs, tangents, colors, influences, morph_targets }))
 }
 
 /// Loads `path` into a `SampleScene`.
@@ -381,8 +388,9 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
         for prim in mesh.primitives() {
             let key = (mesh.index(), prim.index());
             let at = || format!("{name}: mesh {} primitive {}", mesh.index(), prim.index());
-            // A skinned primitive bends on its own: its mesh is not shared.
-            let shared = if skin.is_some() { None } else { meshes.get(&key).copied() };
+            // A skinned or morphed primitive deforms on its own: its mesh is not shared.
+            let morphed = prim.morph_targets().next().is_some();
+            let shared = if skin.is_some() || morphed { None } else { meshes.get(&key).copied() };
             let ours = match shared {
                 Some(m) => Some(m),
                 None => match read_primitive(&prim, &data, skin.map(|k| rig.skins[k].joints.len()), &mut warnings)
@@ -395,13 +403,18 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
                         colors.push(p.colors);
                         uvs.push(p.uvs);
                         let m = scene.add_mesh(p.mesh);
-                        match (skin, p.influences) {
-                            (Some(skin), Some(Influences { joints, weights })) => {
-                                rig.skinned.push(SkinnedMesh { mesh: m, skin, joints, weights })
-                            }
-                            _ => {
+                        let morph = (!p.morph_targets.is_empty()).then(|| {
+                            // The node's weights, else the mesh's, else 0 (one per target).
+                            let defaults = node.weights().or(mesh.weights()).unwrap_or(&[]);
+                            let weights = (0..p.morph_targets.len()).map(|k| defaults.get(k).copied().unwrap_or(0.0)).collect();
+                            Morph { node: node.index(), targets: p.morph_targets, weights }
+                        });
+                        let (joints, weights) = p.influences.map(|i| (i.joints, i.weights)).unwrap_or_default();
+                        match (skin, morph) {
+                            (None, None) => {
                                 meshes.insert(key, m);
                             }
+                            (skin, morph) => rig.skinned.push(SkinnedMesh { mesh: m, skin, joints, weights, morph }),
                         }
                         Some(m)
                     }

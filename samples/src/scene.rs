@@ -267,11 +267,8 @@ impl SampleScene {
             let mesh = s.instances[d.instance].mesh;
             s.meshes[mesh].positions = d.positions(time);
         }
-        if !self.rig.skinned.is_empty() {
-            for m in &self.rig.skinned {
-                let joints = self.rig.joint_matrices(m.skin, &pose);
-                s.meshes[m.mesh].positions = Rig::skin_positions(m, &joints, &self.scene.meshes[m.mesh].positions);
-            }
+        for m in &self.rig.skinned {
+            s.meshes[m.mesh].positions = self.rig.deform_positions(m, time, &pose, &self.scene.meshes[m.mesh].positions);
         }
         s
     }

@@ -1,9 +1,10 @@
 //! Skeletal animation as glTF describes it: a node hierarchy with rest transforms, animations
-//! whose channels drive a node's translation, rotation or scale (step, linear or cubic-spline
-//! keyframes, played in a loop), and skins (joint nodes and inverse bind matrices) that bend
-//! meshes by up to four weighted joints per vertex. The sample poses the hierarchy on the CPU
-//! each frame (a few matrices), skins on the GPU (`skinning`), and keeps a CPU skinning of the
-//! same mesh for the tests' reference renders.
+//! whose channels drive a node's translation, rotation, scale or morph-target weights (step,
+//! linear or cubic-spline keyframes, played in a loop), skins (joint nodes and inverse bind
+//! matrices) that bend meshes by up to four weighted joints per vertex, and morph targets
+//! (per-vertex displacements blended by weights) applied before the skin. The sample poses the
+//! hierarchy on the CPU each frame (a few matrices and weights), deforms on the GPU
+//! (`skinning`), and keeps a CPU deformation of the same mesh for the tests' reference renders.
 use glam::{Affine3A, Mat4, Quat, Vec3, Vec4};
 
 /// One node: its parent and its transform at rest.
@@ -27,6 +28,11 @@ pub enum Property {
     Translation,
     Rotation,
     Scale,
+    /// Morph-target weights `first..first + 4` of the node's mesh (glTF's `weights` path, four
+    /// targets to a channel: the values' xyzw).
+    Weights {
+        first: u32,
+    },
 }
 
 /// How a channel's keyframes are interpolated (glTF's `interpolation`).
@@ -103,15 +109,35 @@ pub struct Skin {
     pub inverse_bind: Vec<Mat4>,
 }
 
-/// A mesh bent by a skin: per vertex, four joints (indices into the skin's joint list) and
-/// their weights. Its instance's transform is ignored (glTF: a skinned mesh lives where its
-/// joints put it).
+/// A mesh deformed on the GPU every frame: by morph targets, then by a skin. With a skin,
+/// per vertex, four joints (indices into the skin's joint list) and their weights, and its
+/// instance's transform is ignored (glTF: a skinned mesh lives where its joints put it);
+/// without one (morph targets alone) its instance keeps its node's transform.
 #[derive(Clone, Debug)]
 pub struct SkinnedMesh {
     pub mesh: usize,
-    pub skin: usize,
+    pub skin: Option<usize>,
     pub joints: Vec<[u32; 4]>,
     pub weights: Vec<[f32; 4]>,
+    pub morph: Option<Morph>,
+}
+
+/// Morph targets: displacements of every vertex, blended by weights — the node's (or mesh's)
+/// defaults, which `Property::Weights` channels of `node` animate.
+#[derive(Clone, Debug, Default)]
+pub struct Morph {
+    pub node: usize,
+    pub targets: Vec<MorphTarget>,
+    /// One per target.
+    pub weights: Vec<f32>,
+}
+
+/// One target's displacements, one per vertex (empty: the attribute does not move).
+#[derive(Clone, Debug, Default)]
+pub struct MorphTarget {
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub tangents: Vec<Vec3>,
 }
 
 /// The scene's nodes, what animates them and what they bend.
@@ -143,6 +169,7 @@ impl Rig {
                 Property::Translation => l.0 = v.truncate(),
                 Property::Rotation => l.1 = Quat::from_vec4(v).normalize(),
                 Property::Scale => l.2 = v.truncate(),
+                Property::Weights { .. } => {}
             }
         }
         let mut world: Vec<Option<Mat4>> = vec![None; self.nodes.len()];
@@ -168,6 +195,49 @@ impl Rig {
             }
         }
         world.into_iter().map(|m| m.unwrap_or(Mat4::IDENTITY)).collect()
+    }
+
+    /// `morph`'s weights at `time` seconds (the animation looped): its defaults where no
+    /// channel drives them.
+    pub fn morph_weights(&self, morph: &Morph, time: f32) -> Vec<f32> {
+        let duration = self.duration();
+        let t = if duration > 0.0 { time.rem_euclid(duration) } else { 0.0 };
+        let mut w = morph.weights.clone();
+        for c in self.channels.iter().filter(|c| c.node == morph.node) {
+            if let Property::Weights { first } = c.property {
+                let v = c.sample(t).to_array();
+                for (k, x) in v.into_iter().enumerate() {
+                    if let Some(slot) = w.get_mut(first as usize + k) {
+                        *slot = x;
+                    }
+                }
+            }
+        }
+        w
+    }
+
+    /// `rest` displaced by `morph`'s targets at `weights`: what the GPU computes first.
+    pub fn morph_positions(morph: &Morph, weights: &[f32], rest: &[Vec3]) -> Vec<Vec3> {
+        let mut out = rest.to_vec();
+        for (target, &w) in morph.targets.iter().zip(weights) {
+            for (p, d) in out.iter_mut().zip(&target.positions) {
+                *p += w * *d;
+            }
+        }
+        out
+    }
+
+    /// Mesh `m`'s positions at `time` (`pose` the rig's nodes then): `rest` displaced by its
+    /// morph targets, then bent by its skin.
+    pub fn deform_positions(&self, m: &SkinnedMesh, time: f32, pose: &[Mat4], rest: &[Vec3]) -> Vec<Vec3> {
+        let morphed = match &m.morph {
+            Some(morph) => Rig::morph_positions(morph, &self.morph_weights(morph, time), rest),
+            None => rest.to_vec(),
+        };
+        match m.skin {
+            Some(skin) => Rig::skin_positions(m, &self.joint_matrices(skin, pose), &morphed),
+            None => morphed,
+        }
     }
 
     /// Skin `skin`'s joint matrices for the node transforms `pose`: joint world x inverse bind.
@@ -266,13 +336,44 @@ mod tests {
         };
         let m = SkinnedMesh {
             mesh: 0,
-            skin: 0,
+            skin: Some(0),
             joints: vec![[1, 0, 0, 0], [0, 1, 0, 0]],
             weights: vec![[1.0, 0.0, 0.0, 0.0], [0.5, 0.5, 0.0, 0.0]],
+            morph: None,
         };
         let joints = rig.joint_matrices(0, &rig.pose(0.0));
         let bent = Rig::skin_positions(&m, &joints, &[Vec3::new(2.0, 0.0, 0.0), Vec3::new(2.0, 0.0, 0.0)]);
         assert!((bent[0] - Vec3::new(1.0, 1.0, 0.0)).length() < 1e-6, "{}", bent[0]);
         assert!((bent[1] - Vec3::new(1.5, 0.5, 0.0)).length() < 1e-6, "{}", bent[1]);
+    }
+
+    /// Two morph targets, the second's weight animated linearly from 0 to 1 over a second: at
+    /// 0.25 s a vertex moves by the first target's default weight and a quarter of the second.
+    #[test]
+    fn morph_targets_blend_by_their_animated_weights() {
+        let morph = Morph {
+            node: 0,
+            targets: vec![
+                MorphTarget { positions: vec![Vec3::X], ..Default::default() },
+                MorphTarget { positions: vec![Vec3::Y * 2.0], ..Default::default() },
+            ],
+            weights: vec![0.5, 0.0],
+        };
+        let rig = Rig {
+            nodes: vec![Node::new(None, Vec3::ZERO, Quat::IDENTITY)],
+            channels: vec![Channel {
+                node: 0,
+                property: Property::Weights { first: 0 },
+                interpolation: Interpolation::Linear,
+                times: vec![0.0, 1.0],
+                values: vec![Vec4::new(0.5, 0.0, 0.0, 0.0), Vec4::new(0.5, 1.0, 0.0, 0.0)],
+            }],
+            skins: Vec::new(),
+            skinned: Vec::new(),
+        };
+        let w = rig.morph_weights(&morph, 0.25);
+        assert_eq!(w, [0.5, 0.25]);
+        let p = Rig::morph_positions(&morph, &w, &[Vec3::ZERO]);
+        assert!((p[0] - Vec3::new(0.5, 0.5, 0.0)).length() < 1e-6, "{}", p[0]);
     }
 }

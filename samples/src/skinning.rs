@@ -1,6 +1,7 @@
-//! GPU skinning, as an engine does it: each frame a compute pass bends every skinned mesh's
-//! rest vertices by its joints' matrices (posed on the CPU: a few per mesh) into that frame
-//! slot's vertex buffer, which the raster pass draws and the SDK refits the mesh's BLAS from
+//! GPU skinning, as an engine does it: each frame a compute pass displaces every deforming
+//! mesh's rest vertices by its morph targets (weights from the CPU: a few per mesh) and bends
+//! them by its joints' matrices (posed on the CPU: a few per mesh) into that frame slot's
+//! vertex buffer, which the raster pass draws and the SDK refits the mesh's BLAS from
 //! (`TaskOperation::Update` on an `allow_update` geometry). No vertex ever goes through the
 //! CPU after loading.
 use crate::gpu::{push_layout, shader_module, spirv, UploadSlots};
@@ -23,14 +24,37 @@ struct Push {
     vertex_count: u32,
     joint_offset: u32,
     joint_count: u32,
+    target_count: u32,
+    weight_offset: u32,
 }
 
-/// One skinned mesh's inputs on the GPU.
+/// One deforming mesh's inputs on the GPU.
 struct Skinned {
     mesh: usize,
     vertex_count: u32,
+    target_count: u32,
     rest: HostBuffer,
     influences: HostBuffer,
+    /// Per target, per vertex: position, normal and tangent displacements (xyz of three
+    /// vec4s; a placeholder vec4 for a mesh without targets).
+    displacements: HostBuffer,
+}
+
+/// A mesh's morph-target displacements as skin.comp reads them (target-major).
+fn displacements(morph: Option<&crate::skin::Morph>, vertices: usize) -> Vec<[f32; 4]> {
+    let Some(morph) = morph else { return vec![[0.0; 4]] };
+    let mut out = Vec::with_capacity(morph.targets.len() * vertices * 3);
+    for t in &morph.targets {
+        for v in 0..vertices {
+            for list in [&t.positions, &t.normals, &t.tangents] {
+                out.push(list.get(v).map_or([0.0; 4], |d| d.extend(0.0).to_array()));
+            }
+        }
+    }
+    if out.is_empty() {
+        out.push([0.0; 4]);
+    }
+    out
 }
 
 /// The skinning pipeline and the scene's skinned meshes.
@@ -42,6 +66,8 @@ pub struct SkinningPass {
     meshes: Vec<Skinned>,
     /// The frame's joint matrices, all meshes' one after the other, per frame slot.
     joints: UploadSlots,
+    /// The frame's morph-target weights, all meshes' one after the other, per frame slot.
+    weights: UploadSlots,
 }
 
 /// The usage of a posed vertex buffer: written by the pass, drawn, copied by the SDK.
@@ -58,7 +84,7 @@ pub fn rest_vertices(scene: &SampleScene, k: usize) -> Vec<Vertex> {
 
 impl SkinningPass {
     pub fn new(host: &Host, scene: &SampleScene) -> HostResult<SkinningPass> {
-        let bindings: Vec<_> = (0..4)
+        let bindings: Vec<_> = (0..6)
             .map(|i| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(i)
@@ -89,6 +115,7 @@ impl SkinningPass {
             push: ash::khr::push_descriptor::Device::new(&host.instance, &host.device),
             meshes: Vec::new(),
             joints: UploadSlots::new(vk::BufferUsageFlags::STORAGE_BUFFER),
+            weights: UploadSlots::new(vk::BufferUsageFlags::STORAGE_BUFFER),
         };
         for m in &scene.rig.skinned {
             let rest = rest_vertices(scene, m.mesh);
@@ -99,15 +126,21 @@ impl SkinningPass {
                 })
                 .collect();
             let usage = vk::BufferUsageFlags::STORAGE_BUFFER;
-            let rest_buffer = host.device_buffer_with_data(bytemuck::cast_slice(&rest), usage);
-            let influence_buffer = host.device_buffer_with_data(bytemuck::cast_slice(&influences), usage);
-            match (rest_buffer, influence_buffer) {
-                (Ok(rest_buffer), Ok(influences)) => {
-                    pass.meshes.push(Skinned { mesh: m.mesh, vertex_count: rest.len() as u32, rest: rest_buffer, influences })
-                }
-                (a, b) => {
-                    let e = a.as_ref().err().or(b.as_ref().err()).cloned().unwrap_or_default();
-                    for buffer in [a, b].into_iter().flatten() {
+            let moves = displacements(m.morph.as_ref(), rest.len());
+            let buffers = [bytemuck::cast_slice(&rest), bytemuck::cast_slice(&influences), bytemuck::cast_slice(&moves)]
+                .map(|bytes| host.device_buffer_with_data(bytes, usage));
+            match buffers {
+                [Ok(rest_buffer), Ok(influences), Ok(displacements)] => pass.meshes.push(Skinned {
+                    mesh: m.mesh,
+                    vertex_count: rest.len() as u32,
+                    target_count: m.morph.as_ref().map_or(0, |k| k.targets.len() as u32),
+                    rest: rest_buffer,
+                    influences,
+                    displacements,
+                }),
+                made => {
+                    let e = made.iter().find_map(|b| b.as_ref().err()).cloned().unwrap_or_default();
+                    for buffer in made.into_iter().flatten() {
                         host.destroy_buffer(buffer);
                     }
                     pass.destroy(host);
@@ -136,36 +169,48 @@ impl SkinningPass {
         Ok(out)
     }
 
-    /// Records the skinning of every skinned mesh, the rig's nodes at `pose`, into `posed` (this slot's
-    /// buffers, as `posed_buffers` made them); returns (mesh, buffer) for each. The caller
-    /// puts a barrier between these writes and the draws and BLAS refits that read them.
+    /// Records the deformation of every deforming mesh at `time`, the rig's nodes at `pose`,
+    /// into `posed` (this slot's buffers, as `posed_buffers` made them); returns (mesh, buffer)
+    /// for each. The caller puts a barrier between these writes and the draws and BLAS refits
+    /// that read them.
     pub fn record(
         &mut self,
         host: &Host,
         cmd: vk::CommandBuffer,
         slot: usize,
         scene: &SampleScene,
+        time: f32,
         pose: &[glam::Mat4],
         posed: &[HostBuffer],
     ) -> HostResult<Vec<(usize, vk::Buffer)>> {
         if self.meshes.is_empty() {
             return Ok(Vec::new());
         }
-        let mut joints: Vec<glam::Mat4> = Vec::new();
+        // (A mesh without a skin has no joints: the shader's missing joints are identities.)
+        let mut joints: Vec<glam::Mat4> = vec![glam::Mat4::IDENTITY];
+        let mut weights: Vec<f32> = vec![0.0];
         let mut offsets = Vec::new();
         for m in &scene.rig.skinned {
-            offsets.push((joints.len() as u32, scene.rig.skins[m.skin].joints.len() as u32));
-            joints.extend(scene.rig.joint_matrices(m.skin, pose));
+            let skin = m.skin.map_or(0, |k| scene.rig.skins[k].joints.len() as u32);
+            offsets.push((joints.len() as u32, skin, weights.len() as u32));
+            if let Some(k) = m.skin {
+                joints.extend(scene.rig.joint_matrices(k, pose));
+            }
+            if let Some(morph) = &m.morph {
+                weights.extend(scene.rig.morph_weights(morph, time));
+            }
         }
         let joint_buffer = self.joints.write(host, slot, bytemuck::cast_slice(&joints))?;
+        let weight_buffer = self.weights.write(host, slot, bytemuck::cast_slice(&weights))?;
         let mut out = Vec::new();
         // SAFETY: cmd is recording; the buffers outlive the frame.
         unsafe {
             host.device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
         }
-        for ((m, &(joint_offset, joint_count)), target) in self.meshes.iter().zip(&offsets).zip(posed) {
-            let infos = [m.rest.buffer, m.influences.buffer, joint_buffer, target.buffer]
-                .map(|buffer| [vk::DescriptorBufferInfo { buffer, offset: 0, range: vk::WHOLE_SIZE }]);
+        for ((m, &(joint_offset, joint_count, weight_offset)), target) in self.meshes.iter().zip(&offsets).zip(posed) {
+            let buffers =
+                [m.rest.buffer, m.influences.buffer, joint_buffer, target.buffer, m.displacements.buffer, weight_buffer];
+            let infos = buffers.map(|buffer| [vk::DescriptorBufferInfo { buffer, offset: 0, range: vk::WHOLE_SIZE }]);
             let writes: Vec<_> = infos
                 .iter()
                 .enumerate()
@@ -176,7 +221,8 @@ impl SkinningPass {
                         .buffer_info(info)
                 })
                 .collect();
-            let push = Push { vertex_count: m.vertex_count, joint_offset, joint_count };
+            let push =
+                Push { vertex_count: m.vertex_count, joint_offset, joint_count, target_count: m.target_count, weight_offset };
             // SAFETY: cmd is recording, the pipeline bound above.
             unsafe {
                 self.push.cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &writes);
@@ -197,8 +243,10 @@ impl SkinningPass {
         for m in self.meshes {
             host.destroy_buffer(m.rest);
             host.destroy_buffer(m.influences);
+            host.destroy_buffer(m.displacements);
         }
         self.joints.destroy(host);
+        self.weights.destroy(host);
         // SAFETY: the caller waited for every frame that used the pass.
         unsafe {
             host.device.destroy_pipeline(self.pipeline, None);

@@ -207,3 +207,88 @@ fn the_waving_figure_is_skinned_on_the_gpu_and_traced_as_drawn() {
     assert!((hands[0] - hands[1]).length() > 0.1, "the hand waves: {} -> {}", hands[0], hands[1]);
     assert_eq!(Host::validation_errors(), 0, "{:#?}", Host::validation_messages());
 }
+
+/// The strip of `write_skinned_strip`'s shape, unskinned, with two morph targets: the first
+/// lifts each vertex by half its x (a ramp), the second pushes it along +Z by its x. The
+/// node's default weights are (0, 0.5); an animation drives the first from 0 at t = 0 to 1 at
+/// t = 1 (linear), the second stays at its default.
+fn write_morphed_strip(name: &str) -> PathBuf {
+    let xs = [0.0f32, 0.5, 1.0, 1.5, 2.0];
+    let positions: Vec<[f32; 3]> = xs.iter().flat_map(|&x| [[x, 0.0, 0.0], [x, 0.2, 0.0]]).collect();
+    let ramp: Vec<[f32; 3]> = xs.iter().flat_map(|&x| [[0.0, 0.5 * x, 0.0]; 2]).collect();
+    let push_z: Vec<[f32; 3]> = xs.iter().flat_map(|&x| [[0.0, 0.0, x]; 2]).collect();
+    let indices: Vec<u16> = (0..4u16).flat_map(|q| [2 * q, 2 * q + 2, 2 * q + 1, 2 * q + 1, 2 * q + 2, 2 * q + 3]).collect();
+    let f32s = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+    let mut bytes: Vec<u8> = Vec::new();
+    let mut views = Vec::new();
+    for data in [
+        f32s(positions.as_flattened()),
+        f32s(ramp.as_flattened()),
+        f32s(push_z.as_flattened()),
+        indices.iter().flat_map(|i| i.to_le_bytes()).collect(),
+        f32s(&[0.0, 1.0]),
+        // Per keyframe, both targets' weights.
+        f32s(&[0.0, 0.5, 1.0, 0.5]),
+    ] {
+        views.push(format!(r#"{{"buffer": 0, "byteOffset": {}, "byteLength": {}}}"#, bytes.len(), data.len()));
+        bytes.extend(data);
+    }
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}],
+  "nodes": [{{"mesh": 0, "weights": [0, 0.5]}}],
+  "animations": [{{"channels": [{{"sampler": 0, "target": {{"node": 0, "path": "weights"}}}}],
+    "samplers": [{{"input": 4, "output": 5, "interpolation": "LINEAR"}}]}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 3, "targets": [{{"POSITION": 1}}, {{"POSITION": 2}}]}}]}}],
+  "accessors": [
+    {{"bufferView": 0, "componentType": 5126, "count": 10, "type": "VEC3", "min": [0, 0, 0], "max": [2, 0.2, 0]}},
+    {{"bufferView": 1, "componentType": 5126, "count": 10, "type": "VEC3", "min": [0, 0, 0], "max": [0, 1, 0]}},
+    {{"bufferView": 2, "componentType": 5126, "count": 10, "type": "VEC3", "min": [0, 0, 0], "max": [0, 0, 2]}},
+    {{"bufferView": 3, "componentType": 5123, "count": 24, "type": "SCALAR"}},
+    {{"bufferView": 4, "componentType": 5126, "count": 2, "type": "SCALAR", "min": [0], "max": [1]}},
+    {{"bufferView": 5, "componentType": 5126, "count": 4, "type": "SCALAR"}}],
+  "bufferViews": [{views}],
+  "buffers": [{{"byteLength": {len}, "uri": "data:application/octet-stream;base64,{data}"}}]}}"#,
+        views = views.join(", "),
+        len = bytes.len(),
+        data = base64::engine::general_purpose::STANDARD.encode(&bytes),
+    );
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    std::fs::write(&path, json).unwrap();
+    path
+}
+
+/// Morph targets and their weight animation are read (the tip at t = 0.5: lifted by a
+/// quarter of its x, pushed by half of it), the GPU's morphing matches the CPU's within 1e-4
+/// of the scene's size, and the SDK's rays see the morphed strip where the raster pass draws it.
+#[test]
+fn morph_targets_deform_on_the_gpu_and_the_sdk_traces_them() {
+    let scene = gltf_scene::load(&write_morphed_strip("morph-read.gltf")).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let m = &scene.rig.skinned[0];
+    assert!(m.skin.is_none());
+    let morph = m.morph.as_ref().expect("morph targets");
+    assert_eq!((morph.targets.len(), morph.weights.clone()), (2, vec![0.0, 0.5]));
+    assert_eq!(scene.rig.morph_weights(morph, 0.5), [0.5, 0.5]);
+    assert!(!scene.is_dynamic(0), "weights deform the mesh; the node stays put");
+    let tip = scene.at(0.5).meshes[m.mesh].positions[8];
+    assert!((tip - Vec3::new(2.0, 0.5, 1.0)).length() < 1e-6, "{tip}");
+    let size = {
+        let (lo, hi) = scene.bounds();
+        (hi - lo).length()
+    };
+    let host = Host::new().expect("a Vulkan device with ray tracing");
+    for time in [0.5f32, 1.0] {
+        let strip = gltf_scene::load(&write_morphed_strip("morph-render.gltf")).unwrap();
+        let modes = [Mode::Normals, Mode::Debug(DebugOutput::RandomMeshColor)];
+        let (worst, images) = render_posed(&host, strip, &scene, m.mesh, time, (96, 64), &modes);
+        assert!(worst <= 1e-4 * size, "t = {time}: GPU morphing {worst} from the CPU's (scene size {size})");
+        let [normals, traced] = &images[..] else { unreachable!() };
+        let drawn: Vec<bool> = normals.iter().map(|t| (0..3).map(|c| (2.0 * t[c] - 1.0).powi(2)).sum::<f32>() > 0.25).collect();
+        let hit: Vec<bool> = traced.iter().map(|t| t[0] + t[1] + t[2] > 0.0).collect();
+        let both = drawn.iter().zip(&hit).filter(|(d, h)| **d && **h).count();
+        let either = drawn.iter().zip(&hit).filter(|(d, h)| **d || **h).count();
+        eprintln!("t = {time}: GPU morphing within {worst:.2e}; raster and SDK rays agree on {both} of {either} px");
+        assert!(both > 100 && both as f32 >= 0.95 * either as f32, "t = {time}: {both} of {either} pixels");
+    }
+    assert_eq!(Host::validation_errors(), 0, "{:#?}", Host::validation_messages());
+}

@@ -384,7 +384,7 @@ impl<'h> Renderer<'h> {
         let mut deformed: Vec<(usize, vk::Buffer)> = self.write_deformed(slot, time)?.into_iter().collect();
         if !self.scene.rig.skinned.is_empty() {
             let s = &self.slots[slot];
-            deformed.extend(self.skinning.record(host, cmd, slot, &self.scene, &pose, &s.posed)?);
+            deformed.extend(self.skinning.record(host, cmd, slot, &self.scene, time, &pose, &s.posed)?);
             host.full_barrier(cmd);
             self.slots[slot].timer.mark(host, cmd, "skinning");
         }
