@@ -98,7 +98,7 @@ fn weight_channels(
     per_key: usize,
 ) -> Result<Vec<Channel>, String> {
     let slots = times.len() * per_key;
-    if slots == 0 || w.is_empty() || w.len() % slots != 0 {
+    if slots == 0 || w.is_empty() || !w.len().is_multiple_of(slots) {
         return Err(format!("{} keyframe times but {} weights", times.len(), w.len()));
     }
     if times.iter().any(|t| !t.is_finite()) || times.windows(2).any(|p| p[1] < p[0]) {

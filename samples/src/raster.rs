@@ -107,6 +107,9 @@ pub struct Draw {
     pub material: Material,
     /// Vertices to draw instead of the mesh's own (a deforming mesh's of this frame).
     pub vertex_buffer: Option<vk::Buffer>,
+    /// Where those vertices were last frame (buffer, byte offset): their positions' motion
+    /// goes into the motion vectors. None: they did not move (but for `prev_transform`).
+    pub prev_vertex_buffer: Option<(vk::Buffer, vk::DeviceSize)>,
     /// The material's textures (indices into the scene's).
     pub textures: MaterialTextures,
     /// Alpha-tested: fragments whose texture alpha is below this are holes (0: opaque).
@@ -151,11 +154,12 @@ impl GBufferPass {
                 vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vs).name(c"main"),
                 vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fs).name(c"main"),
             ];
-            let vertex_bindings = [vk::VertexInputBindingDescription {
-                binding: 0,
+            // Binding 1: the same vertices a frame earlier (their positions alone).
+            let vertex_bindings = [0, 1].map(|binding| vk::VertexInputBindingDescription {
+                binding,
                 stride: VERTEX_STRIDE,
                 input_rate: vk::VertexInputRate::VERTEX,
-            }];
+            });
             let attribute = |location: u32, format: vk::Format, offset: u32| vk::VertexInputAttributeDescription {
                 location,
                 binding: 0,
@@ -168,6 +172,7 @@ impl GBufferPass {
                 attribute(2, vk::Format::R32G32_SFLOAT, UV_OFFSET),
                 attribute(3, vk::Format::R32G32B32A32_SFLOAT, TANGENT_OFFSET),
                 attribute(4, vk::Format::R32G32B32A32_SFLOAT, COLOR_OFFSET),
+                vk::VertexInputAttributeDescription { location: 5, binding: 1, format: vk::Format::R32G32B32_SFLOAT, offset: 0 },
             ];
             let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
                 .vertex_binding_descriptions(&vertex_bindings)
@@ -352,7 +357,9 @@ impl GBufferPass {
                         .image_info(&textures);
                     self.push.cmd_push_descriptor_set(cmd, vk::PipelineBindPoint::GRAPHICS, self.layout, 0, &[write]);
                 }
-                d.cmd_bind_vertex_buffers(cmd, 0, &[dr.vertex_buffer.unwrap_or(vb)], &[0]);
+                let current = dr.vertex_buffer.unwrap_or(vb);
+                let (prev, offset) = dr.prev_vertex_buffer.unwrap_or((current, 0));
+                d.cmd_bind_vertex_buffers(cmd, 0, &[current, prev], &[0, offset]);
                 d.cmd_bind_index_buffer(cmd, ib, 0, vk::IndexType::UINT32);
                 d.cmd_draw_indexed(cmd, count, 1, 0, 0, 0);
             }
@@ -392,6 +399,7 @@ pub fn static_draws(scene: &Scene, material: impl Fn(usize) -> Material) -> Vec<
             prev_transform: inst.transform,
             material: material(i),
             vertex_buffer: None,
+            prev_vertex_buffer: None,
             textures: MaterialTextures::default(),
             alpha_cutoff: 0.0,
         })

@@ -173,6 +173,7 @@ impl SkinningPass {
     /// into `posed` (this slot's buffers, as `posed_buffers` made them); returns (mesh, buffer)
     /// for each. The caller puts a barrier between these writes and the draws and BLAS refits
     /// that read them.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &mut self,
         host: &Host,

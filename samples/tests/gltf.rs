@@ -499,7 +499,10 @@ fn unread_features_are_named_once() {
     let json = std::fs::read_to_string(&path)
         .unwrap()
         .replace(r#""extensionsUsed": []"#, r#""extensionsUsed": ["KHR_materials_clearcoat", "KHR_materials_clearcoat"]"#)
-        .replace(r#""asset":"#, r#""animations": [{"channels": [], "samplers": []}, {"channels": [], "samplers": []}], "asset":"#);
+        .replace(
+            r#""asset":"#,
+            r#""animations": [{"channels": [], "samplers": []}, {"channels": [], "samplers": []}], "asset":"#,
+        );
     std::fs::write(&path, json).unwrap();
     let scene = gltf_scene::load(&path).unwrap();
     assert_eq!(

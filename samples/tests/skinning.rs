@@ -292,3 +292,71 @@ fn morph_targets_deform_on_the_gpu_and_the_sdk_traces_them() {
     }
     assert_eq!(Host::validation_errors(), 0, "{:#?}", Host::validation_messages());
 }
+
+/// A skinned mesh's own motion is in the motion vectors the denoisers reproject with: the
+/// strip's forearm turns 4.5 degrees between two frames seen by a still camera, and each of
+/// its pixels' motion (previous - current, pixels) is where its surface point was a frame
+/// earlier, within 0.05 pixels (RG16F holds a few pixels' motion to 0.002); the still part's
+/// pixels do not move.
+#[test]
+fn skinned_motion_is_in_the_motion_vectors() {
+    let host = Host::new().expect("a Vulkan device with ray tracing");
+    let scene = gltf_scene::load(&write_skinned_strip("strip-motion.gltf")).unwrap();
+    let (w, h) = (128u32, 96u32);
+    let settings = Settings { width: w, height: h, ..Default::default() };
+    let mut r = Renderer::new(&host, scene, settings).unwrap();
+    let camera = r.scene.camera_path.at(0.5);
+    let (t0, t1) = (0.5f32, 0.55f32);
+    r.render(camera, t0, &[], None).unwrap();
+    r.render(camera, t1, &[], None).unwrap();
+    r.finish().unwrap();
+    let motion = r.capture(Mode::Motion).unwrap().0;
+    let normals = r.capture(Mode::Normals).unwrap().0;
+    r.destroy().unwrap();
+    // The forearm turns about Z through (1, 0, 0) by 90 degrees x t (the animation's first
+    // second); the strip stays in the plane z = 0.
+    let angle = |t: f32| std::f32::consts::FRAC_PI_2 * t;
+    let clip = camera.view_to_clip(w as f32 / h as f32) * camera.world_to_view();
+    let to_pixel = |p: Vec3| {
+        let c = clip * p.extend(1.0);
+        glam::Vec2::new((c.x / c.w + 1.0) * 0.5 * w as f32, (c.y / c.w + 1.0) * 0.5 * h as f32)
+    };
+    let inverse = clip.inverse();
+    let (mut moving, mut still) = (0, 0);
+    for py in 0..h {
+        for px in 0..w {
+            let i = (py * w + px) as usize;
+            let n = &normals[i];
+            if (0..3).map(|c| (2.0 * n[c] - 1.0).powi(2)).sum::<f32>() < 0.25 {
+                continue;
+            }
+            // The pixel centre's ray meets the plane z = 0 (the skinned strip; the rigid copy
+            // sits at z = 1, nearer the camera: its pixels miss this plane's strip below).
+            let ndc = glam::Vec2::new((px as f32 + 0.5) / w as f32 * 2.0 - 1.0, (py as f32 + 0.5) / h as f32 * 2.0 - 1.0);
+            let (a, b) = (inverse.project_point3(ndc.extend(0.0)), inverse.project_point3(ndc.extend(1.0)));
+            let p = a + (b - a) * (-a.z / (b.z - a.z));
+            // Where it sits on the strip at rest: the still part where it is, the forearm
+            // turned back by angle(t1).
+            let joint = Vec3::X;
+            let rest = if p.x <= 1.0 { p } else { joint + Quat::from_rotation_z(-angle(t1)) * (p - joint) };
+            let on_strip = (0.0..=2.0).contains(&rest.x) && (0.0..=0.2).contains(&rest.y);
+            // Skip pixels near the strip's outline and the quad across the bend (its vertices at
+            // x = 1 stay, those at 1.5 turn: it stretches), where `rest` is not where they sit.
+            let inside = rest.x > 0.05 && rest.x < 1.95 && rest.y > 0.03 && rest.y < 0.17 && !(0.95..1.55).contains(&rest.x);
+            if !on_strip || !inside || p.z.abs() > 1e-3 {
+                continue;
+            }
+            let was = if rest.x > 1.5 { joint + Quat::from_rotation_z(angle(t0)) * (rest - joint) } else { p };
+            let expected = to_pixel(was) - to_pixel(p);
+            let got = glam::Vec2::new((motion[i][0] - 0.5) / 0.05, (motion[i][1] - 0.5) / 0.05);
+            assert!((got - expected).length() < 0.05, "pixel {px},{py}: motion {got}, expected {expected}");
+            if expected.length() > 0.5 {
+                moving += 1;
+            } else if expected.length() == 0.0 {
+                still += 1;
+            }
+        }
+    }
+    eprintln!("{moving} moving and {still} still strip pixels checked");
+    assert!(moving > 30 && still > 30, "{moving} moving, {still} still pixels");
+}

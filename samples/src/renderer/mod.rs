@@ -163,6 +163,8 @@ pub struct Renderer<'h> {
     frame: u64,
     last_slot: usize,
     prev_transforms: Vec<glam::Affine3A>,
+    /// The last frame's animation time (the flag's previous vertices).
+    prev_time: f32,
     /// The furthest a GI or reflection ray needs to go: the scene's diagonal.
     reach: f32,
     pub stats: Stats,
@@ -227,7 +229,8 @@ impl<'h> Renderer<'h> {
         let skinning = SkinningPass::new(host, &scene)?;
         let mut slots = Vec::new();
         for _ in 0..SLOTS {
-            let rest = scene.deformer.as_ref().map(|d| deformed_vertices(&scene, d, 0.0));
+            // The flag's vertices of the slot's frame, then of the frame before (see write_deformed).
+            let rest = scene.deformer.as_ref().map(|d| deformed_vertices(&scene, d, 0.0).repeat(2));
             let posed = skinning.posed_buffers(host, &scene)?;
             slots.push(Slot::new(host, w, h, settings.lidar_size, rest.as_deref(), posed, scene.camera_path.at(0.0))?);
         }
@@ -276,6 +279,7 @@ impl<'h> Renderer<'h> {
             frame: 0,
             last_slot: 0,
             prev_transforms,
+            prev_time: 0.0,
             reach,
             stats: Stats::default(),
         })
@@ -416,16 +420,43 @@ impl<'h> Renderer<'h> {
         s.lidar_camera = lidar;
         s.frame = frame;
         self.prev_transforms = transforms;
+        self.prev_time = time;
         self.last_slot = slot;
         Ok(())
     }
 
-    /// Writes the deforming mesh's vertices at `time` into `slot`'s vertex buffer: the mesh
-    /// and the buffer, where the scene has one.
+    /// Writes the deforming mesh's vertices at `time` into `slot`'s vertex buffer, and after
+    /// them its vertices of the frame before (for its motion vectors: the CPU writes a slot
+    /// while the other slot's frame may still read it, so each slot keeps both): the mesh and
+    /// the buffer, where the scene has one.
     fn write_deformed(&self, slot: usize, time: f32) -> HostResult<Option<(usize, vk::Buffer)>> {
         let (Some(d), Some(buffer)) = (&self.scene.deformer, &self.slots[slot].deformed) else { return Ok(None) };
-        self.host.write_buffer(buffer, bytemuck::cast_slice(&deformed_vertices(&self.scene, d, time)))?;
+        let before = if self.frame == 0 { time } else { self.prev_time };
+        let mut vertices = deformed_vertices(&self.scene, d, time);
+        vertices.extend(deformed_vertices(&self.scene, d, before));
+        self.host.write_buffer(buffer, bytemuck::cast_slice(&vertices))?;
         Ok(Some((self.scene.scene.instances[d.instance].mesh, buffer.buffer)))
+    }
+
+    /// Where each deforming mesh's vertices of the frame before this one (in `slot`) are: the
+    /// flag's after its current ones in this slot's buffer, a skinned mesh's in the other
+    /// slot's (the skinning pass rewrites it only after the next frame's opening barrier).
+    /// Empty for the first frame: nothing moved before it.
+    fn prev_deformed(&self, slot: usize) -> Vec<(usize, vk::Buffer, vk::DeviceSize)> {
+        if self.frame == 0 {
+            return Vec::new();
+        }
+        let mut out = Vec::new();
+        if let (Some(d), Some(buffer)) = (&self.scene.deformer, &self.slots[slot].deformed) {
+            let mesh = self.scene.scene.instances[d.instance].mesh;
+            let half = self.scene.scene.meshes[mesh].positions.len() as u64 * VERTEX_STRIDE as u64;
+            out.push((mesh, buffer.buffer, half));
+        }
+        let prev = &self.slots[(slot + SLOTS - 1) % SLOTS];
+        for (m, b) in self.scene.rig.skinned.iter().zip(&prev.posed) {
+            out.push((m.mesh, b.buffer, 0));
+        }
+        out
     }
 
     /// The raster G-buffers of the main view and of the lidar view, every instance at
@@ -438,6 +469,7 @@ impl<'h> Renderer<'h> {
         cameras: &FrameCameras,
     ) -> HostResult<()> {
         let scene = &self.scene;
+        let before = self.prev_deformed(slot);
         let draws: Vec<Draw> = (0..transforms.len())
             .map(|i| Draw {
                 mesh: scene.scene.instances[i].mesh,
@@ -445,6 +477,7 @@ impl<'h> Renderer<'h> {
                 prev_transform: self.prev_transforms[i],
                 material: scene.materials[i],
                 vertex_buffer: deformed.iter().find(|(m, _)| *m == scene.scene.instances[i].mesh).map(|&(_, b)| b),
+                prev_vertex_buffer: before.iter().find(|(m, ..)| *m == scene.scene.instances[i].mesh).map(|&(_, b, o)| (b, o)),
                 textures: scene.material_textures.get(i).copied().unwrap_or_default(),
                 alpha_cutoff: scene.cutouts.get(scene.scene.instances[i].mesh).copied().flatten().map_or(0.0, |c| c.cutoff),
             })
