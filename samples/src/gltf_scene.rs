@@ -363,19 +363,7 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
         for child in node.children() {
             stack.push((child, world));
         }
-        let yfov = node.camera().and_then(|c| match c.projection() {
-            gltf::camera::Projection::Perspective(p) => Some(p.yfov()),
-            gltf::camera::Projection::Orthographic(_) => None,
-        });
-        if let Some(yfov) = yfov {
-            let (eye, forward) = (world.transform_point3(Vec3::ZERO), world.transform_vector3(Vec3::NEG_Z));
-            // Its up is the node's +Y, made perpendicular to the view (a sheared node's is not).
-            let up = world.transform_vector3(Vec3::Y);
-            if let (true, Some(forward)) = (eye.is_finite() && yfov > 0.0 && yfov < 3.1, forward.try_normalize()) {
-                let up = (up - forward * up.dot(forward)).try_normalize().unwrap_or(Vec3::Y);
-                cameras.push((eye, forward, up, yfov));
-            }
-        }
+        cameras.extend(perspective_camera(&node, world));
         if let Some(light) = node.light() {
             match gltf_lights::PlacedLight::new(&light, world) {
                 Some(p) => placed_lights.push(p),
@@ -479,6 +467,21 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
         })
         .collect();
     Ok(s)
+}
+
+/// `node`'s perspective camera at `world`, if it has a usable one: (eye, forward, up, vertical
+/// field of view).
+fn perspective_camera(node: &gltf::Node, world: Mat4) -> Option<(Vec3, Vec3, Vec3, f32)> {
+    let yfov = node.camera().and_then(|c| match c.projection() {
+        gltf::camera::Projection::Perspective(p) => Some(p.yfov()),
+        gltf::camera::Projection::Orthographic(_) => None,
+    })?;
+    let (eye, forward) = (world.transform_point3(Vec3::ZERO), world.transform_vector3(Vec3::NEG_Z));
+    let forward = forward.try_normalize().filter(|_| eye.is_finite() && yfov > 0.0 && yfov < 3.1)?;
+    // Its up is the node's +Y, made perpendicular to the view (a sheared node's is not).
+    let up = world.transform_vector3(Vec3::Y);
+    let up = (up - forward * up.dot(forward)).try_normalize().unwrap_or(Vec3::Y);
+    Some((eye, forward, up, yfov))
 }
 
 /// How much larger than the scene's bounding sphere the fitted camera's view is.

@@ -69,9 +69,7 @@ impl File {
             ilen = 2 * self.indices.len(),
             blen = bytes.len(),
         );
-        let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
-        std::fs::write(&path, json).unwrap();
-        path
+        written(name, &json)
     }
 }
 
@@ -193,9 +191,7 @@ fn write_textured_quad(name: &str) -> PathBuf {
         len = bytes.len(),
         data = b64(&bytes),
     );
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
-    std::fs::write(&path, json).unwrap();
-    path
+    written(name, &json)
 }
 
 /// The loader reads texture coordinates and the PNG base-colour texture, texel for texel.
@@ -313,9 +309,7 @@ fn write_material_quad(name: &str, tangents: bool) -> PathBuf {
         len = bytes.len(),
         data = b64(&bytes),
     );
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
-    std::fs::write(&path, json).unwrap();
-    path
+    written(name, &json)
 }
 
 /// Every texture of the material is read, colour textures as sRGB and data textures as
@@ -430,9 +424,7 @@ fn write_cutout_scene(name: &str, factor: f32, quad_material: &str) -> PathBuf {
         len = bytes.len(),
         data = b64(&bytes),
     );
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
-    std::fs::write(&path, json).unwrap();
-    path
+    written(name, &json)
 }
 
 /// `alphaMode: MASK` cuts the mesh where texture alpha x factor alpha < `alphaCutoff` (the
@@ -646,9 +638,7 @@ fn write_spot_scene(name: &str, extra_lights: bool, ring: usize) -> PathBuf {
         len = bytes.len(),
         data = b64(&bytes),
     );
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
-    std::fs::write(&path, json).unwrap();
-    path
+    written(name, &json)
 }
 
 /// KHR_lights_punctual lights are read where their nodes put them (a light shines down its
@@ -807,8 +797,7 @@ fn vertex_colours_tint_the_base_colour() {
         len = bytes.len(),
         data = b64(&bytes),
     );
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("colours.gltf");
-    std::fs::write(&path, json).unwrap();
+    let path = written("colours.gltf", &json);
     let scene = gltf_scene::load(&path).unwrap();
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
     let expected = color.map(|c| 0.8 * c);
@@ -821,4 +810,11 @@ fn vertex_colours_tint_the_base_colour() {
         // The albedo target is RGBA8: within a level.
         assert!((0..3).all(|c| (t[c] - expected[c]).abs() < 0.006), "albedo {t:?}, expected {expected:?}");
     }
+}
+
+/// Writes `text` as `name` in the tests' directory; returns its path.
+fn written(name: &str, text: &str) -> PathBuf {
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    std::fs::write(&path, text).unwrap();
+    path
 }

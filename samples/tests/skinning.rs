@@ -69,9 +69,7 @@ fn write_skinned_strip(name: &str) -> PathBuf {
         len = bytes.len(),
         data = base64::engine::general_purpose::STANDARD.encode(&bytes),
     );
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
-    std::fs::write(&path, json).unwrap();
-    path
+    written(name, &json)
 }
 
 /// Renders `scene` at `time` (two frames, the SDK's random-mesh-colour view on) at `size`;
@@ -252,9 +250,7 @@ fn write_morphed_strip(name: &str) -> PathBuf {
         len = bytes.len(),
         data = base64::engine::general_purpose::STANDARD.encode(&bytes),
     );
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
-    std::fs::write(&path, json).unwrap();
-    path
+    written(name, &json)
 }
 
 /// Morph targets and their weight animation are read (the tip at t = 0.5: lifted by a
@@ -359,4 +355,11 @@ fn skinned_motion_is_in_the_motion_vectors() {
     }
     eprintln!("{moving} moving and {still} still strip pixels checked");
     assert!(moving > 30 && still > 30, "{moving} moving, {still} still pixels");
+}
+
+/// Writes `text` as `name` in the tests' directory; returns its path.
+fn written(name: &str, text: &str) -> PathBuf {
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    std::fs::write(&path, text).unwrap();
+    path
 }
