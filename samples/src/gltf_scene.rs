@@ -185,7 +185,28 @@ fn open(path: &Path) -> Result<gltf::Gltf, String> {
     if !missing.is_empty() {
         return Err(format!("{name}: requires the glTF extension(s) {}, which this loader does not support", missing.join(", ")));
     }
-    gltf::Gltf::from_slice(&bytes).map_err(|e| match e {
+    // The gltf crate (1.4.1) panics on some invalid files its validation lets through or trips
+    // over: a primitive's attribute past the accessors, an image with neither a URI nor a
+    // buffer view and MIME type. Refuse those first, and turn any other panic of the parser
+    // into an error, so no file takes the sample down.
+    // (Read from the JSON: the document's own accessors index unchecked too.)
+    let root = unvalidated.document.as_json();
+    let accessors = root.accessors.len();
+    for (mi, m) in root.meshes.iter().enumerate() {
+        for (pi, p) in m.primitives.iter().enumerate() {
+            if let Some(k) = p.attributes.values().map(|a| a.value()).find(|&k| k >= accessors) {
+                return Err(format!("{name}: mesh {mi} primitive {pi}: an attribute is accessor {k} of {accessors}"));
+            }
+        }
+    }
+    for (k, image) in root.images.iter().enumerate() {
+        if image.uri.is_none() && (image.buffer_view.is_none() || image.mime_type.is_none()) {
+            return Err(format!("{name}: image {k} has neither a URI nor a buffer view with a MIME type"));
+        }
+    }
+    let parsed = std::panic::catch_unwind(|| gltf::Gltf::from_slice(&bytes))
+        .map_err(|_| format!("{name}: the glTF parser failed on this file (an index or size out of range)"))?;
+    parsed.map_err(|e| match e {
         gltf::Error::Validation(errors) => {
             let shown: Vec<String> = errors.iter().take(SHOWN_ERRORS).map(|(at, what)| format!("{at}: {what}")).collect();
             let more = errors.len().saturating_sub(SHOWN_ERRORS);

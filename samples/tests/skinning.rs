@@ -3,6 +3,7 @@
 //! matches the CPU skinning of the same mesh, the SDK's rays see the bent strip where the
 //! raster pass draws it (its BLAS was refit), and the file's animation is read as written.
 use base64::Engine;
+mod fuzz_support;
 use glam::{Quat, Vec3};
 use hybrid_rt::DebugOutput;
 use hybrid_rt_host::Host;
@@ -362,4 +363,15 @@ fn written(name: &str, text: &str) -> PathBuf {
     let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
     std::fs::write(&path, text).unwrap();
     path
+}
+
+/// No rig makes the loader panic: 300 mutants each of the skinned and the morphed strip
+/// (keyframes, joints, weights, targets set to edge values, removed, emptied) load or are
+/// refused.
+#[test]
+fn mutated_rigs_load_or_are_refused() {
+    for (k, file) in [write_skinned_strip("fuzz-skin.gltf"), write_morphed_strip("fuzz-morph.gltf")].iter().enumerate() {
+        let (loaded, refused) = fuzz_support::fuzz_loader(file, 300, 41 + k as u64);
+        eprintln!("{}: {loaded} mutants loaded, {refused} refused", file.display());
+    }
 }
