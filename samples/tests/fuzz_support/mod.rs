@@ -2,7 +2,10 @@
 //! random (a number replaced by an edge value, a member removed, an array emptied), loaded
 //! again. Every mutant must load or be refused with an error; none may panic.
 use hybrid_rt_host::scene::Rng;
+use hybrid_rt_host::Host;
 use hybrid_rt_samples::gltf_scene;
+use hybrid_rt_samples::renderer::{Renderer, Settings};
+use hybrid_rt_samples::scene::SampleScene;
 use serde_json::Value;
 use std::path::Path;
 
@@ -46,8 +49,10 @@ fn parent<'a>(root: &'a mut Value, path: &[Value]) -> Option<(&'a mut Value, Val
 }
 
 /// Loads `iterations` mutants of `file` (one to three mutations each, from `seed`); panics,
-/// naming the mutation, if the loader panics on one. Returns (loaded, refused).
-pub fn fuzz_loader(file: &Path, iterations: usize, seed: u64) -> (usize, usize) {
+/// naming the mutation, if the loader panics on one. The first `rendered` mutants that load
+/// are rendered (two frames, 32x24) on `host`: that may fail with an error, never panic.
+/// Returns (loaded, refused).
+pub fn fuzz_loader(file: &Path, iterations: usize, seed: u64, host: &Host, rendered: usize) -> (usize, usize) {
     let original: Value = serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
     let mut all = Vec::new();
     places(&original, &mut Vec::new(), &mut all);
@@ -87,10 +92,26 @@ pub fn fuzz_loader(file: &Path, iterations: usize, seed: u64) -> (usize, usize) 
         }
         std::fs::write(&mutant, serde_json::to_string(&v).unwrap()).unwrap();
         match std::panic::catch_unwind(|| gltf_scene::load(&mutant)) {
-            Ok(Ok(_)) => loaded += 1,
+            Ok(Ok(scene)) => {
+                if loaded < rendered {
+                    let run = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| render(host, scene)));
+                    let Ok(worked) = run else { panic!("mutant {it} of {}: rendering panicked on {said:?}", file.display()) };
+                    eprintln!("mutant {it} rendered: {}", if worked { "yes" } else { "no (an error)" });
+                }
+                loaded += 1
+            }
             Ok(Err(_)) => refused += 1,
             Err(_) => panic!("mutant {it} of {}: the loader panicked on {said:?}", file.display()),
         }
     }
     (loaded, refused)
+}
+
+/// Two frames of `scene` at 32x24; whether it worked (an error is an answer too).
+fn render(host: &Host, scene: SampleScene) -> bool {
+    let settings = Settings { width: 32, height: 24, lidar_size: 16, ..Default::default() };
+    let Ok(mut r) = Renderer::new(host, scene, settings) else { return false };
+    let camera = r.scene.camera_path.at(0.5);
+    let ok = (0..2).all(|f| r.render(camera, f as f32 / 30.0, &[], None).is_ok());
+    r.destroy().is_ok() && ok
 }
