@@ -162,7 +162,7 @@ const READ_EXTENSIONS: &[&str] = &["KHR_lights_punctual", "KHR_materials_emissiv
 /// The file-wide features the loader ignores.
 fn unread_features(doc: &gltf::Document, warnings: &mut Warnings) {
     for x in doc.extensions_used().filter(|x| !READ_EXTENSIONS.contains(x)) {
-        warnings.add(&format!("the extension {x}"));
+        warnings.add(&format!("the extension {x} (not read)"));
     }
 }
 
@@ -470,7 +470,7 @@ pub fn load(path: &Path) -> Result<SampleScene, String> {
     (s.uvs, s.tangents, s.colors, s.textures, s.material_textures, s.cutouts) =
         (uvs, tangents, colors, textures.textures, material_textures, cutouts);
     for w in &warnings.0 {
-        eprintln!("{file}: uses {w}, which this loader does not read");
+        eprintln!("{file}: {w}");
     }
     s.warnings = warnings.0;
     // A glTF camera looks down its node's -Z with +Y up; the path's target sits a bounding

@@ -129,8 +129,9 @@ pub struct SampleScene {
     pub tile_unit_length: f32,
     /// Longest AO ray (world units).
     pub ao_ray_length: f32,
-    /// What the scene's file uses that its loader does not read, one line each (empty for
-    /// the built-in scenes).
+    /// What the loader could not draw as the file says — a feature it does not read, a value
+    /// it changed — one line each, what it did instead in brackets (empty for the built-in
+    /// scenes).
     pub warnings: Vec<String>,
 }
 
