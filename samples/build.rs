@@ -1,6 +1,10 @@
 //! Compiles the sample's raster and lighting shaders (`../shaders/sample/*.vert|frag|comp`) to SPIR-V with
 //! glslangValidator (the SDK's build script checks it is installed) and writes
 //! `sample_shaders.rs` with one `include_bytes!` per shader. No compiled shader is committed.
+// The SDK's shader build helpers (the sample uses one of them).
+#[path = "../sdk/build/spirv.rs"]
+mod spirv;
+
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -8,6 +12,7 @@ fn main() {
     let dir = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap()).join("../shaders/sample");
     let out = PathBuf::from(std::env::var("OUT_DIR").unwrap());
     println!("cargo:rerun-if-changed={}", dir.display());
+    println!("cargo:rerun-if-changed=../sdk/build/spirv.rs");
     let compiler = std::env::var("GLSLANG_VALIDATOR").unwrap_or_else(|_| "glslangValidator".into());
     let mut entries: Vec<PathBuf> =
         std::fs::read_dir(&dir).expect("shaders/sample").filter_map(|e| e.ok().map(|e| e.path())).collect();
@@ -22,9 +27,9 @@ fn main() {
         let file = src.file_name().unwrap().to_str().unwrap().to_string();
         let spv = out.join(format!("{file}.spv"));
         let o = Command::new(&compiler)
-            // Vulkan 1.3 (SPIR-V 1.6): compute workgroup sizes as LocalSizeId, not the deprecated
-            // WorkgroupSize built-in (the device enables maintenance4 for it).
-            .args(["-V", "--target-env", "vulkan1.3", "-o"])
+            // Vulkan 1.2 (SPIR-V 1.5), like the SDK's compute shaders: SPIR-V 1.6 states
+            // workgroup sizes as LocalSizeId, which needs maintenance4 (not an SDK feature).
+            .args(["-V", "--target-env", "vulkan1.2", "-o"])
             .arg(&spv)
             .arg(&src)
             .output()
@@ -36,6 +41,9 @@ fn main() {
                 String::from_utf8_lossy(&o.stdout),
                 String::from_utf8_lossy(&o.stderr)
             );
+        }
+        if ext == "comp" {
+            spirv::strip_workgroup_size_builtin(&spv).unwrap_or_else(|e| panic!("{e}"));
         }
         let ident = file.replace('.', "_").to_uppercase();
         rust += &format!("pub const {ident}: &[u8] = include_bytes!(concat!(env!(\"OUT_DIR\"), \"/{file}.spv\"));\n");

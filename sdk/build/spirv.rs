@@ -18,11 +18,11 @@ pub fn sources(dir: &Path) -> Vec<PathBuf> {
 }
 
 /// Ray-tracing stages are SPIR-V 1.4 (what VK_KHR_ray_tracing_pipeline needs); compute
-/// shaders SPIR-V 1.6, where the workgroup size is an execution mode (LocalSizeId) instead of
-/// the WorkgroupSize built-in that 1.6 deprecates (and the best-practices layer warns about).
+/// shaders SPIR-V 1.5. (SPIR-V 1.6 states the workgroup size as LocalSizeId, which needs the
+/// `maintenance4` feature: wgpu, and so Bevy, leave it off on the devices they create.)
 pub fn target_env(src: &Path) -> &'static str {
     if src.extension().is_some_and(|e| e == "comp") {
-        "spirv1.6"
+        "spirv1.5"
     } else {
         "spirv1.4"
     }
@@ -53,7 +53,42 @@ pub fn compile(compiler: &str, src: &Path, spv: &Path) -> Result<(), String> {
             String::from_utf8_lossy(&output.stderr)
         ));
     }
+    if src.extension().is_some_and(|e| e == "comp") {
+        strip_workgroup_size_builtin(spv)?;
+    }
     Ok(())
+}
+
+/// Removes the `BuiltIn WorkgroupSize` decoration glslang puts on its `gl_WorkGroupSize`
+/// constant. The `LocalSize` execution mode states the size already and the constant keeps its
+/// value; the best-practices layer flags the built-in as deprecated (SPIR-V 1.6 deprecates it)
+/// whatever the module's version.
+pub fn strip_workgroup_size_builtin(spv: &Path) -> Result<(), String> {
+    const MAGIC: u32 = 0x0723_0203;
+    const OP_DECORATE: u32 = 71;
+    const DECORATION_BUILT_IN: u32 = 11;
+    const BUILT_IN_WORKGROUP_SIZE: u32 = 25;
+    let bytes = std::fs::read(spv).map_err(|e| format!("{}: {e}", spv.display()))?;
+    let words: Vec<u32> = bytes.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+    if bytes.len() % 4 != 0 || words.len() < 5 || words[0] != MAGIC {
+        return Err(format!("{}: not little-endian SPIR-V", spv.display()));
+    }
+    let mut kept = words[..5].to_vec();
+    let mut i = 5;
+    while i < words.len() {
+        let count = (words[i] >> 16) as usize;
+        let Some(inst) = words.get(i..i + count).filter(|_| count > 0) else {
+            return Err(format!("{}: malformed instruction at word {i}", spv.display()));
+        };
+        let decorates_workgroup_size =
+            inst[0] & 0xffff == OP_DECORATE && count == 4 && inst[2] == DECORATION_BUILT_IN && inst[3] == BUILT_IN_WORKGROUP_SIZE;
+        if !decorates_workgroup_size {
+            kept.extend_from_slice(inst);
+        }
+        i += count;
+    }
+    let out: Vec<u8> = kept.iter().flat_map(|w| w.to_le_bytes()).collect();
+    std::fs::write(spv, out).map_err(|e| format!("{}: {e}", spv.display()))
 }
 
 /// spirv-val, when installed (false: not installed).

@@ -34,14 +34,14 @@ fn a_device_without_what_the_sdk_needs_is_refused_naming_it() {
     let e = missing(with(&|d| d.enabled_features = std::ptr::null()));
     assert!(e.iter().any(|m| m.contains("enabled_features")), "{e:?}");
 
-    // A chain without maintenance4 and rayTracingPipeline: both named, and only those.
+    // A chain without synchronization2 and rayTracingPipeline: both named, and only those.
     let mut off = DeviceFeatures::required(false);
-    off.vulkan13.maintenance4 = vk::FALSE;
+    off.vulkan13.synchronization2 = vk::FALSE;
     off.ray_tracing_pipeline.ray_tracing_pipeline = vk::FALSE;
     let _ = off.push_to(vk::DeviceCreateInfo::default());
     let e = missing(with(&|d| d.enabled_features = off.chain()));
     assert_eq!(e.len(), 2, "{e:?}");
-    assert!(e.iter().any(|m| m.contains("maintenance4")) && e.iter().any(|m| m.contains("rayTracingPipeline")), "{e:?}");
+    assert!(e.iter().any(|m| m.contains("synchronization2")) && e.iter().any(|m| m.contains("rayTracingPipeline")), "{e:?}");
 
     // A Vulkan 1.2 instance: the SDK records 1.3 commands (it used to abort inside ash).
     let e = missing(with(&|d| d.instance_api_version = vk::API_VERSION_1_2));

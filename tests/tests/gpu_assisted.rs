@@ -25,7 +25,8 @@ fn compile(source: &str) -> Vec<u32> {
     std::fs::write(&src, source).unwrap();
     let compiler = std::env::var("GLSLANG_VALIDATOR").unwrap_or_else(|_| "glslangValidator".into());
     let status = std::process::Command::new(&compiler)
-        .args(["-V", "--target-env", "vulkan1.3", "-o"])
+        // SPIR-V 1.5, as the SDK's compute shaders: 1.6's LocalSizeId needs maintenance4.
+        .args(["-V", "--target-env", "vulkan1.2", "-o"])
         .arg(&spv)
         .arg(&src)
         .status()

@@ -68,11 +68,10 @@ pub fn query_device_support(instance: &ash::Instance, pdev: vk::PhysicalDevice) 
         unsafe { instance.get_physical_device_features2(pdev, &mut f2) };
         f2.features
     };
-    let checks: [(&str, vk::Bool32); 7] = [
+    let checks: [(&str, vk::Bool32); 6] = [
         ("feature shaderBufferFloat32AtomicAdd", faf.shader_buffer_float32_atomic_add),
         ("feature bufferDeviceAddress", f12.buffer_device_address),
         ("feature synchronization2", f13.synchronization2),
-        ("feature maintenance4", f13.maintenance4),
         ("feature accelerationStructure", fas.acceleration_structure),
         ("feature rayTracingPipeline", frt.ray_tracing_pipeline),
         ("feature shaderStorageImageWriteWithoutFormat", core.shader_storage_image_write_without_format),

@@ -12,7 +12,6 @@ pub(crate) enum Feature {
     ShaderStorageImageWriteWithoutFormat,
     BufferDeviceAddress,
     Synchronization2,
-    Maintenance4,
     AccelerationStructure,
     RayTracingPipeline,
     ShaderBufferFloat32AtomicAdd,
@@ -20,11 +19,10 @@ pub(crate) enum Feature {
 }
 
 impl Feature {
-    pub const REQUIRED: [Feature; 7] = [
+    pub const REQUIRED: [Feature; 6] = [
         Feature::ShaderStorageImageWriteWithoutFormat,
         Feature::BufferDeviceAddress,
         Feature::Synchronization2,
-        Feature::Maintenance4,
         Feature::AccelerationStructure,
         Feature::RayTracingPipeline,
         Feature::ShaderBufferFloat32AtomicAdd,
@@ -35,7 +33,6 @@ impl Feature {
             Feature::ShaderStorageImageWriteWithoutFormat => "shaderStorageImageWriteWithoutFormat",
             Feature::BufferDeviceAddress => "bufferDeviceAddress",
             Feature::Synchronization2 => "synchronization2",
-            Feature::Maintenance4 => "maintenance4",
             Feature::AccelerationStructure => "accelerationStructure",
             Feature::RayTracingPipeline => "rayTracingPipeline",
             Feature::ShaderBufferFloat32AtomicAdd => "shaderBufferFloat32AtomicAdd",
@@ -78,17 +75,12 @@ unsafe fn visit(s: *mut vk::BaseOutStructure<'_>, set: &[Feature], found: &mut V
                 &mut (*(s as *mut vk::PhysicalDeviceBufferDeviceAddressFeatures<'_>)).buffer_device_address,
             ),
             T::PHYSICAL_DEVICE_VULKAN_1_3_FEATURES => {
-                let s = &mut *(s as *mut vk::PhysicalDeviceVulkan13Features<'_>);
-                mark(Feature::Synchronization2, &mut s.synchronization2);
-                mark(Feature::Maintenance4, &mut s.maintenance4);
+                mark(Feature::Synchronization2, &mut (*(s as *mut vk::PhysicalDeviceVulkan13Features<'_>)).synchronization2)
             }
             T::PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES => mark(
                 Feature::Synchronization2,
                 &mut (*(s as *mut vk::PhysicalDeviceSynchronization2Features<'_>)).synchronization2,
             ),
-            T::PHYSICAL_DEVICE_MAINTENANCE_4_FEATURES => {
-                mark(Feature::Maintenance4, &mut (*(s as *mut vk::PhysicalDeviceMaintenance4Features<'_>)).maintenance4)
-            }
             T::PHYSICAL_DEVICE_ACCELERATION_STRUCTURE_FEATURES_KHR => mark(
                 Feature::AccelerationStructure,
                 &mut (*(s as *mut vk::PhysicalDeviceAccelerationStructureFeaturesKHR<'_>)).acceleration_structure,
@@ -140,7 +132,7 @@ pub struct DeviceFeatures {
     pub core: vk::PhysicalDeviceFeatures2<'static>,
     /// `bufferDeviceAddress` (`push_to`).
     pub vulkan12: vk::PhysicalDeviceVulkan12Features<'static>,
-    /// `synchronization2`, `maintenance4` (`push_to`).
+    /// `synchronization2` (`push_to`).
     pub vulkan13: vk::PhysicalDeviceVulkan13Features<'static>,
     /// `accelerationStructure`.
     pub acceleration_structure: vk::PhysicalDeviceAccelerationStructureFeaturesKHR<'static>,
@@ -154,8 +146,6 @@ pub struct DeviceFeatures {
     pub buffer_device_address: vk::PhysicalDeviceBufferDeviceAddressFeatures<'static>,
     /// `synchronization2` as a per-extension struct (`merge_into`).
     pub synchronization2: vk::PhysicalDeviceSynchronization2Features<'static>,
-    /// `maintenance4` as a per-extension struct (`merge_into`).
-    pub maintenance4: vk::PhysicalDeviceMaintenance4Features<'static>,
 }
 
 /// The features it enables, by name.
@@ -173,15 +163,13 @@ impl DeviceFeatures {
             core: vk::PhysicalDeviceFeatures2::default()
                 .features(vk::PhysicalDeviceFeatures::default().shader_storage_image_write_without_format(true)),
             vulkan12: vk::PhysicalDeviceVulkan12Features::default().buffer_device_address(true),
-            // maintenance4: compute shaders are SPIR-V 1.6, whose workgroup size is LocalSizeId.
-            vulkan13: vk::PhysicalDeviceVulkan13Features::default().synchronization2(true).maintenance4(true),
+            vulkan13: vk::PhysicalDeviceVulkan13Features::default().synchronization2(true),
             acceleration_structure: vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true),
             ray_tracing_pipeline: vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default().ray_tracing_pipeline(true),
             ray_query: vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(with_ray_query),
             atomic_float: vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default().shader_buffer_float32_atomic_add(true),
             buffer_device_address: vk::PhysicalDeviceBufferDeviceAddressFeatures::default().buffer_device_address(true),
             synchronization2: vk::PhysicalDeviceSynchronization2Features::default().synchronization2(true),
-            maintenance4: vk::PhysicalDeviceMaintenance4Features::default().maintenance4(true),
         }
     }
 
@@ -283,10 +271,9 @@ impl DeviceFeatures {
         // clash with what the chain holds (a chain may not mix VkPhysicalDeviceVulkan13Features
         // with, say, VkPhysicalDeviceSynchronization2Features; this one has no Vulkan13Features,
         // or it would have covered the feature).
-        let nodes: [(Feature, *mut c_void); 7] = [
+        let nodes: [(Feature, *mut c_void); 6] = [
             (Feature::BufferDeviceAddress, &mut self.buffer_device_address as *mut _ as *mut c_void),
             (Feature::Synchronization2, &mut self.synchronization2 as *mut _ as *mut c_void),
-            (Feature::Maintenance4, &mut self.maintenance4 as *mut _ as *mut c_void),
             (Feature::AccelerationStructure, &mut self.acceleration_structure as *mut _ as *mut c_void),
             (Feature::RayTracingPipeline, &mut self.ray_tracing_pipeline as *mut _ as *mut c_void),
             (Feature::ShaderBufferFloat32AtomicAdd, &mut self.atomic_float as *mut _ as *mut c_void),
@@ -310,13 +297,13 @@ impl DeviceFeatures {
 mod tests {
     use super::*;
 
-    /// An engine chain with its own Vulkan13Features (synchronization2 on, maintenance4 off)
+    /// An engine chain with its own Vulkan13Features (synchronization2 off)
     /// and the per-extension buffer-device-address struct: merging switches the SDK's features
     /// on in those structs, appends only what is missing, and never adds a second struct of a
     /// type the chain has (`push_to` did: vkCreateDevice then failed).
     #[test]
     fn merging_keeps_one_struct_per_type_and_enables_everything() {
-        let mut v13 = vk::PhysicalDeviceVulkan13Features::default().synchronization2(true).dynamic_rendering(true);
+        let mut v13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true);
         let mut bda = vk::PhysicalDeviceBufferDeviceAddressFeatures::default();
         let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut v13).push_next(&mut bda);
         let mut sdk = DeviceFeatures::required(false);
@@ -346,7 +333,7 @@ mod tests {
         }
         assert!(!enabled.contains(&Feature::RayQuery));
         assert_eq!(v13.dynamic_rendering, vk::TRUE, "the engine's own features stay");
-        assert_eq!(v13.maintenance4, vk::TRUE, "set in the engine's Vulkan13Features");
+        assert_eq!(v13.synchronization2, vk::TRUE, "set in the engine's Vulkan13Features");
     }
 
     #[test]
