@@ -2,9 +2,10 @@
 //! index past the vertices, a missing buffer, a required extension it lacks, nothing but
 //! points) give one short error that names the file and what is wrong, never a hang or panic.
 use base64::Engine;
-mod fuzz_support;
+mod support;
 use hybrid_rt_samples::gltf_scene;
 use std::path::PathBuf;
+use support::written;
 
 /// One quad's four corners, and a primitive over them.
 struct File {
@@ -813,13 +814,6 @@ fn vertex_colours_tint_the_base_colour() {
     }
 }
 
-/// Writes `text` as `name` in the tests' directory; returns its path.
-fn written(name: &str, text: &str) -> PathBuf {
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
 /// No file makes the loader panic: 300 mutants each of the spot-light, material and cut-out
 /// files (numbers set to edge values, members removed, arrays emptied) load or are refused,
 /// and the first two of each that load render or fail with an error.
@@ -832,7 +826,7 @@ fn mutated_files_load_or_are_refused() {
         write_cutout_scene("fuzz-cutout.gltf", 1.0, r#", "alphaMode": "MASK""#),
     ];
     for (k, file) in files.iter().enumerate() {
-        let (loaded, refused) = fuzz_support::fuzz_loader(file, 300, 17 + k as u64, &host, 2);
+        let (loaded, refused) = support::fuzz::fuzz_loader(file, 300, 17 + k as u64, &host, 2);
         eprintln!("{}: {loaded} mutants loaded, {refused} refused", file.display());
     }
 }

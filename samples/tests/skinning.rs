@@ -3,7 +3,7 @@
 //! matches the CPU skinning of the same mesh, the SDK's rays see the bent strip where the
 //! raster pass draws it (its BLAS was refit), and the file's animation is read as written.
 use base64::Engine;
-mod fuzz_support;
+mod support;
 use glam::{Quat, Vec3};
 use hybrid_rt::DebugOutput;
 use hybrid_rt_host::Host;
@@ -13,6 +13,7 @@ use hybrid_rt_samples::renderer::{Renderer, Settings};
 use hybrid_rt_samples::scene::SampleScene;
 use hybrid_rt_samples::skin::{Interpolation, Property};
 use std::path::PathBuf;
+use support::written;
 
 /// A 2 x 0.2 strip along +X in the XY plane, four quads; vertices at x <= 1 follow joint 0
 /// (the root, at the origin), the others joint 1 (at x = 1), which the animation turns about
@@ -358,13 +359,6 @@ fn skinned_motion_is_in_the_motion_vectors() {
     assert!(moving > 30 && still > 30, "{moving} moving, {still} still pixels");
 }
 
-/// Writes `text` as `name` in the tests' directory; returns its path.
-fn written(name: &str, text: &str) -> PathBuf {
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
 /// No rig makes the loader panic: 300 mutants each of the skinned and the morphed strip
 /// (keyframes, joints, weights, targets set to edge values, removed, emptied) load or are
 /// refused, and the first two of each that load render or fail with an error.
@@ -372,7 +366,7 @@ fn written(name: &str, text: &str) -> PathBuf {
 fn mutated_rigs_load_or_are_refused() {
     let host = Host::new().expect("a Vulkan device with ray tracing");
     for (k, file) in [write_skinned_strip("fuzz-skin.gltf"), write_morphed_strip("fuzz-morph.gltf")].iter().enumerate() {
-        let (loaded, refused) = fuzz_support::fuzz_loader(file, 300, 41 + k as u64, &host, 2);
+        let (loaded, refused) = support::fuzz::fuzz_loader(file, 300, 41 + k as u64, &host, 2);
         eprintln!("{}: {loaded} mutants loaded, {refused} refused", file.display());
     }
 }
