@@ -4,16 +4,17 @@
 // Shadow denoiser, pass 2: penumbra-aware blur, shaped like SIGMA's. The blur radius is half
 // the penumbra width (world) over the world size of a pixel at this depth. The width comes
 // from what is already at hand rather than from a search: the pixel's own occluded sample and
-// its 3x3 neighbours (geometry-weighted, from a 10x10 tile the workgroup loads into shared
-// memory once, about three fetches a pixel), and the prep pass's tile summaries within the
+// its 3x3 neighbours (geometry-weighted, from a 12x12 tile the workgroup loads into shared
+// memory once, four and a half fetches a pixel), and the prep pass's tile summaries within the
 // largest radius (each 8x8 tile's mean width and count, summed once per workgroup), so lit
 // pixels beside a penumbra find it too. (The 24-tap search this replaces fetched 48 texels a
-// pixel and set the pass's time.) Contact shadows and hard lights give a radius under half a
-// pixel: the visibility passes unchanged. Otherwise 8 taps of a rotated golden-angle disk
-// (turned per pixel and per frame: the temporal pass after this one averages the turns),
-// Gaussian in the radius, with plane and normal stops. Workgroups with no occluded sample
-// within reach, and those deep in an umbra (no pixel within reach sees any light), do nothing
-// but copy.
+// pixel and set the pass's time.) While the view moves, penumbrae under EDGE_PENUMBRA pixels
+// are blurred along their edge instead (`along_edge`). Still views: contact shadows and hard
+// lights give a radius under half a pixel, and the visibility passes unchanged; otherwise 8
+// taps of a rotated golden-angle disk (turned per pixel and per frame: the temporal pass
+// after this one averages the turns), Gaussian in the radius, with plane and normal stops.
+// Workgroups with no occluded sample within reach, and those deep in an umbra (no pixel
+// within reach sees any light), do nothing but copy.
 #include "include/denoise.glsl"
 #include "include/group_sum.glsl"
 
@@ -24,8 +25,22 @@ const float SHADOW_BLUR_FRAMES = 1.0;
 // pixel beside a penumbra) the tiles do.
 const float TILE_WEIGHT = 0.5;
 
-// The intermediate and the denoiser's G-buffer around the workgroup (one texel of border).
-const int APRON = 10;
+// Narrow penumbrae while the view moves (see `along_edge`): the kernel's deviations across
+// and along the edge (pixels; docs/benchmarks.md has the values tried).
+const float EDGE_ACROSS = 0.3;
+const float EDGE_ALONG = 1.5;
+// Taps nearer than this to the line along the edge through the pixel (pixels) tell whether
+// the pixel lies on the edge.
+const float LINE = 0.5;
+// The history length (frames) up to which, and the penumbra half-width (pixels) under which,
+// the edge-aligned blur replaces the disk.
+const float SHORT_HISTORY = 2.5;
+const float EDGE_PENUMBRA = 3.0;
+
+// The intermediate and the denoiser's G-buffer around the workgroup (two texels of border:
+// the edge-aligned blur reaches two pixels, its direction's differences one beyond the 3x3).
+const int BORDER = 2;
+const int APRON = 8 + 2 * BORDER;
 shared vec4 s_temp[APRON * APRON];
 shared uint s_gbuf[APRON * APRON];
 
@@ -48,7 +63,7 @@ vec3 sum_tiles(int reach) {
     return hrt_group_sum(sum);
 }
 
-// Fills the 10x10 apron: texels outside the viewport read as background.
+// Fills the apron: texels outside the viewport read as background.
 void load_apron(ivec2 origin) {
     for (int i = int(gl_LocalInvocationIndex); i < APRON * APRON; i += 64) {
         ivec2 q = origin + ivec2(i % APRON, i / APRON);
@@ -65,6 +80,59 @@ int apron_index(ivec2 q, ivec2 origin) {
     return all(greaterThanEqual(l, ivec2(0))) && all(lessThan(l, ivec2(APRON))) ? l.y * APRON + l.x : -1;
 }
 
+// A narrow penumbra while the view moves. The history, resampled between texels, softens a
+// sharp edge, so the temporal pass keeps at most two frames there; a disk blur as wide as
+// the penumbra would soften it as much; one frame's samples alone are as noisy as the raw
+// trace. But along the edge the visibility changes slowly (the edge's offset from the pixel
+// centres drifts by a fraction of a pixel per pixel), so a kernel narrow across the edge and
+// long along it averages samples of nearly one value. The edge's direction: the structure
+// tensor of this frame's visibility over the 3x3. Taps come in point-symmetric pairs, so a
+// tap's offset across the edge is cancelled by its partner's (the visibility's slope across
+// the edge drops out; only its curvature is left).
+float along_edge(ivec2 pixel, int centre, HrtPixelRays rays, vec3 p, vec3 n, float dist) {
+    float v = s_temp[centre].x;
+    vec3 tensor = vec3(0.0);
+    float lo = v, hi = v;
+    [[unroll]] for (int j = 0; j < 9; ++j) {
+        int k = centre + (j / 3 - 1) * APRON + (j % 3 - 1);
+        float gx = s_temp[k + 1].x - s_temp[k - 1].x;
+        float gy = s_temp[k + APRON].x - s_temp[k - APRON].x;
+        tensor += vec3(gx * gx, gx * gy, gy * gy);
+        lo = min(lo, s_temp[k].x);
+        hi = max(hi, s_temp[k].x);
+    }
+    // No edge through the 3x3: nothing to align with (and nothing a blur would change much).
+    if (hi - lo < 0.5) return v;
+    float angle = 0.5 * atan(2.0 * tensor.y, tensor.x - tensor.z);
+    vec2 across = vec2(cos(angle), sin(angle));
+    // One of each point-symmetric pair in a 5x5 (the other is its negation).
+    const ivec2 PAIRS[12] = ivec2[12](ivec2(1, 0), ivec2(2, 0), ivec2(-2, 1), ivec2(-1, 1), ivec2(0, 1), ivec2(1, 1),
+        ivec2(2, 1), ivec2(-2, 2), ivec2(-1, 2), ivec2(0, 2), ivec2(1, 2), ivec2(2, 2));
+    float sum = v, wsum = 1.0, line_lo = v, line_hi = v;
+    [[unroll]] for (int i = 0; i < 12; ++i) {
+        vec2 o = vec2(PAIRS[i]);
+        float x = dot(o, across), y = dot(o, vec2(-across.y, across.x));
+        float w = exp(-(x * x) / (EDGE_ACROSS * EDGE_ACROSS) - (y * y) / (2.0 * EDGE_ALONG * EDGE_ALONG));
+        if (w < 0.01) continue;
+        int offset = PAIRS[i].y * APRON + PAIRS[i].x;
+        vec3 a_p, a_n, b_p, b_n;
+        if (!hrt_surface_on(rays, uvec2(s_gbuf[centre + offset], 0u), u_d.eye.xyz, pixel + PAIRS[i], a_p, a_n)) continue;
+        if (!hrt_surface_on(rays, uvec2(s_gbuf[centre - offset], 0u), u_d.eye.xyz, pixel - PAIRS[i], b_p, b_n)) continue;
+        w *= min(hrt_geometry_weight(p, n, dist, a_p, a_n), hrt_geometry_weight(p, n, dist, b_p, b_n));
+        float a = s_temp[centre + offset].x, b = s_temp[centre - offset].x;
+        sum += w * (a + b);
+        wsum += 2.0 * w;
+        if (abs(x) < LINE) {
+            line_lo = min(line_lo, min(a, b));
+            line_hi = max(line_hi, max(a, b));
+        }
+    }
+    // Where the samples on the line through the pixel all agree with it, the pixel is beside
+    // the edge rather than on it (an umbra or a lit pixel): its own visibility is exact there,
+    // and the taps off the line would only pull it towards the other side.
+    return line_hi - line_lo < 0.01 ? v : sum / wsum;
+}
+
 void main() {
     float max_radius = u_d.stops.w;
     vec3 tiles = sum_tiles(int(ceil(max_radius)));
@@ -78,7 +146,7 @@ void main() {
         hrt_store_temp(0u, pixel, vec4(c.x, 0.0, c.zw));
         return;
     }
-    ivec2 origin = ivec2(gl_WorkGroupID.xy) * 8 + ivec2(u_d.c.viewport.xy) - 1;
+    ivec2 origin = ivec2(gl_WorkGroupID.xy) * 8 + ivec2(u_d.c.viewport.xy) - BORDER;
     load_apron(origin);
     if (!hrt_in_viewport(pixel)) return;
     int centre = apron_index(pixel, origin);
@@ -118,6 +186,15 @@ void main() {
     // reprojecting it cost the pass three fetches a pixel (motion, last frame's guide, the
     // texel) for no measured difference.
     if (u_d.flags.z == 0u && radius >= 0.5) radius *= clamp(sqrt(SHADOW_BLUR_FRAMES / max(c.w, 1.0)), 0.25, 1.0);
+    // While the view moves (the temporal pass keeps a short history there: see
+    // SHARP_EDGE_RADIUS in it) a narrow penumbra is blurred along its edge, not across it.
+    // Where the history is long it averages the pixel's own samples instead, and any spatial
+    // blur would only bias it where the edge curves within the kernel.
+    bool short_history = u_d.flags.z != 0u || c.w <= SHORT_HISTORY;
+    if (penumbra < EDGE_PENUMBRA && short_history) {
+        hrt_store_temp(0u, pixel, vec4(along_edge(pixel, centre, rays, p, n, dist), penumbra, c.zw));
+        return;
+    }
     if (radius < 0.5) {
         hrt_store_temp(0u, pixel, vec4(c.x, penumbra, c.zw));
         return;

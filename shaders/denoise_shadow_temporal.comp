@@ -121,8 +121,9 @@ void temporal(ivec2 pixel, bool resized) {
     // edge, which one raw frame gets right but for the edge's own pixels. A history
     // interpolated between texels softens such an edge a little more every frame the view
     // moves, and the 3x3 box spans both sides of it, so nothing clamps that away: there the
-    // pixel keeps at most two frames (the edge pixel's noise halved, one frame's softening).
-    // Still views read single texels and keep everything.
+    // pixel keeps at most two frames (one frame's softening; the blur pass averages such
+    // pixels along their edge, which takes most of the one-ray noise). Still views read
+    // single texels and keep everything.
     if (radius_here < SHARP_EDGE_RADIUS && resampled) len = min(len, 2.0);
     if (resampled) len = min(len, 1.0 + EDGE_FRAMES * radius_here * radius_here);
     // The box is widened by the noise a 3x3 of one-ray visibilities has where the history

@@ -92,11 +92,11 @@ fn denoised_shadows_are_never_worse_than_a_raw_frame() {
 /// The sample's sun while the camera pans a quarter of a pixel a frame: every frame's history
 /// is resampled between texels, which softens a hard edge a little more each frame, while a
 /// raw frame is exact but for its sub-pixel penumbrae (here 20 of 3,200 pixels). Where the
-/// penumbra is under a pixel wide the denoiser keeps at most two frames while the view moves:
-/// the edge carries one resampled frame's softening, not a long history's. Bounds (mean of 4
-/// seeds): the summed error within 2x the raw frame's (measured 1.5x; 5.2x when such edges
-/// accumulated like soft penumbrae), the umbra beside the edge within 0.05 (0.027; was 0.12),
-/// the light within 0.002 (0.0008; was 0.0043).
+/// penumbra is under a pixel wide the denoiser keeps at most two frames while the view moves
+/// (and blurs along the edge): the edge carries one resampled frame's softening, not a long
+/// history's. Bounds (mean of 4 seeds): the summed error within 2x the raw frame's (measured
+/// 1.5x; 5.2x when such edges accumulated like soft penumbrae), the umbra beside the edge
+/// within 0.05 (0.028; was 0.12), the light within 0.002 (0.0004; was 0.0043).
 #[test]
 fn hard_shadows_stay_sharp_while_the_camera_pans() {
     let per_seed: Vec<_> = SEEDS.iter().map(|&s| shadow_regions(0.03, 0.013, s)).collect();
