@@ -1617,7 +1617,7 @@ void hrt_device_features_destroy(struct HrtDeviceFeatures *features);
  * The device extensions the SDK needs (static strings). Enable all of them, plus
  * VK_KHR_ray_query where the device has it (`hrt_optional_device_extensions`), and these
  * features: bufferDeviceAddress (1.2), synchronization2 (1.3), accelerationStructure,
- * rayTracingPipeline, shaderStorageImageWriteWithoutFormat (and rayQuery if enabled).
+ * rayTracingPipeline, shaderBufferFloat32AtomicAdd (and rayQuery if enabled).
  */
 void hrt_required_device_extensions(const char *const **names, uint32_t *count);
 

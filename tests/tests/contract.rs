@@ -141,6 +141,66 @@ fn the_same_frame_index_gives_the_same_image() {
     f.images.destroy(&f.host);
 }
 
+/// The SDK's shaders write engine outputs without a format qualifier, which Vulkan 1.3 allows
+/// per format (`VK_FORMAT_FEATURE_2_STORAGE_WRITE_WITHOUT_FORMAT_BIT`), so the device needs no
+/// `shaderStorageImageWriteWithoutFormat` — which wgpu leaves off on the devices it creates.
+/// `DeviceFeatures` does not ask for it (every test's device is made without it, under the
+/// validation layer); an output in each format the device writes that way traces the frame's
+/// AO, and one it does not is refused by name before anything is recorded.
+#[test]
+fn outputs_need_no_device_wide_formatless_writes() {
+    let wanted = DeviceFeatures::required(true);
+    assert_eq!(wanted.core.features.shader_storage_image_write_without_format, vk::FALSE);
+    let f = Frame::new();
+    let ctx = f.context(0);
+    let reference = f.ao(&ctx, Some(5), false);
+    assert!(reference.iter().any(|v| *v > 0.01 && *v < 0.99), "the image is noisy: equality means something");
+    let formats = [
+        vk::Format::R8_UNORM,
+        vk::Format::R16_UNORM,
+        vk::Format::R16_SFLOAT,
+        vk::Format::R32_SFLOAT,
+        vk::Format::R8G8B8A8_UNORM,
+        vk::Format::R16G16B16A16_SFLOAT,
+        vk::Format::R32G32B32A32_SFLOAT,
+    ];
+    let mut written = 0;
+    for format in formats {
+        let mut props3 = vk::FormatProperties3::default();
+        let mut props2 = vk::FormatProperties2::default().push_next(&mut props3);
+        // SAFETY: a plain query on the host's physical device.
+        unsafe { f.host.instance.get_physical_device_format_properties2(f.host.physical_device, format, &mut props2) };
+        let features = props3.optimal_tiling_features;
+        if !features.contains(vk::FormatFeatureFlags2::STORAGE_IMAGE) {
+            continue;
+        }
+        let out = f.host.image_cleared(format, W, H, vk::ImageUsageFlags::STORAGE, vk::ImageLayout::GENERAL).unwrap();
+        let mut task = f.images.ao_task(&f.camera, 1.0, 2);
+        task.output = out.input(vk::ImageLayout::GENERAL);
+        let mut c = ctx.create_task_container();
+        c.set_frame_index(5);
+        let scheduled = c.schedule_ambient_occlusion(&task);
+        if features.contains(vk::FormatFeatureFlags2::STORAGE_WRITE_WITHOUT_FORMAT) {
+            scheduled.unwrap_or_else(|e| panic!("{format:?}: {e}"));
+            run_frame(&f.host, &ctx, &mut c).unwrap();
+            if format == vk::Format::R32G32B32A32_SFLOAT {
+                let got = f.host.read_image_f32(&out, vk::ImageLayout::GENERAL).unwrap();
+                assert_eq!(got, reference, "frame 5's AO written to {format:?}");
+            }
+            written += 1;
+        } else {
+            match scheduled {
+                Err(Error::UnsupportedFormat { format: refused, .. }) => assert_eq!(refused, format),
+                other => panic!("{format:?} without formatless writes: expected UnsupportedFormat, got {other:?}"),
+            }
+        }
+        f.host.destroy_image(out);
+    }
+    assert!(written >= 2, "the device writes R32F and RGBA32F outputs ({written} formats written)");
+    drop(ctx);
+    f.images.destroy(&f.host);
+}
+
 /// The two checkerboard modes of one frame trace complementary halves of the pixels — each
 /// pixel exactly once between them, in a checker pattern — and the halves swap with the frame.
 #[test]

@@ -25,8 +25,11 @@ const H: u32 = 64;
 
 #[allow(dead_code)] // the test calls `run` instead
 fn main() {
-    let out = std::env::args().nth(1).unwrap_or_else(|| "wgpu_ao.png".into());
-    match run(Some(std::path::Path::new(&out))) {
+    // `--attach`: the device is opened the way an engine or Bevy opens its own (wgpu-hal's
+    // create-device callback), and the SDK attaches to it.
+    let attach = std::env::args().any(|a| a == "--attach");
+    let out = std::env::args().skip(1).find(|a| a != "--attach").unwrap_or_else(|| "wgpu_ao.png".into());
+    match run(Some(std::path::Path::new(&out)), attach) {
         Ok(report) => println!("{report:?}\nwrote {out}"),
         Err(e) => {
             eprintln!("error: {e}");
@@ -67,8 +70,9 @@ impl log::Log for ValidationLog {
     fn flush(&self) {}
 }
 
-/// Opens the device, traces, shows, checks. `out`: where the shown texture goes as a PNG.
-pub fn run(out: Option<&std::path::Path>) -> Result<Report, Box<dyn std::error::Error>> {
+/// Opens the device, traces, shows, checks. `out`: where the shown texture goes as a PNG;
+/// `attach`: open wgpu's device first and attach the SDK to it (else the bridge opens it).
+pub fn run(out: Option<&std::path::Path>, attach: bool) -> Result<Report, Box<dyn std::error::Error>> {
     let _ = log::set_logger(&ValidationLog).map(|()| log::set_max_level(log::LevelFilter::Warn));
     let validation = std::env::var("HRT_VALIDATION").as_deref() != Ok("0");
     if validation {
@@ -89,7 +93,11 @@ pub fn run(out: Option<&std::path::Path>) -> Result<Report, Box<dyn std::error::
         .find(|a| hybrid_rt_wgpu::check_adapter(a).is_ok())
         .ok_or("no Vulkan adapter with ray tracing (run scripts/setup.sh)")?;
     println!("adapter: {}", adapter.get_info().name);
-    let rt = RtDevice::new(&adapter, &wgpu::DeviceDescriptor::default(), &InitSettings::default())?;
+    let rt = if attach {
+        open_and_attach(&adapter)?
+    } else {
+        RtDevice::new(&adapter, &wgpu::DeviceDescriptor::default(), &InitSettings::default())?
+    };
     let (device, queue, ctx) = (&rt.device, &rt.queue, rt.context());
 
     // ---- Geometry in wgpu buffers: a 20x20 ground quad and a 1x1 quad 0.2 above its centre.
@@ -298,4 +306,31 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     pass.set_pipeline(&pipeline);
     pass.set_bind_group(0, &bind, &[]);
     pass.dispatch_workgroups(W / 8, H / 8, 1);
+}
+
+/// Opens wgpu's device as an engine (or Bevy's raw Vulkan initialisation) would — wgpu-hal's
+/// create-device callback adding what the SDK needs — and attaches the SDK to it.
+fn open_and_attach(adapter: &wgpu::Adapter) -> Result<RtDevice, Box<dyn std::error::Error>> {
+    use hybrid_rt_wgpu::{SdkDeviceAdditions, SDK_WGPU_FEATURES};
+    use wgpu::hal::api::Vulkan;
+    let desc = wgpu::DeviceDescriptor {
+        required_features: SDK_WGPU_FEATURES,
+        // SAFETY: the experimental ray-tracing features only get the device's features enabled;
+        // this program makes no wgpu ray-tracing pipeline.
+        experimental_features: unsafe { wgpu::ExperimentalFeatures::enabled() },
+        ..Default::default()
+    };
+    let mut additions = SdkDeviceAdditions::default();
+    // SAFETY: the callback only adds extensions and a feature struct (living in `additions`).
+    let open = unsafe {
+        adapter.as_hal::<Vulkan>().ok_or("not a Vulkan adapter")?.open_with_callback(
+            desc.required_features,
+            &desc.required_limits,
+            &desc.memory_hints,
+            Some(Box::new(|args| additions.apply(args))),
+        )?
+    };
+    // SAFETY: `open` is a device of this adapter, made for `desc`.
+    let (device, queue) = unsafe { adapter.create_device_from_hal(open, &desc) }?;
+    Ok(RtDevice::attach(adapter, &device, &queue, &InitSettings::default())?)
 }

@@ -3,7 +3,9 @@
 //! Many Rust engines render with wgpu. This crate lets such an engine use hybrid-rt without
 //! leaving wgpu: it opens the wgpu device itself, on the engine's adapter, with everything the
 //! SDK needs (extensions and features merged into what wgpu asked for — one `VkDevice` serves
-//! both), makes the SDK's [`ExecuteContext`] on it, turns wgpu textures and buffers into the
+//! both; [`RtDevice::new`]) or attaches to a device the engine opened with
+//! [`SDK_WGPU_FEATURES`] and [`SdkDeviceAdditions`] ([`RtDevice::attach`]), makes the SDK's
+//! [`ExecuteContext`] on it, turns wgpu textures and buffers into the
 //! SDK's inputs, and records a [`TaskContainer`] into a wgpu command buffer through wgpu's
 //! HAL escape hatch. The command buffer is submitted with the engine's others, on wgpu's queue;
 //! the ticket goes back to the SDK after the submission completed.
@@ -57,6 +59,69 @@ pub const SDK_READ: wgpu::TextureUses = wgpu::TextureUses::RESOURCE;
 pub const SDK_WRITE: wgpu::TextureUses = wgpu::TextureUses::STORAGE_READ_WRITE;
 /// The state of a buffer the SDK copies geometry from.
 pub const SDK_COPY: wgpu::BufferUses = wgpu::BufferUses::COPY_SRC;
+
+/// The wgpu features a device made elsewhere (by the engine, by Bevy) must have been created
+/// with for [`RtDevice::attach`]: with them wgpu itself enables the acceleration-structure,
+/// ray-tracing-pipeline, buffer-device-address and float-atomic extensions and their features.
+/// Add [`wgpu::Features::EXPERIMENTAL_RAY_QUERY`] for the SDK's ray-query paths where the
+/// adapter has it. The "EXPERIMENTAL" features need `ExperimentalFeatures::enabled()` in the
+/// `DeviceDescriptor`.
+pub const SDK_WGPU_FEATURES: wgpu::Features =
+    wgpu::Features::EXPERIMENTAL_RAY_TRACING_PIPELINES.union(wgpu::Features::SHADER_FLOAT32_ATOMIC);
+
+/// What the SDK needs on a device that wgpu-hal creates and wgpu does not enable for
+/// [`SDK_WGPU_FEATURES`]: the rest of [`hybrid_rt::REQUIRED_DEVICE_EXTENSIONS`] (push
+/// descriptors) and `synchronization2`. Apply it from wgpu-hal's create-device callback
+/// (`wgpu::hal::vulkan::Adapter::open_with_callback`, or Bevy's raw Vulkan initialisation);
+/// it must outlive the device's creation (the callback links its feature struct into the
+/// create info).
+///
+/// ```no_run
+/// # fn demo(adapter: &wgpu::Adapter) -> Result<(), Box<dyn std::error::Error>> {
+/// use hybrid_rt_wgpu::{RtDevice, SdkDeviceAdditions, SDK_WGPU_FEATURES};
+/// use wgpu::hal::api::Vulkan;
+/// let desc = wgpu::DeviceDescriptor {
+///     required_features: SDK_WGPU_FEATURES,
+///     // SAFETY: the SDK uses wgpu's ray-tracing features only to have them enabled.
+///     experimental_features: unsafe { wgpu::ExperimentalFeatures::enabled() },
+///     ..Default::default()
+/// };
+/// let mut additions = SdkDeviceAdditions::default();
+/// // SAFETY: the callback only adds extensions and a feature struct.
+/// let open = unsafe {
+///     adapter.as_hal::<Vulkan>().ok_or("not Vulkan")?.open_with_callback(
+///         desc.required_features,
+///         &desc.required_limits,
+///         &desc.memory_hints,
+///         Some(Box::new(|args| additions.apply(args))),
+///     )?
+/// };
+/// // SAFETY: `open` is a device of this adapter.
+/// let (device, queue) = unsafe { adapter.create_device_from_hal(open, &desc) }?;
+/// let rt = RtDevice::attach(adapter, &device, &queue, &hybrid_rt::InitSettings::default())?;
+/// # Ok(()) }
+/// ```
+#[derive(Debug, Default)]
+pub struct SdkDeviceAdditions {
+    synchronization2: vk::PhysicalDeviceSynchronization2Features<'static>,
+}
+
+impl SdkDeviceAdditions {
+    /// Adds the SDK's extensions (those not already listed) and a
+    /// `VkPhysicalDeviceSynchronization2Features` to the device wgpu-hal is about to create.
+    pub fn apply<'pnext>(&'pnext mut self, args: wgpu::hal::vulkan::CreateDeviceCallbackArgs<'_, 'pnext, '_>) {
+        for e in hybrid_rt::REQUIRED_DEVICE_EXTENSIONS {
+            if !args.extensions.contains(e) {
+                args.extensions.push(e);
+            }
+        }
+        self.synchronization2 = vk::PhysicalDeviceSynchronization2Features::default().synchronization2(true);
+        // wgpu chains per-extension feature structs and never this one (nor a Vulkan13Features
+        // that would also carry it): the chain gets one struct of its type.
+        self.synchronization2.p_next = args.create_info.p_next as *mut std::ffi::c_void;
+        args.create_info.p_next = &self.synchronization2 as *const _ as *const std::ffi::c_void;
+    }
+}
 
 /// What can go wrong between wgpu and the SDK.
 #[derive(Debug, thiserror::Error)]
@@ -193,6 +258,72 @@ impl RtDevice {
         // the context is dropped before the wgpu device (field order).
         let context = unsafe { ExecuteContext::new(&dd, settings) }?;
         Ok(RtDevice { context, raw, queue, device, adapter: adapter.clone() })
+    }
+
+    /// The SDK's context on a wgpu device made elsewhere — by the engine or by Bevy — with
+    /// [`SDK_WGPU_FEATURES`] and [`SdkDeviceAdditions`] applied in wgpu-hal's create-device
+    /// callback. Checked: the adapter, the device's wgpu features and its enabled extensions
+    /// (an error names what is missing). Not checkable (a `VkDevice` cannot be asked): that
+    /// `synchronization2` was enabled, which `SdkDeviceAdditions` does. Ray queries are used
+    /// where the device has [`wgpu::Features::EXPERIMENTAL_RAY_QUERY`].
+    ///
+    /// The returned `RtDevice` holds clones of `device` and `queue`; drop it (the context)
+    /// before the engine destroys the device.
+    pub fn attach(
+        adapter: &wgpu::Adapter,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        settings: &InitSettings,
+    ) -> Result<RtDevice, BridgeError> {
+        check_adapter(adapter)?;
+        let features = device.features();
+        if !features.contains(SDK_WGPU_FEATURES) {
+            return Err(BridgeError::Unsupported(format!(
+                "the device was created without the wgpu features {:?} (SDK_WGPU_FEATURES)",
+                SDK_WGPU_FEATURES.difference(features)
+            )));
+        }
+        // SAFETY: as in `new`.
+        let hal = unsafe { adapter.as_hal::<Vulkan>() }.ok_or(BridgeError::NotVulkan("adapter"))?;
+        let shared = hal.shared_instance();
+        let (entry, instance) = (shared.entry().clone(), shared.raw_instance().clone());
+        let pdev = hal.raw_physical_device();
+        let api_version =
+            if shared.instance_api_version() >= vk::API_VERSION_1_1 { vk::API_VERSION_1_3 } else { vk::API_VERSION_1_0 };
+        drop(hal);
+        // SAFETY: the raw device and its extension list are read while `device` lives.
+        let hal_device = unsafe { device.as_hal::<Vulkan>() }.ok_or(BridgeError::NotVulkan("device"))?;
+        let raw = hal_device.raw_device().clone();
+        let extensions: Vec<&'static CStr> = hal_device.enabled_device_extensions().to_vec();
+        drop(hal_device);
+        let missing: Vec<String> = hybrid_rt::REQUIRED_DEVICE_EXTENSIONS
+            .iter()
+            .filter(|e| !extensions.contains(e))
+            .map(|e| e.to_string_lossy().into_owned())
+            .collect();
+        if !missing.is_empty() {
+            return Err(BridgeError::Unsupported(format!(
+                "the device was created without {} (apply SdkDeviceAdditions in the create-device callback)",
+                missing.join(", ")
+            )));
+        }
+        let ray_query = features.contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY)
+            && extensions.contains(&hybrid_rt::OPTIONAL_DEVICE_EXTENSIONS[0]);
+        // What the device was created with, as the SDK reads it: SDK_WGPU_FEATURES made wgpu
+        // enable the ray-tracing, address and atomic features, SdkDeviceAdditions
+        // synchronization2 (the chain is read during `ExecuteContext::new` only).
+        let mut enabled = DeviceFeatures::required(ray_query);
+        let _ = enabled.push_to(vk::DeviceCreateInfo::default());
+        let dd = DeviceDesc::new(&entry, &instance, pdev, &raw)
+            .enabled_extensions(&extensions)
+            .instance_api_version(api_version)
+            .enabled_features(enabled.chain())
+            .with_debug_utils(shared_has_debug_utils(adapter));
+        // SAFETY: the live instance, physical device and device of `device`, made with
+        // `extensions` and (the caller's contract, checked above where it can be) the SDK's
+        // features; the context is dropped before the clones of the wgpu device it holds.
+        let context = unsafe { ExecuteContext::new(&dd, settings) }?;
+        Ok(RtDevice { context, raw, queue: queue.clone(), device: device.clone(), adapter: adapter.clone() })
     }
 
     /// The SDK's context: handles, containers, tickets.

@@ -81,7 +81,7 @@ unsafe fn extension_list(
 /// The device extensions the SDK needs (static strings). Enable all of them, plus
 /// VK_KHR_ray_query where the device has it (`hrt_optional_device_extensions`), and these
 /// features: bufferDeviceAddress (1.2), synchronization2 (1.3), accelerationStructure,
-/// rayTracingPipeline, shaderStorageImageWriteWithoutFormat (and rayQuery if enabled).
+/// rayTracingPipeline, shaderBufferFloat32AtomicAdd (and rayQuery if enabled).
 #[no_mangle]
 pub unsafe extern "C" fn hrt_required_device_extensions(names: *mut *const *const c_char, count: *mut u32) {
     static NAMES: std::sync::OnceLock<Vec<usize>> = std::sync::OnceLock::new();

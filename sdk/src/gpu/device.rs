@@ -2,7 +2,7 @@
 //! the check that everything the SDK relies on is there (with an error naming what is not).
 use crate::error::{Error, Result};
 use crate::gpu::commands::Commands;
-use crate::gpu::formats::MaskFormats;
+use crate::gpu::formats::{MaskFormats, WriteFormats};
 use ash::{khr, vk};
 use std::ffi::CStr;
 
@@ -56,7 +56,7 @@ pub fn query_device_support(instance: &ash::Instance, pdev: vk::PhysicalDevice) 
     let mut frt = vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default();
     let mut frq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
     let mut faf = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default();
-    let core = {
+    {
         let mut f2 = vk::PhysicalDeviceFeatures2::default()
             .push_next(&mut f12)
             .push_next(&mut f13)
@@ -66,15 +66,13 @@ pub fn query_device_support(instance: &ash::Instance, pdev: vk::PhysicalDevice) 
             .push_next(&mut faf);
         // SAFETY: a well-formed feature chain that lives for the call.
         unsafe { instance.get_physical_device_features2(pdev, &mut f2) };
-        f2.features
-    };
-    let checks: [(&str, vk::Bool32); 6] = [
+    }
+    let checks: [(&str, vk::Bool32); 5] = [
         ("feature shaderBufferFloat32AtomicAdd", faf.shader_buffer_float32_atomic_add),
         ("feature bufferDeviceAddress", f12.buffer_device_address),
         ("feature synchronization2", f13.synchronization2),
         ("feature accelerationStructure", fas.acceleration_structure),
         ("feature rayTracingPipeline", frt.ray_tracing_pipeline),
-        ("feature shaderStorageImageWriteWithoutFormat", core.shader_storage_image_write_without_format),
     ];
     for (name, on) in checks {
         if on != vk::TRUE {
@@ -136,6 +134,8 @@ pub(crate) struct Limits {
     pub max_image_dimension_2d: u32,
     /// The float-readable colour formats the device samples (input masks).
     pub mask_formats: MaskFormats,
+    /// The output formats the device writes without a format qualifier (engine outputs).
+    pub write_formats: WriteFormats,
 }
 
 /// The handles and what the engine says it made them with (the loader and function tables
@@ -312,6 +312,7 @@ impl Device {
             max_ray_dispatch: rt_props.max_ray_dispatch_invocation_count,
             max_image_dimension_2d: limits.max_image_dimension2_d,
             mask_formats: MaskFormats::query(desc.instance, desc.physical_device),
+            write_formats: WriteFormats::query(desc.instance, desc.physical_device),
         };
 
         Ok(Device {

@@ -9,7 +9,6 @@ use std::ffi::c_void;
 /// One feature the SDK relies on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Feature {
-    ShaderStorageImageWriteWithoutFormat,
     BufferDeviceAddress,
     Synchronization2,
     AccelerationStructure,
@@ -19,8 +18,7 @@ pub(crate) enum Feature {
 }
 
 impl Feature {
-    pub const REQUIRED: [Feature; 6] = [
-        Feature::ShaderStorageImageWriteWithoutFormat,
+    pub const REQUIRED: [Feature; 5] = [
         Feature::BufferDeviceAddress,
         Feature::Synchronization2,
         Feature::AccelerationStructure,
@@ -30,7 +28,6 @@ impl Feature {
 
     pub fn name(self) -> &'static str {
         match self {
-            Feature::ShaderStorageImageWriteWithoutFormat => "shaderStorageImageWriteWithoutFormat",
             Feature::BufferDeviceAddress => "bufferDeviceAddress",
             Feature::Synchronization2 => "synchronization2",
             Feature::AccelerationStructure => "accelerationStructure",
@@ -62,10 +59,6 @@ unsafe fn visit(s: *mut vk::BaseOutStructure<'_>, set: &[Feature], found: &mut V
     // so the cast matches the memory behind it.
     unsafe {
         match (*s).s_type {
-            T::PHYSICAL_DEVICE_FEATURES_2 => {
-                let s = &mut *(s as *mut vk::PhysicalDeviceFeatures2<'_>);
-                mark(Feature::ShaderStorageImageWriteWithoutFormat, &mut s.features.shader_storage_image_write_without_format);
-            }
             T::PHYSICAL_DEVICE_VULKAN_1_2_FEATURES => mark(
                 Feature::BufferDeviceAddress,
                 &mut (*(s as *mut vk::PhysicalDeviceVulkan12Features<'_>)).buffer_device_address,
@@ -128,7 +121,10 @@ pub(crate) unsafe fn enabled_in(chain: *const c_void) -> Vec<Feature> {
 /// until `vkCreateDevice` — and `ExecuteContext::new`, which reads the chain — have returned.
 #[non_exhaustive]
 pub struct DeviceFeatures {
-    /// `shaderStorageImageWriteWithoutFormat`; the head of the chain `push_to` builds.
+    /// The head of the chain `push_to` builds; no core feature is needed (the SDK writes
+    /// engine images without a format qualifier only in formats whose
+    /// `VK_FORMAT_FEATURE_2_STORAGE_WRITE_WITHOUT_FORMAT_BIT` the device reports, which Vulkan
+    /// 1.3 allows without `shaderStorageImageWriteWithoutFormat`).
     pub core: vk::PhysicalDeviceFeatures2<'static>,
     /// `bufferDeviceAddress` (`push_to`).
     pub vulkan12: vk::PhysicalDeviceVulkan12Features<'static>,
@@ -160,8 +156,7 @@ impl DeviceFeatures {
     /// VK_KHR_ray_query: see [`DeviceSupport`](crate::DeviceSupport)).
     pub fn required(with_ray_query: bool) -> Self {
         DeviceFeatures {
-            core: vk::PhysicalDeviceFeatures2::default()
-                .features(vk::PhysicalDeviceFeatures::default().shader_storage_image_write_without_format(true)),
+            core: vk::PhysicalDeviceFeatures2::default(),
             vulkan12: vk::PhysicalDeviceVulkan12Features::default().buffer_device_address(true),
             vulkan13: vk::PhysicalDeviceVulkan13Features::default().synchronization2(true),
             acceleration_structure: vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true),

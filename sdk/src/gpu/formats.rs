@@ -78,3 +78,55 @@ impl MaskFormats {
         FLOAT_READABLE_FORMATS.iter().position(|g| *g == f).is_some_and(|i| self.0 & (1 << i) != 0)
     }
 }
+
+/// Every format an engine image the SDK writes may have (trace, denoise and debug outputs):
+/// the shaders declare those images without a format qualifier, so one shader serves them all.
+pub(crate) const OUTPUT_FORMATS: &[vk::Format] = &[
+    vk::Format::R8_UNORM,
+    vk::Format::R16_UNORM,
+    vk::Format::R16_SFLOAT,
+    vk::Format::R32_SFLOAT,
+    vk::Format::R16G16_SFLOAT,
+    vk::Format::R32G32_SFLOAT,
+    vk::Format::R8G8B8A8_UNORM,
+    vk::Format::R16G16B16A16_SFLOAT,
+    vk::Format::R32G32B32A32_SFLOAT,
+    vk::Format::R32_UINT,
+    vk::Format::R32G32B32A32_UINT,
+];
+
+/// Which of `OUTPUT_FORMATS` the device writes without a format qualifier
+/// (`VK_FORMAT_FEATURE_2_STORAGE_WRITE_WITHOUT_FORMAT_BIT`, optimal tiling; bit i: format i),
+/// asked once when the context is made. Vulkan 1.3 reports it per format, so the SDK needs no
+/// device-wide `shaderStorageImageWriteWithoutFormat` (which wgpu, for one, leaves off).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct WriteFormats(u64);
+
+impl WriteFormats {
+    pub(crate) fn query(instance: &ash::Instance, pdev: vk::PhysicalDevice) -> WriteFormats {
+        const _: () = assert!(OUTPUT_FORMATS.len() <= 64);
+        let writable = |f: vk::Format| {
+            let mut props3 = vk::FormatProperties3::default();
+            let mut props2 = vk::FormatProperties2::default().push_next(&mut props3);
+            // SAFETY: a plain query on the engine's physical device (Vulkan 1.3, checked
+            // before the context is made), with a property chain alive for the call.
+            unsafe { instance.get_physical_device_format_properties2(pdev, f, &mut props2) };
+            props3
+                .optimal_tiling_features
+                .contains(vk::FormatFeatureFlags2::STORAGE_IMAGE | vk::FormatFeatureFlags2::STORAGE_WRITE_WITHOUT_FORMAT)
+        };
+        WriteFormats(OUTPUT_FORMATS.iter().enumerate().filter(|(_, f)| writable(**f)).fold(0, |m, (i, _)| m | 1 << i))
+    }
+
+    /// Every output format (tests).
+    #[cfg(test)]
+    pub(crate) fn all_outputs() -> WriteFormats {
+        WriteFormats((1u64 << OUTPUT_FORMATS.len()) - 1)
+    }
+
+    /// Whether the SDK's shaders can write an image of format `f` on this device (false for
+    /// a format that is not an output format).
+    pub(crate) fn writable(&self, f: vk::Format) -> bool {
+        OUTPUT_FORMATS.iter().position(|g| *g == f).is_some_and(|i| self.0 & (1 << i) != 0)
+    }
+}

@@ -20,7 +20,7 @@ impl Check for TraceShadowTask {
         let (t, limits) = (self, &shared.device.limits);
         trace_common(&t.common, limits, Common::Trace)?;
         if t.common.debug_output != DebugOutput::Default {
-            image("TraceShadowTask.output", &t.output, &t.common.viewport, Use::Storage)?;
+            image("TraceShadowTask.output", &t.output, &t.common.viewport, Use::Storage(limits.write_formats))?;
             return format_in(
                 "TraceShadowTask.output (debug output)",
                 t.output.format,
@@ -28,7 +28,7 @@ impl Check for TraceShadowTask {
                 "an RGBA format for a debug visualisation",
             );
         }
-        image("TraceShadowTask.output", &t.output, &t.common.viewport, Use::Storage)?;
+        image("TraceShadowTask.output", &t.output, &t.common.viewport, Use::Storage(limits.write_formats))?;
         format_in(
             "TraceShadowTask.output",
             t.output.format,
@@ -150,7 +150,7 @@ impl Check for TraceMultiShadowTask {
             light("TraceMultiShadowTask.lights[]", l)?;
         }
         let vp = &t.common.viewport;
-        image("TraceMultiShadowTask.visibility", &t.visibility, vp, Use::Storage)?;
+        image("TraceMultiShadowTask.visibility", &t.visibility, vp, Use::Storage(limits.write_formats))?;
         let vis_formats: &[vk::Format] = if t.lights.len() <= 4 {
             &[vk::Format::R32_UINT, vk::Format::R32G32B32A32_UINT]
         } else {
@@ -177,7 +177,7 @@ impl Check for TraceMultiShadowTask {
                     "given with 16 lights or fewer: leave it null",
                 ));
             }
-            image("TraceMultiShadowTask.visibility_high", &t.visibility_high, vp, Use::Storage)?;
+            image("TraceMultiShadowTask.visibility_high", &t.visibility_high, vp, Use::Storage(limits.write_formats))?;
             let formats: &[vk::Format] =
                 if high <= 4 { &[vk::Format::R32_UINT, vk::Format::R32G32B32A32_UINT] } else { &[vk::Format::R32G32B32A32_UINT] };
             format_in(
@@ -203,7 +203,7 @@ impl Check for TraceMultiShadowTask {
                     format!("light {} of {} lights", o.light, t.lights.len()),
                 ));
             }
-            image("TraceMultiShadowTask.light_outputs[].output", &o.output, vp, Use::Storage)?;
+            image("TraceMultiShadowTask.light_outputs[].output", &o.output, vp, Use::Storage(limits.write_formats))?;
             format_in(
                 "TraceMultiShadowTask.light_outputs[].output",
                 o.output.format,
@@ -218,7 +218,7 @@ impl Check for TraceMultiShadowTask {
                 ));
             }
         }
-        image("TraceMultiShadowTask.packed", &t.packed, vp, Use::Storage)?;
+        image("TraceMultiShadowTask.packed", &t.packed, vp, Use::Storage(limits.write_formats))?;
         format_in(
             "TraceMultiShadowTask.packed",
             t.packed.format,

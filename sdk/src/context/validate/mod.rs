@@ -4,6 +4,7 @@
 use crate::context::Shared;
 use crate::error::{Error, Result};
 use crate::gpu::device::Limits;
+use crate::gpu::formats::{WriteFormats, OUTPUT_FORMATS};
 use crate::types::*;
 use ash::vk;
 use glam::{Affine3A, Mat4};
@@ -81,7 +82,8 @@ const INPUT_LAYOUTS: &[vk::ImageLayout] = &[
 #[derive(Clone, Copy)]
 enum Use {
     Sampled,
-    Storage,
+    /// Written: in one of the formats the device writes without a format qualifier.
+    Storage(WriteFormats),
 }
 
 fn image(what: &'static str, img: &ImageInput, vp: &Viewport, role: Use) -> Result<()> {
@@ -90,7 +92,7 @@ fn image(what: &'static str, img: &ImageInput, vp: &Viewport, role: Use) -> Resu
     }
     let (layouts, usage, usage_name): (&[vk::ImageLayout], _, _) = match role {
         Use::Sampled => (INPUT_LAYOUTS, vk::ImageUsageFlags::SAMPLED, "SAMPLED"),
-        Use::Storage => (&[vk::ImageLayout::GENERAL], vk::ImageUsageFlags::STORAGE, "STORAGE"),
+        Use::Storage(_) => (&[vk::ImageLayout::GENERAL], vk::ImageUsageFlags::STORAGE, "STORAGE"),
     };
     // Vulkan cannot tell an image's usage, and binding one without it is undefined behaviour
     // (a crash at descriptor write on some drivers): the engine declares it.
@@ -102,6 +104,17 @@ fn image(what: &'static str, img: &ImageInput, vp: &Viewport, role: Use) -> Resu
     }
     if !layouts.contains(&img.layout) {
         return Err(Error::invalid(what, format!("layout {:?} is not one of {layouts:?}", img.layout)));
+    }
+    // The shaders declare engine outputs without a format qualifier; Vulkan 1.3 allows that per
+    // format (a format outside the output list is refused below, by the task's own list).
+    if let Use::Storage(writes) = role {
+        if OUTPUT_FORMATS.contains(&img.format) && !writes.writable(img.format) {
+            return Err(Error::UnsupportedFormat {
+                what,
+                format: img.format,
+                expected: "a format this device writes without a format qualifier (VK_FORMAT_FEATURE_2_STORAGE_WRITE_WITHOUT_FORMAT_BIT)",
+            });
+        }
     }
     if vp.x as u64 + vp.width as u64 > img.width as u64 || vp.y as u64 + vp.height as u64 > img.height as u64 {
         return Err(Error::invalid(
@@ -301,8 +314,14 @@ pub(crate) fn trace_common(c: &TraceCommon, limits: &Limits, on: Common) -> Resu
     Ok(())
 }
 
-pub(crate) fn output_image(what: &'static str, img: &ImageInput, vp: &Viewport, formats: &[vk::Format]) -> Result<()> {
-    image(what, img, vp, Use::Storage)?;
+pub(crate) fn output_image(
+    what: &'static str,
+    img: &ImageInput,
+    vp: &Viewport,
+    formats: &[vk::Format],
+    limits: &Limits,
+) -> Result<()> {
+    image(what, img, vp, Use::Storage(limits.write_formats))?;
     format_in(what, img.format, formats, "R8/R16/R32 single channel or an RGBA 8/16/32-bit format")
 }
 
@@ -315,7 +334,7 @@ impl Check for TraceAmbientOcclusionTask {
         let (t, limits) = (self, &shared.device.limits);
         trace_common(&t.common, limits, Common::Trace)?;
         if t.common.debug_output != DebugOutput::Default {
-            image("TraceAmbientOcclusionTask.output", &t.output, &t.common.viewport, Use::Storage)?;
+            image("TraceAmbientOcclusionTask.output", &t.output, &t.common.viewport, Use::Storage(limits.write_formats))?;
             format_in(
                 "TraceAmbientOcclusionTask.output (debug output)",
                 t.output.format,
@@ -323,7 +342,7 @@ impl Check for TraceAmbientOcclusionTask {
                 "R8G8B8A8_UNORM, R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT for a debug visualisation",
             )?;
         } else {
-            output_image("TraceAmbientOcclusionTask.output", &t.output, &t.common.viewport, SCALAR_OUTPUT_FORMATS)?;
+            output_image("TraceAmbientOcclusionTask.output", &t.output, &t.common.viewport, SCALAR_OUTPUT_FORMATS, limits)?;
         }
         if !(t.ray_length.is_finite() && t.ray_length > 0.0) {
             return Err(Error::invalid("TraceAmbientOcclusionTask.ray_length", "must be finite and > 0"));
@@ -435,7 +454,7 @@ impl Check for TraceDiffuseTask {
         let (t, limits) = (self, &shared.device.limits);
         trace_common(&t.common, limits, Common::Trace)?;
         environment("TraceDiffuseTask.environment", &t.environment)?;
-        image("TraceDiffuseTask.output", &t.output, &t.common.viewport, Use::Storage)?;
+        image("TraceDiffuseTask.output", &t.output, &t.common.viewport, Use::Storage(limits.write_formats))?;
         format_in(
             "TraceDiffuseTask.output",
             t.output.format,
@@ -460,7 +479,7 @@ impl Check for TraceSpecularTask {
         let (t, limits) = (self, &shared.device.limits);
         trace_common(&t.common, limits, Common::Trace)?;
         environment("TraceSpecularTask.environment", &t.environment)?;
-        image("TraceSpecularTask.output", &t.output, &t.common.viewport, Use::Storage)?;
+        image("TraceSpecularTask.output", &t.output, &t.common.viewport, Use::Storage(limits.write_formats))?;
         let formats = [vk::Format::R16G16B16A16_SFLOAT, vk::Format::R32G32B32A32_SFLOAT];
         if t.common.debug_output == DebugOutput::Default {
             format_in("TraceSpecularTask.output", t.output.format, &formats, "R16G16B16A16_SFLOAT or R32G32B32A32_SFLOAT")?;
@@ -468,7 +487,12 @@ impl Check for TraceSpecularTask {
             format_in("TraceSpecularTask.output (debug output)", t.output.format, COLOR_OUTPUT_FORMATS, "an RGBA format")?;
         }
         if t.demodulated_output.image != vk::Image::null() {
-            image("TraceSpecularTask.demodulated_output", &t.demodulated_output, &t.common.viewport, Use::Storage)?;
+            image(
+                "TraceSpecularTask.demodulated_output",
+                &t.demodulated_output,
+                &t.common.viewport,
+                Use::Storage(limits.write_formats),
+            )?;
             format_in(
                 "TraceSpecularTask.demodulated_output",
                 t.demodulated_output.format,
@@ -592,12 +616,43 @@ impl Check for Box<DenoiseJob> {
             let (input, output) = denoise_image_fields(j.signal, k);
             image(input, &j.inputs[k], vp, Use::Sampled)?;
             format_in(input, j.inputs[k].format, inputs, "the format of the trace task's output for this signal")?;
-            image(output, &j.outputs[k], vp, Use::Storage)?;
+            image(output, &j.outputs[k], vp, Use::Storage(limits.write_formats))?;
             format_in(output, j.outputs[k].format, outputs, "an RGBA16F/32F (radiance) or scalar/RGBA (visibility) format")?;
         }
         if j.signal == SignalType::Shadow {
             light("DenoiseShadowTask.light", &j.light)?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ash::vk::Handle;
+
+    /// An output the device cannot write without a format qualifier is refused by name, before
+    /// anything reaches the driver; the same image is accepted where the device can.
+    #[test]
+    fn a_storage_output_needs_formatless_writes_in_its_format() {
+        let img = ImageInput {
+            image: vk::Image::from_raw(1),
+            view: vk::ImageView::from_raw(2),
+            format: vk::Format::R16_SFLOAT,
+            width: 8,
+            height: 8,
+            layout: vk::ImageLayout::GENERAL,
+            usage: vk::ImageUsageFlags::STORAGE,
+        };
+        let vp = Viewport::full(8, 8);
+        match image("output", &img, &vp, Use::Storage(WriteFormats::default())) {
+            Err(Error::UnsupportedFormat { what: "output", format: vk::Format::R16_SFLOAT, .. }) => {}
+            other => panic!("expected UnsupportedFormat, got {other:?}"),
+        }
+        assert!(image("output", &img, &vp, Use::Storage(WriteFormats::all_outputs())).is_ok());
+        // Read through a sampler, the format needs no storage support.
+        let sampled =
+            ImageInput { usage: vk::ImageUsageFlags::SAMPLED, layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, ..img };
+        assert!(image("input", &sampled, &vp, Use::Sampled).is_ok());
     }
 }
