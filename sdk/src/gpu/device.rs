@@ -2,7 +2,7 @@
 //! the check that everything the SDK relies on is there (with an error naming what is not).
 use crate::error::{Error, Result};
 use crate::gpu::commands::Commands;
-use crate::gpu::formats::{MaskFormats, WriteFormats};
+use crate::gpu::formats::FormatSet;
 use ash::{khr, vk};
 use std::ffi::CStr;
 
@@ -133,9 +133,9 @@ pub(crate) struct Limits {
     /// maxImageDimension2D (denoiser history images).
     pub max_image_dimension_2d: u32,
     /// The float-readable colour formats the device samples (input masks).
-    pub mask_formats: MaskFormats,
+    pub mask_formats: FormatSet,
     /// The output formats the device writes without a format qualifier (engine outputs).
-    pub write_formats: WriteFormats,
+    pub write_formats: FormatSet,
 }
 
 /// The handles and what the engine says it made them with (the loader and function tables
@@ -311,8 +311,8 @@ impl Device {
             max_dispatch_groups: [limits.max_compute_work_group_count[0], limits.max_compute_work_group_count[1]],
             max_ray_dispatch: rt_props.max_ray_dispatch_invocation_count,
             max_image_dimension_2d: limits.max_image_dimension2_d,
-            mask_formats: MaskFormats::query(desc.instance, desc.physical_device),
-            write_formats: WriteFormats::query(desc.instance, desc.physical_device),
+            mask_formats: FormatSet::sampled(desc.instance, desc.physical_device),
+            write_formats: FormatSet::written_without_format(desc.instance, desc.physical_device),
         };
 
         Ok(Device {

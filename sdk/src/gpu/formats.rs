@@ -14,7 +14,7 @@ pub(crate) fn channel_count(f: vk::Format) -> Option<u32> {
 
 /// Colour formats a float sampler reads, the R channel first: unorm, snorm, sRGB and float,
 /// packed or not. The input mask accepts those of them the device can sample
-/// (`MaskFormats`); integer formats need an integer sampler, and depth/stencil formats an
+/// (`FormatSet::sampled`); integer formats need an integer sampler, and depth/stencil formats an
 /// aspect the SDK's views do not choose.
 pub(crate) const FLOAT_READABLE_FORMATS: &[vk::Format] = &[
     vk::Format::R8_UNORM,
@@ -57,28 +57,6 @@ pub(crate) const FLOAT_READABLE_FORMATS: &[vk::Format] = &[
     vk::Format::R32G32B32A32_SFLOAT,
 ];
 
-/// Which of `FLOAT_READABLE_FORMATS` the device samples in optimal tiling (bit i: format i),
-/// asked once when the context is made.
-#[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct MaskFormats(u64);
-
-impl MaskFormats {
-    pub(crate) fn query(instance: &ash::Instance, pdev: vk::PhysicalDevice) -> MaskFormats {
-        const _: () = assert!(FLOAT_READABLE_FORMATS.len() <= 64);
-        let sampled = |f: vk::Format| {
-            // SAFETY: a plain query on the engine's physical device.
-            let props = unsafe { instance.get_physical_device_format_properties(pdev, f) };
-            props.optimal_tiling_features.contains(vk::FormatFeatureFlags::SAMPLED_IMAGE)
-        };
-        MaskFormats(FLOAT_READABLE_FORMATS.iter().enumerate().filter(|(_, f)| sampled(**f)).fold(0, |m, (i, _)| m | 1 << i))
-    }
-
-    /// Whether the device samples `f` (false for a format not float-readable).
-    pub(crate) fn sampled(&self, f: vk::Format) -> bool {
-        FLOAT_READABLE_FORMATS.iter().position(|g| *g == f).is_some_and(|i| self.0 & (1 << i) != 0)
-    }
-}
-
 /// Every format an engine image the SDK writes may have (trace, denoise and debug outputs):
 /// the shaders declare those images without a format qualifier, so one shader serves them all.
 pub(crate) const OUTPUT_FORMATS: &[vk::Format] = &[
@@ -95,38 +73,54 @@ pub(crate) const OUTPUT_FORMATS: &[vk::Format] = &[
     vk::Format::R32G32B32A32_UINT,
 ];
 
-/// Which of `OUTPUT_FORMATS` the device writes without a format qualifier
-/// (`VK_FORMAT_FEATURE_2_STORAGE_WRITE_WITHOUT_FORMAT_BIT`, optimal tiling; bit i: format i),
-/// asked once when the context is made. Vulkan 1.3 reports it per format, so the SDK needs no
-/// device-wide `shaderStorageImageWriteWithoutFormat` (which wgpu, for one, leaves off).
+/// Which formats of one of the lists above the device supports for one use (bit i: the
+/// list's format i), asked once when the context is made.
 #[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct WriteFormats(u64);
+pub(crate) struct FormatSet {
+    list: &'static [vk::Format],
+    bits: u64,
+}
 
-impl WriteFormats {
-    pub(crate) fn query(instance: &ash::Instance, pdev: vk::PhysicalDevice) -> WriteFormats {
-        const _: () = assert!(OUTPUT_FORMATS.len() <= 64);
-        let writable = |f: vk::Format| {
+impl FormatSet {
+    /// The formats of `list` for which `supported` holds.
+    fn of(list: &'static [vk::Format], supported: impl Fn(vk::Format) -> bool) -> FormatSet {
+        const _: () = assert!(FLOAT_READABLE_FORMATS.len() <= 64 && OUTPUT_FORMATS.len() <= 64);
+        FormatSet { list, bits: list.iter().enumerate().filter(|(_, f)| supported(**f)).fold(0, |m, (i, _)| m | 1 << i) }
+    }
+
+    /// The `FLOAT_READABLE_FORMATS` the device samples in optimal tiling (input masks).
+    pub(crate) fn sampled(instance: &ash::Instance, pdev: vk::PhysicalDevice) -> FormatSet {
+        FormatSet::of(FLOAT_READABLE_FORMATS, |f| {
+            // SAFETY: a plain query on the engine's physical device.
+            let props = unsafe { instance.get_physical_device_format_properties(pdev, f) };
+            props.optimal_tiling_features.contains(vk::FormatFeatureFlags::SAMPLED_IMAGE)
+        })
+    }
+
+    /// The `OUTPUT_FORMATS` the device writes without a format qualifier
+    /// (`VK_FORMAT_FEATURE_2_STORAGE_WRITE_WITHOUT_FORMAT_BIT`, optimal tiling). Vulkan 1.3
+    /// reports it per format, so the SDK needs no device-wide
+    /// `shaderStorageImageWriteWithoutFormat` (which wgpu, for one, leaves off).
+    pub(crate) fn written_without_format(instance: &ash::Instance, pdev: vk::PhysicalDevice) -> FormatSet {
+        FormatSet::of(OUTPUT_FORMATS, |f| {
             let mut props3 = vk::FormatProperties3::default();
             let mut props2 = vk::FormatProperties2::default().push_next(&mut props3);
             // SAFETY: a plain query on the engine's physical device (Vulkan 1.3, checked
             // before the context is made), with a property chain alive for the call.
             unsafe { instance.get_physical_device_format_properties2(pdev, f, &mut props2) };
-            props3
-                .optimal_tiling_features
-                .contains(vk::FormatFeatureFlags2::STORAGE_IMAGE | vk::FormatFeatureFlags2::STORAGE_WRITE_WITHOUT_FORMAT)
-        };
-        WriteFormats(OUTPUT_FORMATS.iter().enumerate().filter(|(_, f)| writable(**f)).fold(0, |m, (i, _)| m | 1 << i))
+            let wanted = vk::FormatFeatureFlags2::STORAGE_IMAGE | vk::FormatFeatureFlags2::STORAGE_WRITE_WITHOUT_FORMAT;
+            props3.optimal_tiling_features.contains(wanted)
+        })
     }
 
     /// Every output format (tests).
     #[cfg(test)]
-    pub(crate) fn all_outputs() -> WriteFormats {
-        WriteFormats((1u64 << OUTPUT_FORMATS.len()) - 1)
+    pub(crate) fn all_outputs() -> FormatSet {
+        FormatSet::of(OUTPUT_FORMATS, |_| true)
     }
 
-    /// Whether the SDK's shaders can write an image of format `f` on this device (false for
-    /// a format that is not an output format).
-    pub(crate) fn writable(&self, f: vk::Format) -> bool {
-        OUTPUT_FORMATS.iter().position(|g| *g == f).is_some_and(|i| self.0 & (1 << i) != 0)
+    /// Whether `f` is in the set (false for a format not in its list).
+    pub(crate) fn contains(&self, f: vk::Format) -> bool {
+        self.list.iter().position(|g| *g == f).is_some_and(|i| self.bits & (1 << i) != 0)
     }
 }

@@ -4,7 +4,7 @@
 use crate::context::Shared;
 use crate::error::{Error, Result};
 use crate::gpu::device::Limits;
-use crate::gpu::formats::{WriteFormats, OUTPUT_FORMATS};
+use crate::gpu::formats::{FormatSet, OUTPUT_FORMATS};
 use crate::types::*;
 use ash::vk;
 use glam::{Affine3A, Mat4};
@@ -83,7 +83,7 @@ const INPUT_LAYOUTS: &[vk::ImageLayout] = &[
 enum Use {
     Sampled,
     /// Written: in one of the formats the device writes without a format qualifier.
-    Storage(WriteFormats),
+    Storage(FormatSet),
 }
 
 fn image(what: &'static str, img: &ImageInput, vp: &Viewport, role: Use) -> Result<()> {
@@ -108,7 +108,7 @@ fn image(what: &'static str, img: &ImageInput, vp: &Viewport, role: Use) -> Resu
     // The shaders declare engine outputs without a format qualifier; Vulkan 1.3 allows that per
     // format (a format outside the output list is refused below, by the task's own list).
     if let Use::Storage(writes) = role {
-        if OUTPUT_FORMATS.contains(&img.format) && !writes.writable(img.format) {
+        if OUTPUT_FORMATS.contains(&img.format) && !writes.contains(img.format) {
             return Err(Error::UnsupportedFormat {
                 what,
                 format: img.format,
@@ -295,7 +295,7 @@ pub(crate) fn trace_common(c: &TraceCommon, limits: &Limits, on: Common) -> Resu
     }
     if c.input_mask.image != vk::Image::null() {
         image(field!(on, "input_mask"), &c.input_mask, vp, Use::Sampled)?;
-        if !limits.mask_formats.sampled(c.input_mask.format) {
+        if !limits.mask_formats.contains(c.input_mask.format) {
             return Err(Error::UnsupportedFormat {
                 what: field!(on, "input_mask.format"),
                 format: c.input_mask.format,
@@ -645,14 +645,25 @@ mod tests {
             usage: vk::ImageUsageFlags::STORAGE,
         };
         let vp = Viewport::full(8, 8);
-        match image("output", &img, &vp, Use::Storage(WriteFormats::default())) {
+        match image("output", &img, &vp, Use::Storage(FormatSet::default())) {
             Err(Error::UnsupportedFormat { what: "output", format: vk::Format::R16_SFLOAT, .. }) => {}
             other => panic!("expected UnsupportedFormat, got {other:?}"),
         }
-        assert!(image("output", &img, &vp, Use::Storage(WriteFormats::all_outputs())).is_ok());
+        assert!(image("output", &img, &vp, Use::Storage(FormatSet::all_outputs())).is_ok());
         // Read through a sampler, the format needs no storage support.
         let sampled =
             ImageInput { usage: vk::ImageUsageFlags::SAMPLED, layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL, ..img };
         assert!(image("input", &sampled, &vp, Use::Sampled).is_ok());
+    }
+
+    /// Every format a task accepts for an output is one whose formatless writes the context
+    /// asks the device about (else the check above would let it through unasked).
+    #[test]
+    fn every_output_format_is_asked_about() {
+        let lists = [SCALAR_OUTPUT_FORMATS, COLOR_OUTPUT_FORMATS, RADIANCE_FORMATS, SHADOW_OUTPUT_FORMATS];
+        let visibility = [vk::Format::R32_UINT, vk::Format::R32G32B32A32_UINT];
+        for f in lists.iter().flat_map(|l| l.iter()).chain(&visibility) {
+            assert!(OUTPUT_FORMATS.contains(f), "{f:?}");
+        }
     }
 }
