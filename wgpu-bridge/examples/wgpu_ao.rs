@@ -311,7 +311,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
 /// Opens wgpu's device as an engine (or Bevy's raw Vulkan initialisation) would — wgpu-hal's
 /// create-device callback adding what the SDK needs — and attaches the SDK to it.
 fn open_and_attach(adapter: &wgpu::Adapter) -> Result<RtDevice, Box<dyn std::error::Error>> {
-    use hybrid_rt_wgpu::{SdkDeviceAdditions, SDK_WGPU_FEATURES};
+    use hybrid_rt_wgpu::{add_sdk_requirements, SDK_WGPU_FEATURES};
     use wgpu::hal::api::Vulkan;
     let desc = wgpu::DeviceDescriptor {
         required_features: SDK_WGPU_FEATURES,
@@ -320,14 +320,13 @@ fn open_and_attach(adapter: &wgpu::Adapter) -> Result<RtDevice, Box<dyn std::err
         experimental_features: unsafe { wgpu::ExperimentalFeatures::enabled() },
         ..Default::default()
     };
-    let mut additions = SdkDeviceAdditions::default();
-    // SAFETY: the callback only adds extensions and a feature struct (living in `additions`).
+    // SAFETY: the callback only adds extensions and a feature struct.
     let open = unsafe {
         adapter.as_hal::<Vulkan>().ok_or("not a Vulkan adapter")?.open_with_callback(
             desc.required_features,
             &desc.required_limits,
             &desc.memory_hints,
-            Some(Box::new(|args| additions.apply(args))),
+            Some(Box::new(|mut args| add_sdk_requirements(&mut args))),
         )?
     };
     // SAFETY: `open` is a device of this adapter, made for `desc`.

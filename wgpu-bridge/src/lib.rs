@@ -4,7 +4,7 @@
 //! leaving wgpu: it opens the wgpu device itself, on the engine's adapter, with everything the
 //! SDK needs (extensions and features merged into what wgpu asked for — one `VkDevice` serves
 //! both; [`RtDevice::new`]) or attaches to a device the engine opened with
-//! [`SDK_WGPU_FEATURES`] and [`SdkDeviceAdditions`] ([`RtDevice::attach`]), makes the SDK's
+//! [`SDK_WGPU_FEATURES`] and [`add_sdk_requirements`] ([`RtDevice::attach`]), makes the SDK's
 //! [`ExecuteContext`] on it, turns wgpu textures and buffers into the
 //! SDK's inputs, and records a [`TaskContainer`] into a wgpu command buffer through wgpu's
 //! HAL escape hatch. The command buffer is submitted with the engine's others, on wgpu's queue;
@@ -69,16 +69,17 @@ pub const SDK_COPY: wgpu::BufferUses = wgpu::BufferUses::COPY_SRC;
 pub const SDK_WGPU_FEATURES: wgpu::Features =
     wgpu::Features::EXPERIMENTAL_RAY_TRACING_PIPELINES.union(wgpu::Features::SHADER_FLOAT32_ATOMIC);
 
-/// What the SDK needs on a device that wgpu-hal creates and wgpu does not enable for
-/// [`SDK_WGPU_FEATURES`]: the rest of [`hybrid_rt::REQUIRED_DEVICE_EXTENSIONS`] (push
-/// descriptors) and `synchronization2`. Apply it from wgpu-hal's create-device callback
-/// (`wgpu::hal::vulkan::Adapter::open_with_callback`, or Bevy's raw Vulkan initialisation);
-/// it must outlive the device's creation (the callback links its feature struct into the
-/// create info).
+/// Adds to a device that wgpu-hal is about to create what the SDK needs and wgpu does not
+/// enable for [`SDK_WGPU_FEATURES`]: the rest of [`hybrid_rt::REQUIRED_DEVICE_EXTENSIONS`]
+/// (push descriptors) and a `VkPhysicalDeviceSynchronization2Features`. Call it from wgpu-hal's
+/// create-device callback — `wgpu::hal::vulkan::Adapter::open_with_callback`'s, or one
+/// registered with Bevy's raw Vulkan initialisation (`RawVulkanInitSettings`), which hands its
+/// callbacks the same arguments. The feature struct must outlive the device's creation, which
+/// a callback cannot see the end of: each call leaks one (a few dozen bytes per device made).
 ///
 /// ```no_run
 /// # fn demo(adapter: &wgpu::Adapter) -> Result<(), Box<dyn std::error::Error>> {
-/// use hybrid_rt_wgpu::{RtDevice, SdkDeviceAdditions, SDK_WGPU_FEATURES};
+/// use hybrid_rt_wgpu::{add_sdk_requirements, RtDevice, SDK_WGPU_FEATURES};
 /// use wgpu::hal::api::Vulkan;
 /// let desc = wgpu::DeviceDescriptor {
 ///     required_features: SDK_WGPU_FEATURES,
@@ -86,14 +87,13 @@ pub const SDK_WGPU_FEATURES: wgpu::Features =
 ///     experimental_features: unsafe { wgpu::ExperimentalFeatures::enabled() },
 ///     ..Default::default()
 /// };
-/// let mut additions = SdkDeviceAdditions::default();
 /// // SAFETY: the callback only adds extensions and a feature struct.
 /// let open = unsafe {
 ///     adapter.as_hal::<Vulkan>().ok_or("not Vulkan")?.open_with_callback(
 ///         desc.required_features,
 ///         &desc.required_limits,
 ///         &desc.memory_hints,
-///         Some(Box::new(|args| additions.apply(args))),
+///         Some(Box::new(|mut args| add_sdk_requirements(&mut args))),
 ///     )?
 /// };
 /// // SAFETY: `open` is a device of this adapter.
@@ -101,26 +101,19 @@ pub const SDK_WGPU_FEATURES: wgpu::Features =
 /// let rt = RtDevice::attach(adapter, &device, &queue, &hybrid_rt::InitSettings::default())?;
 /// # Ok(()) }
 /// ```
-#[derive(Debug, Default)]
-pub struct SdkDeviceAdditions {
-    synchronization2: vk::PhysicalDeviceSynchronization2Features<'static>,
-}
-
-impl SdkDeviceAdditions {
-    /// Adds the SDK's extensions (those not already listed) and a
-    /// `VkPhysicalDeviceSynchronization2Features` to the device wgpu-hal is about to create.
-    pub fn apply<'pnext>(&'pnext mut self, args: wgpu::hal::vulkan::CreateDeviceCallbackArgs<'_, 'pnext, '_>) {
-        for e in hybrid_rt::REQUIRED_DEVICE_EXTENSIONS {
-            if !args.extensions.contains(e) {
-                args.extensions.push(e);
-            }
+pub fn add_sdk_requirements(args: &mut wgpu::hal::vulkan::CreateDeviceCallbackArgs<'_, '_, '_>) {
+    for e in hybrid_rt::REQUIRED_DEVICE_EXTENSIONS {
+        if !args.extensions.contains(e) {
+            args.extensions.push(e);
         }
-        self.synchronization2 = vk::PhysicalDeviceSynchronization2Features::default().synchronization2(true);
-        // wgpu chains per-extension feature structs and never this one (nor a Vulkan13Features
-        // that would also carry it): the chain gets one struct of its type.
-        self.synchronization2.p_next = args.create_info.p_next as *mut std::ffi::c_void;
-        args.create_info.p_next = &self.synchronization2 as *const _ as *const std::ffi::c_void;
     }
+    // wgpu chains per-extension feature structs and never this one (nor a Vulkan13Features
+    // that would also carry it): the chain gets one struct of its type.
+    let synchronization2: &'static mut vk::PhysicalDeviceSynchronization2Features<'static> =
+        Box::leak(Box::new(vk::PhysicalDeviceSynchronization2Features::default().synchronization2(true)));
+    synchronization2.p_next = args.create_info.p_next as *mut std::ffi::c_void;
+    args.create_info.p_next =
+        synchronization2 as *const vk::PhysicalDeviceSynchronization2Features<'_> as *const std::ffi::c_void;
 }
 
 /// What can go wrong between wgpu and the SDK.
@@ -261,10 +254,10 @@ impl RtDevice {
     }
 
     /// The SDK's context on a wgpu device made elsewhere — by the engine or by Bevy — with
-    /// [`SDK_WGPU_FEATURES`] and [`SdkDeviceAdditions`] applied in wgpu-hal's create-device
-    /// callback. Checked: the adapter, the device's wgpu features and its enabled extensions
+    /// [`SDK_WGPU_FEATURES`] requested and [`add_sdk_requirements`] called in wgpu-hal's
+    /// create-device callback. Checked: the adapter, the device's wgpu features and its enabled extensions
     /// (an error names what is missing). Not checkable (a `VkDevice` cannot be asked): that
-    /// `synchronization2` was enabled, which `SdkDeviceAdditions` does. Ray queries are used
+    /// `synchronization2` was enabled, which `add_sdk_requirements` does. Ray queries are used
     /// where the device has [`wgpu::Features::EXPERIMENTAL_RAY_QUERY`].
     ///
     /// The returned `RtDevice` holds clones of `device` and `queue`; drop it (the context)
@@ -303,14 +296,14 @@ impl RtDevice {
             .collect();
         if !missing.is_empty() {
             return Err(BridgeError::Unsupported(format!(
-                "the device was created without {} (apply SdkDeviceAdditions in the create-device callback)",
+                "the device was created without {} (call add_sdk_requirements in the create-device callback)",
                 missing.join(", ")
             )));
         }
         let ray_query = features.contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY)
             && extensions.contains(&hybrid_rt::OPTIONAL_DEVICE_EXTENSIONS[0]);
         // What the device was created with, as the SDK reads it: SDK_WGPU_FEATURES made wgpu
-        // enable the ray-tracing, address and atomic features, SdkDeviceAdditions
+        // enable the ray-tracing, address and atomic features, add_sdk_requirements
         // synchronization2 (the chain is read during `ExecuteContext::new` only).
         let mut enabled = DeviceFeatures::required(ray_query);
         let _ = enabled.push_to(vk::DeviceCreateInfo::default());

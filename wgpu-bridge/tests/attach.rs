@@ -1,6 +1,6 @@
 //! `RtDevice::attach` refuses a wgpu device that lacks what the SDK needs, naming it, before
 //! the SDK touches the device: one made without the SDK's wgpu features, and one made with
-//! them but without `SdkDeviceAdditions` (its extensions are missing).
+//! them but without `add_sdk_requirements` (its extensions are missing).
 use hybrid_rt::InitSettings;
 use hybrid_rt_wgpu::{BridgeError, RtDevice, SDK_WGPU_FEATURES};
 
@@ -38,5 +38,5 @@ fn a_device_without_the_sdk_s_needs_is_refused_naming_them() {
         ..Default::default()
     };
     let why = refusal(&adapter, &desc);
-    assert!(why.contains("VK_KHR_push_descriptor") && why.contains("SdkDeviceAdditions"), "{why}");
+    assert!(why.contains("VK_KHR_push_descriptor") && why.contains("add_sdk_requirements"), "{why}");
 }
