@@ -300,8 +300,8 @@ impl RtDevice {
                 missing.join(", ")
             )));
         }
-        let ray_query = features.contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY)
-            && extensions.contains(&hybrid_rt::OPTIONAL_DEVICE_EXTENSIONS[0]);
+        let ray_query =
+            features.contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY) && extensions.contains(&ash::khr::ray_query::NAME);
         // What the device was created with, as the SDK reads it: SDK_WGPU_FEATURES made wgpu
         // enable the ray-tracing, address and atomic features, add_sdk_requirements
         // synchronization2 (the chain is read during `ExecuteContext::new` only).
