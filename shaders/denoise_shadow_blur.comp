@@ -29,9 +29,6 @@ const float TILE_WEIGHT = 0.5;
 // and along the edge (pixels; docs/benchmarks.md has the values tried).
 const float EDGE_ACROSS = 0.3;
 const float EDGE_ALONG = 1.5;
-// Taps nearer than this to the line along the edge through the pixel (pixels) tell whether
-// the pixel lies on the edge.
-const float LINE = 0.5;
 // The history length (frames) up to which, and the penumbra half-width (pixels) under which,
 // the edge-aligned blur replaces the disk.
 const float SHORT_HISTORY = 2.5;
@@ -108,7 +105,7 @@ float along_edge(ivec2 pixel, int centre, HrtPixelRays rays, vec3 p, vec3 n, flo
     // One of each point-symmetric pair in a 5x5 (the other is its negation).
     const ivec2 PAIRS[12] = ivec2[12](ivec2(1, 0), ivec2(2, 0), ivec2(-2, 1), ivec2(-1, 1), ivec2(0, 1), ivec2(1, 1),
         ivec2(2, 1), ivec2(-2, 2), ivec2(-1, 2), ivec2(0, 2), ivec2(1, 2), ivec2(2, 2));
-    float sum = v, wsum = 1.0, line_lo = v, line_hi = v;
+    float sum = v, wsum = 1.0;
     [[unroll]] for (int i = 0; i < 12; ++i) {
         vec2 o = vec2(PAIRS[i]);
         float x = dot(o, across), y = dot(o, vec2(-across.y, across.x));
@@ -122,15 +119,8 @@ float along_edge(ivec2 pixel, int centre, HrtPixelRays rays, vec3 p, vec3 n, flo
         float a = s_temp[centre + offset].x, b = s_temp[centre - offset].x;
         sum += w * (a + b);
         wsum += 2.0 * w;
-        if (abs(x) < LINE) {
-            line_lo = min(line_lo, min(a, b));
-            line_hi = max(line_hi, max(a, b));
-        }
     }
-    // Where the samples on the line through the pixel all agree with it, the pixel is beside
-    // the edge rather than on it (an umbra or a lit pixel): its own visibility is exact there,
-    // and the taps off the line would only pull it towards the other side.
-    return line_hi - line_lo < 0.01 ? v : sum / wsum;
+    return sum / wsum;
 }
 
 void main() {

@@ -76,7 +76,7 @@ pub fn run(out: Option<&std::path::Path>, attach: bool) -> Result<Report, Box<dy
     let _ = log::set_logger(&ValidationLog).map(|()| log::set_max_level(log::LevelFilter::Warn));
     let validation = std::env::var("HRT_VALIDATION").as_deref() != Ok("0");
     if validation {
-        // SAFETY: set before any Vulkan object exists, on the only thread touching it.
+        // SAFETY: set while no Vulkan object is alive, on the only thread touching it.
         unsafe { std::env::set_var("VK_LAYER_ENABLES", "VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT") };
     }
     let flags = if validation { wgpu::InstanceFlags::VALIDATION } else { wgpu::InstanceFlags::empty() };

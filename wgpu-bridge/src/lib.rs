@@ -178,13 +178,8 @@ impl RtDevice {
         // SAFETY: wgpu's Vulkan objects are only used while they live (the guard holds the
         // adapter; the instance outlives every device of it).
         let hal = unsafe { adapter.as_hal::<Vulkan>() }.ok_or(BridgeError::NotVulkan("adapter"))?;
-        let shared = hal.shared_instance();
-        let (entry, instance) = (shared.entry().clone(), shared.raw_instance().clone());
-        let pdev = hal.raw_physical_device();
+        let (entry, instance, pdev, api_version) = vulkan_of(&hal);
         let support = hybrid_rt::query_device_support(&instance, pdev);
-        // wgpu-hal asks for Vulkan 1.3 whenever the loader is 1.1 or newer (see its Instance::init).
-        let api_version =
-            if shared.instance_api_version() >= vk::API_VERSION_1_1 { vk::API_VERSION_1_3 } else { vk::API_VERSION_1_0 };
 
         // wgpu's extensions, then the SDK's.
         let mut extensions: Vec<&'static CStr> = hal.required_device_extensions(desc.required_features);
@@ -278,14 +273,13 @@ impl RtDevice {
         }
         // SAFETY: as in `new`.
         let hal = unsafe { adapter.as_hal::<Vulkan>() }.ok_or(BridgeError::NotVulkan("adapter"))?;
-        let shared = hal.shared_instance();
-        let (entry, instance) = (shared.entry().clone(), shared.raw_instance().clone());
-        let pdev = hal.raw_physical_device();
-        let api_version =
-            if shared.instance_api_version() >= vk::API_VERSION_1_1 { vk::API_VERSION_1_3 } else { vk::API_VERSION_1_0 };
+        let (entry, instance, pdev, api_version) = vulkan_of(&hal);
         drop(hal);
         // SAFETY: the raw device and its extension list are read while `device` lives.
         let hal_device = unsafe { device.as_hal::<Vulkan>() }.ok_or(BridgeError::NotVulkan("device"))?;
+        if hal_device.raw_physical_device() != pdev {
+            return Err(BridgeError::Unsupported("the device was not opened on this adapter".into()));
+        }
         let raw = hal_device.raw_device().clone();
         let extensions: Vec<&'static CStr> = hal_device.enabled_device_extensions().to_vec();
         drop(hal_device);
@@ -401,6 +395,16 @@ pub fn prepare(
         copies.iter().map(|b| wgpu::BufferTransition { buffer: *b, state: SDK_COPY }),
         textures.map(|(t, state)| wgpu::TextureTransition { texture: *t, selector: None, state }),
     );
+}
+
+/// The loader, instance and physical device of a wgpu Vulkan adapter, and the API version its
+/// instance was made with (wgpu-hal asks for Vulkan 1.3 whenever the loader is 1.1 or newer:
+/// see its `Instance::init`).
+fn vulkan_of(hal: &wgpu::hal::vulkan::Adapter) -> (ash::Entry, ash::Instance, vk::PhysicalDevice, u32) {
+    let shared = hal.shared_instance();
+    let api_version =
+        if shared.instance_api_version() >= vk::API_VERSION_1_1 { vk::API_VERSION_1_3 } else { vk::API_VERSION_1_0 };
+    (shared.entry().clone(), shared.raw_instance().clone(), hal.raw_physical_device(), api_version)
 }
 
 fn shared_has_debug_utils(adapter: &wgpu::Adapter) -> bool {
