@@ -2,7 +2,8 @@
 //! no "breaking for main", and no link to a module or a file that does not exist.
 //!
 //! Scans README.md, docs/*.md (the contributors' design notes too),
-//! CHANGELOG.md, and every `//!` and `///` comment in sdk/src, wgpu-bridge/src and tests/src.
+//! CHANGELOG.md, and every `//!` and `///` comment in sdk/src, wgpu-bridge/src, tests/src and
+//! bevy/src.
 //! Reads files only: no GPU.
 use std::path::{Path, PathBuf};
 
@@ -16,6 +17,7 @@ const CRATES: &[(&str, &str)] = &[
     ("hybrid_rt_samples", "samples/src"),
     ("hybrid_rt_bench", "bench/src"),
     ("hybrid_rt_c", "sdk-c-api/src"),
+    ("hybrid_rt_bevy", "bevy/src"),
 ];
 
 /// First path segments that are not the workspace's: other crates and primitive types.
@@ -30,6 +32,7 @@ const EXTERNAL: &[&str] = &[
     "glam",
     "wgpu",
     "wgpu_hal",
+    "bevy",
     "hal",
     "wgt",
     "bytemuck",
@@ -120,7 +123,12 @@ fn documentation() -> Vec<Line> {
             lines.push(Line { file: relative(&p), number: i + 1, text: l.to_string(), home: None });
         }
     }
-    for (name, src) in [("hybrid_rt", "sdk/src"), ("hybrid_rt_wgpu", "wgpu-bridge/src"), ("hybrid_rt_testkit", "tests/src")] {
+    for (name, src) in [
+        ("hybrid_rt", "sdk/src"),
+        ("hybrid_rt_wgpu", "wgpu-bridge/src"),
+        ("hybrid_rt_testkit", "tests/src"),
+        ("hybrid_rt_bevy", "bevy/src"),
+    ] {
         let mut files = Vec::new();
         rust_files(&root.join(src), &mut files);
         assert!(!files.is_empty(), "no Rust files in {src}");

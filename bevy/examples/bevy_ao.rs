@@ -1,0 +1,122 @@
+//! A Bevy scene built in code, rendered headless to a PNG, with ray-traced AO from hybrid-rt in
+//! place of Bevy's SSAO — or, with `--ssao`, Bevy's own SSAO for comparison.
+//!
+//! ```sh
+//! cargo run --example bevy_ao -- --out ao.png
+//! cargo run --example bevy_ao -- --ssao --out ssao.png
+//! ```
+use bevy::camera::RenderTarget;
+use bevy::core_pipeline::tonemapping::Tonemapping;
+use bevy::prelude::*;
+use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
+use bevy::render::render_resource::TextureFormat;
+use bevy::render::view::screenshot::{save_to_disk, Screenshot};
+use bevy::window::ExitCondition;
+use hybrid_rt_bevy::{render_plugin, HybridRtInitPlugin, HybridRtPlugin, RayTracedAo};
+
+/// Frames rendered before the screenshot (the scene's BVH is built on the first; the AO
+/// denoiser's history fills over the others).
+const FRAMES: u32 = 16;
+
+struct Args {
+    out: String,
+    ssao: bool,
+    width: u32,
+    height: u32,
+}
+
+fn args() -> Args {
+    let mut a = Args { out: "bevy_ao.png".into(), ssao: false, width: 320, height: 180 };
+    let mut it = std::env::args().skip(1);
+    while let Some(arg) = it.next() {
+        match arg.as_str() {
+            "--out" => a.out = it.next().expect("--out PATH"),
+            "--ssao" => a.ssao = true,
+            "--width" => a.width = it.next().and_then(|v| v.parse().ok()).expect("--width N"),
+            "--height" => a.height = it.next().and_then(|v| v.parse().ok()).expect("--height N"),
+            other => panic!("unknown argument {other}"),
+        }
+    }
+    a
+}
+
+#[derive(Resource)]
+struct Settings {
+    ssao: bool,
+    target: Handle<Image>,
+}
+
+fn main() {
+    let a = args();
+    let mut app = App::new();
+    app.add_plugins(HybridRtInitPlugin)
+        .add_plugins(
+            DefaultPlugins
+                // Pipelines compiled before the frame that needs them: the screenshot's frame
+                // shows every mesh.
+                .set(bevy::render::RenderPlugin { synchronous_pipeline_compilation: true, ..render_plugin() })
+                .set(WindowPlugin { primary_window: None, exit_condition: ExitCondition::DontExit, ..default() })
+                // One frame rendered per update, so the screenshot's frame is known.
+                .disable::<PipelinedRenderingPlugin>(),
+        )
+        .add_plugins(HybridRtPlugin)
+        .add_systems(Startup, setup);
+    let target = {
+        let mut images = app.world_mut().resource_mut::<Assets<Image>>();
+        images.add(Image::new_target_texture(a.width, a.height, TextureFormat::Rgba8UnormSrgb, None))
+    };
+    app.insert_resource(Settings { ssao: a.ssao, target: target.clone() });
+    app.finish();
+    app.cleanup();
+    for _ in 0..FRAMES {
+        app.update();
+    }
+    let _ = std::fs::remove_file(&a.out);
+    app.world_mut().spawn(Screenshot::image(target)).observe(save_to_disk(a.out.clone()));
+    // The screenshot is read back and written a few updates later.
+    for _ in 0..60 {
+        app.update();
+        if std::fs::metadata(&a.out).is_ok_and(|m| m.len() > 0) {
+            println!("wrote {}", a.out);
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    eprintln!("error: no screenshot came back");
+    std::process::exit(1);
+}
+
+fn setup(
+    mut commands: Commands,
+    settings: Res<Settings>,
+    mut meshes: ResMut<Assets<Mesh>>,
+    mut materials: ResMut<Assets<StandardMaterial>>,
+) {
+    let grey = materials.add(StandardMaterial { base_color: Color::srgb(0.8, 0.8, 0.8), perceptual_roughness: 0.9, ..default() });
+    let red = materials.add(StandardMaterial { base_color: Color::srgb(0.8, 0.2, 0.2), perceptual_roughness: 0.6, ..default() });
+    commands.spawn((Mesh3d(meshes.add(Plane3d::default().mesh().size(8.0, 8.0))), MeshMaterial3d(grey.clone())));
+    commands.spawn((Mesh3d(meshes.add(Cuboid::new(1.0, 1.0, 1.0))), MeshMaterial3d(red), Transform::from_xyz(0.0, 0.5, 0.0)));
+    commands.spawn((
+        Mesh3d(meshes.add(Sphere::new(0.5).mesh().uv(32, 18))),
+        MeshMaterial3d(grey),
+        Transform::from_xyz(1.3, 0.5, 0.6),
+    ));
+    commands.spawn((
+        DirectionalLight { illuminance: 3000.0, shadow_maps_enabled: true, ..default() },
+        Transform::from_xyz(2.0, 4.0, 1.0).looking_at(Vec3::ZERO, Vec3::Y),
+    ));
+    commands.insert_resource(GlobalAmbientLight { color: Color::WHITE, brightness: 2000.0, ..default() });
+    let camera = (
+        Camera3d::default(),
+        RenderTarget::from(settings.target.clone()),
+        Tonemapping::Reinhard,
+        Transform::from_xyz(2.5, 2.2, 3.5).looking_at(Vec3::new(0.3, 0.3, 0.0), Vec3::Y),
+    );
+    if settings.ssao {
+        commands.spawn((camera, bevy::pbr::ScreenSpaceAmbientOcclusion::default(), Msaa::Off));
+    } else {
+        // Motion vectors let the AO denoiser follow moving objects (without them it reprojects
+        // with the cameras).
+        commands.spawn((camera, RayTracedAo::default(), Msaa::Off, bevy::core_pipeline::prepass::MotionVectorPrepass));
+    }
+}

@@ -1,0 +1,137 @@
+//! hybrid-rt inside Bevy: ray-traced ambient occlusion for Bevy's rasterized frame.
+//!
+//! Bevy keeps its renderer. Each frame the plugin
+//! - mirrors the scene into the SDK: every visible entity with a `Mesh3d` becomes an SDK
+//!   instance of its mesh's geometry, read straight from the vertex and index slabs of Bevy's
+//!   mesh allocator (offsets and strides, no copy on Bevy's side); entities that move, hide or
+//!   go away are updated or removed, and the BVH is rebuilt with them;
+//! - traces AO from Bevy's prepass (its depth and world-space normals, as they are: the SDK
+//!   reads `Depth32Float` reversed-Z and `Rgb10a2Unorm` normals directly) into the texture
+//!   Bevy's PBR reads its screen-space AO from, after Bevy's SSAO and before the opaque pass —
+//!   so Bevy's lighting takes ray-traced occlusion where it took SSAO's;
+//! - records the SDK's work into a command buffer placed among Bevy's own, and hands each
+//!   ticket back once the queue has finished the frame, with the SDK's per-task GPU times
+//!   published as Bevy diagnostics (`hybrid_rt/<task>`).
+//!
+//! Bevy's own ray tracer, `bevy_solari`, replaces Bevy's lighting; this plugin adds ray-traced
+//! effects to the lighting Bevy already has.
+//!
+//! # Set-up
+//! The SDK needs Vulkan extensions that Bevy's device must be created with:
+//! ```ignore
+//! App::new()
+//!     .add_plugins(HybridRtInitPlugin) // before DefaultPlugins: the device's extensions
+//!     .add_plugins(DefaultPlugins.set(hybrid_rt_bevy::render_plugin()))
+//!     .add_plugins(HybridRtPlugin)
+//! ```
+//! and a camera takes [`RayTracedAo`] (which brings Bevy's depth and normal prepasses and its
+//! AO texture with it; the camera needs `Msaa::Off`, as Bevy's SSAO does).
+#![deny(missing_docs)]
+
+mod render;
+mod scene;
+
+use bevy::diagnostic::{Diagnostic, DiagnosticPath, Diagnostics, RegisterDiagnostic};
+use bevy::pbr::ScreenSpaceAmbientOcclusion;
+use bevy::prelude::*;
+use bevy::render::extract_component::{ExtractComponent, ExtractComponentPlugin};
+use bevy::render::renderer::raw_vulkan_init::RawVulkanInitSettings;
+use bevy::render::settings::{RenderCreation, WgpuSettings};
+use bevy::render::RenderPlugin;
+use parking_lot::Mutex;
+use std::sync::Arc;
+
+pub use hybrid_rt;
+pub use hybrid_rt_wgpu;
+
+/// Ray-traced ambient occlusion for a 3D camera. Toggle `enabled` at run time: off, Bevy's
+/// SSAO shows again.
+#[derive(Component, Clone, Debug, PartialEq, ExtractComponent)]
+#[extract_app(bevy::render::RenderApp)]
+#[require(ScreenSpaceAmbientOcclusion)]
+pub struct RayTracedAo {
+    /// Trace it (true) or leave Bevy's SSAO in place. Default true.
+    pub enabled: bool,
+    /// How far an occluder counts, in world units. Default 1.0.
+    pub ray_length: f32,
+    /// Rays per pixel (1..=64). Default 1.
+    pub rays_per_pixel: u32,
+    /// Denoise (the SDK's AO denoiser: temporal, along Bevy's motion vectors where the camera
+    /// has `MotionVectorPrepass`, else reprojected with the cameras; then spatial). Default true.
+    pub denoise: bool,
+    /// Where the AO goes. Default [`AoOutput::Pbr`].
+    pub output: AoOutput,
+}
+
+impl Default for RayTracedAo {
+    fn default() -> Self {
+        RayTracedAo { enabled: true, ray_length: 1.0, rays_per_pixel: 1, denoise: true, output: AoOutput::Pbr }
+    }
+}
+
+/// Where [`RayTracedAo`] writes.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub enum AoOutput {
+    /// Into the texture Bevy's PBR reads its screen-space AO from (after Bevy's SSAO wrote it,
+    /// before the opaque pass reads it): Bevy's lighting takes ray-traced occlusion. The
+    /// camera needs `Msaa::Off`, as Bevy's SSAO does. Default.
+    #[default]
+    Pbr,
+    /// Into an image of the application's, of the view's size (`R32Float`, `R16Float` or
+    /// `Rgba16Float`, with `STORAGE_BINDING` usage, created with contents): for its own
+    /// materials or compositing, debug views, tests.
+    Image(Handle<Image>),
+}
+
+/// Adds what the SDK needs to the Vulkan device Bevy is about to create. Add it *before*
+/// `DefaultPlugins` (Bevy reads the device callbacks when its render plugin is built), with
+/// [`render_plugin`] in place of Bevy's default `RenderPlugin`.
+pub struct HybridRtInitPlugin;
+
+impl Plugin for HybridRtInitPlugin {
+    fn build(&self, app: &mut App) {
+        let mut settings = app.world_mut().get_resource_or_init::<RawVulkanInitSettings>();
+        // SAFETY: the callback only adds device extensions and one feature struct to the chain.
+        unsafe { settings.add_create_device_callback(|args, _adapter, _features| hybrid_rt_wgpu::add_sdk_requirements(args)) };
+    }
+}
+
+/// Bevy's render plugin with the wgpu features the SDK needs ([`hybrid_rt_wgpu::SDK_WGPU_FEATURES`]):
+/// `DefaultPlugins.set(hybrid_rt_bevy::render_plugin())`.
+pub fn render_plugin() -> RenderPlugin {
+    let settings = WgpuSettings { features: hybrid_rt_wgpu::SDK_WGPU_FEATURES, ..Default::default() };
+    RenderPlugin { render_creation: RenderCreation::Automatic(Box::new(settings)), ..Default::default() }
+}
+
+/// The plugin: scene sync, AO traced per camera, tickets and GPU times. Add it after
+/// `DefaultPlugins` (and [`HybridRtInitPlugin`] before them).
+pub struct HybridRtPlugin;
+
+/// The SDK's per-task GPU times of the last frame whose ticket came back, shared between
+/// Bevy's render world (which fills it) and the main world (which publishes it).
+#[derive(Resource, Clone, Default)]
+pub struct HybridRtTimings(pub Arc<Mutex<Vec<(String, f64)>>>);
+
+/// Diagnostics the plugin publishes (milliseconds of GPU time).
+pub const DIAGNOSTIC_PATHS: [&str; 3] = ["hybrid_rt/bvh", "hybrid_rt/ao", "hybrid_rt/frame"];
+
+impl Plugin for HybridRtPlugin {
+    fn build(&self, app: &mut App) {
+        let timings = HybridRtTimings::default();
+        app.add_plugins(ExtractComponentPlugin::<RayTracedAo>::default()).insert_resource(timings.clone());
+        for path in DIAGNOSTIC_PATHS {
+            app.register_diagnostic(Diagnostic::new(DiagnosticPath::new(path)).with_suffix(" ms"));
+        }
+        app.add_systems(Update, publish_timings);
+        render::build(app, timings);
+    }
+}
+
+/// Main world: the GPU times the render world collected, as diagnostics.
+fn publish_timings(timings: Res<HybridRtTimings>, mut diagnostics: Diagnostics) {
+    let mut t = timings.0.lock();
+    for (name, ms) in t.drain(..) {
+        let path = DiagnosticPath::new(format!("hybrid_rt/{name}"));
+        diagnostics.add_measurement(&path, || ms);
+    }
+}
