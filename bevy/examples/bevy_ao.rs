@@ -78,12 +78,23 @@ fn main() {
         app.update();
         if std::fs::metadata(&a.out).is_ok_and(|m| m.len() > 0) {
             println!("wrote {}", a.out);
+            print_gpu_times(&app);
             return;
         }
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
     eprintln!("error: no screenshot came back");
     std::process::exit(1);
+}
+
+/// The SDK's GPU times of the last frames, as the plugin publishes them (Bevy diagnostics).
+fn print_gpu_times(app: &App) {
+    let store = app.world().resource::<bevy::diagnostic::DiagnosticsStore>();
+    for path in hybrid_rt_bevy::DIAGNOSTIC_PATHS {
+        if let Some(ms) = store.get(&bevy::diagnostic::DiagnosticPath::new(path)).and_then(|d| d.average()) {
+            println!("{path}: {ms:.3} ms (GPU, mean of the last frames)");
+        }
+    }
 }
 
 fn setup(

@@ -11,7 +11,7 @@
 //!   so Bevy's lighting takes ray-traced occlusion where it took SSAO's;
 //! - records the SDK's work into a command buffer placed among Bevy's own, and hands each
 //!   ticket back once the queue has finished the frame, with the SDK's per-task GPU times
-//!   published as Bevy diagnostics (`hybrid_rt/<task>`).
+//!   published as Bevy diagnostics ([`DIAGNOSTIC_PATHS`]).
 //!
 //! Bevy's own ray tracer, `bevy_solari`, replaces Bevy's lighting; this plugin adds ray-traced
 //! effects to the lighting Bevy already has.
@@ -112,8 +112,10 @@ pub struct HybridRtPlugin;
 #[derive(Resource, Clone, Default)]
 pub struct HybridRtTimings(pub Arc<Mutex<Vec<(String, f64)>>>);
 
-/// Diagnostics the plugin publishes (milliseconds of GPU time).
-pub const DIAGNOSTIC_PATHS: [&str; 3] = ["hybrid_rt/bvh", "hybrid_rt/ao", "hybrid_rt/frame"];
+/// Diagnostics the plugin publishes, in milliseconds of GPU time (the SDK's timestamp queries):
+/// the scene's sync and BVH builds (frames that change the scene), AO traced and denoised (all
+/// cameras), and the SDK's whole frame.
+pub const DIAGNOSTIC_PATHS: [&str; 3] = ["hybrid_rt/scene", "hybrid_rt/ao", "hybrid_rt/frame"];
 
 impl Plugin for HybridRtPlugin {
     fn build(&self, app: &mut App) {

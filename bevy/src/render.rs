@@ -32,6 +32,10 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 /// The SDK in Bevy's render world.
+/// The SDK's working sets (tickets in flight at once): frames in flight (3) x tickets a frame
+/// (the scene's and one camera's).
+const WORKING_SETS: u32 = 6;
+
 /// wgpu objects (reference-counted handles) kept until a ticket is back.
 #[derive(Default)]
 struct Held {
@@ -57,6 +61,8 @@ pub(crate) struct HybridRt {
     has_instances: bool,
     /// Per camera: the AO denoiser's context and the noisy trace it reads.
     views: HashMap<RetainedViewEntity, ViewAo>,
+    /// Cameras already warned about (once each).
+    warned_msaa: bevy::platform::collections::HashSet<RetainedViewEntity>,
 }
 
 /// A camera's denoised AO: the SDK's denoising context (its history) and the texture the
@@ -129,7 +135,10 @@ fn sync_scene(
 ) {
     let state = &mut *state;
     if state.rt.is_none() && !state.failed {
-        match RtDevice::attach(&adapter, device.wgpu_device(), &queue, &InitSettings::default()) {
+        // Tickets in flight: the scene's and one per camera each frame, and Bevy's pipelined
+        // rendering keeps up to three frames on the GPU.
+        let settings = InitSettings { supported_working_sets: WORKING_SETS, ..Default::default() };
+        match RtDevice::attach(&adapter, device.wgpu_device(), &queue, &settings) {
             Ok(rt) => state.rt = Some(rt),
             Err(e) => {
                 error!("hybrid-rt: cannot attach to Bevy's device: {e} (see hybrid_rt_bevy::HybridRtInitPlugin)");
@@ -141,11 +150,23 @@ fn sync_scene(
     // Tickets of frames the queue has finished.
     let (done, waiting): (Vec<_>, Vec<_>) = state.in_flight.drain(..).partition(|(_, flag, _)| flag.load(Ordering::Acquire));
     state.in_flight = waiting;
-    for (ticket, _, _) in done {
+    // A frame's tickets share its flag: their times add up to the frame's.
+    let mut frames: Vec<(*const AtomicBool, FrameTimes)> = Vec::new();
+    for (ticket, flag, _) in done {
         match rt.context().mark_gpu_task_completed(ticket) {
-            Ok(completed) => publish(&completed, &timings),
+            Ok(completed) => {
+                let key = Arc::as_ptr(&flag);
+                let at = frames.iter().position(|(k, _)| *k == key).unwrap_or_else(|| {
+                    frames.push((key, FrameTimes::default()));
+                    frames.len() - 1
+                });
+                frames[at].1.add(&completed);
+            }
             Err(e) => warn!("hybrid-rt: {e}"),
         }
+    }
+    for (_, times) in frames {
+        times.publish(&timings);
     }
     let mut tasks = rt.context().create_task_container();
     let outcome = match state.scene.sync(rt, &mut tasks, &extracted, &allocator, &meshes) {
@@ -202,7 +223,13 @@ fn trace_ao(
             Some(s) => {
                 (&s.screen_space_ambient_occlusion_texture.texture, &s.screen_space_ambient_occlusion_texture.default_view)
             }
-            None => return, // Bevy skips SSAO (and its texture) on cameras with MSAA
+            None => {
+                // Bevy makes no AO texture for cameras with MSAA (as for its SSAO).
+                if state.warned_msaa.insert(view.retained_view_entity) {
+                    warn!("hybrid-rt: a camera with RayTracedAo has no AO texture: give it Msaa::Off");
+                }
+                return;
+            }
         },
         AoOutput::Image(handle) => match images.get(handle) {
             Some(image) => (&image.texture, &image.texture_view),
@@ -349,22 +376,33 @@ fn sdk_camera(view: &ExtractedView) -> hybrid_rt::Camera {
     hybrid_rt::Camera { world_to_view: world_from_view.inverse(), view_to_clip: flip_y * clip_from_view }
 }
 
-/// The SDK's GPU times of a completed ticket, for the main world's diagnostics.
-fn publish(completed: &CompletedTask, timings: &HybridRtTimings) {
-    let (mut bvh, mut ao, mut total) = (0.0, 0.0, 0.0);
-    for t in &completed.timings {
-        total += t.gpu_ms;
-        match t.kind {
-            TaskKind::AmbientOcclusion => ao += t.gpu_ms,
-            _ => bvh += t.gpu_ms,
+/// The SDK's GPU times of one frame's tickets (milliseconds), for the main world's diagnostics.
+#[derive(Default)]
+struct FrameTimes {
+    scene: f64,
+    ao: f64,
+    total: f64,
+}
+
+impl FrameTimes {
+    fn add(&mut self, completed: &CompletedTask) {
+        for t in &completed.timings {
+            self.total += t.gpu_ms;
+            match t.kind {
+                TaskKind::AmbientOcclusion | TaskKind::DenoiseDiffuseOcclusion => self.ao += t.gpu_ms,
+                _ => self.scene += t.gpu_ms,
+            }
         }
     }
-    let mut out = timings.0.lock();
-    if bvh > 0.0 {
-        out.push(("bvh".into(), bvh));
+
+    fn publish(&self, timings: &HybridRtTimings) {
+        let mut out = timings.0.lock();
+        if self.scene > 0.0 {
+            out.push(("scene".into(), self.scene));
+        }
+        if self.ao > 0.0 {
+            out.push(("ao".into(), self.ao));
+        }
+        out.push(("frame".into(), self.total));
     }
-    if ao > 0.0 {
-        out.push(("ao".into(), ao));
-    }
-    out.push(("frame".into(), total));
 }

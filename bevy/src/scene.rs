@@ -70,6 +70,8 @@ pub(crate) struct SceneMirror {
     skipped: HashSet<AssetId<Mesh>>,
     /// Instances removed by this frame's container, freed once it is recorded.
     removed: Vec<InstanceHandle>,
+    /// Geometries of meshes Bevy no longer has, freed with them.
+    removed_meshes: Vec<GeometryHandle>,
 }
 
 /// What a frame's sync scheduled: whether anything changed, and the buffers the SDK copies
@@ -94,6 +96,7 @@ impl SceneMirror {
         let ctx = rt.context();
         let mut out = SyncOutcome { changed: false, copies: Vec::new() };
         let mut seen = HashSet::new();
+        let used: HashSet<AssetId<Mesh>> = extracted.0.iter().map(|(_, id, _)| *id).collect();
         for (entity, mesh_id, transform) in &extracted.0 {
             let Some(place) = self.place_of(rt, mesh_id, allocator, meshes, &mut out.copies)? else { continue };
             let geometry = match self.meshes.get_mut(mesh_id) {
@@ -139,6 +142,15 @@ impl SceneMirror {
                 }
             }
         }
+        // Meshes Bevy unloaded (no instance of this frame uses them): their geometries go once
+        // the instances that used them are out (after this container is recorded).
+        let unloaded: Vec<AssetId<Mesh>> =
+            self.meshes.keys().filter(|id| meshes.get(**id).is_none() && !used.contains(*id)).copied().collect();
+        for id in unloaded {
+            if let Some(m) = self.meshes.remove(&id) {
+                self.removed_meshes.push(m.handle);
+            }
+        }
         // Entities despawned, hidden or without their mesh any more: out of the TLAS, their
         // handles freed (the SDK frees GPU memory once the tickets in flight are back).
         let gone: Vec<MainEntity> = self.instances.keys().filter(|e| !seen.contains(*e)).copied().collect();
@@ -156,15 +168,21 @@ impl SceneMirror {
         Ok(out)
     }
 
-    /// Frees the handles of the instances the recorded container removed. (An instance handle
-    /// must outlive the container that names it; the SDK frees GPU memory once the tickets in
-    /// flight are back.)
+    /// Frees the handles of the instances the recorded container removed, then the geometries
+    /// of unloaded meshes. (A handle must outlive the container that names it; the SDK frees
+    /// GPU memory once the tickets in flight are back.)
     pub(crate) fn release_removed(&mut self, rt: &RtDevice) {
         if !self.removed.is_empty() {
             if let Err(e) = rt.context().destroy_instance_handles(&self.removed) {
                 warn!("hybrid-rt: {e}");
             }
             self.removed.clear();
+        }
+        if !self.removed_meshes.is_empty() {
+            if let Err(e) = rt.context().destroy_geometry_handles(&self.removed_meshes) {
+                warn!("hybrid-rt: {e}");
+            }
+            self.removed_meshes.clear();
         }
     }
 
