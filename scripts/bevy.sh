@@ -14,4 +14,8 @@ cargo fmt --check
 cargo clippy --all-targets --locked -- -D warnings
 cargo test --locked
 cargo run --locked --example bevy_ao -- --out target/bevy_ao.png
+# The window path, under Xvfb where it is installed (scripts/setup.sh installs it).
+if command -v xvfb-run >/dev/null 2>&1; then
+  xvfb-run -a cargo run --locked --example bevy_ao -- --window --frames 30
+fi
 echo "bevy: plugin checked in $(( $(date +%s) - start )) s"

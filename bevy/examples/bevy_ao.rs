@@ -1,9 +1,12 @@
-//! A Bevy scene built in code, rendered headless to a PNG, with ray-traced AO from hybrid-rt in
-//! place of Bevy's SSAO — or, with `--ssao`, Bevy's own SSAO for comparison.
+//! A Bevy scene built in code with ray-traced AO from hybrid-rt in place of Bevy's SSAO: rendered
+//! headless to a PNG, or shown in a window (`--window`; the T key toggles the ray-traced AO,
+//! Bevy's SSAO showing while it is off). `--ssao`: Bevy's own SSAO alone, for comparison.
 //!
 //! ```sh
 //! cargo run --example bevy_ao -- --out ao.png
 //! cargo run --example bevy_ao -- --ssao --out ssao.png
+//! cargo run --example bevy_ao -- --window            # until the window is closed
+//! cargo run --example bevy_ao -- --window --frames 60
 //! ```
 use bevy::camera::RenderTarget;
 use bevy::core_pipeline::tonemapping::Tonemapping;
@@ -23,10 +26,13 @@ struct Args {
     ssao: bool,
     width: u32,
     height: u32,
+    window: bool,
+    /// Window mode: exit after this many frames (None: when the window closes).
+    frames: Option<u32>,
 }
 
 fn args() -> Args {
-    let mut a = Args { out: "bevy_ao.png".into(), ssao: false, width: 320, height: 180 };
+    let mut a = Args { out: "bevy_ao.png".into(), ssao: false, width: 320, height: 180, window: false, frames: None };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
         match arg.as_str() {
@@ -34,6 +40,8 @@ fn args() -> Args {
             "--ssao" => a.ssao = true,
             "--width" => a.width = it.next().and_then(|v| v.parse().ok()).expect("--width N"),
             "--height" => a.height = it.next().and_then(|v| v.parse().ok()).expect("--height N"),
+            "--window" => a.window = true,
+            "--frames" => a.frames = Some(it.next().and_then(|v| v.parse().ok()).expect("--frames N")),
             other => panic!("unknown argument {other}"),
         }
     }
@@ -43,11 +51,15 @@ fn args() -> Args {
 #[derive(Resource)]
 struct Settings {
     ssao: bool,
-    target: Handle<Image>,
+    /// Headless: the image the camera renders to (None: the window).
+    target: Option<Handle<Image>>,
 }
 
 fn main() {
     let a = args();
+    if a.window {
+        return window(&a);
+    }
     let mut app = App::new();
     app.add_plugins(HybridRtInitPlugin)
         .add_plugins(
@@ -57,7 +69,8 @@ fn main() {
                 .set(bevy::render::RenderPlugin { synchronous_pipeline_compilation: true, ..render_plugin() })
                 .set(WindowPlugin { primary_window: None, exit_condition: ExitCondition::DontExit, ..default() })
                 // One frame rendered per update, so the screenshot's frame is known.
-                .disable::<PipelinedRenderingPlugin>(),
+                .disable::<PipelinedRenderingPlugin>()
+                .disable::<bevy::winit::WinitPlugin>(),
         )
         .add_plugins(HybridRtPlugin)
         .add_systems(Startup, setup);
@@ -65,7 +78,7 @@ fn main() {
         let mut images = app.world_mut().resource_mut::<Assets<Image>>();
         images.add(Image::new_target_texture(a.width, a.height, TextureFormat::Rgba8UnormSrgb, None))
     };
-    app.insert_resource(Settings { ssao: a.ssao, target: target.clone() });
+    app.insert_resource(Settings { ssao: a.ssao, target: Some(target.clone()) });
     app.finish();
     app.cleanup();
     for _ in 0..FRAMES {
@@ -85,6 +98,50 @@ fn main() {
     }
     eprintln!("error: no screenshot came back");
     std::process::exit(1);
+}
+
+/// The scene in a window, the SDK's GPU times printed every second.
+fn window(a: &Args) {
+    let window = Window { title: "hybrid-rt in Bevy (T: ray-traced AO on / off)".into(), ..default() };
+    let mut app = App::new();
+    app.add_plugins(HybridRtInitPlugin)
+        .add_plugins(DefaultPlugins.set(render_plugin()).set(WindowPlugin { primary_window: Some(window), ..default() }))
+        .add_plugins(HybridRtPlugin)
+        .insert_resource(Settings { ssao: a.ssao, target: None })
+        .add_systems(Startup, setup)
+        .add_systems(Update, toggle_and_report);
+    if let Some(frames) = a.frames {
+        app.add_systems(Update, move |mut n: Local<u32>, mut exit: MessageWriter<AppExit>| {
+            *n += 1;
+            if *n >= frames {
+                exit.write(AppExit::Success);
+            }
+        });
+    }
+    app.run();
+}
+
+/// T toggles the ray-traced AO; every second the SDK's GPU times are printed.
+fn toggle_and_report(
+    keys: Res<ButtonInput<KeyCode>>,
+    mut cameras: Query<&mut RayTracedAo>,
+    diagnostics: Res<bevy::diagnostic::DiagnosticsStore>,
+    time: Res<Time>,
+    mut last: Local<f32>,
+) {
+    if keys.just_pressed(KeyCode::KeyT) {
+        for mut ao in &mut cameras {
+            ao.enabled = !ao.enabled;
+            println!("ray-traced AO {}", if ao.enabled { "on" } else { "off (Bevy's SSAO)" });
+        }
+    }
+    if time.elapsed_secs() - *last >= 1.0 {
+        *last = time.elapsed_secs();
+        let ms = |p: &str| diagnostics.get(&bevy::diagnostic::DiagnosticPath::new(p.to_string())).and_then(|d| d.average());
+        if let (Some(ao), Some(frame)) = (ms("hybrid_rt/ao"), ms("hybrid_rt/frame")) {
+            println!("hybrid-rt GPU time: AO {ao:.3} ms, frame {frame:.3} ms");
+        }
+    }
 }
 
 /// The SDK's GPU times of the last frames, as the plugin publishes them (Bevy diagnostics).
@@ -119,7 +176,7 @@ fn setup(
     commands.insert_resource(GlobalAmbientLight { color: Color::WHITE, brightness: 2000.0, ..default() });
     let camera = (
         Camera3d::default(),
-        RenderTarget::from(settings.target.clone()),
+        settings.target.clone().map_or_else(RenderTarget::default, RenderTarget::from),
         Tonemapping::Reinhard,
         Transform::from_xyz(2.5, 2.2, 3.5).looking_at(Vec3::new(0.3, 0.3, 0.0), Vec3::Y),
     );

@@ -72,7 +72,8 @@ fn app() -> (App, Latest) {
                 .set(bevy::render::RenderPlugin { synchronous_pipeline_compilation: true, ..render_plugin() })
                 .set(WindowPlugin { primary_window: None, exit_condition: ExitCondition::DontExit, ..default() })
                 .set(LogPlugin { custom_layer: count_validation, ..default() })
-                .disable::<PipelinedRenderingPlugin>(),
+                .disable::<PipelinedRenderingPlugin>()
+                .disable::<bevy::winit::WinitPlugin>(),
         )
         .add_plugins(HybridRtPlugin);
     let latest = Latest::default();
