@@ -8,6 +8,7 @@ use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::core_pipeline::schedule::camera_driver;
 use bevy::core_pipeline::{Core3d, Core3dSystems};
 use bevy::log::{error, warn};
+use bevy::pbr::deferred::deferred_lighting;
 use bevy::pbr::ScreenSpaceAmbientOcclusionResources;
 use bevy::platform::collections::HashMap;
 use bevy::prelude::*;
@@ -116,7 +117,9 @@ pub(crate) fn build(app: &mut App, timings: HybridRtTimings) {
         .add_systems(ExtractSchedule, extract_instances)
         .add_systems(RenderGraph, sync_scene.in_set(RenderGraphSystems::Render).before(camera_driver))
         .add_systems(RenderGraph, track_submission.after(RenderGraphSystems::Submit))
-        .add_systems(Core3d, trace_ao.in_set(Core3dSystems::MainPass).before(main_opaque_pass_3d));
+        // After Bevy's SSAO (before MainPass), before whichever pass reads the AO texture: the
+        // forward opaque pass, or the deferred lighting pass of a deferred camera.
+        .add_systems(Core3d, trace_ao.in_set(Core3dSystems::MainPass).before(main_opaque_pass_3d).before(deferred_lighting));
 }
 
 /// Before the cameras: hand back the tickets whose frames are done, then bring the SDK's scene
