@@ -117,6 +117,11 @@ pub struct HybridRtTimings(pub Arc<Mutex<Vec<(String, f64)>>>);
 /// cameras), and the SDK's whole frame.
 pub const DIAGNOSTIC_PATHS: [&str; 3] = ["hybrid_rt/scene", "hybrid_rt/ao", "hybrid_rt/frame"];
 
+/// Diagnostic: how many cameras hold an AO denoiser history (about 8 bytes a pixel of the
+/// view, besides the view's shared denoising guide). A camera's history is freed a few frames after it stops
+/// being traced (despawned, `RayTracedAo` removed or disabled).
+pub const DIAGNOSTIC_AO_HISTORIES: &str = "hybrid_rt/ao_histories";
+
 impl Plugin for HybridRtPlugin {
     fn build(&self, app: &mut App) {
         let timings = HybridRtTimings::default();
@@ -124,6 +129,7 @@ impl Plugin for HybridRtPlugin {
         for path in DIAGNOSTIC_PATHS {
             app.register_diagnostic(Diagnostic::new(DiagnosticPath::new(path)).with_suffix(" ms"));
         }
+        app.register_diagnostic(Diagnostic::new(DiagnosticPath::new(DIAGNOSTIC_AO_HISTORIES)));
         app.add_systems(Update, publish_timings);
         render::build(app, timings);
     }

@@ -62,8 +62,27 @@ pub(crate) struct HybridRt {
     has_instances: bool,
     /// Per camera: the AO denoiser's context and the noisy trace it reads.
     views: HashMap<RetainedViewEntity, ViewAo>,
-    /// Cameras already warned about (once each).
-    warned_msaa: bevy::platform::collections::HashSet<RetainedViewEntity>,
+    /// Frames rendered (for dropping the contexts of cameras gone).
+    frame: u64,
+    /// Messages already logged: a refused input is reported once, not every frame.
+    warned: Warnings,
+}
+
+/// A camera's AO state is dropped after this many frames without it (a camera despawned, its
+/// `RayTracedAo` removed or disabled), freeing the denoiser's history.
+const VIEW_GRACE_FRAMES: u64 = 3;
+
+/// Messages logged once each (bounded, so a message that changes every frame cannot grow it).
+#[derive(Default)]
+struct Warnings(bevy::platform::collections::HashSet<String>);
+
+impl Warnings {
+    fn once(&mut self, message: impl std::fmt::Display) {
+        let message = format!("hybrid-rt: {message}");
+        if self.0.len() < 256 && self.0.insert(message.clone()) {
+            warn!("{message}");
+        }
+    }
 }
 
 /// A camera's denoised AO: the SDK's denoising context (its history) and the texture the
@@ -73,10 +92,12 @@ struct ViewAo {
     noisy: wgpu::Texture,
     noisy_view: wgpu::TextureView,
     size: (u32, u32),
+    /// The last frame that traced this camera.
+    last_used: u64,
 }
 
 impl ViewAo {
-    fn new(rt: &RtDevice, size: (u32, u32)) -> Option<ViewAo> {
+    fn new(rt: &RtDevice, size: (u32, u32), warned: &mut Warnings) -> Option<ViewAo> {
         let input = DenoisingContextInput {
             max_width: size.0,
             max_height: size.1,
@@ -87,7 +108,7 @@ impl ViewAo {
         let context = match rt.context().create_denoising_context(&input) {
             Ok(c) => c,
             Err(e) => {
-                warn!("hybrid-rt: {e}");
+                warned.once(e);
                 return None;
             }
         };
@@ -102,7 +123,7 @@ impl ViewAo {
             view_formats: &[],
         });
         let noisy_view = noisy.create_view(&Default::default());
-        Some(ViewAo { context, noisy, noisy_view, size })
+        Some(ViewAo { context, noisy, noisy_view, size, last_used: 0 })
     }
 }
 
@@ -165,17 +186,29 @@ fn sync_scene(
                 });
                 frames[at].1.add(&completed);
             }
-            Err(e) => warn!("hybrid-rt: {e}"),
+            Err(e) => state.warned.once(&e),
         }
     }
     for (_, times) in frames {
         times.publish(&timings);
     }
+    // Cameras gone or no longer traced: their denoiser history is freed (the SDK keeps it until
+    // the tickets that use it are back; the noisy textures are held with those tickets).
+    state.frame += 1;
+    let frame = state.frame;
+    state.views.retain(|_, v| {
+        let keep = frame - v.last_used <= VIEW_GRACE_FRAMES;
+        if !keep {
+            let _ = rt.context().destroy_denoising_context(v.context);
+        }
+        keep
+    });
+    timings.0.lock().push(("ao_histories".into(), state.views.len() as f64));
     let mut tasks = rt.context().create_task_container();
     let outcome = match state.scene.sync(rt, &mut tasks, &extracted, &allocator, &meshes) {
         Ok(o) => o,
         Err(e) => {
-            warn!("hybrid-rt: scene sync: {e}");
+            state.warned.once(format!("scene sync: {e}"));
             return;
         }
     };
@@ -184,7 +217,7 @@ fn sync_scene(
         return;
     }
     if let Err(e) = tasks.schedule_bvh_build(&BvhBuildTask::default()) {
-        warn!("hybrid-rt: {e}");
+        state.warned.once(&e);
         return;
     }
     let copies: Vec<&wgpu::Buffer> = outcome.copies.iter().collect();
@@ -197,7 +230,7 @@ fn sync_scene(
             state.held.buffers.extend(outcome.copies);
             state.scene.release_removed(rt);
         }
-        Err(e) => warn!("hybrid-rt: {e}"),
+        Err(e) => state.warned.once(&e),
     }
 }
 
@@ -228,9 +261,7 @@ fn trace_ao(
             }
             None => {
                 // Bevy makes no AO texture for cameras with MSAA (as for its SSAO).
-                if state.warned_msaa.insert(view.retained_view_entity) {
-                    warn!("hybrid-rt: a camera with RayTracedAo has no AO texture: give it Msaa::Off");
-                }
+                state.warned.once("a camera with RayTracedAo has no AO texture: give it Msaa::Off");
                 return;
             }
         },
@@ -251,7 +282,7 @@ fn trace_ao(
     let (depth_image, normal_image, output) = match inputs {
         Ok(i) => i,
         Err(e) => {
-            warn!("hybrid-rt: {e}");
+            state.warned.once(&e);
             return;
         }
     };
@@ -273,11 +304,15 @@ fn trace_ao(
             if let Some(old) = state.views.remove(&view.retained_view_entity) {
                 let _ = rt.context().destroy_denoising_context(old.context);
             }
-            if let Some(v) = ViewAo::new(rt, size) {
+            if let Some(v) = ViewAo::new(rt, size, &mut state.warned) {
                 state.views.insert(view.retained_view_entity, v);
             }
         }
-        state.views.get(&view.retained_view_entity)
+        let frame = state.frame;
+        state.views.get_mut(&view.retained_view_entity).map(|v| {
+            v.last_used = frame;
+            &*v
+        })
     } else {
         None
     };
@@ -285,7 +320,7 @@ fn trace_ao(
         Some(v) => match rt.image(&v.noisy, &v.noisy_view, hybrid_rt_wgpu::SDK_WRITE) {
             Ok(i) => Some((v, i)),
             Err(e) => {
-                warn!("hybrid-rt: {e}");
+                state.warned.once(&e);
                 return;
             }
         },
@@ -299,7 +334,7 @@ fn trace_ao(
         ..Default::default()
     };
     if let Err(e) = tasks.schedule_ambient_occlusion(&task) {
-        warn!("hybrid-rt: {e}");
+        state.warned.once(&e);
         return;
     }
     if let Some((v, noisy_image)) = &noisy {
@@ -314,7 +349,7 @@ fn trace_ao(
                     MotionInput { image, motion_type: MotionType::RgClipSpace, scale: [-2.0, -2.0, 1.0] }
                 }
                 Err(e) => {
-                    warn!("hybrid-rt: {e}");
+                    state.warned.once(&e);
                     return;
                 }
             },
@@ -334,7 +369,7 @@ fn trace_ao(
             output,
         };
         if let Err(e) = tasks.schedule_denoise_diffuse_occlusion(&denoise) {
-            warn!("hybrid-rt: {e}");
+            state.warned.once(&e);
             return;
         }
         writes.push(&v.noisy);
@@ -349,7 +384,7 @@ fn trace_ao(
             state.held.textures.extend([depth_tex.clone(), normal_tex.clone(), out_tex.clone()]);
             state.held.views.extend([depth_view.clone(), normal.texture.default_view.clone(), out_view.clone()]);
         }
-        Err(e) => warn!("hybrid-rt: {e}"),
+        Err(e) => state.warned.once(&e),
     }
 }
 

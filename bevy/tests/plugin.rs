@@ -122,6 +122,13 @@ fn app() -> (App, Latest) {
 
 /// The texels of a read-back R32Float image, without the rows' padding (rows are copied at a
 /// 256-byte pitch).
+/// The plugin's count of cameras holding an AO denoiser history.
+fn ao_histories(app: &App) -> f64 {
+    let store = app.world().resource::<bevy::diagnostic::DiagnosticsStore>();
+    let path = bevy::diagnostic::DiagnosticPath::new(hybrid_rt_bevy::DIAGNOSTIC_AO_HISTORIES);
+    store.get(&path).and_then(|d| d.value()).unwrap_or(-1.0)
+}
+
 fn bytemuck_f32(bytes: &[u8]) -> Vec<f32> {
     let pitch = bytes.len() / H as usize;
     (0..H as usize)
@@ -268,7 +275,9 @@ fn ray_traced_ao_in_a_bevy_frame() {
     // the 64-ray trace, from a 1-ray trace (its per-pixel RMSE about 0.3 in the contact).
     let camera = app.world_mut().query_filtered::<Entity, With<RayTracedAo>>().single(app.world()).unwrap();
     app.world_mut().get_mut::<RayTracedAo>(camera).unwrap().enabled = false;
-    frames(&mut app, &latest, 2);
+    frames(&mut app, &latest, 6);
+    // The disabled camera's denoiser history is freed after a few frames.
+    assert_eq!(ao_histories(&app), 0.0, "a disabled camera kept its AO history");
     {
         let mut e = app.world_mut().entity_mut(camera);
         let mut ao = e.get_mut::<RayTracedAo>().unwrap();
@@ -278,6 +287,7 @@ fn ray_traced_ao_in_a_bevy_frame() {
     }
     let cube = app.world_mut().spawn((Mesh3d(cube_mesh), MeshMaterial3d(material), Transform::from_xyz(0.0, 0.5, 0.0))).id();
     let ao = frames(&mut app, &latest, 16);
+    assert_eq!(ao_histories(&app), 1.0, "the camera's AO history");
     let e = against_reference(&ao, Some(0.0));
     eprintln!(
         "1 ray, denoised, 16 frames: RMSE {:.3}; contact RMSE {:.3}, mean difference {:+.3}",
