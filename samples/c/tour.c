@@ -434,6 +434,52 @@ int main(void) {
     free_image(noisy);
     free_image(clean);
 
+    /* ---- Many lights by resampling: a many-lights context holds the light list (on the GPU)
+     * and the view's reservoirs; the task gives the list once and changes it by ranges. */
+    HrtManyLightsContextInput mli = hrt_many_lights_context_input_default();
+    mli.max_width = W;
+    mli.max_height = H;
+    mli.max_lights = 2;
+    HrtManyLightsContextHandle many_ctx = 0;
+    CHECK_HRT(hrt_create_many_lights_context(ctx, &mli, &many_ctx));
+    HrtLightInfo ml_lights[2] = {shadow_task.light, shadow_task.light};
+    ml_lights[1].intensity = 0.0f; /* switched off: its samples die */
+    Image ml_diffuse = make_image(VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT);
+    Image ml_specular = make_image(VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT);
+    cmd = begin();
+    transition(cmd, ml_diffuse.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL);
+    transition(cmd, ml_specular.image, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL);
+    submit_and_wait(cmd);
+    HrtTraceManyLightsTask ml = hrt_trace_many_lights_task_default();
+    ml.context = many_ctx;
+    ml.common = shadow_task.common;
+    ml.light_operation = HRT_LIGHT_LIST_WRITE; /* lights 1 and 2 of an empty list: refused at build */
+    ml.first_light = 1;
+    ml.lights = ml_lights;
+    ml.light_count = 2;
+    ml.diffuse_output = sdk_image(&ml_diffuse, VK_IMAGE_LAYOUT_GENERAL);
+    ml.specular_output = sdk_image(&ml_specular, VK_IMAGE_LAYOUT_GENERAL);
+    EXPECT(ml.settings.mode == HRT_RESAMPLING_BIASED && ml.settings.initial_candidates == 8, "the defaults");
+    CHECK_HRT(hrt_schedule_many_lights(frame, &ml));
+    cmd = begin();
+    HrtTicket too_many;
+    EXPECT(hrt_build_gpu_task(ctx, frame, cmd, &too_many) == HRT_ERROR_INVALID_INPUT, "a write past the list's end");
+    submit_and_wait(cmd);
+    hrt_task_container_clear(frame);
+    ml.light_operation = HRT_LIGHT_LIST_REPLACE;
+    ml.first_light = 0;
+    CHECK_HRT(hrt_schedule_many_lights(frame, &ml));
+    float ml_px[W * H * 4];
+    printf("many lights frame:\n");
+    run_frame(ctx, frame, &ml_diffuse, 16, ml_px);
+    const float *mc = &ml_px[((H / 2) * W + W / 2) * 4];
+    printf("many lights, diffuse: centre %.4f, corner %.4f\n", mc[0], ml_px[0]);
+    EXPECT(mc[0] == 0.0f && ml_px[0] > 0.0f, "the ceiling shadows the centre; the corner is lit");
+    CHECK_HRT(hrt_destroy_many_lights_context(ctx, many_ctx));
+    EXPECT(hrt_destroy_many_lights_context(ctx, many_ctx) == HRT_ERROR_INVALID_HANDLE, "destroyed twice");
+    free_image(ml_diffuse);
+    free_image(ml_specular);
+
     /* ---- Two lights in one pass: the same light twice gives the same visibility twice. */
     Image vis = make_image(VK_FORMAT_R32_UINT, VK_IMAGE_USAGE_STORAGE_BIT);
     Image packed = make_image(VK_FORMAT_R32G32B32A32_SFLOAT, VK_IMAGE_USAGE_STORAGE_BIT);

@@ -13,8 +13,8 @@
  *    must not race a call on it.
  *  - HrtDeviceFeatures: one thread at a time; hrt_context_create reads it, so keep it alive
  *    and unchanged until that call returns.
- *  - HrtGeometryHandle, HrtInstanceHandle, HrtDenoisingContextHandle, HrtTicket: plain values,
- *    checked on use; any thread. A handle destroyed on one thread while another schedules a
+ *  - HrtGeometryHandle, HrtInstanceHandle, HrtDenoisingContextHandle, HrtManyLightsContextHandle,
+ *    HrtTicket: plain values, checked on use; any thread. A handle destroyed on one thread while another schedules a
  *    task for it gets HRT_ERROR_INVALID_HANDLE from the schedule or from the build (which
  *    then records nothing), never undefined behaviour.
  *  - The VkCommandBuffer given to hrt_build_gpu_task: yours, recorded into during the call;
@@ -55,6 +55,16 @@
  * Largest HrtDenoisingContextInput.max_width / max_height.
  */
 #define HRT_MAX_DENOISING_EXTENT 16384
+
+/**
+ * Most lights a many-lights context holds.
+ */
+#define HRT_MAX_MANY_LIGHTS (1 << 20)
+
+/**
+ * Largest HrtManyLightsContextInput.max_width / max_height.
+ */
+#define HRT_MAX_MANY_LIGHTS_EXTENT 16384
 
 /**
  * Most samples one HrtRelightCacheTask may take.
@@ -344,6 +354,39 @@ typedef enum HrtMotionType {
   HRT_MOTION_RGB_WORLD_SPACE = 2,
 } HrtMotionType;
 
+typedef enum HrtResamplingMode {
+  /**
+   * Sample-count weights: fast, slightly dark where neighbours cannot see a light (default).
+   */
+  HRT_RESAMPLING_BIASED = 0,
+  /**
+   * Weights over the pixels that could have produced the sample (a shadow ray per neighbour).
+   */
+  HRT_RESAMPLING_UNBIASED = 1,
+  /**
+   * No resampling: lights drawn by power, a shadow ray each (the baseline).
+   */
+  HRT_RESAMPLING_POWER_SAMPLING = 2,
+} HrtResamplingMode;
+
+/**
+ * How a task changes the context's light list.
+ */
+typedef enum HrtLightListOperation {
+  /**
+   * The lights of the context's previous task (default).
+   */
+  HRT_LIGHT_LIST_KEEP = 0,
+  /**
+   * A new list: `lights[0..light_count]`.
+   */
+  HRT_LIGHT_LIST_REPLACE = 1,
+  /**
+   * Lights `first_light..first_light + light_count` overwritten (the list grows past its end).
+   */
+  HRT_LIGHT_LIST_WRITE = 2,
+} HrtLightListOperation;
+
 /**
  * Opaque context. Thread-safe: any call from any thread, except that hrt_context_destroy
  * must not race another call on it or its containers.
@@ -591,6 +634,10 @@ typedef struct HrtResourceAllocations {
    * Denoising contexts' history images.
    */
   struct HrtAllocationCount denoiser;
+  /**
+   * Many-lights contexts' light lists and resampling history.
+   */
+  struct HrtAllocationCount many_lights;
 } HrtResourceAllocations;
 
 /**
@@ -859,6 +906,147 @@ typedef struct HrtDenoiseSpecularAndDiffuseTask {
 } HrtDenoiseSpecularAndDiffuseTask;
 
 /**
+ * One view's many-lights context (see the Rust docs of ManyLightsContextInput).
+ */
+typedef struct HrtManyLightsContextInput {
+  /**
+   * Largest viewport right edge, 1..=HRT_MAX_MANY_LIGHTS_EXTENT.
+   */
+  uint32_t max_width;
+  /**
+   * Largest viewport bottom edge, 1..=HRT_MAX_MANY_LIGHTS_EXTENT.
+   */
+  uint32_t max_height;
+  /**
+   * Lights the list may hold, 1..=HRT_MAX_MANY_LIGHTS. Default 65536.
+   */
+  uint32_t max_lights;
+} HrtManyLightsContextInput;
+
+typedef uint64_t HrtManyLightsContextHandle;
+
+typedef struct HrtRayOffset {
+  /**
+   * An HrtRayOffsetType. Default HRT_RAY_OFFSET_CAMERA_DISTANCE.
+   */
+  uint32_t offset_type;
+  float world_threshold;
+  float world_float_scale;
+  float world_int_scale;
+  float cam_constant;
+  float cam_linear;
+  float cam_quadratic;
+} HrtRayOffset;
+
+/**
+ * Specular colour: global_metalness * image.rgb (image != 0), global_metalness without.
+ */
+typedef struct HrtSpecularInput {
+  struct HrtImageInput image;
+  /**
+   * Default 1.0.
+   */
+  float global_metalness;
+} HrtSpecularInput;
+
+typedef struct HrtTraceCommon {
+  struct HrtDepthInput depth;
+  struct HrtNormalInput normals;
+  struct HrtViewport viewport;
+  struct HrtCamera camera;
+  struct HrtRayOffset ray_offset;
+  struct HrtRoughnessInput roughness;
+  struct HrtSpecularInput specular;
+  /**
+   * Optional (image = VK_NULL_HANDLE for none): pixels with R >= 0.5 are excluded from the
+   * trace (written as background). Any unorm, snorm, sRGB or float colour format the device
+   * can sample; integer and depth/stencil formats give HRT_ERROR_UNSUPPORTED_FORMAT.
+   */
+  struct HrtImageInput input_mask;
+  /**
+   * Optional lit frame (image = VK_NULL_HANDLE for none): secondary hits on screen take
+   * its radiance, others the cache's.
+   */
+  struct HrtImageInput direct_lighting;
+  /**
+   * Default false.
+   */
+  bool use_inline_rt;
+  /**
+   * Interpolate mesh-colors caches. Default true.
+   */
+  bool enable_bilinear_sampling;
+  /**
+   * An HrtDebugOutput. Default HRT_DEBUG_DEFAULT.
+   */
+  uint32_t debug_output;
+  /**
+   * An HrtHalfResolutionMode: checkerboard tracing, half the pixels per ticket,
+   * alternating. Default HRT_HALF_RESOLUTION_OFF.
+   */
+  uint32_t half_resolution_mode;
+  /**
+   * An HrtRandomNumbers. Default HRT_RANDOM_NUMBERS_DEFAULT.
+   */
+  uint32_t random_numbers;
+} HrtTraceCommon;
+
+/**
+ * Resampling settings (see the Rust docs of ManyLightsSettings for each default).
+ */
+typedef struct HrtManyLightsSettings {
+  /**
+   * An HrtResamplingMode.
+   */
+  uint32_t mode;
+  uint32_t initial_candidates;
+  uint32_t spatial_samples;
+  float spatial_radius;
+  uint32_t max_history;
+} HrtManyLightsSettings;
+
+/**
+ * Direct lighting from the context's lights by resampling (see the Rust docs of
+ * TraceManyLightsTask): demodulated diffuse and specular, hit distance in A. The lights are
+ * copied when the task is scheduled.
+ */
+typedef struct HrtTraceManyLightsTask {
+  HrtManyLightsContextHandle context;
+  struct HrtTraceCommon common;
+  /**
+   * Optional (image = VK_NULL_HANDLE: reproject with the cameras, static scenes only).
+   */
+  struct HrtMotionInput motion;
+  /**
+   * An HrtLightListOperation. Default HRT_LIGHT_LIST_KEEP.
+   */
+  uint32_t light_operation;
+  /**
+   * HRT_LIGHT_LIST_WRITE: the first light written.
+   */
+  uint32_t first_light;
+  const struct HrtLightInfo *lights;
+  uint32_t light_count;
+  /**
+   * RGBA16F or RGBA32F, GENERAL, STORAGE usage.
+   */
+  struct HrtImageInput diffuse_output;
+  /**
+   * RGBA16F or RGBA32F, GENERAL, STORAGE usage.
+   */
+  struct HrtImageInput specular_output;
+  /**
+   * Optional: RGB = a colour per chosen light, A = the reservoir's sample count.
+   */
+  struct HrtImageInput debug_output;
+  struct HrtManyLightsSettings settings;
+  /**
+   * Default false.
+   */
+  bool reset_history;
+} HrtTraceManyLightsTask;
+
+/**
  * Lights cache samples no camera has injected from the engine's lights, with shadow rays:
  * albedo (HrtInstanceInput.albedo x the geometry's colors and albedo_texture, where given) x
  * the lights' irradiance (intensity x color; directional: irradiance at normal incidence,
@@ -1111,72 +1299,6 @@ typedef struct HrtGeometryTask {
   struct HrtGeometryInput input;
 } HrtGeometryTask;
 
-typedef struct HrtRayOffset {
-  /**
-   * An HrtRayOffsetType. Default HRT_RAY_OFFSET_CAMERA_DISTANCE.
-   */
-  uint32_t offset_type;
-  float world_threshold;
-  float world_float_scale;
-  float world_int_scale;
-  float cam_constant;
-  float cam_linear;
-  float cam_quadratic;
-} HrtRayOffset;
-
-/**
- * Specular colour: global_metalness * image.rgb (image != 0), global_metalness without.
- */
-typedef struct HrtSpecularInput {
-  struct HrtImageInput image;
-  /**
-   * Default 1.0.
-   */
-  float global_metalness;
-} HrtSpecularInput;
-
-typedef struct HrtTraceCommon {
-  struct HrtDepthInput depth;
-  struct HrtNormalInput normals;
-  struct HrtViewport viewport;
-  struct HrtCamera camera;
-  struct HrtRayOffset ray_offset;
-  struct HrtRoughnessInput roughness;
-  struct HrtSpecularInput specular;
-  /**
-   * Optional (image = VK_NULL_HANDLE for none): pixels with R >= 0.5 are excluded from the
-   * trace (written as background). Any unorm, snorm, sRGB or float colour format the device
-   * can sample; integer and depth/stencil formats give HRT_ERROR_UNSUPPORTED_FORMAT.
-   */
-  struct HrtImageInput input_mask;
-  /**
-   * Optional lit frame (image = VK_NULL_HANDLE for none): secondary hits on screen take
-   * its radiance, others the cache's.
-   */
-  struct HrtImageInput direct_lighting;
-  /**
-   * Default false.
-   */
-  bool use_inline_rt;
-  /**
-   * Interpolate mesh-colors caches. Default true.
-   */
-  bool enable_bilinear_sampling;
-  /**
-   * An HrtDebugOutput. Default HRT_DEBUG_DEFAULT.
-   */
-  uint32_t debug_output;
-  /**
-   * An HrtHalfResolutionMode: checkerboard tracing, half the pixels per ticket,
-   * alternating. Default HRT_HALF_RESOLUTION_OFF.
-   */
-  uint32_t half_resolution_mode;
-  /**
-   * An HrtRandomNumbers. Default HRT_RANDOM_NUMBERS_DEFAULT.
-   */
-  uint32_t random_numbers;
-} HrtTraceCommon;
-
 typedef struct HrtTraceAmbientOcclusionTask {
   struct HrtTraceCommon common;
   /**
@@ -1411,6 +1533,8 @@ typedef struct HrtTraceMultiShadowTask {
 #define HRT_TASK_DENOISE_SHADOW 15
 
 #define HRT_TASK_DENOISE_MULTI_SHADOW 16
+
+#define HRT_TASK_MANY_LIGHTS 18
 
 #define HRT_TASK_CACHE_RELIGHT 17
 
@@ -1726,6 +1850,26 @@ enum HrtStatus hrt_schedule_denoise_shadow(struct HrtTaskContainer *container,
 
 enum HrtStatus hrt_schedule_denoise_specular_and_diffuse(struct HrtTaskContainer *container,
                                                          const struct HrtDenoiseSpecularAndDiffuseTask *task);
+
+struct HrtManyLightsContextInput hrt_many_lights_context_input_default(void);
+
+/**
+ * Creates a many-lights context (its light list and history are allocated now).
+ */
+enum HrtStatus hrt_create_many_lights_context(struct HrtContext *ctx,
+                                              const struct HrtManyLightsContextInput *input,
+                                              HrtManyLightsContextHandle *out);
+
+/**
+ * Destroys a many-lights context; its buffers are freed once the tickets issued so far return.
+ */
+enum HrtStatus hrt_destroy_many_lights_context(struct HrtContext *ctx,
+                                               HrtManyLightsContextHandle handle);
+
+struct HrtTraceManyLightsTask hrt_trace_many_lights_task_default(void);
+
+enum HrtStatus hrt_schedule_many_lights(struct HrtTaskContainer *container,
+                                        const struct HrtTraceManyLightsTask *task);
 
 struct HrtRelightCacheTask hrt_relight_cache_task_default(void);
 

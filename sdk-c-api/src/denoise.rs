@@ -161,22 +161,31 @@ pub struct HrtDenoiseSpecularAndDiffuseTask {
     pub output_diffuse: HrtImageInput,
 }
 
-fn common(c: &HrtDenoisingCommon) -> Result<rt::DenoisingCommon, Failure> {
-    // The G-buffer fields convert as a trace task's do (and in its order).
-    let (depth, normals) = (depth(&c.depth)?, normals(&c.normals)?);
-    let motion_type = match c.motion.motion_type {
+/// Motion vectors as the SDK takes them (the denoisers' and the many-lights task's).
+pub(crate) fn motion(m: &HrtMotionInput) -> Result<rt::MotionInput, Failure> {
+    let motion_type = match m.motion_type {
         0 => rt::MotionType::RgViewSpace,
         1 => rt::MotionType::RgClipSpace,
         2 => rt::MotionType::RgbWorldSpace,
         v => return Err(Failure(HrtStatus::HRT_ERROR_INVALID_INPUT, format!("invalid HrtMotionInput.motion_type: {v}"))),
     };
+    Ok(rt::MotionInput { image: image(&m.image), motion_type, scale: m.scale })
+}
+
+pub(crate) fn motion_c(m: &rt::MotionInput) -> HrtMotionInput {
+    HrtMotionInput { image: image_c(&m.image), motion_type: m.motion_type as u32, scale: m.scale }
+}
+
+fn common(c: &HrtDenoisingCommon) -> Result<rt::DenoisingCommon, Failure> {
+    // The G-buffer fields convert as a trace task's do (and in its order).
+    let (depth, normals) = (depth(&c.depth)?, normals(&c.normals)?);
     let s = &c.settings;
     Ok(rt::DenoisingCommon {
         depth,
         normals,
         roughness: roughness(&c.roughness),
         input_mask: image(&c.input_mask),
-        motion: rt::MotionInput { image: image(&c.motion.image), motion_type, scale: c.motion.scale },
+        motion: motion(&c.motion)?,
         viewport: viewport(&c.viewport),
         camera: camera(&c.camera),
         previous_camera: c.has_previous_camera.then(|| camera(&c.previous_camera)),
@@ -209,11 +218,7 @@ pub extern "C" fn hrt_denoising_common_default() -> HrtDenoisingCommon {
         normals: t.normals,
         roughness: t.roughness,
         input_mask: t.input_mask,
-        motion: HrtMotionInput {
-            image: image_c(&d.motion.image),
-            motion_type: d.motion.motion_type as u32,
-            scale: d.motion.scale,
-        },
+        motion: motion_c(&d.motion),
         viewport: t.viewport,
         camera: t.camera,
         has_previous_camera: false,

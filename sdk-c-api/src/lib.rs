@@ -11,8 +11,8 @@
 //! One module per API area, each with its C structs, their conversions to the SDK's types, the
 //! `hrt_*_default()` functions and the calls: `context` (with the device set-up), `scene`
 //! (with geometry), `cache`, `trace` (with shadows and the shading traces), `denoise`,
-//! `relight`. Every C struct mirrors an SDK struct field for field, with the same defaults,
-//! and each area defines the `HRT_TASK_*` values of its own tasks. The support modules:
+//! `relight`, `many_lights`. Every C struct mirrors an SDK struct field for field, with the
+//! same defaults, and each area defines the `HRT_TASK_*` values of its own tasks. The support modules:
 //! `vulkan` (the Vulkan types as the header names them), `image` (`HrtImageInput`), `args`
 //! (reading arguments, writing results), `status` (status codes, the last error, the panic
 //! guard), `live` (the registry of live contexts and containers) and `log_bridge`.
@@ -24,6 +24,7 @@ mod denoise;
 mod image;
 mod live;
 mod log_bridge;
+mod many_lights;
 mod relight;
 mod scene;
 mod status;
@@ -35,6 +36,7 @@ pub use context::*;
 pub use denoise::*;
 pub use image::HrtImageInput;
 pub use log_bridge::{HrtLogCallback, HrtLogSeverity};
+pub use many_lights::*;
 pub use relight::*;
 pub use scene::*;
 pub use status::HrtStatus;

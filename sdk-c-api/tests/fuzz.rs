@@ -373,6 +373,21 @@ fn every_c_schedule_entry_point_refuses_raw_bytes_by_name() {
     (relight.lights, relight.light_count) = (lights.as_ptr(), 1);
     entry!("HrtRelightCacheTask", relight, hrt_schedule_cache_relight);
 
+    let mut many_input = hrt_many_lights_context_input_default();
+    (many_input.max_width, many_input.max_height, many_input.max_lights) = (W, W, 16);
+    let mut many_context = 0;
+    assert_eq!(
+        unsafe { hrt_create_many_lights_context(ctx, &many_input, &mut many_context) },
+        HrtStatus::HRT_OK,
+        "{}",
+        last_error()
+    );
+    let mut many = hrt_trace_many_lights_task_default();
+    (many.context, many.common, many.diffuse_output, many.specular_output) = (many_context, trace, color_io, color2_io);
+    (many.light_operation, many.lights, many.light_count) =
+        (HrtLightListOperation::HRT_LIGHT_LIST_REPLACE as u32, lights.as_ptr(), 1);
+    entry!("HrtTraceManyLightsTask", many, hrt_schedule_many_lights);
+
     let mut geometry_task = hrt_geometry_task_default();
     geometry_task.handle = geometry;
     (geometry_task.input.vertices.buffer, geometry_task.input.vertices.count) = (vk::Handle::as_raw(vertices.buffer), 3);

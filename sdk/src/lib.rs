@@ -84,9 +84,10 @@ pub use gpu::memory::{AllocationCount, MemoryKind, ResourceAllocations};
 // modules under names the crate's own layers use).
 pub use types::cache::*;
 pub use types::denoise::*;
-pub use types::handles::{DenoisingContextHandle, GeometryHandle, InstanceHandle};
+pub use types::handles::{DenoisingContextHandle, GeometryHandle, InstanceHandle, ManyLightsContextHandle};
 pub use types::inputs::*;
 pub use types::limits::*;
+pub use types::many_lights::*;
 pub use types::scene::*;
 pub use types::settings::*;
 pub use types::ticket::*;

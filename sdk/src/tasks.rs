@@ -97,6 +97,17 @@ macro_rules! task_table {
                         schedule_specular(TraceSpecularTask);
                     ]
                 }
+                ManyLights(TraceManyLightsTask) {
+                    pass: many_lights: many_lights::ManyLightsPass = "many lights";
+                    kinds: [
+                        /// `TraceManyLightsTask`.
+                        ManyLights = 18, "many_lights";
+                    ]
+                    schedule: [
+                        /// Direct lighting from many shadowed lights by resampling (see `TraceManyLightsTask`).
+                        schedule_many_lights(TraceManyLightsTask);
+                    ]
+                }
                 DirectLightingInjection(DirectLightingInjectionTask) {
                     pass: inject: inject::InjectPass = "injection";
                     kinds: [

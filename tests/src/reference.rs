@@ -564,3 +564,141 @@ pub fn light_weight(l: &hybrid_rt::LightInfo, p: Vec3, n: Vec3) -> f32 {
     }
     l.intensity * reach * n.dot(-v / d).max(0.0) / (d * d)
 }
+
+// ---------------------------------------------------------------- many lights
+
+/// What `TraceManyLightsTask` estimates at a surface, by brute force: every light's unshadowed
+/// irradiance times the surface's response to the light's centre direction (Lambert's 1/pi;
+/// GGX specular, lobe widened by half the light's angular radius) times the visible fraction
+/// of the light's extent, with `strata`² stratified shadow rays per light (one for a point of
+/// no size). Returns per pixel (diffuse = E/pi, specular = E x GGX), summed over the lights;
+/// background pixels get zeros. `roughness` is the surface's everywhere.
+#[allow(clippy::too_many_arguments)]
+pub fn many_lights_reference(
+    tracer: &Tracer,
+    g: &GBuffer,
+    eye: Vec3,
+    lights: &[hybrid_rt::LightInfo],
+    roughness: f32,
+    offset: &hybrid_rt::RayOffset,
+    strata: u32,
+    rng: &mut Rng,
+) -> Vec<([f32; 3], [f32; 3])> {
+    (0..g.depth.len())
+        .map(|i| {
+            if !g.hit[i] {
+                return ([0.0; 3], [0.0; 3]);
+            }
+            let p = g.position[i];
+            let v = (eye - p).normalize();
+            let mut n = g.normal[i];
+            if n.dot(v) < 0.0 {
+                n = (n - 2.0 * n.dot(v) * v).normalize();
+            }
+            let (mut diffuse, mut specular) = (Vec3::ZERO, Vec3::ZERO);
+            for l in lights {
+                let (e, wi, dist) = many_lights_irradiance(l, p, n);
+                if luminance(e) <= 0.0 {
+                    continue;
+                }
+                let angle = if l.light_type == hybrid_rt::LightType::Directional {
+                    (l.angular_extent * 0.5).tan()
+                } else {
+                    l.radius / dist.max(1e-6)
+                };
+                let fs = ggx_direct(n, v, wi, roughness * roughness, angle);
+                let sized =
+                    if l.light_type == hybrid_rt::LightType::Directional { l.angular_extent > 0.0 } else { l.radius > 0.0 };
+                let s = if sized { strata } else { 1 };
+                let vis = light_visible_fraction(tracer, p, n, eye, l, offset, s, rng);
+                diffuse += e * (vis / std::f32::consts::PI);
+                specular += e * (fs * vis);
+            }
+            (diffuse.to_array(), specular.to_array())
+        })
+        .collect()
+}
+
+/// Rec. 709 luminance.
+pub fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
+/// A light's unshadowed irradiance at (p, n) (colour), the direction to its centre and its
+/// distance: `hrt_ml_irradiance` in shaders/include/many_lights.glsl.
+pub fn many_lights_irradiance(l: &hybrid_rt::LightInfo, p: Vec3, n: Vec3) -> (Vec3, Vec3, f32) {
+    let radiant = Vec3::from_array(l.color) * l.intensity;
+    if l.light_type == hybrid_rt::LightType::Directional {
+        let wi = -l.direction.normalize();
+        return (radiant * n.dot(wi).max(0.0), wi, 1e30);
+    }
+    let d = l.position - p;
+    let d2 = d.length_squared().max(1e-8);
+    let dist = d2.sqrt();
+    let wi = d / dist;
+    let mut reach = 1.0;
+    if l.range > 0.0 {
+        reach = (1.0 - (dist / l.range).powi(4)).clamp(0.0, 1.0).powi(2);
+    }
+    if l.light_type == hybrid_rt::LightType::Spot {
+        let c = (-wi).dot(l.direction.normalize());
+        let (lo, hi) = (l.outer_cone.cos(), l.inner_cone.cos().max(l.outer_cone.cos() + 1e-6));
+        let t = ((c - lo) / (hi - lo)).clamp(0.0, 1.0);
+        reach *= if c <= lo { 0.0 } else { t * t * (3.0 - 2.0 * t) };
+    }
+    (radiant * (reach * n.dot(wi).max(0.0) / d2), wi, dist)
+}
+
+/// GGX specular without Fresnel for a light of angular radius `angle`: `hrt_ml_specular`.
+pub fn ggx_direct(n: Vec3, v: Vec3, wi: Vec3, alpha: f32, angle: f32) -> f32 {
+    let (nl, nv) = (n.dot(wi), n.dot(v));
+    if nl <= 0.0 || nv <= 0.0 {
+        return 0.0;
+    }
+    let a = (alpha.max(0.01) + 0.5 * angle).min(1.0);
+    let a2 = a * a;
+    let nh = n.dot((wi + v).normalize()).max(0.0);
+    let dd = nh * nh * (a2 - 1.0) + 1.0;
+    let d = a2 / (std::f32::consts::PI * dd * dd);
+    let lv = nl * (nv * nv * (1.0 - a2) + a2).sqrt();
+    let ll = nv * (nl * nl * (1.0 - a2) + a2).sqrt();
+    d * 0.5 / (lv + ll).max(1e-12)
+}
+
+/// The visible fraction of a light's extent from (p, n): `strata`² stratified samples of the
+/// disk the SDK samples (`hrt_light_ray`), a sample below the surface's horizon unseen.
+#[allow(clippy::too_many_arguments)]
+pub fn light_visible_fraction(
+    tracer: &Tracer,
+    p: Vec3,
+    n: Vec3,
+    eye: Vec3,
+    light: &hybrid_rt::LightInfo,
+    offset: &hybrid_rt::RayOffset,
+    strata: u32,
+    rng: &mut Rng,
+) -> f32 {
+    let origin = offset_origin(p, n, eye, offset);
+    let mut visible = 0;
+    for sy in 0..strata {
+        for sx in 0..strata {
+            let (u, v) = ((sx as f32 + rng.next_f32()) / strata as f32, (sy as f32 + rng.next_f32()) / strata as f32);
+            let (dx, dy) = concentric_disk(u, v);
+            let (dir, tmax) = if light.light_type == hybrid_rt::LightType::Directional {
+                let to_light = -light.direction.normalize();
+                let (t, b) = basis(to_light);
+                ((to_light + (t * dx + b * dy) * (light.angular_extent * 0.5).tan()).normalize(), f32::MAX)
+            } else {
+                let to_centre = (light.position - origin).normalize();
+                let (t, b) = basis(to_centre);
+                let target = light.position + (t * dx + b * dy) * light.radius;
+                let v = target - origin;
+                (v.normalize(), v.length() * 0.9999)
+            };
+            if dir.dot(n) > 0.0 && tracer.closest_hit(origin, dir, 0.0, tmax).is_none() {
+                visible += 1;
+            }
+        }
+    }
+    visible as f32 / (strata * strata) as f32
+}

@@ -397,6 +397,8 @@ pub struct HrtResourceAllocations {
     pub readback: HrtAllocationCount,
     /// Denoising contexts' history images.
     pub denoiser: HrtAllocationCount,
+    /// Many-lights contexts' light lists and resampling history.
+    pub many_lights: HrtAllocationCount,
 }
 
 impl From<rt::ResourceAllocations> for HrtResourceAllocations {
@@ -412,6 +414,7 @@ impl From<rt::ResourceAllocations> for HrtResourceAllocations {
             cache: c(a.cache),
             readback: c(a.readback),
             denoiser: c(a.denoiser),
+            many_lights: c(a.many_lights),
         }
     }
 }

@@ -44,8 +44,15 @@ pub struct Header {
 const WORDS: &[&str] =
     &["uint32_t", "int32_t", "float", "VkFormat", "VkImageLayout", "HrtTaskKind", "HrtBuildHint", "HrtHitIndirect"];
 const VULKAN_HANDLES: &[&str] = &["VkBuffer", "VkImage", "VkImageView", "VkInstance", "VkPhysicalDevice", "VkDevice"];
-const WIDES: &[&str] =
-    &["uint64_t", "double", "HrtGeometryHandle", "HrtInstanceHandle", "HrtDenoisingContextHandle", "HrtTicket"];
+const WIDES: &[&str] = &[
+    "uint64_t",
+    "double",
+    "HrtGeometryHandle",
+    "HrtInstanceHandle",
+    "HrtDenoisingContextHandle",
+    "HrtManyLightsContextHandle",
+    "HrtTicket",
+];
 
 impl Header {
     pub fn parse(text: &str) -> Header {

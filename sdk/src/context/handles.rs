@@ -14,6 +14,7 @@ pub(crate) struct Live {
     pub geometries: HashSet<u64>,
     pub instances: HashSet<u64>,
     pub denoisers: HashSet<u64>,
+    pub many_lights: HashSet<u64>,
 }
 
 /// Why `raw` is not a live handle of context `ctx`: null, foreign, or destroyed.

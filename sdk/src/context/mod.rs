@@ -20,6 +20,7 @@ mod cache;
 mod denoise;
 mod handles;
 mod journal;
+mod many_lights;
 mod record;
 mod scene;
 mod tickets;
@@ -88,6 +89,7 @@ struct State {
     scene: Scene,
     cache_pool: CachePool,
     denoisers: Registry<DenoisingContextHandle, DenoiserState>,
+    many_lights: Registry<ManyLightsContextHandle, crate::passes::many_lights::ManyLightsState>,
     /// The intermediates every denoising context shares (as large as the largest).
     denoise_temps: TempPool,
     /// The denoisers' guides: one per view, and one per context without a view.
@@ -174,6 +176,7 @@ impl ExecuteContext {
                 scene: Scene::new(id),
                 cache_pool: CachePool::default(),
                 denoisers: Registry::new(id),
+                many_lights: Registry::new(id),
                 denoise_temps: TempPool::default(),
                 denoise_guides: HashMap::new(),
                 relight_cursor: Default::default(),
@@ -418,6 +421,14 @@ impl Drop for Shared {
         }
         for image in std::mem::take(&mut st.denoise_temps).into_images() {
             st.deferred.retire(0, Garbage::Image(image));
+        }
+        let many_lights: Vec<ManyLightsContextHandle> = st.many_lights.iter().map(|(h, _)| h).collect();
+        for h in many_lights {
+            if let Ok(state) = st.many_lights.remove(h) {
+                for buffer in state.into_buffers() {
+                    st.deferred.retire(0, Garbage::Buffer(buffer));
+                }
+            }
         }
         for (_, guide) in st.denoise_guides.drain() {
             for image in guide.into_images() {

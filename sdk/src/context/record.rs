@@ -170,6 +170,7 @@ impl Recorder<'_> {
             scene: &st.scene,
             cache_pool: &st.cache_pool,
             denoisers: &mut st.denoisers,
+            many_lights: &mut st.many_lights,
             denoise_temps: &mut st.denoise_temps,
             denoise_guides: &mut st.denoise_guides,
             view_inputs: Default::default(),

@@ -138,6 +138,7 @@ pub(super) fn validate_handles(st: &mut State, tasks: &[Task], limits: &Limits) 
         scene: &st.scene,
         cache_pool: &st.cache_pool,
         denoisers: &mut st.denoisers,
+        many_lights: &mut st.many_lights,
         denoise_temps: &mut st.denoise_temps,
         denoise_guides: &mut st.denoise_guides,
         view_inputs: Default::default(),

@@ -32,10 +32,12 @@ pub enum MemoryKind {
     Readback = 7,
     /// Denoising contexts' history and intermediate images.
     Denoiser = 8,
+    /// Many-lights contexts: light lists, their power distributions and resampling history.
+    ManyLights = 9,
 }
 
 /// Number of `MemoryKind`s.
-pub const MEMORY_KIND_COUNT: usize = 9;
+pub const MEMORY_KIND_COUNT: usize = 10;
 
 /// Bytes and counts of live SDK allocations, per kind.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -71,6 +73,8 @@ pub struct ResourceAllocations {
     pub readback: AllocationCount,
     /// Denoiser history.
     pub denoiser: AllocationCount,
+    /// Many-lights contexts (light lists, resampling history).
+    pub many_lights: AllocationCount,
 }
 
 impl ResourceAllocations {
@@ -87,6 +91,7 @@ impl ResourceAllocations {
             (Cache, self.cache),
             (Readback, self.readback),
             (Denoiser, self.denoiser),
+            (ManyLights, self.many_lights),
         ]
     }
 
@@ -448,6 +453,7 @@ impl Memory {
             cache: c[MemoryKind::Cache as usize],
             readback: c[MemoryKind::Readback as usize],
             denoiser: c[MemoryKind::Denoiser as usize],
+            many_lights: c[MemoryKind::ManyLights as usize],
         }
     }
 

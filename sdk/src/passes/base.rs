@@ -93,6 +93,7 @@ pub(crate) struct World<'a> {
     pub scene: &'a Scene,
     pub cache_pool: &'a CachePool,
     pub denoisers: &'a mut Registry<DenoisingContextHandle, super::denoise::DenoiserState>,
+    pub many_lights: &'a mut Registry<ManyLightsContextHandle, super::many_lights::ManyLightsState>,
     /// The denoisers' shared intermediates.
     pub denoise_temps: &'a mut super::denoise::TempPool,
     /// The denoisers' guides, by view (or context).

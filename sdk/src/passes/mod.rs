@@ -20,6 +20,7 @@ pub(crate) mod descriptors;
 pub(crate) mod diffuse;
 pub(crate) mod geometry_pack;
 pub(crate) mod inject;
+pub(crate) mod many_lights;
 pub(crate) mod program;
 pub(crate) mod relight;
 pub(crate) mod shadow;

@@ -34,6 +34,9 @@ handle_type!(
 handle_type!(
     /// A denoiser's state: its history images and the previous camera.
     DenoisingContextHandle, "denoising context");
+handle_type!(
+    /// A many-lights context: the light list and one view's resampling history.
+    ManyLightsContextHandle, "many-lights context");
 
 pub(crate) trait RawHandle: Copy {
     const KIND: &'static str;

@@ -11,6 +11,7 @@ use glam::{Affine3A, Mat4};
 
 mod geometry;
 mod lights;
+mod many_lights;
 pub(crate) use geometry::geometry_input;
 use lights::{light, SHADOW_OUTPUT_FORMATS};
 
