@@ -48,6 +48,7 @@ impl Report {
                 ("caches", mem.cache.bytes),
                 ("read-back", mem.readback.bytes),
                 ("denoisers", mem.denoiser.bytes),
+                ("many lights", mem.many_lights.bytes),
             ],
             cache_bytes: r.cache_bytes(),
             denoiser_bytes: mem.denoiser.bytes,

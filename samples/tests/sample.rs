@@ -467,3 +467,33 @@ fn the_random_numbers_flag_changes_the_rays_not_the_mean() {
         assert!((mean(&ao[0]) - mean(&ao[k])).abs() < 0.05, "means {} vs {}", mean(&ao[0]), mean(&ao[k]));
     }
 }
+
+/// `--many-lights`: the SDK's resampled lighting of the scattered lights is traced, denoised and
+/// added to the direct lighting (brighter than without, nowhere darker beyond noise).
+#[test]
+fn many_lights_add_their_light() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let direct: Vec<(String, Vec<f32>)> = [&[][..], &["--many-lights", "1024"][..]]
+        .iter()
+        .enumerate()
+        .map(|(k, extra)| {
+            let out = dir.join(format!("sample-many-lights-{k}"));
+            let mut args = vec!["--headless", "--width", "64", "--height", "36", "--frames", "4", "--modes", "direct"];
+            args.extend_from_slice(extra);
+            let text = run_sample(&args, &out);
+            let lum = read_exr_rgba(&out.join("direct.exr"))
+                .unwrap()
+                .2
+                .iter()
+                .map(|t| 0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2])
+                .collect();
+            (text, lum)
+        })
+        .collect();
+    let (without, with) = (&direct[0], &direct[1]);
+    assert!(with.0.contains("many lights") && with.0.contains("denoise many lights"), "{}", with.0);
+    assert!(!without.0.contains("denoise many lights"), "{}", without.0);
+    eprintln!("direct light: mean {:.4} without, {:.4} with 1,024 lights", mean(&without.1), mean(&with.1));
+    assert!(with.1.iter().all(|v| v.is_finite()));
+    assert!(mean(&with.1) > 1.05 * mean(&without.1), "the lights add light: {} vs {}", mean(&with.1), mean(&without.1));
+}

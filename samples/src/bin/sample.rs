@@ -124,6 +124,10 @@ struct Cli {
     /// the fitted camera path.
     #[arg(long)]
     camera: Option<usize>,
+    /// Scatter N small lights (2,048 without a number) through the scene, shaded by the SDK's
+    /// resampled direct lighting (TraceManyLightsTask) and denoised; 64 of them circle.
+    #[arg(long, num_args = 0..=1, default_missing_value = "2048", value_parser = clap::value_parser!(u32).range(1..=1_048_576))]
+    many_lights: Option<u32>,
     /// Write the GPU times and memory as JSON to this file.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -153,6 +157,7 @@ fn run() -> Result<(), String> {
         hit_lighting: cli.hit_lighting,
         cache_budget_bytes: cli.cache_budget_mib.saturating_mul(1 << 20),
         time_passes: cli.time_passes,
+        many_lights: cli.many_lights.unwrap_or(0),
         max_blas_build_count: cli.blas_per_frame,
         rays_per_pixel: cli.rays,
         checkerboard: cli.checkerboard,

@@ -35,6 +35,7 @@ use hybrid_rt_host::scene::Camera;
 use hybrid_rt_host::{Host, HostImage, HostResult};
 
 mod inputs;
+mod many_lights;
 mod resources;
 mod schedule;
 mod stats;
@@ -117,6 +118,9 @@ pub struct Settings {
     /// `InitSettings::time_passes`: the report breaks each denoiser's time down by pass.
     /// Default false.
     pub time_passes: bool,
+    /// Scatter this many small lights through the scene and shade them with the SDK's
+    /// resampled direct lighting (`TraceManyLightsTask`), denoised; 0 (the default): none.
+    pub many_lights: u32,
 }
 
 impl Default for Settings {
@@ -138,6 +142,7 @@ impl Default for Settings {
             relight_samples: 65_536,
             hit_lighting: false,
             cache_budget_bytes: 0,
+            many_lights: 0,
             time_passes: false,
         }
     }
@@ -160,6 +165,8 @@ pub struct Renderer<'h> {
     slots: Vec<Slot>,
     work: Work,
     denoisers: Denoisers,
+    /// `Settings::many_lights`: the lights and their SDK contexts and images.
+    many: Option<many_lights::ManyLights>,
     frame: u64,
     last_slot: usize,
     prev_transforms: Vec<glam::Affine3A>,
@@ -256,6 +263,13 @@ impl<'h> Renderer<'h> {
                 false => Some(context(SignalType::MultiShadow).map_err(sdk_err)?),
             },
         };
+        let many = match settings.many_lights {
+            0 => None,
+            n => {
+                let lights = many_lights::scatter(scene.bounds(), scene.lights.point_intensity, n as usize);
+                Some(many_lights::ManyLights::new(host, &ctx, lights, w, h)?)
+            }
+        };
         let prev_transforms = scene.transforms(0.0);
         let (lo, hi) = scene.bounds();
         let reach = (hi - lo).length().max(1.0);
@@ -276,6 +290,7 @@ impl<'h> Renderer<'h> {
             slots,
             work,
             denoisers,
+            many,
             frame: 0,
             last_slot: 0,
             prev_transforms,
@@ -396,7 +411,7 @@ impl<'h> Renderer<'h> {
         self.slots[slot].timer.mark(host, cmd, "raster G-buffers (main + lidar)");
 
         // --- The SDK: one container for everything of this frame.
-        self.schedule_frame(slot, &transforms, &deformed, &cameras, debug)?;
+        self.schedule_frame(slot, &transforms, &deformed, &cameras, debug, time)?;
         // SAFETY: the buffer is recording; what the tasks name lives until the ticket is back.
         let ticket = unsafe { self.ctx.build_gpu_task(&mut self.container, cmd) }.map_err(sdk_err)?;
         let s = &mut self.slots[slot];
@@ -502,6 +517,10 @@ impl<'h> Renderer<'h> {
             raw_trace: false,
         };
         self.lighting.record(host, s.cmd, 2 * slot, &s.main.targets, &cameras.main, &lights, file, main_vis, &s.main.lit)?;
+        if let Some(many) = &mut self.many {
+            host.full_barrier(s.cmd);
+            many.compose(host, s.cmd, slot, &s.main.targets, &s.main.lit)?;
+        }
         let lidar_vis = Visibility {
             sun: &wk.lidar_sun,
             point: &wk.lidar_point,
@@ -747,6 +766,9 @@ impl<'h> Renderer<'h> {
         let d = &self.denoisers;
         for d in [Some(d.sun), Some(d.point), Some(d.ao), Some(d.radiance), d.lights].into_iter().flatten() {
             self.ctx.destroy_denoising_context(d).map_err(sdk_err)?;
+        }
+        if let Some(many) = self.many.take() {
+            many.destroy(host, &self.ctx)?;
         }
         drop(self.container);
         drop(self.ctx);

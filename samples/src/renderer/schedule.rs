@@ -39,6 +39,7 @@ impl Renderer<'_> {
         deformed: &[(usize, ash::vk::Buffer)],
         cameras: &FrameCameras,
         debug: &[DebugOutput],
+        time: f32,
     ) -> HostResult<()> {
         let (sun, point) = self.lights();
         self.schedule_scene_changes(transforms, deformed)?;
@@ -63,6 +64,11 @@ impl Renderer<'_> {
         let lidar = Inputs::of(&self.slots[slot].lidar.targets, &cameras.lidar);
         self.schedule_shadows(&main, &lidar, sun, point)?;
         self.schedule_file_light_shadows(&main, &lidar)?;
+        if let Some(many) = &mut self.many {
+            let mut common = main.common;
+            common.random_numbers = self.settings.random_numbers;
+            many.schedule(&mut self.container, common, main.denoising, time)?;
+        }
         self.schedule_gi_and_reflections(&main, shining)?;
         self.schedule_debug_views(&main, debug)
     }

@@ -21,6 +21,7 @@ use std::time::Duration;
 mod blas_floor;
 mod builds;
 mod denoisers;
+mod many_lights;
 mod timing;
 mod traces;
 
@@ -203,6 +204,7 @@ fn run() -> Result<(), String> {
     bench.ambient_occlusion(&field)?;
     bench.injection(&field)?;
     let traces = bench.traces(&field)?;
+    bench.many_lights(&field, traces.multi_32_ms)?;
     bench.denoisers(&field, traces)?;
     bench.memory();
 

@@ -22,6 +22,8 @@ pub struct Traces {
     pub specular: TraceSpecularTask,
     pub multi: TraceMultiShadowTask,
     pub visibility: HostImage,
+    /// GPU time of 32 ranged point lights in one multi-shadow task (brute force's unit).
+    pub multi_32_ms: f64,
 }
 
 /// Median GPU times of the 1-ray traces (with their floors where the row shows one).
@@ -204,7 +206,7 @@ impl Bench<'_> {
             multi_32_unlimited,
         });
         self.host.destroy_image(rgba);
-        Ok(Traces { shadow, diffuse, specular, multi, visibility })
+        Ok(Traces { shadow, diffuse, specular, multi, visibility, multi_32_ms: multi_32_ranged })
     }
 
     /// Mirrors shaded from the cache, and hit-lit from a sun and a point light (a shadow ray
