@@ -140,6 +140,16 @@ float hrt_ml_target(uint light, HrtShadePoint s, out vec3 E, out float fs) {
     return e * (1.0 / HRT_PI + fs);
 }
 
+// Whether the light reaches a surface at all (its target is non-zero there): the support test
+// of the merging weights, without the shading.
+bool hrt_ml_reaches(uint light, vec3 p, vec3 n) {
+    if (light >= u_c.counts.x) return false;
+    LightGpu l = hrt_ml_light(light);
+    if (!(l.power.x > 0.0 && hrt_ml_luminance(l.power.yzw) > 0.0)) return false;
+    if (uint(l.position.w) == HRT_LIGHT_DIRECTIONAL) return dot(n, -l.direction.xyz) > 0.0;
+    return hrt_light_reach(l, p) > 0.0 && dot(n, l.position.xyz - p) > 0.0;
+}
+
 float hrt_ml_target_only(uint light, HrtShadePoint s) {
     vec3 E;
     float fs;
@@ -246,6 +256,20 @@ bool hrt_ml_surface(ivec2 q, out HrtShadePoint s) {
     if (dot(s.n, s.v) < 0.0) s.n = normalize(s.n - 2.0 * dot(s.n, s.v) * s.v);
     float r = hrt_surface_roughness(c, u_roughness, q);
     s.alpha = r * r;
+    return true;
+}
+
+// A neighbour's surface as the merging needs it: position and normal (no roughness: its
+// support test and the geometric test do not read it). False: background or masked.
+bool hrt_ml_surface_pn(ivec2 q, out vec3 p, out vec3 n) {
+    TraceCommon c = u_c.common_;
+    n = vec3(0.0, 0.0, 1.0);
+    p = vec3(0.0);
+    if (hrt_masked(c, u_input_mask, uvec2(q))) return false;
+    if (!hrt_world_position(c, uvec2(q), texelFetch(u_depth, q, 0), p)) return false;
+    n = hrt_world_normal(c, texelFetch(u_normals, q, 0));
+    vec3 v = c.view_to_world[3].xyz - p;
+    if (dot(n, v) < 0.0) n = normalize(n - 2.0 * dot(n, v) / dot(v, v) * v);
     return true;
 }
 
@@ -370,9 +394,8 @@ void hrt_ml_temporal_main() {
         bool unbiased = u_c.modes.x == HRT_ML_UNBIASED;
         float z = canonical.M;
         if (has_prev && prev_m > 0.0) {
-            HrtShadePoint ps = HrtShadePoint(q_p, q_n, normalize(u_c.prev_eye.xyz - q_p), s.alpha);
             float d;
-            if (hrt_ml_target_only(r.light - 1u, ps) > 0.0 && (!unbiased || hrt_ml_visible(r.light - 1u, r.uv, q_p, q_n, d))) z += prev_m;
+            if (hrt_ml_reaches(r.light - 1u, q_p, q_n) && (!unbiased || hrt_ml_visible(r.light - 1u, r.uv, q_p, q_n, d))) z += prev_m;
         }
         r.W = z > 0.0 ? r.wsum / (z * r.target) : 0.0;
         if (unbiased && from_history && r.W > 0.0) {
@@ -466,8 +489,8 @@ void hrt_ml_spatial_main() {
         vec2 d = hrt_disk(vec2(hrt_ml_rand(), hrt_ml_rand())) * u_c.params.x;
         ivec2 q = pixel + ivec2(round(d));
         if (q == pixel || !hrt_ml_in_viewport(q, c.viewport)) continue;
-        HrtShadePoint qs;
-        if (!hrt_ml_surface(q, qs) || !hrt_ml_similar(s, dist, qs.p, qs.n)) continue;
+        vec3 q_p, q_n;
+        if (!hrt_ml_surface_pn(q, q_p, q_n) || !hrt_ml_similar(s, dist, q_p, q_n)) continue;
         HrtReservoir nb = hrt_ml_unpack(temporal.r[hrt_ml_index(q)]);
         if (nb.light != 0u) {
             float t = hrt_ml_target_only(nb.light - 1u, s);
@@ -490,10 +513,10 @@ void hrt_ml_spatial_main() {
                 z += taken_m[i];
                 continue;
             }
-            HrtShadePoint qs;
-            hrt_ml_surface(taken[i], qs);
+            vec3 q_p, q_n;
+            hrt_ml_surface_pn(taken[i], q_p, q_n);
             float d;
-            if (hrt_ml_target_only(r.light - 1u, qs) > 0.0 && (!unbiased || hrt_ml_visible(r.light - 1u, r.uv, qs.p, qs.n, d))) z += taken_m[i];
+            if (hrt_ml_reaches(r.light - 1u, q_p, q_n) && (!unbiased || hrt_ml_visible(r.light - 1u, r.uv, q_p, q_n, d))) z += taken_m[i];
         }
         r.W = z > 0.0 ? r.wsum / (z * r.target) : 0.0;
     } else {
