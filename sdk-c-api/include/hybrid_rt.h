@@ -1003,6 +1003,10 @@ typedef struct HrtManyLightsSettings {
   uint32_t spatial_samples;
   float spatial_radius;
   uint32_t max_history;
+  /**
+   * Biased mode: test the candidates' visibility (a ray a pixel more). Default false.
+   */
+  bool candidate_visibility;
 } HrtManyLightsSettings;
 
 /**

@@ -63,6 +63,8 @@ pub struct HrtManyLightsSettings {
     pub spatial_samples: u32,
     pub spatial_radius: f32,
     pub max_history: u32,
+    /// Biased mode: test the candidates' visibility (a ray a pixel more). Default false.
+    pub candidate_visibility: bool,
 }
 
 /// Direct lighting from the context's lights by resampling (see the Rust docs of
@@ -103,6 +105,7 @@ fn settings(s: &HrtManyLightsSettings) -> Result<rt::ManyLightsSettings, Failure
         spatial_samples: s.spatial_samples,
         spatial_radius: s.spatial_radius,
         max_history: s.max_history,
+        candidate_visibility: s.candidate_visibility,
     })
 }
 
@@ -187,6 +190,7 @@ pub extern "C" fn hrt_trace_many_lights_task_default() -> HrtTraceManyLightsTask
             spatial_samples: s.spatial_samples,
             spatial_radius: s.spatial_radius,
             max_history: s.max_history,
+            candidate_visibility: s.candidate_visibility,
         },
         reset_history: d.reset_history,
     }

@@ -32,6 +32,9 @@
 // A reservoir's light word: index + 1 (0: empty) in the low bits, and this flag when the
 // sample is known to reach the light from the reservoir's own pixel.
 #define HRT_ML_VISIBLE_BIT 0x80000000u
+// sizes.w flags: the biased mode skips the candidates' visibility test (one ray a pixel less;
+// occluded samples are then passed on and found out by the shading ray).
+#define HRT_ML_NO_CANDIDATE_VISIBILITY 1u
 
 layout(set = 0, binding = 0) uniform accelerationStructureEXT u_tlas;
 layout(set = 0, binding = 1) uniform sampler2D u_depth;
@@ -49,7 +52,7 @@ layout(set = 0, binding = 4, std140) uniform ManyLightsConstants {
     uvec4 addr0;         // lights, CDF
     uvec4 addr1;         // presampled lights, reservoirs of the temporal pass
     uvec4 addr2;         // reservoirs kept (history), surfaces (this frame's, last frame's)
-    uvec4 sizes;         // buffer row pitch (pixels), presample tiles, frame, 0
+    uvec4 sizes;         // buffer row pitch (pixels), presample tiles, frame, flags (HRT_ML_*)
 } u_c;
 layout(set = 0, binding = 5) uniform sampler2D u_roughness;
 layout(set = 0, binding = 6) uniform sampler2D u_motion;
@@ -356,8 +359,10 @@ void hrt_ml_temporal_main() {
     }
     hrt_ml_seed(uvec2(pixel), 0x1u);
     HrtReservoir canonical = hrt_ml_initial(uvec2(pixel), s);
-    // Visibility reuse: a candidate that cannot reach the light is not passed on.
-    if (canonical.W > 0.0) {
+    // Visibility reuse: a candidate that cannot reach the light is not passed on (the unbiased
+    // mode's weights need it).
+    bool test = u_c.modes.x == HRT_ML_UNBIASED || (u_c.sizes.w & HRT_ML_NO_CANDIDATE_VISIBILITY) == 0u;
+    if (test && canonical.W > 0.0) {
         float d;
         canonical.visible = hrt_ml_visible(canonical.light - 1u, canonical.uv, s.p, s.n, d);
         if (!canonical.visible) canonical.W = 0.0;

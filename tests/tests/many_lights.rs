@@ -241,11 +241,16 @@ fn biased_mode_bias_is_bounded() {
     let (b, se) = bias_over_seeds(settings(ResamplingMode::Biased), &lights, &reference, &mask, 12);
     eprintln!("biased: bias {b:+.4} (standard error {se:.4}, 12 runs)");
     assert!(b >= -0.08 - 3.0 * se && b <= 3.0 * se + 0.005, "biased mode off by {b:+.4} (standard error {se:.4})");
+    // With the candidates' visibility tested (a ray a pixel more).
+    let tested = ManyLightsSettings { candidate_visibility: true, ..settings(ResamplingMode::Biased) };
+    let (b, se) = bias_over_seeds(tested, &lights, &reference, &mask, 12);
+    eprintln!("biased, candidates' visibility tested: bias {b:+.4} (standard error {se:.4}, 12 runs)");
+    assert!(b >= -0.08 - 3.0 * se && b <= 3.0 * se + 0.005, "biased mode off by {b:+.4} (standard error {se:.4})");
 }
 
 /// One frame of the resampled estimate against lights drawn by power without reuse, at equal
-/// shadow rays: the biased mode traces at most two a pixel (the candidates' visibility and the
-/// shading ray), so power sampling gets two lights a pixel, a ray each. Then the denoised
+/// shadow rays: the biased mode traces one a pixel (the shading ray), so power sampling gets one
+/// light a pixel; with the candidates' visibility tested, two against two. Then the denoised
 /// output after 32 frames.
 #[test]
 fn resampling_beats_power_sampling_at_equal_rays() {
@@ -253,19 +258,30 @@ fn resampling_beats_power_sampling_at_equal_rays() {
     let (scene, camera) = scene();
     let g = GBuffer::render(&Tracer::new(&scene), &camera, W, H);
     let (reference, mask) = reference(&scene, &camera, &g, &lights);
-    let (mut resampled, mut power, mut denoised) = (0.0, 0.0, 0.0);
+    let (mut resampled, mut power, mut denoised) = ([0.0; 2], [0.0; 2], 0.0);
     for seed in [1000u64, 2000, 3000, 4000] {
-        let r = run_seeded(settings(ResamplingMode::Biased), &lights, 32, seed, true, |_| None);
-        resampled += rmse(&r.frames[31], &reference, &mask) / 4.0;
-        denoised += rmse(&r.denoised[31], &reference, &mask) / 4.0;
-        let p = ManyLightsSettings { initial_candidates: 2, ..settings(ResamplingMode::PowerSampling) };
-        power += rmse(&run_seeded(p, &lights, 1, seed, false, |_| None).frames[0], &reference, &mask) / 4.0;
+        for (k, tested) in [false, true].into_iter().enumerate() {
+            let s = ManyLightsSettings { candidate_visibility: tested, ..settings(ResamplingMode::Biased) };
+            let r = run_seeded(s, &lights, 32, seed, !tested, |_| None);
+            resampled[k] += rmse(&r.frames[31], &reference, &mask) / 4.0;
+            if !tested {
+                denoised += rmse(&r.denoised[31], &reference, &mask) / 4.0;
+            }
+            let p = ManyLightsSettings { initial_candidates: 1 + k as u32, ..settings(ResamplingMode::PowerSampling) };
+            power[k] += rmse(&run_seeded(p, &lights, 1, seed, false, |_| None).frames[0], &reference, &mask) / 4.0;
+        }
     }
-    eprintln!(
-        "one frame, relative RMSE: resampled {resampled:.3}, power sampling {power:.3} ({:.1}x); denoised after 32 frames {denoised:.3}",
-        power / resampled
-    );
-    assert!(power >= 4.0 * resampled, "resampling {resampled:.3} vs power sampling {power:.3}");
+    for k in 0..2 {
+        eprintln!(
+            "one frame at {} ray(s) a pixel, relative RMSE: resampled {:.3}, power sampling {:.3} ({:.1}x)",
+            k + 1,
+            resampled[k],
+            power[k],
+            power[k] / resampled[k]
+        );
+        assert!(power[k] >= 4.0 * resampled[k], "resampling {:.3} vs power sampling {:.3}", resampled[k], power[k]);
+    }
+    eprintln!("denoised after 32 frames: {denoised:.3}");
     assert!(denoised <= 0.6, "denoised after 32 frames: relative RMSE {denoised:.3}");
 }
 

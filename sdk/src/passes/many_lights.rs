@@ -345,7 +345,7 @@ fn constants(task: &TraceManyLightsTask, state: &ManyLightsState, seed: u32) -> 
         addr0: [lights[0], lights[1], cdf[0], cdf[1]],
         addr1: [presampled[0], presampled[1], temporal[0], temporal[1]],
         addr2: [kept[0], kept[1], surfaces[0], surfaces[1]],
-        sizes: [state.input.max_width, PRESAMPLE_TILES, seed, 0],
+        sizes: [state.input.max_width, PRESAMPLE_TILES, seed, (!s.candidate_visibility) as u32],
     }
 }
 

@@ -35,8 +35,8 @@ impl Default for ManyLightsContextInput {
 #[repr(u32)]
 pub enum ResamplingMode {
     /// Reservoirs merged with weights by their sample counts, counting only the pixels whose
-    /// surface the light reaches (RTXDI's basic bias correction: no rays): at most two shadow
-    /// rays per pixel. A neighbour or last frame's pixel that cannot *see* the light still
+    /// surface the light reaches (RTXDI's basic bias correction: no rays): one shadow ray per
+    /// pixel (two with `candidate_visibility`). A neighbour or last frame's pixel that cannot *see* the light still
     /// counts, so contact shadows come out slightly dark (the tests bound it). Default.
     #[default]
     Biased = 0,
@@ -65,6 +65,13 @@ pub struct ManyLightsSettings {
     /// Last frame's reservoir counts at most this many frames (the history's length: longer is
     /// smoother, shorter follows changes sooner), 1..=64. Default 20.
     pub max_history: u32,
+    /// Biased mode: test whether this frame's chosen candidate reaches its light before it is
+    /// merged and passed on (Bitterli et al.'s visibility reuse: one more shadow ray a pixel).
+    /// Off, occluded candidates are passed on too and only the shading ray finds them out: one
+    /// ray a pixel in all. Measured against brute force, off costs next to nothing (one frame's
+    /// error 1.137 vs 1.131, the mean's darkening -3.5% vs -1.5%, both within their runs'
+    /// spread), so it is off by default. (The unbiased mode always tests.) Default false.
+    pub candidate_visibility: bool,
 }
 
 impl Default for ManyLightsSettings {
@@ -75,6 +82,7 @@ impl Default for ManyLightsSettings {
             spatial_samples: 4,
             spatial_radius: 24.0,
             max_history: 20,
+            candidate_visibility: false,
         }
     }
 }
