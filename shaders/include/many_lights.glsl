@@ -169,7 +169,7 @@ bool hrt_ml_visible(uint light, vec2 uv, vec3 p, vec3 n, out float dist) {
     hrt_light_ray(l, origin, uv, dir, tmax);
     dist = min(tmax, 1e4);
     if (dot(dir, n) <= 0.0) return false;
-    return hrt_trace_record(u_tlas, u_c.common_.frame.y & 0xffu, origin, dir, tmax).t < 0.0;
+    return hrt_trace_visible(u_tlas, u_c.common_.frame.y & 0xffu, origin, dir, tmax);
 }
 
 // ---------------------------------------------------------------- reservoirs

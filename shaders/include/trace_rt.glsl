@@ -17,5 +17,14 @@ HitRecord hrt_trace_record_flags(accelerationStructureEXT tlas, uint flags, uint
 HitRecord hrt_trace_record(accelerationStructureEXT tlas, uint mask, vec3 origin, vec3 dir, float tmax) {
     return hrt_trace_record_flags(tlas, 0u, mask, origin, dir, tmax);
 }
+// Whether nothing blocks the segment: traversal stops at the first hit it finds and runs no
+// closest-hit shader (the miss shader alone writes the payload), so a shadow ray that needs no
+// occluder distance costs only the traversal it needs.
+bool hrt_trace_visible(accelerationStructureEXT tlas, uint mask, vec3 origin, vec3 dir, float tmax) {
+    p_hit.t = 1.0;
+    traceRayEXT(tlas, gl_RayFlagsTerminateOnFirstHitEXT | gl_RayFlagsSkipClosestHitShaderEXT, mask, 0, 0, 0, origin, 0.0, dir,
+                tmax, 0);
+    return p_hit.t < 0.0;
+}
 #define HRT_LAUNCH_ID gl_LaunchIDEXT.xy
 #endif

@@ -92,6 +92,19 @@ fn run_seeded(
     denoise: bool,
     change: impl Fn(u32) -> Option<LightListUpdate>,
 ) -> Run {
+    run_with(settings, lights, frames, first_frame, denoise, false, change)
+}
+
+/// `run_seeded`, through inline ray queries when `inline` (where the device has them).
+fn run_with(
+    settings: ManyLightsSettings,
+    lights: &[LightInfo],
+    frames: u32,
+    first_frame: u64,
+    denoise: bool,
+    inline: bool,
+    change: impl Fn(u32) -> Option<LightListUpdate>,
+) -> Run {
     let (host, ctx) = host_and_context(InitSettings::default());
     let (scene, camera) = scene();
     let g = GBuffer::render(&Tracer::new(&scene), &camera, W, H);
@@ -115,6 +128,7 @@ fn run_seeded(
     frame.schedule_bvh_build(&Default::default()).unwrap();
     let mut common = images.trace_common(&camera);
     common.roughness.global_roughness = ROUGHNESS;
+    common.use_inline_rt = inline;
     let mut out = Run { frames: Vec::new(), counts: Vec::new(), denoised: Vec::new() };
     for f in 0..frames {
         let update = if f == 0 { Some(LightListUpdate::Replace(lights.to_vec())) } else { change(f) };
@@ -442,6 +456,25 @@ fn debug_output_shows_each_pixels_light_and_count() {
     s.destroy(&host);
     drop(ctx);
     assert_no_validation_errors();
+}
+
+/// The ray-tracing pipeline and inline ray queries give the same image, frame after frame (the
+/// same random numbers, the same rays), in both modes.
+#[test]
+fn inline_ray_queries_give_the_pipelines_image() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let inline = ctx.supports_inline_rt();
+    drop(ctx);
+    drop(host);
+    if !inline {
+        eprintln!("no ray queries on this device: only the pipeline runs");
+        return;
+    }
+    let lights = lights();
+    for mode in [ResamplingMode::Biased, ResamplingMode::Unbiased] {
+        let [pipeline, inline] = [false, true].map(|i| run_with(settings(mode), &lights, 3, 7, false, i, |_| None));
+        assert_eq!(pipeline.frames, inline.frames, "{mode:?}: the two paths differ");
+    }
 }
 
 /// Bad input gets a typed error at scheduling or build, and the context stays usable.
