@@ -398,7 +398,13 @@ void hrt_ml_temporal_main() {
         // visible samples).
         bool unbiased = u_c.modes.x == HRT_ML_UNBIASED;
         float z = canonical.M;
-        if (has_prev && prev_m > 0.0) {
+        if (from_history) {
+            // Last frame's surface produced this sample: it reaches it by construction. (Its
+            // surface rebuilt from the kept depth and normal can miss it at a grazing angle,
+            // and leaving its confidence out then multiplies the weight by up to max_history,
+            // frame after frame.)
+            z += prev_m;
+        } else if (has_prev && prev_m > 0.0) {
             float d;
             if (hrt_ml_reaches(r.light - 1u, q_p, q_n) && (!unbiased || hrt_ml_visible(r.light - 1u, r.uv, q_p, q_n, d))) z += prev_m;
         }

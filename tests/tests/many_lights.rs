@@ -217,6 +217,7 @@ fn bias_over_seeds(
     let biases: Vec<f32> = (1..=seeds)
         .map(|seed| bias(&mean_of(&run_seeded(settings, lights, 32, seed * 1000, false, |_| None).frames, 16), reference, mask))
         .collect();
+    eprintln!("per run: {biases:?}");
     let n = biases.len() as f32;
     let mean = biases.iter().sum::<f32>() / n;
     let sd = (biases.iter().map(|b| (b - mean).powi(2)).sum::<f32>() / (n - 1.0)).sqrt();
