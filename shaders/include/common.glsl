@@ -64,6 +64,13 @@ mat3 hrt_basis(vec3 n) {
     return mat3(t, bt, n);
 }
 
+// The octahedral map of a unit vector to [-1, 1]^2 (hrt_oct_decode's inverse).
+vec2 hrt_oct_encode(vec3 n) {
+    vec2 e = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
+    if (n.z < 0.0) e = (1.0 - abs(e.yx)) * vec2(e.x >= 0.0 ? 1.0 : -1.0, e.y >= 0.0 ? 1.0 : -1.0);
+    return e;
+}
+
 vec3 hrt_oct_decode(vec2 e) {
     vec3 v = vec3(e, 1.0 - abs(e.x) - abs(e.y));
     if (v.z < 0.0) {

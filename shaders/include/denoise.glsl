@@ -165,8 +165,7 @@ float hrt_luminance(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
 // the distance: under 3% of the plane-distance stop); distance < 0 marks background. The
 // second component is always 0 (the call sites take the pair the guide once was).
 uvec2 hrt_pack_surface(vec3 n, float dist) {
-    vec2 e = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
-    if (n.z < 0.0) e = (1.0 - abs(e.yx)) * vec2(e.x >= 0.0 ? 1.0 : -1.0, e.y >= 0.0 ? 1.0 : -1.0);
+    vec2 e = hrt_oct_encode(n);
     return uvec2((packSnorm4x8(vec4(e, 0.0, 0.0)) & 0xFFFFu) | (packHalf2x16(vec2(dist, 0.0)) << 16), 0u);
 }
 void hrt_unpack_surface(uvec2 v, out vec3 n, out float dist) {

@@ -224,9 +224,7 @@ uint hrt_ml_index(ivec2 q) { return uint(q.y) * u_c.sizes.x + uint(q.x); }
 // A pixel's surface as kept for the next frame: octahedral normal (2 x snorm16) and distance to
 // the camera (< 0: nothing there).
 uvec2 hrt_ml_pack_surface(vec3 n, float dist) {
-    vec2 e = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
-    if (n.z < 0.0) e = (1.0 - abs(e.yx)) * vec2(e.x >= 0.0 ? 1.0 : -1.0, e.y >= 0.0 ? 1.0 : -1.0);
-    return uvec2(packSnorm2x16(e), floatBitsToUint(dist));
+    return uvec2(packSnorm2x16(hrt_oct_encode(n)), floatBitsToUint(dist));
 }
 
 bool hrt_ml_in_viewport(ivec2 q, vec4 vp) {

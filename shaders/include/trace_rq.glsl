@@ -34,19 +34,10 @@ HitRecord hrt_trace_record_flags(accelerationStructureEXT tlas, uint flags, uint
 HitRecord hrt_trace_record(accelerationStructureEXT tlas, uint mask, vec3 origin, vec3 dir, float tmax) {
     return hrt_trace_record_flags(tlas, 0u, mask, origin, dir, tmax);
 }
-// Whether nothing blocks the segment (see trace_rt.glsl): the first hit found ends it.
+// Whether nothing blocks the segment (see trace_rt.glsl): the first hit found ends it (a ray
+// query runs no shaders, so the record's reads are all the difference).
 bool hrt_trace_visible(accelerationStructureEXT tlas, uint mask, vec3 origin, vec3 dir, float tmax) {
-    rayQueryEXT q;
-    rayQueryInitializeEXT(q, tlas, gl_RayFlagsTerminateOnFirstHitEXT, mask, origin, 0.0, dir, tmax);
-    while (rayQueryProceedEXT(q)) {
-        if (rayQueryGetIntersectionTypeEXT(q, false) == gl_RayQueryCandidateIntersectionTriangleEXT
-            && hrt_alpha_opaque(uint(rayQueryGetIntersectionInstanceCustomIndexEXT(q, false)),
-                                uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, false)),
-                                rayQueryGetIntersectionBarycentricsEXT(q, false))) {
-            rayQueryConfirmIntersectionEXT(q);
-        }
-    }
-    return rayQueryGetIntersectionTypeEXT(q, true) == gl_RayQueryCommittedIntersectionNoneEXT;
+    return hrt_trace_record_flags(tlas, gl_RayFlagsTerminateOnFirstHitEXT, mask, origin, dir, tmax).t < 0.0;
 }
 #define HRT_LAUNCH_ID gl_GlobalInvocationID.xy
 #endif

@@ -414,18 +414,7 @@ pub fn shadow_visibility(
     for sy in 0..strata {
         for sx in 0..strata {
             let (u, v) = ((sx as f32 + rng.next_f32()) / strata as f32, (sy as f32 + rng.next_f32()) / strata as f32);
-            let (dx, dy) = concentric_disk(u, v);
-            let (dir, tmax) = if light.light_type == hybrid_rt::LightType::Directional {
-                let to_light = -light.direction.normalize();
-                let (t, b) = basis(to_light);
-                ((to_light + (t * dx + b * dy) * (light.angular_extent * 0.5).tan()).normalize(), f32::MAX)
-            } else {
-                let to_centre = (light.position - origin).normalize();
-                let (t, b) = basis(to_centre);
-                let target = light.position + (t * dx + b * dy) * light.radius;
-                let v = target - origin;
-                (v.normalize(), v.length() * 0.9999)
-            };
+            let (dir, tmax) = light_ray(light, origin, u, v);
             match tracer.closest_hit(origin, dir, 0.0, tmax) {
                 None => visible += 1,
                 Some(h) => closest = Some(closest.map_or(h.t, |c: f32| c.min(h.t))),
@@ -433,6 +422,25 @@ pub fn shadow_visibility(
         }
     }
     (visible as f32 / (strata * strata) as f32, closest)
+}
+
+/// The ray from `origin` to the point of the light's extent at (u, v) in the unit square, as
+/// the SDK samples it (`hrt_light_ray`): a disk of directions for a directional light of angular
+/// size, a disk facing the origin for a sphere light. Returns the direction and the distance
+/// to stop short of the light.
+pub fn light_ray(light: &hybrid_rt::LightInfo, origin: Vec3, u: f32, v: f32) -> (Vec3, f32) {
+    let (dx, dy) = concentric_disk(u, v);
+    if light.light_type == hybrid_rt::LightType::Directional {
+        let to_light = -light.direction.normalize();
+        let (t, b) = basis(to_light);
+        ((to_light + (t * dx + b * dy) * (light.angular_extent * 0.5).tan()).normalize(), f32::MAX)
+    } else {
+        let to_centre = (light.position - origin).normalize();
+        let (t, b) = basis(to_centre);
+        let target = light.position + (t * dx + b * dy) * light.radius;
+        let v = target - origin;
+        (v.normalize(), v.length() * 0.9999)
+    }
 }
 
 // ---------------------------------------------------------------- test scenes
@@ -683,18 +691,7 @@ pub fn light_visible_fraction(
     for sy in 0..strata {
         for sx in 0..strata {
             let (u, v) = ((sx as f32 + rng.next_f32()) / strata as f32, (sy as f32 + rng.next_f32()) / strata as f32);
-            let (dx, dy) = concentric_disk(u, v);
-            let (dir, tmax) = if light.light_type == hybrid_rt::LightType::Directional {
-                let to_light = -light.direction.normalize();
-                let (t, b) = basis(to_light);
-                ((to_light + (t * dx + b * dy) * (light.angular_extent * 0.5).tan()).normalize(), f32::MAX)
-            } else {
-                let to_centre = (light.position - origin).normalize();
-                let (t, b) = basis(to_centre);
-                let target = light.position + (t * dx + b * dy) * light.radius;
-                let v = target - origin;
-                (v.normalize(), v.length() * 0.9999)
-            };
+            let (dir, tmax) = light_ray(light, origin, u, v);
             if dir.dot(n) > 0.0 && tracer.closest_hit(origin, dir, 0.0, tmax).is_none() {
                 visible += 1;
             }
