@@ -487,10 +487,10 @@ void hrt_ml_spatial_main() {
         hrt_ml_stream(r, own.light, own.uv, own.visible, t * own.W * own.M, t);
     }
     r.M = own.M;
-    // Neighbours taken: their pixels and confidences (for the unbiased mode's count).
+    // Neighbours taken: their offsets, 16 bits a coordinate, in two vectors (an array indexed
+    // in a loop would live in memory); the count below reads their confidences again.
     const uint MAX_NEIGHBOURS = 8u;
-    ivec2 taken[MAX_NEIGHBOURS];
-    float taken_m[MAX_NEIGHBOURS];
+    uvec4 taken_lo = uvec4(0u), taken_hi = uvec4(0u);
     uint n_taken = 0u;
     int chosen = -1; // which neighbour's sample was picked (-1: the pixel's own)
     uint samples = min(u_c.counts.z, MAX_NEIGHBOURS);
@@ -506,8 +506,9 @@ void hrt_ml_spatial_main() {
             if (hrt_ml_stream(r, nb.light, nb.uv, false, t * nb.W * nb.M, t)) chosen = int(n_taken);
         }
         r.M += nb.M;
-        taken[n_taken] = q;
-        taken_m[n_taken] = nb.M;
+        uint packed = packHalf2x16(vec2(q - pixel));
+        if (n_taken < 4u) taken_lo[n_taken] = packed;
+        else taken_hi[n_taken - 4u] = packed;
         ++n_taken;
     }
     bool own_sample = chosen < 0;
@@ -518,14 +519,16 @@ void hrt_ml_spatial_main() {
         bool unbiased = u_c.modes.x == HRT_ML_UNBIASED;
         float z = own.M;
         for (uint i = 0u; i < n_taken; ++i) {
+            ivec2 q = pixel + ivec2(unpackHalf2x16(i < 4u ? taken_lo[i] : taken_hi[i - 4u]));
+            float m = hrt_ml_unpack(temporal.r[hrt_ml_index(q)]).M;
             if (int(i) == chosen) {
-                z += taken_m[i];
+                z += m;
                 continue;
             }
             vec3 q_p, q_n;
-            hrt_ml_surface_pn(taken[i], q_p, q_n);
+            hrt_ml_surface_pn(q, q_p, q_n);
             float d;
-            if (hrt_ml_reaches(r.light - 1u, q_p, q_n) && (!unbiased || hrt_ml_visible(r.light - 1u, r.uv, q_p, q_n, d))) z += taken_m[i];
+            if (hrt_ml_reaches(r.light - 1u, q_p, q_n) && (!unbiased || hrt_ml_visible(r.light - 1u, r.uv, q_p, q_n, d))) z += m;
         }
         r.W = z > 0.0 ? r.wsum / (z * r.target) : 0.0;
     } else {
