@@ -14,11 +14,11 @@
 //!   removed (or switched off) has a zero target and dies the next frame.
 //! - Candidates: local lights by power and one directional light (disjoint strategies, so the
 //!   multiple-importance weights are exact without evaluating both densities).
-//! - Two passes: candidates + visibility + temporal reuse (ray pass 1); spatial reuse + the
-//!   shading ray + the reservoir kept (ray pass 2). Both modes merge with Bitterli et al.'s 1/Z
-//!   weights: the biased one counts the pixels whose surface the light reaches (no rays, at
-//!   most two rays a pixel in all), the unbiased one only those that also see it (a shadow ray
-//!   per neighbour).
+//! - Two passes: candidates (+ their visibility, optional in the biased mode) + temporal reuse
+//!   (ray pass 1); spatial reuse + the shading ray + the reservoir kept (ray pass 2). Both
+//!   modes merge with Bitterli et al.'s 1/Z weights: the biased one counts the pixels whose
+//!   surface the light reaches (no rays: one shadow ray a pixel in all by default), the
+//!   unbiased one only those that also see it (a shadow ray per neighbour).
 //! - Outputs are demodulated diffuse and specular (with hit distance), the denoisers' inputs.
 use super::constants::TraceCommonGpu;
 use super::descriptors::{optional_or, Slot};
