@@ -53,6 +53,7 @@ layout(set = 0, binding = 4, std140) uniform ManyLightsConstants {
     uvec4 addr1;         // presampled lights, reservoirs of the temporal pass
     uvec4 addr2;         // reservoirs kept (history), surfaces (this frame's, last frame's)
     uvec4 sizes;         // buffer row pitch (pixels), presample tiles, frame, flags (HRT_ML_*)
+    uvec4 changed;       // the lights written this frame: first, end
 } u_c;
 layout(set = 0, binding = 5) uniform sampler2D u_roughness;
 layout(set = 0, binding = 6) uniform sampler2D u_motion;
@@ -141,16 +142,6 @@ float hrt_ml_target(uint light, HrtShadePoint s, out vec3 E, out float fs) {
     if (!(e > 0.0)) return 0.0;
     fs = hrt_ml_specular(s, wi, hrt_ml_angle(l, dist));
     return e * (1.0 / HRT_PI + fs);
-}
-
-// Whether the light reaches a surface at all (its target is non-zero there): the support test
-// of the merging weights, without the shading.
-bool hrt_ml_reaches(uint light, vec3 p, vec3 n) {
-    if (light >= u_c.counts.x) return false;
-    LightGpu l = hrt_ml_light(light);
-    if (!(l.power.x > 0.0 && hrt_ml_luminance(l.power.yzw) > 0.0)) return false;
-    if (uint(l.position.w) == HRT_LIGHT_DIRECTIONAL) return dot(n, -l.direction.xyz) > 0.0;
-    return hrt_light_reach(l, p) > 0.0 && dot(n, l.position.xyz - p) > 0.0;
 }
 
 float hrt_ml_target_only(uint light, HrtShadePoint s) {
@@ -260,20 +251,6 @@ bool hrt_ml_surface(ivec2 q, out HrtShadePoint s) {
     return true;
 }
 
-// A neighbour's surface as the merging needs it: position and normal (no roughness: its
-// support test and the geometric test do not read it). False: background or masked.
-bool hrt_ml_surface_pn(ivec2 q, out vec3 p, out vec3 n) {
-    TraceCommon c = u_c.common_;
-    n = vec3(0.0, 0.0, 1.0);
-    p = vec3(0.0);
-    if (hrt_masked(c, u_input_mask, uvec2(q))) return false;
-    if (!hrt_world_position(c, uvec2(q), texelFetch(u_depth, q, 0), p)) return false;
-    n = hrt_world_normal(c, texelFetch(u_normals, q, 0));
-    vec3 v = c.view_to_world[3].xyz - p;
-    if (dot(n, v) < 0.0) n = normalize(n - 2.0 * dot(n, v) / dot(v, v) * v);
-    return true;
-}
-
 // The same surface: on the plane of (p, n) within 5% of the view distance, normals within ~25°.
 bool hrt_ml_similar(HrtShadePoint s, float dist, vec3 q_p, vec3 q_n) {
     return abs(dot(s.n, q_p - s.p)) <= 0.05 * dist && dot(s.n, q_n) >= 0.9;
@@ -365,55 +342,62 @@ void hrt_ml_temporal_main() {
         canonical.visible = hrt_ml_visible(canonical.light - 1u, canonical.uv, s.p, s.n, d);
         if (!canonical.visible) canonical.W = 0.0;
     }
-    HrtReservoir r = hrt_ml_empty();
-    hrt_ml_stream(r, canonical.light, canonical.uv, canonical.visible, canonical.target * canonical.W * canonical.M, canonical.target);
-    r.M = canonical.M;
-    float dist = distance(s.p, c.view_to_world[3].xyz);
-    bool from_history = false;
-    float z = 0.0;        // unbiased: the confidence of the domains that can produce the sample
+    // Last frame's reservoir, on the same surface along the motion vector.
+    HrtReservoir prev = hrt_ml_empty();
+    HrtShadePoint prev_s = s;
     float prev_m = 0.0;
-    vec3 q_p, q_n;
-    bool has_prev = false;
     if (u_c.prev_eye.w != 0.0) {
         ivec2 q = ivec2(floor(hrt_ml_previous_position(pixel, s.p)));
-        if (hrt_ml_in_viewport(q, u_c.prev_viewport) && hrt_ml_prev_surface(q, q_p, q_n) && hrt_ml_similar(s, dist, q_p, q_n)) {
-            HrtReservoir prev = hrt_ml_unpack(HrtReservoirs(u_c.addr2.xy).r[hrt_ml_index(q)]);
+        float dist = distance(s.p, c.view_to_world[3].xyz);
+        if (hrt_ml_in_viewport(q, u_c.prev_viewport) && hrt_ml_prev_surface(q, prev_s.p, prev_s.n) &&
+            hrt_ml_similar(s, dist, prev_s.p, prev_s.n)) {
+            prev = hrt_ml_unpack(HrtReservoirs(u_c.addr2.xy).r[hrt_ml_index(q)]);
             prev_m = min(prev.M, float(u_c.counts.w));
-            has_prev = true;
-            if (prev.light != 0u) {
-                float t = hrt_ml_target_only(prev.light - 1u, s);
-                // Its visibility was known at its own pixel, not at this one.
-                from_history = hrt_ml_stream(r, prev.light, prev.uv, false, t * prev.W * prev_m, t);
-            }
-            r.M += prev_m;
+            prev_s.v = normalize(u_c.prev_eye.xyz - prev_s.p);
         }
     }
-    if (r.light != 0u && r.target > 0.0) {
-        // Count each domain's confidence where it could have produced the sample (Bitterli et
-        // al.'s 1/Z): this pixel wherever the target is non-zero (a sample it cannot see is
-        // zeroed below or when shaded), last frame's surface where the target is non-zero
-        // there — and, unbiased, where the light is visible from it (its reservoirs only hold
-        // visible samples).
-        bool unbiased = u_c.modes.x == HRT_ML_UNBIASED;
-        float z = canonical.M;
-        if (from_history) {
-            // Last frame's surface produced this sample: it reaches it by construction. (Its
-            // surface rebuilt from the kept depth and normal can miss it at a grazing angle,
-            // and leaving its confidence out then multiplies the weight by up to max_history,
-            // frame after frame.)
-            z += prev_m;
-        } else if (has_prev && prev_m > 0.0) {
-            float d;
-            if (hrt_ml_reaches(r.light - 1u, q_p, q_n) && (!unbiased || hrt_ml_visible(r.light - 1u, r.uv, q_p, q_n, d))) z += prev_m;
-        }
-        r.W = z > 0.0 ? r.wsum / (z * r.target) : 0.0;
-        if (unbiased && from_history && r.W > 0.0) {
-            float d;
-            r.visible = hrt_ml_visible(r.light - 1u, r.uv, s.p, s.n, d);
-            if (!r.visible) r.W = 0.0;
-        }
-    } else {
-        r.W = 0.0;
+    // The two samples merged with the balance heuristic over the two domains' targets, weighted
+    // by their confidences (generalized RIS, Lin et al. 2022): a sample is weighted by how
+    // likely each domain was to produce it, so one that last frame's surface barely reached
+    // and this one sees brightly takes a small weight instead of its large contribution weight
+    // (the uniform 1/Z weights' fireflies). Unbiased, last frame's surface produces only
+    // samples it sees: its target includes the visibility there.
+    bool unbiased = u_c.modes.x == HRT_ML_UNBIASED;
+    float mc = canonical.M, tc = canonical.W > 0.0 ? canonical.target : 0.0;
+    // Last frame's sample, here (t) and on last frame's surface (tp).
+    float t = 0.0, tp = 0.0;
+    if (prev_m > 0.0 && prev.light != 0u && prev.W > 0.0) {
+        t = hrt_ml_target_only(prev.light - 1u, s);
+        tp = hrt_ml_target_only(prev.light - 1u, prev_s);
+        // A sample of a light written this frame (moved, recoloured) that still reaches the
+        // pixel: its weight was made for the light as it was, and the history's confidence,
+        // kept, would let it outweigh this frame's candidates for as many frames. It counts as
+        // one frame. (A light that no longer reaches the pixel contributes nothing; its history
+        // keeps its confidence, which keeps the estimate unbiased while the others' weights
+        // still reflect the old list.)
+        uint light = prev.light - 1u;
+        if (t > 0.0 && light >= u_c.changed.x && light < u_c.changed.y) prev_m = min(prev_m, 1.0);
+    }
+    HrtReservoir r = hrt_ml_empty();
+    if (tc > 0.0) {
+        float tpc = prev_m > 0.0 ? hrt_ml_target_only(canonical.light - 1u, prev_s) : 0.0;
+        float d;
+        if (unbiased && tpc > 0.0 && !hrt_ml_visible(canonical.light - 1u, canonical.uv, prev_s.p, prev_s.n, d)) tpc = 0.0;
+        float m = mc * tc / (mc * tc + prev_m * tpc);
+        hrt_ml_stream(r, canonical.light, canonical.uv, canonical.visible, m * tc * canonical.W, tc);
+    }
+    bool from_history = false;
+    if (prev_m > 0.0 && t > 0.0) {
+        float m = prev_m * tp / (prev_m * tp + mc * t);
+        // Its visibility was known at its own pixel, not at this one.
+        from_history = hrt_ml_stream(r, prev.light, prev.uv, false, m * t * prev.W, t);
+    }
+    r.M = mc + prev_m;
+    r.W = r.light != 0u && r.target > 0.0 ? r.wsum / r.target : 0.0;
+    if (unbiased && from_history && r.W > 0.0) {
+        float d;
+        r.visible = hrt_ml_visible(r.light - 1u, r.uv, s.p, s.n, d);
+        if (!r.visible) r.W = 0.0;
     }
     out_r.r[idx] = hrt_ml_pack(r);
 }
@@ -481,59 +465,52 @@ void hrt_ml_spatial_main() {
     }
     HrtReservoirs temporal = HrtReservoirs(u_c.addr1.zw);
     HrtReservoir own = hrt_ml_unpack(temporal.r[idx]);
+    // Neighbours merged by pairwise MIS with confidences (Bitterli 2022; "A Gentle Introduction
+    // to ReSTIR", Wyman et al. 2023): each neighbour i forms a pair with this pixel, whose
+    // confidence Mc is shared out as Mc / k over the k neighbours drawn; within a pair the
+    // balance heuristic of the confidence-weighted targets decides. Weights (before the common
+    // factor 1 / (Mc + sum Mi)):
+    //   neighbour i's sample y:   (Mi + Mc/k) Mi pi(y) / (Mi pi(y) + Mc/k pc(y))
+    //   this pixel's sample y:    sum_i (Mi + Mc/k) (Mc/k) pc(y) / (Mi pi(y) + Mc/k pc(y))
+    // which sum to one for every y, and vanish where a domain cannot produce y. A neighbour
+    // rejected by the geometric test stays in the sum with Mi = 0 (its pair gives the pixel all
+    // of its share), so k is known before the loop. Unbiased, a neighbour's reservoir holds only
+    // samples it sees: pi includes its visibility (one ray a neighbour, for this pixel's sample).
+    bool unbiased = u_c.modes.x == HRT_ML_UNBIASED;
+    uint samples = min(u_c.counts.z, 8u);
+    float mc = own.M;
+    float share = samples > 0u ? mc / float(samples) : mc;
+    float tc = own.light != 0u && own.W > 0.0 ? hrt_ml_target_only(own.light - 1u, s) : 0.0;
+    float m_own = samples > 0u ? 0.0 : mc; // this pixel's sample's weight, summed over pairs
+    float m_total = mc;
     HrtReservoir r = hrt_ml_empty();
-    if (own.light != 0u) {
-        float t = hrt_ml_target_only(own.light - 1u, s);
-        hrt_ml_stream(r, own.light, own.uv, own.visible, t * own.W * own.M, t);
-    }
-    r.M = own.M;
-    // Neighbours taken: their offsets, 16 bits a coordinate, in two vectors (an array indexed
-    // in a loop would live in memory); the count below reads their confidences again.
-    const uint MAX_NEIGHBOURS = 8u;
-    uvec4 taken_lo = uvec4(0u), taken_hi = uvec4(0u);
-    uint n_taken = 0u;
-    int chosen = -1; // which neighbour's sample was picked (-1: the pixel's own)
-    uint samples = min(u_c.counts.z, MAX_NEIGHBOURS);
     for (uint i = 0u; i < samples; ++i) {
         vec2 d = hrt_disk(vec2(hrt_ml_rand(), hrt_ml_rand())) * u_c.params.x;
         ivec2 q = pixel + ivec2(round(d));
-        if (q == pixel || !hrt_ml_in_viewport(q, c.viewport)) continue;
-        vec3 q_p, q_n;
-        if (!hrt_ml_surface_pn(q, q_p, q_n) || !hrt_ml_similar(s, dist, q_p, q_n)) continue;
-        HrtReservoir nb = hrt_ml_unpack(temporal.r[hrt_ml_index(q)]);
-        if (nb.light != 0u) {
+        HrtShadePoint qs;
+        HrtReservoir nb = hrt_ml_empty();
+        if (q != pixel && hrt_ml_in_viewport(q, c.viewport) && hrt_ml_surface(q, qs) && hrt_ml_similar(s, dist, qs.p, qs.n))
+            nb = hrt_ml_unpack(temporal.r[hrt_ml_index(q)]);
+        float mi = nb.M;
+        m_total += mi;
+        if (tc > 0.0) {
+            float ti = mi > 0.0 ? hrt_ml_target_only(own.light - 1u, qs) : 0.0;
+            float dd;
+            if (unbiased && ti > 0.0 && !hrt_ml_visible(own.light - 1u, own.uv, qs.p, qs.n, dd)) ti = 0.0;
+            float den = mi * ti + share * tc;
+            if (den > 0.0) m_own += (mi + share) * share * tc / den;
+        }
+        if (mi > 0.0 && nb.light != 0u && nb.W > 0.0) {
             float t = hrt_ml_target_only(nb.light - 1u, s);
-            if (hrt_ml_stream(r, nb.light, nb.uv, false, t * nb.W * nb.M, t)) chosen = int(n_taken);
+            float ti = hrt_ml_target_only(nb.light - 1u, qs);
+            float den = mi * ti + share * t;
+            float m = den > 0.0 ? (mi + share) * mi * ti / den : 0.0;
+            hrt_ml_stream(r, nb.light, nb.uv, false, m * t * nb.W, t);
         }
-        r.M += nb.M;
-        uint packed = packHalf2x16(vec2(q - pixel));
-        if (n_taken < 4u) taken_lo[n_taken] = packed;
-        else taken_hi[n_taken - 4u] = packed;
-        ++n_taken;
     }
-    bool own_sample = chosen < 0;
-    if (r.light != 0u && r.target > 0.0) {
-        // The pixel's own domain counts where the target is non-zero (it sees the sample or the
-        // shading below zeroes it); a neighbour's where its target is non-zero — and, unbiased,
-        // the light visible from it. The neighbour whose sample this is has both.
-        bool unbiased = u_c.modes.x == HRT_ML_UNBIASED;
-        float z = own.M;
-        for (uint i = 0u; i < n_taken; ++i) {
-            ivec2 q = pixel + ivec2(unpackHalf2x16(i < 4u ? taken_lo[i] : taken_hi[i - 4u]));
-            float m = hrt_ml_unpack(temporal.r[hrt_ml_index(q)]).M;
-            if (int(i) == chosen) {
-                z += m;
-                continue;
-            }
-            vec3 q_p, q_n;
-            hrt_ml_surface_pn(q, q_p, q_n);
-            float d;
-            if (hrt_ml_reaches(r.light - 1u, q_p, q_n) && (!unbiased || hrt_ml_visible(r.light - 1u, r.uv, q_p, q_n, d))) z += m;
-        }
-        r.W = z > 0.0 ? r.wsum / (z * r.target) : 0.0;
-    } else {
-        r.W = 0.0;
-    }
+    bool own_sample = tc > 0.0 && hrt_ml_stream(r, own.light, own.uv, own.visible, m_own * tc * own.W, tc);
+    r.M = m_total;
+    r.W = r.light != 0u && r.target > 0.0 ? r.wsum / (m_total * r.target) : 0.0;
     vec3 diffuse = vec3(0.0), specular = vec3(0.0);
     float hit = 1e4;
     if (r.W > 0.0) {
