@@ -35,11 +35,16 @@ pub enum Mode {
     Specular,
     /// The secondary low-resolution camera's lit view (what it injects).
     Lidar,
+    /// `--many-lights`: the resampled lights' diffuse output (E/pi), raw and denoised, and the
+    /// task's debug output (a colour per chosen light). The composite without the switch.
+    ManyLightsNoisy,
+    ManyLights,
+    ManyLightsDebug,
     /// An SDK debug visualisation from the main camera.
     Debug(DebugOutput),
 }
 
-pub const ALL: [Mode; 26] = [
+pub const ALL: [Mode; 29] = [
     Mode::Composite,
     Mode::Direct,
     Mode::Albedo,
@@ -61,6 +66,9 @@ pub const ALL: [Mode; 26] = [
     Mode::SpecularNoisy,
     Mode::Specular,
     Mode::Lidar,
+    Mode::ManyLightsNoisy,
+    Mode::ManyLights,
+    Mode::ManyLightsDebug,
     Mode::Debug(DebugOutput::DirectLightingCache),
     Mode::Debug(DebugOutput::RandomTileColor),
     Mode::Debug(DebugOutput::RandomMeshColor),
@@ -100,6 +108,9 @@ impl Mode {
             Mode::SpecularNoisy => "specular_noisy",
             Mode::Specular => "specular",
             Mode::Lidar => "lidar",
+            Mode::ManyLightsNoisy => "many_lights_noisy",
+            Mode::ManyLights => "many_lights",
+            Mode::ManyLightsDebug => "many_lights_debug",
             Mode::Debug(DebugOutput::DirectLightingCache) => "debug_cache",
             Mode::Debug(DebugOutput::RandomTileColor) => "debug_random_tile",
             Mode::Debug(DebugOutput::RandomMeshColor) => "debug_random_mesh",
@@ -131,7 +142,9 @@ impl Mode {
             | Mode::DiffuseNoisy
             | Mode::Specular
             | Mode::SpecularNoisy
-            | Mode::Lidar => (Mat4::IDENTITY, Vec4::ZERO, true),
+            | Mode::Lidar
+            | Mode::ManyLightsNoisy
+            | Mode::ManyLights => (Mat4::IDENTITY, Vec4::ZERO, true),
             Mode::Debug(DebugOutput::DirectLightingCache) => (Mat4::IDENTITY, Vec4::ZERO, true),
             Mode::Normals => (Mat4::from_diagonal(Vec4::new(0.5, 0.5, 0.5, 0.0)), Vec4::new(0.5, 0.5, 0.5, 1.0), false),
             Mode::Roughness | Mode::Metalness => (grey(3), Vec4::W, false),

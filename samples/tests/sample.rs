@@ -478,7 +478,8 @@ fn many_lights_add_their_light() {
         .enumerate()
         .map(|(k, extra)| {
             let out = dir.join(format!("sample-many-lights-{k}"));
-            let mut args = vec!["--headless", "--width", "64", "--height", "36", "--frames", "4", "--modes", "direct"];
+            let mut args =
+                vec!["--headless", "--width", "64", "--height", "36", "--frames", "4", "--modes", "direct,many_lights_debug"];
             args.extend_from_slice(extra);
             let text = run_sample(&args, &out);
             let lum = read_exr_rgba(&out.join("direct.exr"))
@@ -496,4 +497,13 @@ fn many_lights_add_their_light() {
     eprintln!("direct light: mean {:.4} without, {:.4} with 1,024 lights", mean(&without.1), mean(&with.1));
     assert!(with.1.iter().all(|v| v.is_finite()));
     assert!(mean(&with.1) > 1.05 * mean(&without.1), "the lights add light: {} vs {}", mean(&with.1), mean(&without.1));
+    // The debug view: a colour per chosen light (many lights, so many colours) and the
+    // reservoirs' sample counts, which reuse makes larger than one frame's candidates.
+    let debug = read_exr_rgba(&dir.join("sample-many-lights-1").join("many_lights_debug.exr")).unwrap().2;
+    let colours: std::collections::HashSet<[u32; 3]> =
+        debug.iter().filter(|t| t[0] + t[1] + t[2] > 0.0).map(|t| [t[0], t[1], t[2]].map(f32::to_bits)).collect();
+    let reused = debug.iter().filter(|t| t[3] > 1.0).count();
+    eprintln!("debug view: {} colours, {reused} of {} pixels with reuse", colours.len(), debug.len());
+    assert!(colours.len() > 100, "{} light colours", colours.len());
+    assert!(reused > debug.len() / 2, "{reused} pixels with reuse");
 }

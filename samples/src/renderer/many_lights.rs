@@ -6,6 +6,7 @@ use super::resources::work_image;
 use super::schedule::schedule;
 use super::{sdk_err, GENERAL, MAIN_VIEW};
 use crate::gpu::{spirv, ComputePass};
+use crate::modes::Mode;
 use crate::raster::Targets;
 use glam::Vec3;
 use hybrid_rt::*;
@@ -24,6 +25,8 @@ pub(super) struct ManyLights {
     noisy_specular: HostImage,
     diffuse: HostImage,
     specular: HostImage,
+    /// The task's debug output: a colour per chosen light, the sample count in A.
+    debug: HostImage,
     compose: ComputePass,
     /// Whether the SDK has the list yet.
     uploaded: bool,
@@ -82,6 +85,7 @@ impl ManyLights {
             noisy_specular: work_image(host, width, height)?,
             diffuse: work_image(host, width, height)?,
             specular: work_image(host, width, height)?,
+            debug: work_image(host, width, height)?,
             compose: ComputePass::new(host, spirv::MANY_LIGHTS_COMP, 3, 1)?,
             uploaded: false,
         })
@@ -122,6 +126,7 @@ impl ManyLights {
             lights,
             diffuse_output: self.noisy_diffuse.input(GENERAL),
             specular_output: self.noisy_specular.input(GENERAL),
+            debug_output: self.debug.input(GENERAL),
             ..Default::default()
         };
         schedule(container, "many lights", |c| c.schedule_many_lights(&trace))?;
@@ -151,10 +156,19 @@ impl ManyLights {
         self.compose.dispatch(host, cmd, slot, &sampled, &[lit], bytemuck::bytes_of(&size), targets.width, targets.height)
     }
 
+    /// The image a many-lights view mode shows (diffuse raw or denoised, the debug output).
+    pub fn image(&self, mode: Mode) -> &HostImage {
+        match mode {
+            Mode::ManyLightsNoisy => &self.noisy_diffuse,
+            Mode::ManyLightsDebug => &self.debug,
+            _ => &self.diffuse,
+        }
+    }
+
     pub fn destroy(self, host: &Host, ctx: &ExecuteContext) -> HostResult<()> {
         ctx.destroy_many_lights_context(self.context).map_err(sdk_err)?;
         ctx.destroy_denoising_context(self.denoiser).map_err(sdk_err)?;
-        for i in [self.noisy_diffuse, self.noisy_specular, self.diffuse, self.specular] {
+        for i in [self.noisy_diffuse, self.noisy_specular, self.diffuse, self.specular, self.debug] {
             host.destroy_image(i);
         }
         self.compose.destroy(host);

@@ -616,9 +616,15 @@ impl<'h> Renderer<'h> {
         let constants = ViewGpu {
             swizzle: m.swizzle.to_cols_array(),
             bias: m.bias.to_array(),
-            params: [self.settings.exposure, if m.tone_map { 1.0 } else { 0.0 }, w as f32, h as f32],
+            // Exposure is for radiance: masks, normals and debug colours are shown as they are.
+            params: [
+                if m.tone_map { self.settings.exposure } else { 1.0 },
+                if m.tone_map { 1.0 } else { 0.0 },
+                w as f32,
+                h as f32,
+            ],
         };
-        let sampled = [source(&self.work, &self.slots[slot], mode)];
+        let sampled = [source(&self.work, &self.slots[slot], self.many.as_ref(), mode)];
         self.view.dispatch(
             self.host,
             cmd,

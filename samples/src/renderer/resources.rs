@@ -1,6 +1,7 @@
 //! What each frame in flight owns (its views: G-buffer and lit image) and what the frames
 //! share (the images written and read inside one frame, the denoising contexts), and which
 //! image each display mode shows.
+use super::many_lights::ManyLights;
 use super::GENERAL;
 use crate::gpu::GpuTimer;
 use crate::lighting::LightingPass;
@@ -241,8 +242,14 @@ pub(super) fn work_image(host: &Host, width: u32, height: u32) -> HostResult<Hos
     host.image_cleared(WORK_FORMAT, width, height, usage, GENERAL)
 }
 
-/// The image behind `mode` and the layout it is in (from the last recorded frame).
-pub(super) fn source<'a>(wk: &'a Work, s: &'a Slot, mode: Mode) -> (&'a HostImage, vk::ImageLayout) {
+/// The image behind `mode` and the layout it is in (from the last recorded frame); `many`:
+/// the many-lights images, when the sample shades them.
+pub(super) fn source<'a>(
+    wk: &'a Work,
+    s: &'a Slot,
+    many: Option<&'a ManyLights>,
+    mode: Mode,
+) -> (&'a HostImage, vk::ImageLayout) {
     let read = raster::READ;
     match mode {
         Mode::Composite => (&wk.composite, GENERAL),
@@ -265,6 +272,9 @@ pub(super) fn source<'a>(wk: &'a Work, s: &'a Slot, mode: Mode) -> (&'a HostImag
         Mode::SpecularNoisy => (&wk.specular_noisy, GENERAL),
         Mode::Specular => (&wk.specular, GENERAL),
         Mode::Lidar => (&s.lidar.lit, GENERAL),
+        Mode::ManyLightsNoisy | Mode::ManyLights | Mode::ManyLightsDebug => {
+            (many.map_or(&wk.composite, |m| m.image(mode)), GENERAL)
+        }
         Mode::Debug(d) => (wk.debug.get(&d).unwrap_or(&wk.composite), GENERAL),
     }
 }
