@@ -477,7 +477,8 @@ void hrt_ml_spatial_main() {
     // of its share), so k is known before the loop. Unbiased, a neighbour's reservoir holds only
     // samples it sees: pi includes its visibility (one ray a neighbour, for this pixel's sample).
     bool unbiased = u_c.modes.x == HRT_ML_UNBIASED;
-    uint samples = min(u_c.counts.z, 8u);
+    const uint MAX_NEIGHBOURS = 8u; // ManyLightsSettings::spatial_samples' bound
+    uint samples = min(u_c.counts.z, MAX_NEIGHBOURS);
     float mc = own.M;
     float share = samples > 0u ? mc / float(samples) : mc;
     float tc = own.light != 0u && own.W > 0.0 ? hrt_ml_target_only(own.light - 1u, s) : 0.0;
