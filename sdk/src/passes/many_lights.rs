@@ -407,7 +407,8 @@ mod tests {
         assert_eq!(offset_of!(ManyLightsConstantsGpu, prev_eye), 512);
         assert_eq!(offset_of!(ManyLightsConstantsGpu, counts), 544);
         assert_eq!(offset_of!(ManyLightsConstantsGpu, sizes), 640);
-        assert_eq!(size_of::<ManyLightsConstantsGpu>(), 656);
+        assert_eq!(offset_of!(ManyLightsConstantsGpu, changed), 656);
+        assert_eq!(size_of::<ManyLightsConstantsGpu>(), 672);
         assert_eq!(size_of::<LightGpuStd>() as u64, LIGHT_BYTES);
         assert_eq!(size_of::<CdfPush>(), 32);
         assert_eq!(size_of::<PresamplePush>(), 32);
