@@ -189,6 +189,7 @@ impl App<'_> {
         };
         let mode = modes::ALL[self.mode];
         let debug: Vec<_> = if let Mode::Debug(d) = mode { vec![d] } else { vec![] };
+        self.renderer.many_lights_debug = mode == Mode::ManyLightsDebug;
         self.renderer.record_frame(slot, self.camera.camera(), self.time, &debug, Some(mode))?;
         let cmd = self.renderer.command_buffer(slot);
         let image = sc.images[index as usize];

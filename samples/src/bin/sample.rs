@@ -214,6 +214,7 @@ fn run() -> Result<(), String> {
         let camera = r.scene.camera_path.at(u);
         // Animation at 30 frames per second of scene time, whatever the real frame rate.
         let last = f + 1 == frames;
+        r.many_lights_debug = last && chosen.contains(&Mode::ManyLightsDebug);
         r.render(camera, f as f32 / 30.0, if last { &debug } else { &[] }, None)?;
         progress.set(f as u64 + 1);
     }

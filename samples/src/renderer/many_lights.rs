@@ -103,13 +103,15 @@ impl ManyLights {
             .collect()
     }
 
-    /// The trace (the whole list the first time, then the moving lights) and its denoiser.
+    /// The trace (the whole list the first time, then the moving lights, and with `debug` the
+    /// debug output) and its denoiser.
     pub fn schedule(
         &mut self,
         container: &mut TaskContainer,
         common: TraceCommon,
         denoising: DenoisingCommon,
         time: f32,
+        debug: bool,
     ) -> HostResult<()> {
         let lights = if self.uploaded {
             LightListUpdate::Write { first: 0, lights: self.moved(time) }
@@ -126,7 +128,7 @@ impl ManyLights {
             lights,
             diffuse_output: self.noisy_diffuse.input(GENERAL),
             specular_output: self.noisy_specular.input(GENERAL),
-            debug_output: self.debug.input(GENERAL),
+            debug_output: if debug { self.debug.input(GENERAL) } else { ImageInput::default() },
             ..Default::default()
         };
         schedule(container, "many lights", |c| c.schedule_many_lights(&trace))?;

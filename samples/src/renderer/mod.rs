@@ -167,6 +167,9 @@ pub struct Renderer<'h> {
     denoisers: Denoisers,
     /// `Settings::many_lights`: the lights and their SDK contexts and images.
     many: Option<many_lights::ManyLights>,
+    /// Have the many-lights task write its debug output (the `many_lights_debug` mode) in
+    /// the frames recorded while set; like the SDK debug views, a cost only when shown.
+    pub many_lights_debug: bool,
     frame: u64,
     last_slot: usize,
     prev_transforms: Vec<glam::Affine3A>,
@@ -291,6 +294,7 @@ impl<'h> Renderer<'h> {
             work,
             denoisers,
             many,
+            many_lights_debug: false,
             frame: 0,
             last_slot: 0,
             prev_transforms,

@@ -67,7 +67,7 @@ impl Renderer<'_> {
         if let Some(many) = &mut self.many {
             let mut common = main.common;
             common.random_numbers = self.settings.random_numbers;
-            many.schedule(&mut self.container, common, main.denoising, time)?;
+            many.schedule(&mut self.container, common, main.denoising, time, self.many_lights_debug)?;
         }
         self.schedule_gi_and_reflections(&main, shining)?;
         self.schedule_debug_views(&main, debug)
