@@ -33,6 +33,18 @@ const float PARALLAX_LOBE_FRAMES = 0.2;
 // The anti-lag test's footprint: (2r+1)^2 pixels (25 samples: a change of a quarter of the
 // signal's range stands out of 1-ray noise).
 const int ANTILAG_RADIUS = 2;
+// A moving surface's diffuse lighting changes as it turns and travels: what lit it a few
+// frames ago lit another place or orientation (an orbiting box's faces, a waving flag). Its
+// diffuse history keeps at most this many frames per radian it turned since the last frame
+// (the normal's turn, plus the distance it travelled over the distance to what its rays hit;
+// hrt_surface_turn), and never fewer than the fast window. A still surface, or one moving
+// through lighting that comes from far away, keeps its history. NRD limits accumulation by
+// parallax likewise, for specular; this is the diffuse lobe's counterpart, only for surfaces
+// that move in the world.
+const float MOVING_TURN_FRAMES = 0.5;
+// A surface moves when its motion vector lands more than this many pixels from where the
+// cameras alone put it.
+const float MOVING_PIXELS = 1.0;
 // Without history: a sample this many times its brightest neighbour is a firefly.
 const float FIREFLY_NEIGHBOUR_FACTOR = 8.0;
 
@@ -134,12 +146,16 @@ void main() {
     // barrier: the tile holds their luminances (a pixel's history where the pixel reads it),
     // and their fetches' latency hides behind the barrier.
     vec4 cur[2], hist[2], fast[2];
+    bool moving = false;
+    ivec2 taps[4];
+    vec4 weights = vec4(0.0);
     float lum_cur[2], lum_fast[2];
     bool found[2];
     if (surface) {
-        ivec2 taps[4];
-        vec4 weights = vec4(0.0);
-        if (!reset) hrt_history_taps(hrt_previous_position(pixel, p), p, n, dist, taps, weights);
+        vec2 was = hrt_previous_position(pixel, p);
+        if (!reset) hrt_history_taps(was, p, n, dist, taps, weights);
+        vec2 still;
+        moving = u_d.flags.x != HRT_MOTION_NONE && hrt_previous_camera_position(p, still) && distance(was, still) > MOVING_PIXELS;
         [[unroll]] for (uint s = 0u; s < 2u; ++s) {
             cur[s] = hist[s] = fast[s] = vec4(0.0);
             lum_cur[s] = lum_fast[s] = 0.0;
@@ -306,6 +322,10 @@ void main() {
             vec3 v = normalize(p - u_d.eye.xyz), v_prev = normalize(p - u_d.prev_eye.xyz);
             float turned = acos(clamp(dot(v, v_prev), -1.0, 1.0));
             max_len = min(max_len, max(1.0, PARALLAX_LOBE_FRAMES * roughness * roughness / max(turned, 1e-6)));
+        }
+        if (kind == HRT_SIGNAL_DIFFUSE && moving && found[s]) {
+            float turned = hrt_surface_turn(taps, weights, p, n, cur[s].a);
+            max_len = min(max_len, max(u_d.history.y, MOVING_TURN_FRAMES / max(turned, 1e-6)));
         }
         len = min(floor(len + 0.5) + 1.0, max_len);
         float a = 1.0 / len;

@@ -275,6 +275,20 @@ vec2 hrt_previous_position(ivec2 pixel, vec3 p) {
     return hrt_previous_camera_position(prev_p, pos) ? pos : vec2(-1e9);
 }
 
+// How far a moving surface turned and travelled since the last frame, as seen from what lights
+// it: the angle between its normal and the normal its strongest history tap had, plus the
+// distance it moved (from that tap's surface point) over `hit_dist`, the distance to what its
+// rays hit. Its diffuse lighting changes at about that rate. 0 without a history tap.
+float hrt_surface_turn(ivec2 taps[4], vec4 weights, vec3 p, vec3 n, float hit_dist) {
+    int best = 0;
+    for (int i = 1; i < 4; ++i) if (weights[i] > weights[best]) best = i;
+    if (weights[best] <= 0.0) return 0.0;
+    HrtPixelRays rays = hrt_pixel_rays_in(u_d.prev_clip_to_world, u_d.prev_viewport);
+    vec3 q_p, q_n;
+    if (!hrt_surface_on(rays, imageLoad(u_gbuf_prev, taps[best]).xy, u_d.prev_eye.xyz, taps[best], q_p, q_n)) return 0.0;
+    return acos(clamp(dot(n, q_n), -1.0, 1.0)) + distance(p, q_p) / max(hit_dist, 1e-3);
+}
+
 // Bilinear taps of the previous frame around `prev_pos` that show the same surface as (p, n)
 // seen at distance `dist`: weights are zero for taps off screen, on background, on another
 // surface (off the plane) or orientation (disocclusion).
