@@ -33,15 +33,6 @@ const int TAPS = AO_ONLY ? 6 : 8;
 // holds most of the noise (the quality program's AO error 0.042 -> 0.043 at 8 frames, 0.021 ->
 // 0.022 at 32; the room's AO blur passes at 1440p a sixth cheaper).
 const float AO_FEW_TAPS_HISTORY = 0.25;
-// Diffuse pixels with less history than this (revealed by a moving camera or object, or
-// restarted by anti-lag) take three times the taps on their own disk: at one ray per pixel
-// their few frames are the noisiest of the image and its blotches in motion, and 8 taps leave
-// them several times noisier than their neighbours. They are a few percent of a moving frame's
-// pixels and, at the length of the fast window, none of a still one's. Diffuse only: a glossy
-// reflection's history is short by design (its lobe moves with the view), and more taps would
-// blur it for good.
-const float FRESH_HISTORY = 4.0;
-const int FRESH_TAPS = 3 * TAPS;
 // AO near a moving object: the share of the disk kept (see below).
 const float MOVING_RADIUS_SCALE = 0.25;
 // History length from which pixels beside a crease keep their value (see below).
@@ -115,21 +106,16 @@ void main() {
     // share the guide's fetches and each tap's geometry weight: a task of both filters each as
     // its own task would). Each tap is weighted as it arrives (see above).
     float rotation = hrt_u01(hrt_pcg(u_pass.x + 1u)) * 2.0 * HRT_PI;
-    // A fresh diffuse pixel's disk (see FRESH_HISTORY) is its own: its taps lie elsewhere.
-    bool fresh[2];
-    [[unroll]] for (uint s = 0u; s < 2u; ++s) fresh[s] = s < count && !AO_ONLY && hrt_kind(s) == HRT_SIGNAL_DIFFUSE && len[s] < FRESH_HISTORY;
-    bool shared_disk = count == 2u && radius[0] == radius[1] && !fresh[0] && !fresh[1];
+    bool shared_disk = count == 2u && radius[0] == radius[1];
     float taps = 0.0, on_surface = 0.0;
     [[unroll]] for (uint d = 0u; d < 2u; ++d) {
         if (d >= count || (d == 1u && shared_disk)) break;
         if (radius[d] <= 0.0) continue;
-        // Half the taps (AO with history) or three times as many (fresh diffuse pixels), on a
-        // spiral of that many.
+        // Half the taps: the first TAPS / 2 of the unrolled loop, on a spiral of that many.
         bool few = AO_ONLY && len[d] >= AO_FEW_TAPS_HISTORY * u_d.history.x;
-        bool many = fresh[d];
-        int n_taps = few ? TAPS / 2 : many ? FRESH_TAPS : TAPS;
-        float disk_taps = float(n_taps);
-        for (int i = 0; i < n_taps; ++i) {
+        float disk_taps = few ? float(TAPS / 2) : float(TAPS);
+        [[unroll]] for (int i = 0; i < TAPS; ++i) {
+            if (i >= TAPS / 2 && few) break;
             float r = sqrt((float(i) + 0.5) / disk_taps) * radius[d];
             float a = float(i) * 2.39996323 + rotation;
             ivec2 q = pixel + ivec2(round(r * vec2(cos(a), sin(a))));

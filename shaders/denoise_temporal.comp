@@ -37,7 +37,7 @@ const int ANTILAG_RADIUS = 2;
 // frames ago lit another place or orientation (an orbiting box's faces, a waving flag). Its
 // diffuse history keeps at most this many frames per radian it turned since the last frame
 // (the normal's turn, plus the distance it travelled over the distance to what its rays hit;
-// hrt_surface_turn), and never fewer than the fast window. A still surface, or one moving
+// hrt_history_taps_moved), and never fewer than the fast window. A still surface, or one moving
 // through lighting that comes from far away, keeps its history. NRD limits accumulation by
 // parallax likewise, for specular; this is the diffuse lobe's counterpart, only for surfaces
 // that move in the world.
@@ -147,13 +147,14 @@ void main() {
     // and their fetches' latency hides behind the barrier.
     vec4 cur[2], hist[2], fast[2];
     bool moving = false;
+    vec2 moved = vec2(0.0); // the surface's turn (radians) and travel (world units): hrt_history_taps_moved
     ivec2 taps[4];
     vec4 weights = vec4(0.0);
     float lum_cur[2], lum_fast[2];
     bool found[2];
     if (surface) {
         vec2 was = hrt_previous_position(pixel, p);
-        if (!reset) hrt_history_taps(was, p, n, dist, taps, weights);
+        if (!reset) hrt_history_taps_moved(was, p, n, dist, taps, weights, moved);
         vec2 still;
         moving = u_d.flags.x != HRT_MOTION_NONE && hrt_previous_camera_position(p, still) && distance(was, still) > MOVING_PIXELS;
         [[unroll]] for (uint s = 0u; s < 2u; ++s) {
@@ -324,7 +325,7 @@ void main() {
             max_len = min(max_len, max(1.0, PARALLAX_LOBE_FRAMES * roughness * roughness / max(turned, 1e-6)));
         }
         if (kind == HRT_SIGNAL_DIFFUSE && moving && found[s]) {
-            float turned = hrt_surface_turn(taps, weights, p, n, cur[s].a);
+            float turned = moved.x + moved.y / max(cur[s].a, 1e-3);
             max_len = min(max_len, max(u_d.history.y, MOVING_TURN_FRAMES / max(turned, 1e-6)));
         }
         len = min(floor(len + 0.5) + 1.0, max_len);

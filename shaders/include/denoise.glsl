@@ -275,26 +275,15 @@ vec2 hrt_previous_position(ivec2 pixel, vec3 p) {
     return hrt_previous_camera_position(prev_p, pos) ? pos : vec2(-1e9);
 }
 
-// How far a moving surface turned and travelled since the last frame, as seen from what lights
-// it: the angle between its normal and the normal its strongest history tap had, plus the
-// distance it moved (from that tap's surface point) over `hit_dist`, the distance to what its
-// rays hit. Its diffuse lighting changes at about that rate. 0 without a history tap.
-float hrt_surface_turn(ivec2 taps[4], vec4 weights, vec3 p, vec3 n, float hit_dist) {
-    int best = 0;
-    for (int i = 1; i < 4; ++i) if (weights[i] > weights[best]) best = i;
-    if (weights[best] <= 0.0) return 0.0;
-    HrtPixelRays rays = hrt_pixel_rays_in(u_d.prev_clip_to_world, u_d.prev_viewport);
-    vec3 q_p, q_n;
-    if (!hrt_surface_on(rays, imageLoad(u_gbuf_prev, taps[best]).xy, u_d.prev_eye.xyz, taps[best], q_p, q_n)) return 0.0;
-    return acos(clamp(dot(n, q_n), -1.0, 1.0)) + distance(p, q_p) / max(hit_dist, 1e-3);
-}
-
 // Bilinear taps of the previous frame around `prev_pos` that show the same surface as (p, n)
 // seen at distance `dist`: weights are zero for taps off screen, on background, on another
 // surface (off the plane) or orientation (disocclusion).
 // (The four taps' positions come from the previous camera's pixel rays, one matrix product
 // for all four instead of one each.)
-void hrt_history_taps(vec2 prev_pos, vec3 p, vec3 n, float dist, out ivec2 taps[4], out vec4 weights) {
+// Also `moved`: how far the surface turned and travelled since the last frame, from the
+// strongest tap — the angle between the normals plus the distance between the surface points
+// (in world units; the caller scales it). 0 without a tap.
+void hrt_history_taps_moved(vec2 prev_pos, vec3 p, vec3 n, float dist, out ivec2 taps[4], out vec4 weights, out vec2 moved) {
     vec2 f = prev_pos - 0.5;
     ivec2 base = ivec2(floor(f));
     vec2 t = f - vec2(base);
@@ -302,13 +291,27 @@ void hrt_history_taps(vec2 prev_pos, vec3 p, vec3 n, float dist, out ivec2 taps[
     vec4 bilinear = vec4((1.0 - t.x) * (1.0 - t.y), t.x * (1.0 - t.y), (1.0 - t.x) * t.y, t.x * t.y);
     HrtPixelRays rays = hrt_pixel_rays_in(u_d.prev_clip_to_world, u_d.prev_viewport);
     vec3 eye = u_d.prev_eye.xyz;
+    moved = vec2(0.0);
+    float best = 0.0;
     for (int i = 0; i < 4; ++i) {
         weights[i] = 0.0;
         if (!hrt_in_prev_viewport(taps[i]) || bilinear[i] <= 0.0) continue;
         vec3 q_p, q_n;
         if (!hrt_surface_on(rays, imageLoad(u_gbuf_prev, taps[i]).xy, eye, taps[i], q_p, q_n)) continue;
-        if (abs(dot(n, q_p - p)) <= u_d.stops.z * dist && dot(n, q_n) >= 0.8) weights[i] = bilinear[i];
+        float cos_n = dot(n, q_n);
+        if (abs(dot(n, q_p - p)) <= u_d.stops.z * dist && cos_n >= 0.8) {
+            weights[i] = bilinear[i];
+            if (bilinear[i] > best) {
+                best = bilinear[i];
+                moved = vec2(acos(min(cos_n, 1.0)), distance(p, q_p));
+            }
+        }
     }
+}
+
+void hrt_history_taps(vec2 prev_pos, vec3 p, vec3 n, float dist, out ivec2 taps[4], out vec4 weights) {
+    vec2 moved;
+    hrt_history_taps_moved(prev_pos, p, n, dist, taps, weights, moved);
 }
 
 // Roughness of the specular signal at a pixel (the trace tasks' rule).

@@ -14,8 +14,7 @@
 //!   smoother the surface (a mirror is passed through, sharp); luminance variance from the
 //!   temporal moments, or from the neighbourhood while history is short; then edge-aware
 //!   blurs of 8 taps on a rotated disk, as NRD's blur and post-blur (plane, normal,
-//!   luminance-variance and roughness stops), whose radius shrinks as a pixel's history grows
-//!   (diffuse pixels with under 4 frames of history, just revealed or restarted, take 24);
+//!   luminance-variance and roughness stops), whose radius shrinks as a pixel's history grows;
 //!   glossy history capped by how far the view turned against the lobe's width (parallax),
 //!   and the diffuse history of a surface that moves in the world by how far it turned and
 //!   travelled against the distance to what lights it (an orbiting object's GI follows it);
@@ -174,8 +173,8 @@ pub struct DenoiserSettings {
     /// reflections by ~0.5%: at 1 ray per pixel the fast history is skewed, and a narrow box
     /// clips the slow mean from above). Radiance, AO.
     pub history_clamp_sigma: f32,
-    /// Spatial passes after the temporal ones (0..=6): each an edge-aware blur of 8 taps (24
-    /// at diffuse pixels with under 4 frames of history) on a disk turned by each pass, the first reaching 16 pixels at a pixel without history,
+    /// Spatial passes after the temporal ones (0..=6): each an edge-aware blur of 8 taps on a
+    /// disk turned by each pass, the first reaching 16 pixels at a pixel without history,
     /// each next one half as wide, all narrower as the history grows. Default 2 (NRD's blur
     /// and post-blur). Radiance, AO.
     pub spatial_passes: u32,
