@@ -147,7 +147,7 @@ void main() {
     // and their fetches' latency hides behind the barrier.
     vec4 cur[2], hist[2], fast[2];
     bool moving = false;
-    vec2 moved = vec2(0.0); // the surface's turn (radians) and travel (world units): hrt_history_taps_moved
+    vec2 moved = vec2(1.0, 0.0); // the surface's turn (cosine) and travel (world units): hrt_history_taps_moved
     ivec2 taps[4];
     vec4 weights = vec4(0.0);
     float lum_cur[2], lum_fast[2];
@@ -325,7 +325,7 @@ void main() {
             max_len = min(max_len, max(1.0, PARALLAX_LOBE_FRAMES * roughness * roughness / max(turned, 1e-6)));
         }
         if (kind == HRT_SIGNAL_DIFFUSE && moving && found[s]) {
-            float turned = moved.x + moved.y / max(cur[s].a, 1e-3);
+            float turned = acos(min(moved.x, 1.0)) + moved.y / max(cur[s].a, 1e-3);
             max_len = min(max_len, max(u_d.history.y, MOVING_TURN_FRAMES / max(turned, 1e-6)));
         }
         len = min(floor(len + 0.5) + 1.0, max_len);

@@ -281,8 +281,9 @@ vec2 hrt_previous_position(ivec2 pixel, vec3 p) {
 // (The four taps' positions come from the previous camera's pixel rays, one matrix product
 // for all four instead of one each.)
 // Also `moved`: how far the surface turned and travelled since the last frame, from the
-// strongest tap — the angle between the normals plus the distance between the surface points
-// (in world units; the caller scales it). 0 without a tap.
+// strongest tap — the cosine between the normals and the distance between the surface points
+// (in world units; the caller scales it). (1, 0) without a tap. The cosine, not the angle:
+// only moving surfaces need the angle, and the caller takes it there.
 void hrt_history_taps_moved(vec2 prev_pos, vec3 p, vec3 n, float dist, out ivec2 taps[4], out vec4 weights, out vec2 moved) {
     vec2 f = prev_pos - 0.5;
     ivec2 base = ivec2(floor(f));
@@ -291,7 +292,7 @@ void hrt_history_taps_moved(vec2 prev_pos, vec3 p, vec3 n, float dist, out ivec2
     vec4 bilinear = vec4((1.0 - t.x) * (1.0 - t.y), t.x * (1.0 - t.y), (1.0 - t.x) * t.y, t.x * t.y);
     HrtPixelRays rays = hrt_pixel_rays_in(u_d.prev_clip_to_world, u_d.prev_viewport);
     vec3 eye = u_d.prev_eye.xyz;
-    moved = vec2(0.0);
+    moved = vec2(1.0, 0.0);
     float best = 0.0;
     for (int i = 0; i < 4; ++i) {
         weights[i] = 0.0;
@@ -303,7 +304,7 @@ void hrt_history_taps_moved(vec2 prev_pos, vec3 p, vec3 n, float dist, out ivec2
             weights[i] = bilinear[i];
             if (bilinear[i] > best) {
                 best = bilinear[i];
-                moved = vec2(acos(min(cos_n, 1.0)), distance(p, q_p));
+                moved = vec2(cos_n, distance(p, q_p));
             }
         }
     }
