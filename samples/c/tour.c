@@ -416,6 +416,11 @@ int main(void) {
     HrtDenoiseShadowTask reaching = denoise;
     reaching.common.settings.moving_object_reach = -1.0f;
     EXPECT(hrt_schedule_denoise_shadow(frame, &reaching) == HRT_ERROR_INVALID_INPUT, "a negative moving-object reach");
+    /* Extra blur taps where diffuse history is fresh: off by default, at most 32. */
+    EXPECT(denoise.common.settings.fresh_history_taps == 0, "fresh-history taps are off by default");
+    HrtDenoiseShadowTask tapping = denoise;
+    tapping.common.settings.fresh_history_taps = 33;
+    EXPECT(hrt_schedule_denoise_shadow(frame, &tapping) == HRT_ERROR_INVALID_INPUT, "more than 32 fresh-history taps");
     /* A denoise task's G-buffer errors name the struct the engine filled. */
     HrtDenoiseShadowTask remap = denoise;
     remap.common.roughness.min_roughness = 0.5f;

@@ -767,6 +767,10 @@ typedef struct HrtDenoiserSettings {
    * World units; 0 turns it off. Default 0.5 (see DenoiserSettings::moving_object_reach).
    */
   float moving_object_reach;
+  /**
+   * 0..=32; default 0 (see DenoiserSettings::fresh_history_taps).
+   */
+  uint32_t fresh_history_taps;
 } HrtDenoiserSettings;
 
 typedef struct HrtDenoisingCommon {

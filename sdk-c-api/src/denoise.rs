@@ -101,6 +101,8 @@ pub struct HrtDenoiserSettings {
     pub anti_lag: bool,
     /// World units; 0 turns it off. Default 0.5 (see DenoiserSettings::moving_object_reach).
     pub moving_object_reach: f32,
+    /// 0..=32; default 0 (see DenoiserSettings::fresh_history_taps).
+    pub fresh_history_taps: u32,
 }
 
 #[repr(C)]
@@ -204,6 +206,7 @@ fn common(c: &HrtDenoisingCommon) -> Result<rt::DenoisingCommon, Failure> {
             max_shadow_blur_radius: s.max_shadow_blur_radius,
             anti_lag: s.anti_lag,
             moving_object_reach: s.moving_object_reach,
+            fresh_history_taps: s.fresh_history_taps,
         },
     })
 }
@@ -238,6 +241,7 @@ pub extern "C" fn hrt_denoising_common_default() -> HrtDenoisingCommon {
             max_shadow_blur_radius: s.max_shadow_blur_radius,
             anti_lag: s.anti_lag,
             moving_object_reach: s.moving_object_reach,
+            fresh_history_taps: s.fresh_history_taps,
         },
     }
 }

@@ -54,7 +54,7 @@ layout(set = 0, binding = 22, std140) uniform DenoiseConstants {
     mat4 prev_world_to_clip;
     mat4 prev_clip_to_world;
     vec4 eye;                // camera position, w = world size of a pixel at unit distance
-    vec4 prev_eye;           // previous camera position
+    vec4 prev_eye;           // previous camera position, w = extra first-pass taps of fresh diffuse pixels
     uvec4 flags;             // motion type, signal count, reset history (0/1), anti-firefly (0/1)
     uvec4 kinds;             // signal kind of input 0 and 1, shadow input has a visibility channel (0/1), anti-lag (0/1)
     vec4 motion_scale;       // xyz

@@ -448,6 +448,11 @@ fn hard_shadow_edges_stay_within_one_pixel() {
 // noise) so what must and must not appear in the output is exact.
 
 const S: u32 = 48;
+/// Bound on the first frame's deviation with 16 extra taps against none (see
+/// fresh_history_taps_smooth_a_first_frame): the first pass averages 25 samples instead of 9,
+/// a deviation of 0.6x were the weights equal; the luminance stop and the second pass leave
+/// less to gain (measured 0.65).
+const FRESH_TAPS_DEVIATION_RATIO: f32 = 0.8;
 
 /// A wall facing +z at z = -3 and a box in front of it at z = -1.
 fn wall_and_box() -> Scene {
@@ -706,6 +711,51 @@ fn anti_lag_restarts_a_changed_signal() {
     }
     eprintln!("mean red one frame after red -> green: anti-lag {:.4}, without {:.4}", left[0], left[1]);
     assert!(left[0] < 0.01 && left[1] > 0.1, "anti-lag restarts the changed pixels: {left:?}");
+    host.destroy_image(noisy);
+    images.destroy(&host);
+    drop(ctx);
+    assert_no_validation_errors();
+}
+
+/// `DenoiserSettings::fresh_history_taps`: a diffuse pixel's first frame is blurred with more
+/// taps (on a plane under noise of mean 1 and deviation 1, as a 1-ray GI sample's), less noisy
+/// and as bright.
+#[test]
+fn fresh_history_taps_smooth_a_first_frame() {
+    let (host, ctx) = host_and_context(InitSettings::default());
+    let (g, camera) = facing_plane();
+    let images = GBufferImages::upload(&host, &g).unwrap();
+    let noisy = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, S, S);
+    let mut rng = Rng::new(5);
+    // Exponential noise: mean 1, deviation 1, skewed as a 1-ray sample of diffuse light is.
+    let texels: Vec<[f32; 4]> = (0..S * S)
+        .map(|_| {
+            let v = -(1.0 - rng.next_f32()).ln();
+            [v, v, v, 3.0]
+        })
+        .collect();
+    host.write_image(&noisy, &rgba_bytes(&texels), GENERAL).unwrap();
+    let mut results = Vec::new();
+    for taps in [0, 16] {
+        let out = storage_image(&host, vk::Format::R32G32B32A32_SFLOAT, S, S);
+        let dn = context(&ctx, SignalType::Diffuse, S, S);
+        let mut frame = ctx.create_task_container();
+        let mut common = images.denoising_common(&camera);
+        common.settings.fresh_history_taps = taps;
+        let task = DenoiseDiffuseTask { context: dn, common, input: noisy.input(GENERAL), output: out.input(GENERAL) };
+        frame.schedule_denoise_diffuse(&task).unwrap();
+        run_frame(&host, &ctx, &mut frame).unwrap();
+        let red: Vec<f32> = read_channel(&host, &out, 0).into_iter().zip(&g.hit).filter(|(_, h)| **h).map(|(v, _)| v).collect();
+        let mean = stats::mean(&red);
+        let deviation = (red.iter().map(|v| (v - mean) * (v - mean)).sum::<f32>() / red.len() as f32).sqrt();
+        results.push((mean, deviation));
+        ctx.destroy_denoising_context(dn).unwrap();
+        host.destroy_image(out);
+    }
+    let [(mean_0, dev_0), (mean_16, dev_16)] = [results[0], results[1]];
+    eprintln!("first frame: 0 extra taps mean {mean_0:.4} deviation {dev_0:.4}; 16: mean {mean_16:.4} deviation {dev_16:.4}");
+    assert!(dev_16 < FRESH_TAPS_DEVIATION_RATIO * dev_0, "16 extra taps: deviation {dev_16} against {dev_0}");
+    assert!((mean_16 - mean_0).abs() < 0.03, "16 extra taps: mean {mean_16} against {mean_0}");
     host.destroy_image(noisy);
     images.destroy(&host);
     drop(ctx);
@@ -1023,7 +1073,9 @@ fn every_setting_affects_the_denoisers_that_read_it() {
     // Which denoisers read each field (DenoiserSettings' documentation). `anti_lag` acts only
     // when the signal changes: a_moving_object_leaves_no_old_occlusion_behind (AO) and
     // anti_lag_restarts_a_changed_signal (diffuse) show it; `moving_object_reach` only while
-    // objects move: a_sliding_object_s_occlusion_follows_it (denoise_quality.rs) shows it.
+    // objects move: a_sliding_object_s_occlusion_follows_it (denoise_quality.rs) shows it;
+    // `fresh_history_taps` only on pixels with under 4 frames of history:
+    // fresh_history_taps_smooth_a_first_frame shows it.
     let reads = |signal: SignalType, field: &str| match field {
         "max_history_frames" | "normal_power" | "plane_distance_sigma" => true,
         "fast_history_frames" | "history_clamp_sigma" | "spatial_passes" | "luminance_sigma" => signal != SignalType::Shadow,

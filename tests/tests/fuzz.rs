@@ -289,7 +289,7 @@ fn denoise_tasks_refuse_hostile_inputs_by_name() {
                 },
                 3 => {
                     let st = &mut d.settings;
-                    match s.index % 9 {
+                    match s.index % 10 {
                         0 => st.max_history_frames = s.int,
                         1 => st.fast_history_frames = s.int,
                         2 => st.history_clamp_sigma = s.float,
@@ -298,6 +298,7 @@ fn denoise_tasks_refuse_hostile_inputs_by_name() {
                         5 => st.normal_power = s.float,
                         6 => st.plane_distance_sigma = s.float,
                         7 => st.max_shadow_blur_radius = s.float,
+                        8 => st.fresh_history_taps = s.int,
                         _ => st.moving_object_reach = s.float,
                     }
                 }

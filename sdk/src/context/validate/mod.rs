@@ -589,7 +589,7 @@ impl Check for Box<DenoiseJob> {
             return Err(Error::invalid("DenoisingCommon.motion.scale", "is not finite"));
         }
         let s = &c.settings;
-        let checks: [(&'static str, bool); 10] = [
+        let checks: [(&'static str, bool); 11] = [
             ("DenoiserSettings.max_history_frames (1..=255)", (1..=255).contains(&s.max_history_frames)),
             (
                 "DenoiserSettings.fast_history_frames (1..=max_history_frames)",
@@ -602,6 +602,7 @@ impl Check for Box<DenoiseJob> {
             ("DenoiserSettings.plane_distance_sigma (> 0)", s.plane_distance_sigma.is_finite() && s.plane_distance_sigma > 0.0),
             ("DenoiserSettings.max_shadow_blur_radius (0..=64)", (0.0..=64.0).contains(&s.max_shadow_blur_radius)),
             ("DenoiserSettings.moving_object_reach (>= 0)", s.moving_object_reach.is_finite() && s.moving_object_reach >= 0.0),
+            ("DenoiserSettings.fresh_history_taps (0..=32)", s.fresh_history_taps <= 32),
             ("DenoiserSettings", true),
         ];
         if let Some((what, _)) = checks.iter().find(|(_, ok)| !ok) {
