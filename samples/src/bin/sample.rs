@@ -108,6 +108,10 @@ struct Cli {
     /// relighting off, leaving what no camera saw unlit.
     #[arg(long, default_value_t = 65_536, value_parser = clap::value_parser!(u32).range(0..=16_777_216))]
     relight_samples: u32,
+    /// Extra blur taps where diffuse GI's history is fresh, in the reflections + GI denoiser
+    /// (DenoiserSettings::fresh_history_taps): a moving view's GI less blotchy, at a cost.
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u32).range(0..=32))]
+    fresh_history_taps: u32,
     /// Hit-light the mirror's reflections from the scene's lights instead of shading them from
     /// the cache (TraceSpecularTask::hit_lighting).
     #[arg(long)]
@@ -158,6 +162,7 @@ fn run() -> Result<(), String> {
         cache_budget_bytes: cli.cache_budget_mib.saturating_mul(1 << 20),
         time_passes: cli.time_passes,
         many_lights: cli.many_lights.unwrap_or(0),
+        fresh_history_taps: cli.fresh_history_taps,
         max_blas_build_count: cli.blas_per_frame,
         rays_per_pixel: cli.rays,
         checkerboard: cli.checkerboard,

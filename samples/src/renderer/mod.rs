@@ -121,6 +121,9 @@ pub struct Settings {
     /// Scatter this many small lights through the scene and shade them with the SDK's
     /// resampled direct lighting (`TraceManyLightsTask`), denoised; 0 (the default): none.
     pub many_lights: u32,
+    /// `DenoiserSettings::fresh_history_taps` of the reflections + GI denoiser: extra blur taps
+    /// where diffuse history is fresh. Default 0 (the SDK's default).
+    pub fresh_history_taps: u32,
 }
 
 impl Default for Settings {
@@ -143,6 +146,7 @@ impl Default for Settings {
             hit_lighting: false,
             cache_budget_bytes: 0,
             many_lights: 0,
+            fresh_history_taps: 0,
             time_passes: false,
         }
     }

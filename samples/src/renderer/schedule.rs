@@ -267,9 +267,11 @@ impl Renderer<'_> {
             ..Default::default()
         };
         schedule(c, "reflections", |c| c.schedule_specular(&specular))?;
+        let mut denoising = main.denoising;
+        denoising.settings.fresh_history_taps = self.settings.fresh_history_taps;
         let denoise = DenoiseSpecularAndDiffuseTask {
             context: self.denoisers.radiance,
-            common: main.denoising,
+            common: denoising,
             input_specular: wk.specular_noisy.input(GENERAL),
             input_diffuse: wk.diffuse_noisy.input(GENERAL),
             output_specular: wk.specular.input(GENERAL),
