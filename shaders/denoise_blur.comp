@@ -1,9 +1,15 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
-// Radiance denoiser, pass 3 (repeated): an edge-aware blur of 8 taps on a rotated disk, as
+// Radiance denoiser, pass 2 (repeated): an edge-aware blur of 8 taps on a rotated disk, as
 // NRD's REBLUR blurs (its blur and post-blur), with SVGF's variance-guided luminance stop
-// (Schied et al. 2017). u_pass = (pass index from 0, last pass 0/1, 0, 0).
+// (Schied et al. 2017). u_pass = (pass index from 0, last pass 0/1, no filtering 0/1, 0): a
+// task without spatial passes runs the first with no filtering, for the histories' sake.
+//
+// The first pass also keeps the temporal pass's histories for the next frame (in place: only
+// the temporal pass reads the kept images, reprojected, and it cannot write them): the slow
+// history from its input pair[0] (clamped RGB; the variance times the length), the fast one
+// from pair[1] (this pass's output, read at the pixel before it is written).
 //
 // A pass fetches 8 taps and the centre, each one fetch of the view's guide and one of each
 // signal (and, for specular, of the roughness), where four 5x5 à-trous iterations fetched 25
@@ -77,8 +83,17 @@ void main() {
     vec3 p, n;
     HrtPixelRays rays = hrt_pixel_rays(u_d.c.clip_to_world);
     bool surface = hrt_surface_on(rays, imageLoad(u_gbuf_cur, pixel).xy, u_d.eye.xyz, pixel, p, n);
-    vec4 c[2];
-    [[unroll]] for (uint s = 0u; s < 2u; ++s) c[s] = s < count ? hrt_load_temp(s, pixel) : vec4(0.0);
+    bool first = u_pass.x == 0u;
+    vec4 c[2], fast[2];
+    [[unroll]] for (uint s = 0u; s < 2u; ++s) {
+        c[s] = fast[s] = vec4(0.0);
+        if (s >= count) break;
+        c[s] = hrt_load_temp(s, pixel);
+        // The history length (and, in the first pass, the fast history to keep).
+        fast[s] = first ? hrt_load_fast_cur(s, pixel) : hrt_load_fast_prev(s, pixel);
+        // A pixel near a moving object (AO: HRT_MOVING_LEN) keeps no variance: it restarted.
+        if (first) hrt_keep_histories(s, pixel, vec4(c[s].rgb, fast[s].a >= 1.0 ? c[s].a * fast[s].a : 0.0), fast[s]);
+    }
     if (!surface) {
         [[unroll]] for (uint s = 0u; s < 2u; ++s) {
             if (s >= count) break;
@@ -92,13 +107,12 @@ void main() {
 
     // Each signal's disk radius (0: this pass leaves the signal alone).
     float radius[2], len[2];
-    float pass_radius = BLUR_RADIUS * exp2(-float(u_pass.x));
+    float pass_radius = u_pass.z != 0u ? 0.0 : BLUR_RADIUS * exp2(-float(u_pass.x));
     [[unroll]] for (uint s = 0u; s < 2u; ++s) {
         radius[s] = 0.0;
         len[s] = 0.0;
         if (s >= count) break;
-        // The history length, from the fast history the clamp pass kept.
-        len[s] = hrt_load_fast_prev(s, pixel).a;
+        len[s] = fast[s].a;
         float scale = mix(1.0, u_d.history.w, clamp((len[s] - 1.0) / (0.25 * u_d.history.x), 0.0, 1.0));
         if (hrt_kind(s) == HRT_SIGNAL_SPECULAR) scale *= clamp(roughness * 4.0, 0.0, 1.0);
         // AO: the darker the pixel, the nearer its occluders and the smaller the features its
@@ -107,7 +121,7 @@ void main() {
         // spread over the open floor around it (the quality program's AO error 0.047 -> 0.043
         // at 8 frames; the sample in motion 0.032 -> 0.028).
         if (hrt_kind(s) == HRT_SIGNAL_SCALAR) scale *= mix(0.25, 1.0, smoothstep(0.7, 1.0, c[s].x));
-        // AO near a moving object (the clamp pass restarted it, HRT_MOVING_LEN): a narrow
+        // AO near a moving object (the temporal pass restarted it, HRT_MOVING_LEN): a narrow
         // disk, as a wide one spreads the contact shadow — a fifth of a sliding cube's
         // change missing with the full disk, none measurable with a quarter of it.
         if (hrt_kind(s) == HRT_SIGNAL_SCALAR && len[s] < 1.0) scale *= MOVING_RADIUS_SCALE;
@@ -116,7 +130,7 @@ void main() {
     }
 
     // Each signal's luminance stop: a tap's deviation from the centre against the local noise —
-    // the variances the clamp pass wrote (the history's own over its frames, or its 3x3
+    // the variances the temporal pass wrote (the history's own over its frames, or its 3x3
     // neighbourhood's while the history is short; then each pass's filtered result's) of the
     // centre and of the taps already seen. (The centre's alone left GI 10% and glossy
     // reflections 25% noisier after 8 frames.)
@@ -135,7 +149,7 @@ void main() {
     // its own task would). Each tap is weighted as it arrives (see above).
     float rotation = hrt_u01(hrt_pcg(u_pass.x + 1u)) * 2.0 * HRT_PI;
     bool shared_disk = count == 2u && radius[0] == radius[1];
-    int fresh_taps = u_pass.x == 0u ? int(u_d.prev_eye.w) : 0;
+    int fresh_taps = HRT_FRESH_TAPS != 0u && u_pass.x == 0u ? int(u_d.prev_eye.w) : 0;
     bool fresh[2];
     [[unroll]] for (uint s = 0u; s < 2u; ++s) fresh[s] = s < count && fresh_taps > 0 && hrt_kind(s) == HRT_SIGNAL_DIFFUSE && len[s] < FRESH_HISTORY;
     float taps = 0.0, on_surface = 0.0;
@@ -170,7 +184,7 @@ void main() {
     // sample in motion (640x360): GI 0.084 -> 0.078 with 16 (0.080 with 8; 0.075 with 16 in
     // both passes); a still view's first frame 0.171 -> 0.112; every other figure unchanged.
     [[unroll]] for (uint s = 0u; s < 2u; ++s) {
-        if (s >= count || !fresh[s] || radius[s] <= 0.0) continue;
+        if (HRT_FRESH_TAPS == 0u || s >= count || !fresh[s] || radius[s] <= 0.0) continue;
         float extra_rotation = rotation + 0.5 * 2.39996323;
         for (int i = 0; i < fresh_taps; ++i) {
             float r = sqrt((float(i) + 0.5) / float(fresh_taps)) * radius[s];

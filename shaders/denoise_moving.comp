@@ -12,11 +12,11 @@
 // vectors under a still camera, where the last frame showed another surface at that pixel.
 // A workgroup (32x32 pixels) that sees a moving surface stamps this frame's number on every
 // 32x32 tile within the surface's reach on screen (the task's reach at its distance); the
-// clamp pass starts the stamped tiles' pixels over from this frame's sample and the blur
-// passes filter them narrowly, so a moving contact shadow is this frame's, noisy but in place.
-// (One frame of history already leaves a quarter of a 2.6 px/frame slide's change behind; the
-// full blur a fifth.) The search is a pass of its own, and the restart lives in the clamp
-// pass, because inside the temporal pass the code alone, run or not, slowed it by 15% (its
+// temporal pass (its pipeline for moving objects) starts the stamped tiles' pixels over from
+// this frame's sample and the blur passes filter them narrowly, so a moving contact shadow is
+// this frame's, noisy but in place. (One frame of history already leaves a quarter of a 2.6
+// px/frame slide's change behind; the full blur a fifth.) The search is a pass of its own
+// because inside the temporal pass its code alone, run or not, slowed it by 15% (its
 // registers).
 // u_pass: this frame's stamp (never 0), 0, HRT_MOVING_* flags, reach (world units, float bits).
 #include "include/denoise.glsl"

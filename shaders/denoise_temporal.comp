@@ -1,11 +1,17 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
-// Radiance denoiser, pass 1: temporal accumulation. Reprojects each pixel's surface (motion
-// vectors or the cameras), keeps the bilinear taps of the previous frame that show the same
-// surface, and blends this frame's sample into a slow history (window up to max frames; RGB +
-// second luminance moment) and a fast one (a few frames; RGB + history length). Specular
-// history follows the reflected point when that lands on the same plane.
+// Radiance denoiser, pass 1: temporal accumulation and history clamping. Reprojects each
+// pixel's surface (motion vectors or the cameras), keeps the bilinear taps of the previous frame
+// that show the same surface, and blends this frame's sample into a slow history (window up to
+// max frames; RGB + one sample's luminance variance) and a fast one (a few frames; RGB + history
+// length). Specular history follows the reflected point when that lands on the same plane.
+// The slow history is then clamped to the fast one's neighbourhood (see CLAMP below), and the
+// variance the spatial passes stop on is made. Writes pair[0] (clamped slow RGB, variance) and
+// pair[1] (fast RGB, length); the first blur pass keeps both for the next frame (the kept
+// images are read here, reprojected, so they cannot be overwritten here). AO near a moving
+// object (while the scene changes, a second pipeline: HRT_MOVING_OBJECTS) starts over from
+// this frame's sample (denoise_moving.comp found the objects; u_pass.x is this frame's stamp).
 #include "include/denoise.glsl"
 
 // Anti-firefly threshold in standard deviations of the pixel's history (see below).
@@ -64,16 +70,27 @@ const int SIDE = 2 * ANTILAG_RADIUS + 1;
 const int WINDOWS = TILE - SIDE + 1; // window corners per axis
 // Per signal: this frame's luminance and its fast history's (where that signal's history is
 // read: for reflections the reflected point, or the surface where that is off screen).
-shared float s_cur[2][TILE * TILE];
-shared float s_fast[2][TILE * TILE];
+shared float s_cur[HRT_SIGNALS][TILE * TILE];
+shared float s_fast[HRT_SIGNALS][TILE * TILE];
 shared float s_ok[TILE * TILE];   // 1 on a surface traced this frame whose history is on screen
 // Per signal: (sum, sum of squares, fast sum, pixels) of each row's 5-wide windows, then of
 // each 5x5 window.
-shared vec4 s_row_win[2][TILE * WINDOWS];
-shared vec4 s_win[2][WINDOWS * WINDOWS];
+shared vec4 s_row_win[HRT_SIGNALS][TILE * WINDOWS];
+shared vec4 s_win[HRT_SIGNALS][WINDOWS * WINDOWS];
 // Diffuse GI's group-wide test (see below): per tile row, (sum, sum of squares, fast sum,
 // pixels) of the diffuse signal.
 shared vec4 s_rows[TILE];
+// The clamp's neighbourhood: each pixel's new fast history (RGB, length; 0 off a surface) per
+// signal, as two pairs of halves (the values stored are halves already). A pixel's 3x3 box is
+// the one of the tile nearest to it (shifted inwards at the tile's border, as the anti-lag
+// windows are): the neighbours' fast histories are made by this pass, and a centred box would
+// need another group's.
+// (The arrays are sized by the signal count: the group's shared memory bounds how many groups
+// a multiprocessor holds, and with them the pass's speed — 1 KB more slowed it by 8%.)
+shared uvec2 s_box[HRT_SIGNALS][TILE * TILE];
+
+void store_box_texel(uint s, uint e, vec4 v) { s_box[s][e] = uvec2(packHalf2x16(v.rg), packHalf2x16(v.ba)); }
+vec4 box_texel(uint s, int e) { uvec2 v = s_box[s][e]; return vec4(unpackHalf2x16(v.x), unpackHalf2x16(v.y)); }
 
 // Whether the task has a diffuse signal, and which. (Functions of the specialization
 // constants: a driver folds them; glslang cannot make a short-circuit constant of them.)
@@ -223,28 +240,47 @@ void main() {
             for (int i = 0; i < TILE; ++i) group += s_rows[i];
         }
     }
-    if (!inside) return;
+    // AO near a moving object (a constant condition but in AO's pipeline for moving objects):
+    // this frame's sample alone. The history and the fast window behind the clamp both lag a
+    // contact shadow that slides (the blur passes then keep it narrow).
+    bool near_moving = HRT_SIGNALS == 1u && HRT_KIND0 == HRT_SIGNAL_SCALAR && HRT_MOVING_OBJECTS != 0u && surface &&
+                       hrt_moving_load(ivec2(gl_GlobalInvocationID.xy) / HRT_MOVING_STAMP_TILE) == u_pass.x;
 
-    if (!surface) {
-        imageStore(u_gbuf_cur, pixel, uvec4(hrt_pack_surface(vec3(0.0, 0.0, 1.0), -1.0), 0u, 0u));
-        for (uint s = 0u; s < count; ++s) {
-            hrt_store_temp(s, pixel, vec4(0.0));
-            hrt_store_fast_cur(s, pixel, vec4(0.0));
-        }
-        return;
-    }
-    imageStore(u_gbuf_cur, pixel, uvec4(hrt_pack_surface(n, dist), 0u, 0u));
-
+    // Every store but the clamped slow history's is made before the clamp's barrier, so only
+    // that history lives across it (what lives across a barrier holds registers).
+    if (inside) imageStore(u_gbuf_cur, pixel, uvec4(surface ? hrt_pack_surface(n, dist) : hrt_pack_surface(vec3(0.0, 0.0, 1.0), -1.0), 0u, 0u));
+    // Each signal's new slow history (RGB, one sample's luminance variance), kept in registers
+    // for the clamp; the new fast history (RGB, length) goes to the image and to s_box.
+    vec4 slow_new[2];
     // The anti-lag test's footprint (see below): this pixel's 5x5 window of the tile, whose
     // sums (sum, sum of squares, fast sum, pixels) were made once per group.
     ivec2 corner = clamp(ivec2(gl_LocalInvocationID.xy) - ANTILAG_RADIUS, ivec2(0), ivec2(WINDOWS - 1));
     int win = corner.y * WINDOWS + corner.x;
-
     [[unroll]] for (uint s = 0u; s < 2u; ++s) {
+        slow_new[s] = vec4(0.0);
         if (s >= count) break;
+        store_box_texel(s, gl_LocalInvocationIndex, vec4(0.0));
+        if (!inside) continue;
+        if (!surface) {
+            hrt_store_temp(s, pixel, vec4(0.0));
+            hrt_store_fast_cur(s, pixel, vec4(0.0));
+            continue;
+        }
+        if (near_moving) {
+            // Nothing to clamp, so no neighbourhood to read; its variance is the largest one
+            // visibility sample can have (the luminance stop then leaves the narrow disk
+            // alone, as a neighbourhood's spread of one sample would).
+            hrt_store_temp(s, pixel, vec4(cur[s].rgb, 0.25));
+            hrt_store_fast_cur(s, pixel, vec4(cur[s].rgb, HRT_MOVING_LEN));
+            continue;
+        }
         uint kind = hrt_kind(s);
         bool specular = kind == HRT_SIGNAL_SPECULAR;
         float len = found[s] ? fast[s].a : 0.0;
+        // One sample's variance over the history (the slow history keeps it, as an exponential
+        // moving variance: the same as its second moment less its mean's square, without the
+        // cancellation).
+        float hist_var = max(hist[s].a, 0.0);
         // Anti-lag (history confidence): this frame's samples in the 5x5 window and their
         // fast histories estimate the same thing while the signal holds still. When their
         // means differ by more than ANTILAG_SIGMA of their combined noise, the signal changed
@@ -260,12 +296,11 @@ void main() {
             float sum = f.x, sum2 = f.y, fsum = f.z, k = f.w;
             if (k >= 3.0) {
                 float m = sum / k, mf = fsum / k;
-                // One sample's variance: this frame's 3x3 spread, or the pixel's own over its
-                // history (slow moments) when larger — nine 1-ray samples of a two-valued
-                // signal (miss or hit) are often all alike, and a spread of 0 would call any
+                // One sample's variance: this frame's spread in the window, or the pixel's own
+                // over its history when larger — nine 1-ray samples of a two-valued signal
+                // (miss or hit) are often all alike, and a spread of 0 would call any
                 // difference a change.
-                float lh = hrt_luminance(hist[s].rgb);
-                float var = max(max(sum2 / k - m * m, 0.0), max(hist[s].a - lh * lh, 0.0));
+                float var = max(max(sum2 / k - m * m, 0.0), hist_var);
                 // Both means cover the same k pixels: this frame's (k samples) and the fast
                 // history's (k x its frames).
                 float sigma = sqrt(var / k * (1.0 + 1.0 / min(len, u_d.history.y))) + 0.02 * max(m, mf) + 1e-3;
@@ -275,7 +310,7 @@ void main() {
                 float z = abs(m - mf) / sigma - (specular ? SPECULAR_EXTRA : 0.0);
                 if (has_diffuse() && s == diffuse_signal() && group.w >= 16.0) {
                     float gm = group.x / group.w, gf = group.z / group.w;
-                    float gvar = max(max(group.y / group.w - gm * gm, 0.0), max(hist[s].a - lh * lh, 0.0));
+                    float gvar = max(max(group.y / group.w - gm * gm, 0.0), hist_var);
                     float gsigma = sqrt(gvar / group.w * (1.0 + 1.0 / min(len, u_d.history.y))) + 0.02 * max(gm, gf) + 1e-3;
                     z = max(z, abs(gm - gf) / gsigma);
                 }
@@ -285,14 +320,14 @@ void main() {
         }
         // Anti-firefly, diffuse GI only. With a history of 4 frames or more, a sample is a
         // firefly when its luminance is more than FIREFLY_SIGMA deviations above this pixel's
-        // history mean (from the slow history's moments): a plain 1-ray distribution almost
-        // never gets there, so the mean stays unbiased, while a 1-in-1000 path to a bright
-        // emitter is cut down. With less history the 8 neighbours stand in, loosely (8x their
-        // brightest), as fresh pixels have no statistics yet. (Clamping every sample to its
-        // brightest neighbour, as the first generation did, darkened GI and glossy reflections
-        // by 2-6%.) Not reflections: a glint of a lamp or a sun patch is their signal, and in a
-        // moving view their history (few frames, another lobe) is no measure of it — the cut
-        // darkened the sample's reflections in motion by 0.8% for no less error.
+        // history mean: a plain 1-ray distribution almost never gets there, so the mean stays
+        // unbiased, while a 1-in-1000 path to a bright emitter is cut down. With less history
+        // the 8 neighbours stand in, loosely (8x their brightest), as fresh pixels have no
+        // statistics yet. (Clamping every sample to its brightest neighbour, as the first
+        // generation did, darkened GI and glossy reflections by 2-6%.) Not reflections: a glint
+        // of a lamp or a sun patch is their signal, and in a moving view their history (few
+        // frames, another lobe) is no measure of it — the cut darkened the sample's reflections
+        // in motion by 0.8% for no less error.
         if (u_d.flags.w != 0u && kind == HRT_SIGNAL_DIFFUSE) {
             float limit;
             if (len >= 4.0) {
@@ -300,7 +335,7 @@ void main() {
                 // A few frames' variance is often near 0 for a signal of a few discrete values
                 // (sky or wall): the deviation never counts below the mean itself, so a
                 // sample must also be (1 + FIREFLY_SIGMA) times the mean to be cut.
-                limit = m1 + FIREFLY_SIGMA * max(sqrt(max(hist[s].a - m1 * m1, 0.0)), m1) + 1e-4;
+                limit = m1 + FIREFLY_SIGMA * max(sqrt(hist_var), m1) + 1e-4;
             } else {
                 float lmax = -1.0;
                 for (int dy = -1; dy <= 1; ++dy) {
@@ -331,8 +366,47 @@ void main() {
         len = min(floor(len + 0.5) + 1.0, max_len);
         float a = 1.0 / len;
         float a_fast = max(a, 1.0 / u_d.history.y);
-        float l = hrt_luminance(cur[s].rgb);
-        hrt_store_temp(s, pixel, vec4(mix(hist[s].rgb, cur[s].rgb, a), mix(hist[s].a, l * l, a)));
-        hrt_store_fast_cur(s, pixel, vec4(mix(fast[s].rgb, cur[s].rgb, a_fast), len));
+        // The moving variance: (1 - a)(var + a (l - mean)^2) is the second moment's blend less
+        // the new mean's square, exactly.
+        float dl = hrt_luminance(cur[s].rgb) - hrt_luminance(hist[s].rgb);
+        slow_new[s] = vec4(mix(hist[s].rgb, cur[s].rgb, a), (1.0 - a) * (hist_var + a * dl * dl));
+        vec4 fast_new = hrt_round_half(vec4(mix(fast[s].rgb, cur[s].rgb, a_fast), len));
+        hrt_store_fast_cur(s, pixel, fast_new);
+        store_box_texel(s, gl_LocalInvocationIndex, fast_new);
+    }
+
+    barrier();
+    if (!inside || !surface || near_moving) return;
+    ivec2 box = clamp(ivec2(gl_LocalInvocationID.xy) - 1, ivec2(0), ivec2(TILE - 3));
+    [[unroll]] for (uint s = 0u; s < 2u; ++s) {
+        if (s >= count) break;
+        // CLAMP: the slow history is clamped to the box mean ± sigma x std of the fast
+        // history's 3x3 neighbourhood (widened to hold the pixel's own fast value), so lighting
+        // and objects that move are followed within the fast window instead of ghosting.
+        // (A box texel's w: the length, above 0 on a surface.)
+        vec3 m1 = vec3(0.0), m2 = vec3(0.0);
+        float l1 = 0.0, l2 = 0.0, k = 0.0;
+        [[unroll]] for (int dy = 0; dy < 3; ++dy) {
+            [[unroll]] for (int dx = 0; dx < 3; ++dx) {
+                vec4 f = box_texel(s, (box.y + dy) * TILE + box.x + dx);
+                float l = hrt_luminance(f.rgb);
+                m1 += f.rgb; m2 += f.rgb * f.rgb; l1 += l; l2 += l * l; k += f.a > 0.0 ? 1.0 : 0.0;
+            }
+        }
+        // k >= 1: the pixel's own texel is in its box.
+        m1 /= k; m2 /= k; l1 /= k; l2 /= k;
+        vec4 own = box_texel(s, int(gl_LocalInvocationIndex));
+        vec3 sigma = sqrt(max(m2 - m1 * m1, vec3(0.0)));
+        vec3 lo = min(m1 - u_d.history.z * sigma, own.rgb);
+        vec3 hi = max(m1 + u_d.history.z * sigma, own.rgb);
+        vec3 clamped = clamp(slow_new[s].rgb, lo, hi);
+        // Variance (for the spatial filter's luminance stop): the history's divided by its
+        // length (the noise left in the mean), blended from the neighbourhood's while history
+        // is short. The first blur pass keeps it, times the length, as the slow history's
+        // variance: a short history's few samples are no measure of it.
+        float len = own.a;
+        float var_spatial = max(l2 - l1 * l1, 0.0);
+        float variance = mix(var_spatial, slow_new[s].a / len, clamp((len - 1.0) / 7.0, 0.0, 1.0));
+        hrt_store_temp(s, pixel, vec4(clamped, variance));
     }
 }

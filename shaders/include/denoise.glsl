@@ -37,10 +37,10 @@ layout(set = 0, binding = 11, rgba16f) uniform readonly image2D u_hist_prev1;
 layout(set = 0, binding = 12, rgba16f) uniform image2D u_hist_cur0;
 layout(set = 0, binding = 13, rgba16f) uniform image2D u_hist_cur1;
 // The kept histories are single images: u_hist_prev and u_hist_cur name the same image, read
-// (reprojected) by the temporal pass and overwritten in place by the clamp pass; the fast
-// history goes through u_fast_cur (an intermediate) from the temporal pass to the clamp pass,
-// which copies it into u_fast_prev (the kept one) in place, where the à-trous passes read its
-// history length.
+// (reprojected) by the temporal pass and overwritten in place by the first blur pass; the fast
+// history goes through u_fast_cur (an intermediate: the second image of the signal's pair)
+// from the temporal pass to the first blur pass, which copies it into u_fast_prev (the kept
+// one) in place, where the later blur passes read its history length.
 layout(set = 0, binding = 14, rgba16f) uniform image2D u_fast_prev0;
 layout(set = 0, binding = 15, rgba16f) uniform image2D u_fast_prev1;
 layout(set = 0, binding = 16, rgba16f) uniform image2D u_fast_cur0;
@@ -78,7 +78,7 @@ layout(set = 0, binding = 24, r32ui) uniform uimage2D u_tiles;
 layout(set = 0, binding = 25, r32ui) uniform uimage2D u_shadow_history;
 // AO: which 32x32 tiles of the viewport a moving object's occlusion reaches, as the number of
 // the frame that found it there (a stamp: nothing to clear). Written by denoise_moving.comp
-// while the scene changes, read by the clamp pass after it; other passes bind a stand-in.
+// while the scene changes, read by the temporal pass after it; other passes bind a stand-in.
 layout(set = 0, binding = 26, r32ui) uniform uimage2D u_motion_tiles;
 
 // The radiance passes' signal configuration, fixed per pipeline (one pipeline per signal type:
@@ -89,13 +89,16 @@ layout(constant_id = 0) const uint HRT_SIGNALS = 2u;
 layout(constant_id = 1) const uint HRT_KIND0 = HRT_SIGNAL_SPECULAR;
 layout(constant_id = 2) const uint HRT_KIND1 = HRT_SIGNAL_DIFFUSE;
 uint hrt_kind(uint s) { return s == 0u ? HRT_KIND0 : HRT_KIND1; }
-// AO's clamp pass: whether this pipeline reads the moving-object stamps (a second pipeline,
+// AO's temporal pass: whether this pipeline reads the moving-object stamps (a second pipeline,
 // used while the scene changes: see denoise_moving.comp).
 layout(constant_id = 3) const uint HRT_MOVING_OBJECTS = 0u;
+// The blur's pipeline for DenoiserSettings::fresh_history_taps above 0 (its first pass only):
+// the extra taps' loop, merely present, cost the radiance blur passes 2-4% of their time.
+layout(constant_id = 4) const uint HRT_FRESH_TAPS = 0u;
 
 layout(push_constant) uniform Pass {
-    // Blur: pass index, last pass (0/1). Clamp: this frame's stamp (AO's moving objects: its
-    // guide frame, never 0), last pass (0/1). AO's moving-object pass: the stamp, 0,
+    // Blur: pass index, last pass (0/1), no filtering (0/1). Temporal: this frame's stamp (AO's
+    // moving objects: its guide frame, never 0). AO's moving-object pass: the stamp, 0,
     // HRT_MOVING_* flags, reach (world units, float bits).
     uvec4 u_pass;
 };
@@ -128,7 +131,7 @@ vec4 hrt_round_half(vec4 v) {
 vec4 hrt_load_input(uint s, ivec2 q) { return s == 0u ? texelFetch(u_input0, q, 0) : texelFetch(u_input1, q, 0); }
 void hrt_store_output(uint s, ivec2 q, vec4 v) { if (s == 0u) imageStore(u_output0, q, v); else imageStore(u_output1, q, v); }
 // A scalar signal (AO) keeps both its histories in one texel of its history image: (slow,
-// 2nd moment, fast, length); the loads below spread them back to (rgb, moment) and (rgb,
+// variance, fast, length); the loads below spread them back to (rgb, variance) and (rgb,
 // length), and hrt_keep_histories packs them.
 vec4 hrt_load_hist_prev(uint s, ivec2 q) {
     vec4 v = s == 0u ? imageLoad(u_hist_prev0, q) : imageLoad(u_hist_prev1, q);

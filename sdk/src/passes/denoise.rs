@@ -2,9 +2,10 @@
 //! filter (what they do and why: `types::denoise`). Every pass shares one push-descriptor
 //! layout (shaders/include/denoise.glsl); a pass's step size travels as a push constant.
 //!
-//! Radiance: temporal → clamp (in place) → rotated-disk blur × `spatial_passes` (the last
-//! writes the output). AO while the scene changes: a moving-object search first, and a clamp
-//! pass that restarts the pixels the moving objects reach.
+//! Radiance: temporal (with the history clamp) → rotated-disk blur × `spatial_passes` (the
+//! first keeps the histories, the last writes the output). AO while the scene changes: a
+//! moving-object search first, and a temporal pass that restarts the pixels the moving objects
+//! reach.
 //! Shadows: prep → penumbra blur → temporal (writes the output).
 use super::constants::LightGpu;
 use super::constants::TraceCommonGpu;
@@ -29,6 +30,7 @@ pub(crate) struct DenoiseConstantsGpu {
     prev_world_to_clip: [f32; 16],
     prev_clip_to_world: [f32; 16],
     eye: [f32; 4],
+    /// The previous camera position; w: `DenoiserSettings::fresh_history_taps`.
     prev_eye: [f32; 4],
     flags: [u32; 4],
     kinds: [u32; 4],
@@ -251,11 +253,23 @@ impl TempPool {
 /// kinds), so a pipeline holds only the code, and the registers, its signals need.
 struct RadiancePipelines {
     temporal: vk::Pipeline,
-    clamp: vk::Pipeline,
-    /// AO's clamp pass that also restarts pixels near moving objects (HRT_MOVING_OBJECTS),
+    /// AO's temporal pass that also restarts pixels near moving objects (HRT_MOVING_OBJECTS),
     /// used while the scene changes; the plain one the rest of the time.
-    clamp_moving: Option<vk::Pipeline>,
+    temporal_moving: Option<vk::Pipeline>,
     blur: vk::Pipeline,
+    /// The first blur pass with `DenoiserSettings::fresh_history_taps` (HRT_FRESH_TAPS), for
+    /// the signal types with diffuse: the taps' loop costs the passes without it.
+    blur_fresh: Option<vk::Pipeline>,
+}
+
+impl RadiancePipelines {
+    /// The first blur pass's pipeline for `fresh_history_taps` taps.
+    fn first_blur(&self, fresh_history_taps: u32) -> vk::Pipeline {
+        match self.blur_fresh {
+            Some(fresh) if fresh_history_taps > 0 => fresh,
+            _ => self.blur,
+        }
+    }
 }
 
 /// The radiance signal types, in `RadiancePipelines` order, with their specialization
@@ -297,15 +311,21 @@ impl DenoisePass {
         let mut radiance = Vec::with_capacity(RADIANCE_SIGNALS.len());
         for (signal, constants) in RADIANCE_SIGNALS {
             let moving = [constants[0], constants[1], constants[2], 1];
+            let fresh = [constants[0], constants[1], constants[2], 0, 1];
+            let has_diffuse = matches!(signal, SignalType::SpecularAndDiffuse | SignalType::Diffuse);
             radiance.push(RadiancePipelines {
                 temporal: b.compute_specialized(layout, shaders::DENOISE_TEMPORAL_COMP, &constants)?,
-                clamp: b.compute_specialized(layout, shaders::DENOISE_CLAMP_COMP, &constants)?,
-                clamp_moving: if signal == SignalType::DiffuseOcclusion {
-                    Some(b.compute_specialized(layout, shaders::DENOISE_CLAMP_COMP, &moving)?)
+                temporal_moving: if signal == SignalType::DiffuseOcclusion {
+                    Some(b.compute_specialized(layout, shaders::DENOISE_TEMPORAL_COMP, &moving)?)
                 } else {
                     None
                 },
                 blur: b.compute_specialized(layout, shaders::DENOISE_BLUR_COMP, &constants)?,
+                blur_fresh: if has_diffuse {
+                    Some(b.compute_specialized(layout, shaders::DENOISE_BLUR_COMP, &fresh)?)
+                } else {
+                    None
+                },
             });
         }
         Ok(DenoisePass {
@@ -369,9 +389,9 @@ impl DenoisePass {
             }
         };
         // The kept histories are single: read by the temporal pass, overwritten in place by the
-        // clamp pass (shaders/include/denoise.glsl). This frame's fast history passes between
-        // the two through the second image of each signal's pair, which the clamp pass leaves
-        // free (it filters the first in place).
+        // first blur pass (shaders/include/denoise.glsl). This frame's fast history passes
+        // between the two through the second image of each signal's pair, which the first blur
+        // pass reads at each pixel before it writes its output there.
         let hist_prev = per_signal(&state.history);
         let hist_cur = hist_prev;
         let fast_prev = per_signal(&state.fast);
@@ -445,21 +465,26 @@ impl DenoisePass {
             let passes = c.settings.spatial_passes;
             // The tiles' stamp: the guide frame (never 0, which cleared tiles hold).
             let stamp = (guide_frame as u32).max(1);
-            let clamp = match p.clamp_moving {
+            let temporal = match p.temporal_moving {
                 Some(restarting) if looks_for_moving_objects(state, c, reset, (serial, scene_changed)) => {
                     let reach = c.settings.moving_object_reach;
                     let push = [stamp, 0, ((previous == c.camera) as u32) << 2, reach.to_bits()];
                     dispatch(r, "moving_objects", self.moving, (1, 0), push, block_groups);
                     restarting
                 }
-                _ => p.clamp,
+                _ => p.temporal,
             };
-            dispatch(r, "temporal", p.temporal, (1, 0), [0; 4], pixel_groups);
-            dispatch(r, "clamp", clamp, (0, 0), [stamp, (passes == 0) as u32, 0, 0], pixel_groups);
+            dispatch(r, "temporal", temporal, (1, 0), [stamp, 0, 0, 0], pixel_groups);
+            // The first blur pass keeps the histories: without spatial passes it runs once,
+            // filtering nothing, and writes the output.
+            if passes == 0 {
+                dispatch(r, "keep", p.blur, (0, 1), [0, 1, 1, 0], pixel_groups);
+            }
+            let first_blur = p.first_blur(c.settings.fresh_history_taps);
             for (i, name) in (0..passes).zip(BLUR_PASS_NAMES) {
                 let src = i as usize % 2;
                 let push = [i, (i + 1 == passes) as u32, 0, 0];
-                dispatch(r, name, p.blur, (src, 1 - src), push, pixel_groups);
+                dispatch(r, name, if i == 0 { first_blur } else { p.blur }, (src, 1 - src), push, pixel_groups);
             }
         }
         temps.initialized = true;

@@ -12,7 +12,7 @@
 //!   moving light or object does not ghost; specular history that follows the *reflected*
 //!   point (the virtual position at the hit distance) and accumulates fewer frames the
 //!   smoother the surface (a mirror is passed through, sharp); luminance variance from the
-//!   temporal moments, or from the neighbourhood while history is short; then edge-aware
+//!   history's moving variance, or from the neighbourhood while history is short; then edge-aware
 //!   blurs of 8 taps on a rotated disk, as NRD's blur and post-blur (plane, normal,
 //!   luminance-variance and roughness stops), whose radius shrinks as a pixel's history grows;
 //!   glossy history capped by how far the view turned against the lobe's width (parallax),
@@ -28,9 +28,10 @@
 //!   neighbourhood clamp.
 //!
 //! The passes, by the names their timings carry (`CompletedTask::pass_timings`, with
-//! `InitSettings::time_passes`): radiance `temporal`, `clamp`, then `blur_1` …
-//! `blur_N` for `DenoiserSettings::spatial_passes` = N; shadows `shadow_prep` (penumbra
-//! width and its spread), `shadow_blur`, `shadow_temporal`.
+//! `InitSettings::time_passes`): radiance `temporal` (accumulation and the history clamp),
+//! then `blur_1` … `blur_N` for `DenoiserSettings::spatial_passes` = N (`keep` for N = 0: it
+//! only keeps the histories and writes the output); shadows `shadow_prep` (penumbra width and
+//! its spread), `shadow_blur`, `shadow_temporal`.
 //!
 //! `half_resolution_mode` resolves a checkerboard trace to full resolution; with no motion
 //! vectors the camera matrices reproject (static geometry only: the guide's debugging mode);
