@@ -35,6 +35,13 @@ const float BLUR_RADIUS = 16.0;
 // 0.044 -> 0.047 at 8 frames, 0.021 -> 0.022 at 32), 8 for radiance.
 const bool AO_ONLY = HRT_SIGNALS == 1u && HRT_KIND0 == HRT_SIGNAL_SCALAR;
 const int TAPS = AO_ONLY ? 6 : 8;
+// Diffuse GI's disk for a pixel without history: this share of BLUR_RADIUS, shrinking as
+// history grows to the quarter every signal reaches. A young pixel's variance is wide, so the
+// luminance stop lets a wide disk's taps through from other lighting: the bias they brought
+// outweighed the noise they took (the sample in motion's GI 0.084 -> 0.079 at 640x360, 0.093
+// -> 0.083 at 320x180; a still view's first frame 0.171 -> 0.132). Half the disk did less
+// well at 320x180 (0.085); every diffuse disk halved, old pixels' too, worse (0.090).
+const float DIFFUSE_YOUNG_SCALE = 0.35;
 // AO takes half the taps once its history is this share of the longest: the temporal mean then
 // holds most of the noise (the quality program's AO error 0.042 -> 0.043 at 8 frames, 0.021 ->
 // 0.022 at 32; the room's AO blur passes at 1440p a sixth cheaper).
@@ -113,7 +120,8 @@ void main() {
         len[s] = 0.0;
         if (s >= count) break;
         len[s] = fast[s].a;
-        float scale = mix(1.0, u_d.history.w, clamp((len[s] - 1.0) / (0.25 * u_d.history.x), 0.0, 1.0));
+        float young = hrt_kind(s) == HRT_SIGNAL_DIFFUSE ? DIFFUSE_YOUNG_SCALE : 1.0;
+        float scale = mix(young, u_d.history.w, clamp((len[s] - 1.0) / (0.25 * u_d.history.x), 0.0, 1.0));
         if (hrt_kind(s) == HRT_SIGNAL_SPECULAR) scale *= clamp(roughness * 4.0, 0.0, 1.0);
         // AO: the darker the pixel, the nearer its occluders and the smaller the features its
         // occlusion has — NRD scales its blur by the hit distance, and distance-weighted AO is
@@ -181,8 +189,7 @@ void main() {
     // A fresh diffuse pixel (see FRESH_HISTORY) takes `fresh_taps` more on a disk of its own,
     // after the shared one, which stays as it is for every pixel. At one ray per pixel a
     // pixel's first frames are the noisiest of the image — the blotches of a moving view. The
-    // sample in motion (640x360): GI 0.084 -> 0.078 with 16 (0.080 with 8; 0.075 with 16 in
-    // both passes); a still view's first frame 0.171 -> 0.112; every other figure unchanged.
+    // sample in motion (640x360): GI 0.079 -> 0.074 with 16; every other figure unchanged.
     [[unroll]] for (uint s = 0u; s < 2u; ++s) {
         if (HRT_FRESH_TAPS == 0u || s >= count || !fresh[s] || radius[s] <= 0.0) continue;
         float extra_rotation = rotation + 0.5 * 2.39996323;
