@@ -271,7 +271,7 @@ void main() {
             // visibility sample can have (the luminance stop then leaves the narrow disk
             // alone, as a neighbourhood's spread of one sample would).
             hrt_store_temp(s, pixel, vec4(cur[s].rgb, 0.25));
-            hrt_store_fast_cur(s, pixel, vec4(cur[s].rgb, HRT_MOVING_LEN));
+            hrt_store_fast_cur(s, pixel, hrt_round_half(vec4(cur[s].rgb, HRT_MOVING_LEN)));
             continue;
         }
         uint kind = hrt_kind(s);

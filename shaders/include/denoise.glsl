@@ -154,7 +154,9 @@ void hrt_keep_histories(uint s, ivec2 q, vec4 slow, vec4 fast) {
     if (s == 0u) imageStore(u_fast_prev0, q, fast); else imageStore(u_fast_prev1, q, fast);
 }
 vec4 hrt_load_fast_cur(uint s, ivec2 q) { return s == 0u ? imageLoad(u_fast_cur0, q) : imageLoad(u_fast_cur1, q); }
-void hrt_store_fast_cur(uint s, ivec2 q, vec4 v) { v = hrt_round_half(v); if (s == 0u) imageStore(u_fast_cur0, q, v); else imageStore(u_fast_cur1, q, v); }
+// `v` rounded by the caller (hrt_round_half): the temporal pass keeps the rounded value in
+// shared memory too, and rounding twice would cost a pixel the work again.
+void hrt_store_fast_cur(uint s, ivec2 q, vec4 v) { if (s == 0u) imageStore(u_fast_cur0, q, v); else imageStore(u_fast_cur1, q, v); }
 vec2 hrt_load_shadow_history(ivec2 q) { return unpackHalf2x16(imageLoad(u_shadow_history, q).x); }
 void hrt_store_shadow_history(ivec2 q, vec2 v) { imageStore(u_shadow_history, q, uvec4(packHalf2x16(hrt_round_half(vec4(v, 0.0, 0.0)).xy))); }
 vec4 hrt_load_temp(uint s, ivec2 q) { return s == 0u ? imageLoad(u_temp_src0, q) : imageLoad(u_temp_src1, q); }
