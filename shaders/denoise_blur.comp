@@ -42,6 +42,16 @@ const int TAPS = AO_ONLY ? 6 : 8;
 // -> 0.083 at 320x180; a still view's first frame 0.171 -> 0.132). Half the disk did less
 // well at 320x180 (0.085); every diffuse disk halved, old pixels' too, worse (0.090).
 const float DIFFUSE_YOUNG_SCALE = 0.35;
+// Diffuse GI's luminance stop for a pixel without history: this many times
+// DenoiserSettings::luminance_sigma wide, narrowing to it by FRESH_HISTORY frames. A young
+// pixel's variance is its 3x3 neighbourhood's few 1-ray samples (or a history of few frames),
+// too few to tell a skewed signal's noise from a lighting edge, and the stop kept out mostly
+// noise: the sample in motion's GI 0.079 -> 0.074 at 640x360 (the 64-ray run's unchanged), a
+// still view's first frame 0.132 -> 0.100. Old pixels keep the plain stop: 2.5x as wide for
+// every pixel did as well in the sample but blurred the lighting a moving box carries (its
+// wall's error 0.33 -> 0.48 in the motion-vector test; 0.33 with this rule), and narrowing by
+// 8 frames kept a revealed wall's fine lighting blurred past the fast window.
+const float DIFFUSE_STOP_SCALE = 4.0;
 // AO takes half the taps once its history is this share of the longest: the temporal mean then
 // holds most of the noise (the quality program's AO error 0.042 -> 0.043 at 8 frames, 0.021 ->
 // 0.022 at 32; the room's AO blur passes at 1440p a sixth cheaper).
@@ -59,7 +69,7 @@ const float CREASE_HISTORY = 8.0;
 // variance, the luminance stop's geometry-weighted variance, the centre's luminance and the
 // disk's fall-off.
 vec3 sum[2];
-float wsum[2], vsum[2], l_c[2], inv_r2[2], var_sum[2], var_w[2];
+float wsum[2], vsum[2], l_c[2], inv_r2[2], var_sum[2], var_w[2], stop_k[2];
 
 // Weighs tap `v` (rgb, variance) of signal `s` as it arrives: `lg` its geometry weight (log2),
 // `r2` its squared distance in pixels, `extra_w` a further factor (specular: roughness).
@@ -70,7 +80,7 @@ void take_tap(uint s, vec4 v, float lg, float r2, float extra_w) {
     // stopped by the centre's alone, a dark pixel kept its bright neighbours out while a bright
     // one took its dark neighbours in, and the image came out dark (the sample's reflections in
     // motion by 0.9%).
-    float inv_stop = 1.0 / (u_d.stops.x * sqrt(max(max(var_sum[s] / var_w[s], v.a), 0.0)) + 1e-4);
+    float inv_stop = 1.0 / (stop_k[s] * sqrt(max(max(var_sum[s] / var_w[s], v.a), 0.0)) + 1e-4);
     float g = exp2(lg);
     var_sum[s] += g * v.a;
     var_w[s] += g;
@@ -150,6 +160,7 @@ void main() {
         var_sum[s] = c[s].a;
         var_w[s] = 1.0;
         inv_r2[s] = radius[s] > 0.0 ? 1.0 / (radius[s] * radius[s]) : 0.0;
+        stop_k[s] = u_d.stops.x * (hrt_kind(s) == HRT_SIGNAL_DIFFUSE ? mix(DIFFUSE_STOP_SCALE, 1.0, clamp((len[s] - 1.0) / (FRESH_HISTORY - 1.0), 0.0, 1.0)) : 1.0);
     }
 
     // The taps of a disk: a signal's own, or both signals' when their radii agree (they then
@@ -189,7 +200,7 @@ void main() {
     // A fresh diffuse pixel (see FRESH_HISTORY) takes `fresh_taps` more on a disk of its own,
     // after the shared one, which stays as it is for every pixel. At one ray per pixel a
     // pixel's first frames are the noisiest of the image — the blotches of a moving view. The
-    // sample in motion (640x360): GI 0.079 -> 0.074 with 16; every other figure unchanged.
+    // sample in motion (640x360): GI 0.075 -> 0.073 with 16; every other figure unchanged.
     [[unroll]] for (uint s = 0u; s < 2u; ++s) {
         if (HRT_FRESH_TAPS == 0u || s >= count || !fresh[s] || radius[s] <= 0.0) continue;
         float extra_rotation = rotation + 0.5 * 2.39996323;

@@ -180,7 +180,8 @@ pub struct DenoiserSettings {
     /// and post-blur). Radiance, AO.
     pub spatial_passes: u32,
     /// Luminance stop in standard deviations of the local variance (> 0). Default 4.0.
-    /// Radiance, AO.
+    /// Diffuse GI's stop is 4x as wide for a pixel without history, narrowing to this by 4
+    /// frames: a young pixel's variance is an estimate from a few samples. Radiance, AO.
     pub luminance_sigma: f32,
     /// Normal stop: weights go as dot(n, n')^power (>= 0). Default 64. All.
     pub normal_power: f32,
@@ -223,8 +224,8 @@ pub struct DenoiserSettings {
     /// Extra taps of the first spatial pass for a diffuse pixel with under 4 frames of history
     /// (revealed by a moving camera or object, or restarted by `anti_lag`), on a disk of its
     /// own beside the 8 it shares (0..=32): at one ray per pixel such pixels are the noisiest of
-    /// a moving image, its blotches. 16 leaves 7% less error in the sample's GI in motion and a
-    /// third less in a still view's first frame; it costs two texture fetches a tap at those
+    /// a moving image, its blotches. 16 leaves 3% less error in the sample's GI in motion and a
+    /// fifth less noise in a first frame; it costs two texture fetches a tap at those
     /// pixels only, but a GPU runs a pixel's neighbours in lockstep, so a few fresh pixels slow
     /// the pass where they are. Default 0 (off). Diffuse GI.
     pub fresh_history_taps: u32,
