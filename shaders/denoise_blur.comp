@@ -46,7 +46,7 @@ const float DIFFUSE_YOUNG_SCALE = 0.35;
 // DenoiserSettings::luminance_sigma wide, narrowing to it by FRESH_HISTORY frames. A young
 // pixel's variance is its 3x3 neighbourhood's few 1-ray samples (or a history of few frames),
 // too few to tell a skewed signal's noise from a lighting edge, and the stop kept out mostly
-// noise: the sample in motion's GI 0.079 -> 0.074 at 640x360 (the 64-ray run's unchanged), a
+// noise: the sample in motion's GI 0.079 -> 0.075 at 640x360 (the 64-ray run's unchanged), a
 // still view's first frame 0.132 -> 0.100. Old pixels keep the plain stop: 2.5x as wide for
 // every pixel did as well in the sample but blurred the lighting a moving box carries (its
 // wall's error 0.33 -> 0.48 in the motion-vector test; 0.33 with this rule), and narrowing by
