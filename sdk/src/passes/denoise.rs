@@ -286,6 +286,9 @@ pub(crate) struct DenoisePass {
     radiance: Vec<RadiancePipelines>,
     shadow_prep: vk::Pipeline,
     shadow_blur: vk::Pipeline,
+    /// The shadow blur without its edge-aligned kernel (HRT_EDGE_BLUR 0), for still frames
+    /// (`needs_edge_blur`): the kernel's code, merely present, slows the pass.
+    shadow_blur_still: vk::Pipeline,
     shadow_temporal: vk::Pipeline,
     /// AO's moving-object search (shaders/denoise_moving.comp).
     moving: vk::Pipeline,
@@ -333,6 +336,8 @@ impl DenoisePass {
             radiance,
             shadow_prep: b.compute(layout, shaders::DENOISE_SHADOW_PREP_COMP)?,
             shadow_blur: b.compute(layout, shaders::DENOISE_SHADOW_BLUR_COMP)?,
+            // Constants 0-4 at the shader's defaults (the shadow passes ignore them).
+            shadow_blur_still: b.compute_specialized(layout, shaders::DENOISE_SHADOW_BLUR_COMP, &[2, 1, 0, 0, 0, 0])?,
             shadow_temporal: b.compute(layout, shaders::DENOISE_SHADOW_TEMPORAL_COMP)?,
             moving: b.compute(layout, shaders::DENOISE_MOVING_COMP)?,
         })
@@ -456,7 +461,9 @@ impl DenoisePass {
 
         if shadow {
             dispatch(r, "shadow_prep", self.shadow_prep, (1, 0), [0; 4], pixel_groups);
-            dispatch(r, "shadow_blur", self.shadow_blur, (0, 1), [0; 4], pixel_groups);
+            let still = !needs_edge_blur(state, c, &previous, reset, (serial, scene_changed));
+            let blur = if still { self.shadow_blur_still } else { self.shadow_blur };
+            dispatch(r, "shadow_blur", blur, (0, 1), [0; 4], pixel_groups);
             dispatch(r, "shadow_temporal", self.shadow_temporal, (1, 0), [0; 4], pixel_groups);
         } else {
             // Every radiance signal type has its pipelines (RADIANCE_SIGNALS).
@@ -507,6 +514,23 @@ fn looks_for_moving_objects(
         && !reset
         && scene_changed != 0
         && serial.saturating_sub(scene_changed) <= MOVING_RECORDINGS
+}
+
+/// Whether the shadow blur needs its edge-aligned kernel this frame: it serves pixels with a
+/// short history, which a still frame does not make — one whose camera (matrices, jitter and
+/// viewport) is last frame's, whose scene has not changed within MOVING_RECORDINGS recordings,
+/// and whose history was not reset.
+fn needs_edge_blur(
+    state: &DenoiserState,
+    c: &DenoisingCommon,
+    previous: &Camera,
+    reset: bool,
+    (serial, scene_changed): (u64, u64),
+) -> bool {
+    let viewport = [c.viewport.x, c.viewport.y, c.viewport.width, c.viewport.height];
+    let camera_moved = *previous != c.camera || state.previous_jitter != c.camera_jitter || state.previous_viewport != viewport;
+    let scene_moved = scene_changed != 0 && serial.saturating_sub(scene_changed) <= MOVING_RECORDINGS;
+    reset || camera_moved || scene_moved
 }
 
 /// SDK-owned images start UNDEFINED; they live in GENERAL from the first task that uses them
