@@ -343,6 +343,15 @@ impl DenoisePass {
         })
     }
 
+    /// The shadow blur's pipeline, with or without its edge-aligned kernel.
+    fn shadow_blur_for(&self, edge: bool) -> vk::Pipeline {
+        if edge {
+            self.shadow_blur
+        } else {
+            self.shadow_blur_still
+        }
+    }
+
     /// Records one denoise task against its context's state and guide (and advances both),
     /// with the shared intermediates of `temps`; `serial` is the recording's, `scene_changed`
     /// the serial of the last one that changed the scene (`Scene::changed_at`).
@@ -461,8 +470,7 @@ impl DenoisePass {
 
         if shadow {
             dispatch(r, "shadow_prep", self.shadow_prep, (1, 0), [0; 4], pixel_groups);
-            let still = !needs_edge_blur(state, c, &previous, reset, (serial, scene_changed));
-            let blur = if still { self.shadow_blur_still } else { self.shadow_blur };
+            let blur = self.shadow_blur_for(needs_edge_blur(state, c, &previous, reset, (serial, scene_changed)));
             dispatch(r, "shadow_blur", blur, (0, 1), [0; 4], pixel_groups);
             dispatch(r, "shadow_temporal", self.shadow_temporal, (1, 0), [0; 4], pixel_groups);
         } else {
