@@ -31,8 +31,8 @@ const float EDGE_ACROSS = 0.3;
 const float EDGE_ALONG = 1.5;
 // Whether this pipeline has the edge-aligned blur: the SDK records the one without it when
 // neither the view nor the scene moved and history was not reset (no pixel then has the short
-// history the blur is for). Merely present, its code cost the pass over half of its time where
-// it never ran (a still view of the bench's field at 2560x1440 on an H100: 0.305 -> 0.143 ms).
+// history the blur is for). Merely present, its code cost the pass time where it never ran
+// (docs/benchmarks.md has the figures).
 layout(constant_id = 5) const uint HRT_EDGE_BLUR = 1u;
 // The history length (frames) up to which, and the penumbra half-width (pixels) under which,
 // the edge-aligned blur replaces the disk.
@@ -90,12 +90,15 @@ int apron_index(ivec2 q, ivec2 origin) {
 // long along it averages samples of nearly one value. The edge's direction: the structure
 // tensor of this frame's visibility over the 3x3. Taps come in point-symmetric pairs, so a
 // tap's offset across the edge is cancelled by its partner's (the visibility's slope across
-// the edge drops out; only its curvature is left).
+// the edge drops out; only its curvature is left). Its loops stay rolled: unrolled, their
+// 24 decoded neighbours widened the whole pass's register footprint, and every pixel paid for
+// it in occupancy (rolled, the pass costs nearly what it costs without the edge blur:
+// docs/benchmarks.md).
 float along_edge(ivec2 pixel, int centre, HrtPixelRays rays, vec3 p, vec3 n, float dist) {
     float v = s_temp[centre].x;
     vec3 tensor = vec3(0.0);
     float lo = v, hi = v;
-    [[unroll]] for (int j = 0; j < 9; ++j) {
+    [[dont_unroll]] for (int j = 0; j < 9; ++j) {
         int k = centre + (j / 3 - 1) * APRON + (j % 3 - 1);
         float gx = s_temp[k + 1].x - s_temp[k - 1].x;
         float gy = s_temp[k + APRON].x - s_temp[k - APRON].x;
@@ -111,7 +114,7 @@ float along_edge(ivec2 pixel, int centre, HrtPixelRays rays, vec3 p, vec3 n, flo
     const ivec2 PAIRS[12] = ivec2[12](ivec2(1, 0), ivec2(2, 0), ivec2(-2, 1), ivec2(-1, 1), ivec2(0, 1), ivec2(1, 1),
         ivec2(2, 1), ivec2(-2, 2), ivec2(-1, 2), ivec2(0, 2), ivec2(1, 2), ivec2(2, 2));
     float sum = v, wsum = 1.0;
-    [[unroll]] for (int i = 0; i < 12; ++i) {
+    [[dont_unroll]] for (int i = 0; i < 12; ++i) {
         vec2 o = vec2(PAIRS[i]);
         float x = dot(o, across), y = dot(o, vec2(-across.y, across.x));
         float w = exp(-(x * x) / (EDGE_ACROSS * EDGE_ACROSS) - (y * y) / (2.0 * EDGE_ALONG * EDGE_ALONG));
