@@ -508,8 +508,7 @@ impl DenoisePass {
 }
 
 /// Whether an AO task looks for moving objects (and restarts the pixels they reach): while the
-/// scene changes (`scene_changed`, the last recording that changed it, is at most
-/// MOVING_RECORDINGS before `serial`), with a reach (DenoiserSettings::moving_object_reach),
+/// scene changes (`scene_changed_recently`), with a reach (DenoiserSettings::moving_object_reach),
 /// and with a history to restart.
 fn looks_for_moving_objects(
     state: &DenoiserState,
@@ -520,8 +519,13 @@ fn looks_for_moving_objects(
     state.motion_tiles.is_some()
         && c.settings.moving_object_reach > 0.0
         && !reset
-        && scene_changed != 0
-        && serial.saturating_sub(scene_changed) <= MOVING_RECORDINGS
+        && scene_changed_recently((serial, scene_changed))
+}
+
+/// Whether the scene changed within MOVING_RECORDINGS recordings of `serial` (`scene_changed`:
+/// the last recording that changed it, 0 for none).
+fn scene_changed_recently((serial, scene_changed): (u64, u64)) -> bool {
+    scene_changed != 0 && serial.saturating_sub(scene_changed) <= MOVING_RECORDINGS
 }
 
 /// Whether the shadow blur needs its edge-aligned kernel this frame: it serves pixels with a
@@ -537,8 +541,7 @@ fn needs_edge_blur(
 ) -> bool {
     let viewport = [c.viewport.x, c.viewport.y, c.viewport.width, c.viewport.height];
     let camera_moved = *previous != c.camera || state.previous_jitter != c.camera_jitter || state.previous_viewport != viewport;
-    let scene_moved = scene_changed != 0 && serial.saturating_sub(scene_changed) <= MOVING_RECORDINGS;
-    reset || camera_moved || scene_moved
+    reset || camera_moved || scene_changed_recently((serial, scene_changed))
 }
 
 /// SDK-owned images start UNDEFINED; they live in GENERAL from the first task that uses them
