@@ -1,21 +1,27 @@
 //! A Bevy scene built in code with ray-traced AO from hybrid-rt in place of Bevy's SSAO: rendered
 //! headless to a PNG, or shown in a window (`--window`; the T key toggles the ray-traced AO,
 //! Bevy's SSAO showing while it is off). `--ssao`: Bevy's own SSAO alone, for comparison.
+//! `--shadow-out PATH` (headless): the sun's ray-traced shadow too, its visible fraction
+//! written as a grey PNG.
 //!
 //! ```sh
 //! cargo run --example bevy_ao -- --out ao.png
+//! cargo run --example bevy_ao -- --out ao.png --shadow-out sun_shadow.png
 //! cargo run --example bevy_ao -- --ssao --out ssao.png
 //! cargo run --example bevy_ao -- --window            # until the window is closed
 //! cargo run --example bevy_ao -- --window --frames 60
 //! ```
+use bevy::asset::RenderAssetUsages;
 use bevy::camera::RenderTarget;
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::prelude::*;
+use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
 use bevy::render::render_resource::TextureFormat;
+use bevy::render::render_resource::{Extent3d, TextureDimension, TextureUsages};
 use bevy::render::view::screenshot::{save_to_disk, Screenshot};
 use bevy::window::ExitCondition;
-use hybrid_rt_bevy::{render_plugin, HybridRtInitPlugin, HybridRtPlugin, RayTracedAo};
+use hybrid_rt_bevy::{render_plugin, HybridRtInitPlugin, HybridRtPlugin, RayTracedAo, RayTracedSunShadow};
 
 /// Frames rendered before the screenshot (the scene's BVH is built on the first; the AO
 /// denoiser's history fills over the others).
@@ -29,10 +35,13 @@ struct Args {
     window: bool,
     /// Window mode: exit after this many frames (None: when the window closes).
     frames: Option<u32>,
+    /// Headless: also trace the sun's shadow and write it here.
+    shadow_out: Option<String>,
 }
 
 fn args() -> Args {
-    let mut a = Args { out: "bevy_ao.png".into(), ssao: false, width: 320, height: 180, window: false, frames: None };
+    let mut a =
+        Args { out: "bevy_ao.png".into(), ssao: false, width: 320, height: 180, window: false, frames: None, shadow_out: None };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
         match arg.as_str() {
@@ -42,6 +51,7 @@ fn args() -> Args {
             "--height" => a.height = it.next().and_then(|v| v.parse().ok()).expect("--height N"),
             "--window" => a.window = true,
             "--frames" => a.frames = Some(it.next().and_then(|v| v.parse().ok()).expect("--frames N")),
+            "--shadow-out" => a.shadow_out = Some(it.next().expect("--shadow-out PATH")),
             other => panic!("unknown argument {other}"),
         }
     }
@@ -53,6 +63,8 @@ struct Settings {
     ssao: bool,
     /// Headless: the image the camera renders to (None: the window).
     target: Option<Handle<Image>>,
+    /// The image the sun's shadow is traced into (None: no shadow traced).
+    shadow: Option<Handle<Image>>,
 }
 
 fn main() {
@@ -78,7 +90,15 @@ fn main() {
         let mut images = app.world_mut().resource_mut::<Assets<Image>>();
         images.add(Image::new_target_texture(a.width, a.height, TextureFormat::Rgba8UnormSrgb, None))
     };
-    app.insert_resource(Settings { ssao: a.ssao, target: Some(target.clone()) });
+    let shadow = a.shadow_out.as_ref().map(|_| {
+        let extent = Extent3d { width: a.width, height: a.height, depth_or_array_layers: 1 };
+        let texel = 1f32.to_ne_bytes();
+        let mut image =
+            Image::new_fill(extent, TextureDimension::D2, &texel, TextureFormat::R32Float, RenderAssetUsages::RENDER_WORLD);
+        image.texture_descriptor.usage |= TextureUsages::STORAGE_BINDING | TextureUsages::COPY_SRC;
+        app.world_mut().resource_mut::<Assets<Image>>().add(image)
+    });
+    app.insert_resource(Settings { ssao: a.ssao, target: Some(target.clone()), shadow: shadow.clone() });
     app.finish();
     app.cleanup();
     for _ in 0..FRAMES {
@@ -86,10 +106,19 @@ fn main() {
     }
     let _ = std::fs::remove_file(&a.out);
     app.world_mut().spawn(Screenshot::image(target)).observe(save_to_disk(a.out.clone()));
+    if let (Some(shadow), Some(path)) = (shadow, a.shadow_out.clone()) {
+        let _ = std::fs::remove_file(&path);
+        let (w, h) = (a.width, a.height);
+        app.world_mut().spawn(Readback::texture(shadow)).observe(move |ev: On<ReadbackComplete>, mut commands: Commands| {
+            write_grey_png(&ev.data, w, h, &path);
+            commands.entity(ev.entity).despawn();
+        });
+    }
     // The screenshot is read back and written a few updates later.
     for _ in 0..60 {
         app.update();
-        if std::fs::metadata(&a.out).is_ok_and(|m| m.len() > 0) {
+        let written = |p: &str| std::fs::metadata(p).is_ok_and(|m| m.len() > 0);
+        if written(&a.out) && a.shadow_out.as_deref().is_none_or(written) {
             println!("wrote {}", a.out);
             print_gpu_times(&app);
             return;
@@ -100,6 +129,25 @@ fn main() {
     std::process::exit(1);
 }
 
+/// Writes a read-back R32Float image (rows at a 256-byte pitch) as a grey PNG.
+fn write_grey_png(bytes: &[u8], width: u32, height: u32, path: &str) {
+    let pitch = bytes.len() / height as usize;
+    let mut grey = Vec::with_capacity((width * height) as usize);
+    for y in 0..height as usize {
+        for t in bytes[y * pitch..y * pitch + width as usize * 4].chunks_exact(4) {
+            let v = (f32::from_ne_bytes([t[0], t[1], t[2], t[3]]).clamp(0.0, 1.0) * 255.0).round() as u8;
+            grey.push(v);
+        }
+    }
+    let extent = Extent3d { width, height, depth_or_array_layers: 1 };
+    let image = Image::new(extent, TextureDimension::D2, grey, TextureFormat::R8Unorm, RenderAssetUsages::MAIN_WORLD);
+    match image.try_into_dynamic().map(|d| d.save(path)) {
+        Ok(Ok(())) => println!("wrote {path}"),
+        Ok(Err(e)) => eprintln!("error: {path}: {e}"),
+        Err(e) => eprintln!("error: {path}: {e}"),
+    }
+}
+
 /// The scene in a window, the SDK's GPU times printed every second.
 fn window(a: &Args) {
     let window = Window { title: "hybrid-rt in Bevy (T: ray-traced AO on / off)".into(), ..default() };
@@ -107,7 +155,7 @@ fn window(a: &Args) {
     app.add_plugins(HybridRtInitPlugin)
         .add_plugins(DefaultPlugins.set(render_plugin()).set(WindowPlugin { primary_window: Some(window), ..default() }))
         .add_plugins(HybridRtPlugin)
-        .insert_resource(Settings { ssao: a.ssao, target: None })
+        .insert_resource(Settings { ssao: a.ssao, target: None, shadow: None })
         .add_systems(Startup, setup)
         .add_systems(Update, toggle_and_report);
     if let Some(frames) = a.frames {
@@ -185,6 +233,10 @@ fn setup(
     } else {
         // Motion vectors let the AO denoiser follow moving objects (without them it reprojects
         // with the cameras).
-        commands.spawn((camera, RayTracedAo::default(), Msaa::Off, bevy::core_pipeline::prepass::MotionVectorPrepass));
+        let mut camera =
+            commands.spawn((camera, RayTracedAo::default(), Msaa::Off, bevy::core_pipeline::prepass::MotionVectorPrepass));
+        if let Some(shadow) = &settings.shadow {
+            camera.insert(RayTracedSunShadow { output: shadow.clone(), ..default() });
+        }
     }
 }

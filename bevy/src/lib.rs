@@ -1,4 +1,5 @@
-//! hybrid-rt inside Bevy: ray-traced ambient occlusion for Bevy's rasterized frame.
+//! hybrid-rt inside Bevy: ray-traced ambient occlusion and sun shadows for Bevy's rasterized
+//! frame.
 //!
 //! Bevy keeps its renderer. Each frame the plugin
 //! - mirrors the scene into the SDK: every visible entity with a `Mesh3d` becomes an SDK
@@ -9,6 +10,8 @@
 //!   reads `Depth32Float` reversed-Z and `Rgb10a2Unorm` normals directly) into the texture
 //!   Bevy's PBR reads its screen-space AO from, after Bevy's SSAO and before the opaque pass —
 //!   so Bevy's lighting takes ray-traced occlusion where it took SSAO's;
+//! - traces the shadow of a directional light (the sun) from the same prepass into an image of
+//!   the application's, for its own compositing ([`RayTracedSunShadow`]);
 //! - records the SDK's work into a command buffer placed among Bevy's own, and hands each
 //!   ticket back once the queue has finished the frame, with the SDK's per-task GPU times
 //!   published as Bevy diagnostics ([`DIAGNOSTIC_PATHS`]).
@@ -25,12 +28,14 @@
 //!     .add_plugins(HybridRtPlugin)
 //! ```
 //! and a camera takes [`RayTracedAo`] (which brings Bevy's depth and normal prepasses and its
-//! AO texture with it; the camera needs `Msaa::Off`, as Bevy's SSAO does).
+//! AO texture with it; the camera needs `Msaa::Off`, as Bevy's SSAO does) and/or
+//! [`RayTracedSunShadow`] (which brings the prepasses).
 #![deny(missing_docs)]
 
 mod render;
 mod scene;
 
+use bevy::core_pipeline::prepass::{DepthPrepass, NormalPrepass};
 use bevy::diagnostic::{Diagnostic, DiagnosticPath, Diagnostics, RegisterDiagnostic};
 use bevy::pbr::ScreenSpaceAmbientOcclusion;
 use bevy::prelude::*;
@@ -83,6 +88,49 @@ pub enum AoOutput {
     Image(Handle<Image>),
 }
 
+/// A ray-traced shadow of a directional light (the sun) for a 3D camera: the fraction of the
+/// light each pixel of Bevy's prepass sees, soft as the light's apparent size makes it,
+/// written into an image of the application's for its own compositing (Bevy's PBR has no
+/// input for a screen-space sun shadow; give the light `shadow_maps_enabled: false` where this
+/// replaces its shadow map). Toggle `enabled` at run time.
+#[derive(Component, Clone, Debug, PartialEq, ExtractComponent)]
+#[extract_app(bevy::render::RenderApp)]
+#[require(DepthPrepass, NormalPrepass)]
+pub struct RayTracedSunShadow {
+    /// Trace it (true) or leave the image as it is. Default true.
+    pub enabled: bool,
+    /// The `DirectionalLight` entity; None (default): the scene's first visible one.
+    pub light: Option<Entity>,
+    /// The light's apparent diameter in radians: 0 casts hard shadows. Default 0.0093 (the
+    /// sun's).
+    pub angular_diameter: f32,
+    /// Rays per pixel (1..=64). Default 1.
+    pub rays_per_pixel: u32,
+    /// Denoise (the SDK's shadow denoiser: temporal, along Bevy's motion vectors where the
+    /// camera has `MotionVectorPrepass`, else reprojected with the cameras; then spatial, its
+    /// penumbrae as wide as the light's size and the occluders' distances make them). Default
+    /// true.
+    pub denoise: bool,
+    /// Where the shadow goes: an image of the view's size with `STORAGE_BINDING` usage,
+    /// created with contents. Denoised, the visible fraction is in every channel (`R32Float`,
+    /// `R16Float` or `Rgba16Float`); with `denoise: false`, the trace's own texels: R = the
+    /// distance to the nearest occluder, G = the visible fraction (`Rgba16Float`).
+    pub output: Handle<Image>,
+}
+
+impl Default for RayTracedSunShadow {
+    fn default() -> Self {
+        RayTracedSunShadow {
+            enabled: true,
+            light: None,
+            angular_diameter: 0.0093,
+            rays_per_pixel: 1,
+            denoise: true,
+            output: Handle::default(),
+        }
+    }
+}
+
 /// Adds what the SDK needs to the Vulkan device Bevy is about to create. Add it *before*
 /// `DefaultPlugins` (Bevy reads the device callbacks when its render plugin is built), with
 /// [`render_plugin`] in place of Bevy's default `RenderPlugin`.
@@ -103,7 +151,7 @@ pub fn render_plugin() -> RenderPlugin {
     RenderPlugin { render_creation: RenderCreation::Automatic(Box::new(settings)), ..Default::default() }
 }
 
-/// The plugin: scene sync, AO traced per camera, tickets and GPU times. Add it after
+/// The plugin: scene sync, AO and the sun's shadow traced per camera, tickets and GPU times. Add it after
 /// `DefaultPlugins` (and [`HybridRtInitPlugin`] before them).
 pub struct HybridRtPlugin;
 
@@ -114,22 +162,31 @@ pub struct HybridRtTimings(pub Arc<Mutex<Vec<(String, f64)>>>);
 
 /// Diagnostics the plugin publishes, in milliseconds of GPU time (the SDK's timestamp queries):
 /// the scene's sync and BVH builds (frames that change the scene), AO traced and denoised (all
-/// cameras), and the SDK's whole frame.
-pub const DIAGNOSTIC_PATHS: [&str; 3] = ["hybrid_rt/scene", "hybrid_rt/ao", "hybrid_rt/frame"];
+/// cameras), the sun's shadow traced and denoised (all cameras), and the SDK's whole frame.
+pub const DIAGNOSTIC_PATHS: [&str; 4] = ["hybrid_rt/scene", "hybrid_rt/ao", "hybrid_rt/sun_shadow", "hybrid_rt/frame"];
 
 /// Diagnostic: how many cameras hold an AO denoiser history (about 8 bytes a pixel of the
 /// view, besides the view's shared denoising guide). A camera's history is freed a few frames after it stops
 /// being traced (despawned, `RayTracedAo` removed or disabled).
 pub const DIAGNOSTIC_AO_HISTORIES: &str = "hybrid_rt/ao_histories";
 
+/// Diagnostic: how many cameras hold a sun-shadow denoiser history, freed as the AO's are.
+pub const DIAGNOSTIC_SUN_SHADOW_HISTORIES: &str = "hybrid_rt/sun_shadow_histories";
+
 impl Plugin for HybridRtPlugin {
     fn build(&self, app: &mut App) {
         let timings = HybridRtTimings::default();
-        app.add_plugins(ExtractComponentPlugin::<RayTracedAo>::default()).insert_resource(timings.clone());
+        app.add_plugins((
+            ExtractComponentPlugin::<RayTracedAo>::default(),
+            ExtractComponentPlugin::<RayTracedSunShadow>::default(),
+        ))
+        .insert_resource(timings.clone());
         for path in DIAGNOSTIC_PATHS {
             app.register_diagnostic(Diagnostic::new(DiagnosticPath::new(path)).with_suffix(" ms"));
         }
-        app.register_diagnostic(Diagnostic::new(DiagnosticPath::new(DIAGNOSTIC_AO_HISTORIES)));
+        for path in [DIAGNOSTIC_AO_HISTORIES, DIAGNOSTIC_SUN_SHADOW_HISTORIES] {
+            app.register_diagnostic(Diagnostic::new(DiagnosticPath::new(path)));
+        }
         app.add_systems(Update, publish_timings);
         render::build(app, timings);
     }

@@ -1,0 +1,401 @@
+//! The effects traced per camera from Bevy's prepass — AO (into Bevy's AO texture or the
+//! application's image) and a directional light's shadow (into the application's image) —
+//! with the denoiser each keeps per camera, and the directional lights they are traced from.
+use super::{Held, HybridRt, Warnings};
+use crate::{AoOutput, RayTracedAo, RayTracedSunShadow};
+use bevy::core_pipeline::prepass::ViewPrepassTextures;
+use bevy::pbr::ScreenSpaceAmbientOcclusionResources;
+use bevy::platform::collections::HashMap;
+use bevy::prelude::*;
+use bevy::render::render_asset::RenderAssets;
+use bevy::render::renderer::{RenderContext, ViewQuery};
+use bevy::render::texture::GpuImage;
+use bevy::render::view::{ExtractedView, RetainedViewEntity};
+use bevy::render::Extract;
+use hybrid_rt::glam::Mat4;
+use hybrid_rt::{
+    DenoiseDiffuseOcclusionTask, DenoiseShadowTask, DenoisingCommon, DenoisingContextHandle, DenoisingContextInput, DepthInput,
+    GpuTicket, ImageInput, LightInfo, LightType, MotionInput, MotionType, NormalInput, NormalType, SignalType, TaskContainer,
+    TraceAmbientOcclusionTask, TraceCommon, TraceShadowTask, Viewport,
+};
+use hybrid_rt_wgpu::{prepare, wgpu, RtDevice};
+
+/// The effects a camera may trace, each with a denoiser of its own.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub(super) enum Effect {
+    Ao,
+    SunShadow,
+}
+
+impl Effect {
+    fn signal(self) -> SignalType {
+        match self {
+            Effect::Ao => SignalType::DiffuseOcclusion,
+            Effect::SunShadow => SignalType::Shadow,
+        }
+    }
+
+    /// The format of the noisy trace the denoiser reads (the shadow trace writes the occluder
+    /// distance and the visible fraction).
+    fn noisy_format(self) -> wgpu::TextureFormat {
+        match self {
+            Effect::Ao => wgpu::TextureFormat::R32Float,
+            Effect::SunShadow => wgpu::TextureFormat::Rgba16Float,
+        }
+    }
+}
+
+/// A camera's denoised effect: the SDK's denoising context (its history) and the texture the
+/// trace writes for the denoiser to read, both of the view's size.
+pub(super) struct ViewDenoiser {
+    pub(super) context: DenoisingContextHandle,
+    noisy: wgpu::Texture,
+    noisy_view: wgpu::TextureView,
+    size: (u32, u32),
+    /// The last frame that traced this camera's effect.
+    pub(super) last_used: u64,
+}
+
+impl ViewDenoiser {
+    fn new(rt: &RtDevice, size: (u32, u32), effect: Effect, warned: &mut Warnings) -> Option<ViewDenoiser> {
+        let input = DenoisingContextInput {
+            max_width: size.0,
+            max_height: size.1,
+            method: Default::default(),
+            signal: effect.signal(),
+            view_id: 0,
+        };
+        let context = match rt.context().create_denoising_context(&input) {
+            Ok(c) => c,
+            Err(e) => {
+                warned.once(e);
+                return None;
+            }
+        };
+        let noisy = rt.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("hybrid-rt noisy trace"),
+            size: wgpu::Extent3d { width: size.0, height: size.1, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: effect.noisy_format(),
+            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let noisy_view = noisy.create_view(&Default::default());
+        Some(ViewDenoiser { context, noisy, noisy_view, size, last_used: 0 })
+    }
+}
+
+/// Render world, extraction: each directional light's direction (where its light travels), by
+/// its main-world entity.
+#[derive(Resource, Default)]
+pub(super) struct ExtractedSuns(Vec<(Entity, hybrid_rt::glam::Vec3)>);
+
+/// The main world's directional lights, as `extract_suns` reads them.
+type Suns<'w, 's> = Query<'w, 's, (Entity, &'static GlobalTransform, &'static InheritedVisibility), With<DirectionalLight>>;
+
+pub(super) fn extract_suns(mut out: ResMut<ExtractedSuns>, query: Extract<Suns>) {
+    out.0.clear();
+    for (entity, transform, visible) in &query {
+        if visible.get() {
+            let f = transform.forward();
+            out.0.push((entity, hybrid_rt::glam::Vec3::new(f.x, f.y, f.z)));
+        }
+    }
+}
+
+/// What a camera's traces read from Bevy's prepass (its depth and world-space normals, as they
+/// are), with the wgpu objects to keep until the ticket is back.
+struct PrepassInputs {
+    common: TraceCommon,
+    motion: MotionInput,
+    textures: Vec<wgpu::Texture>,
+    views: Vec<bevy::render::render_resource::TextureView>,
+}
+
+/// The SDK's inputs from the view's prepass textures for an output of `size` (None: the prepass
+/// has not made them this frame). Motion vectors where the camera has them.
+fn prepass_inputs(
+    rt: &RtDevice,
+    view: &ExtractedView,
+    prepass: &ViewPrepassTextures,
+    size: (u32, u32),
+) -> Result<Option<PrepassInputs>, hybrid_rt_wgpu::BridgeError> {
+    let (Some(depth), Some(depth_view), Some(normal)) =
+        (prepass.depth.as_ref(), prepass.depth_only_view(), prepass.normal.as_ref())
+    else {
+        return Ok(None);
+    };
+    let depth_image = rt.image(&depth.texture.texture, depth_view, hybrid_rt_wgpu::SDK_READ)?;
+    let normal_image = rt.image(&normal.texture.texture, &normal.texture.default_view, hybrid_rt_wgpu::SDK_READ)?;
+    let mut textures = vec![(*depth.texture.texture).clone(), (*normal.texture.texture).clone()];
+    let mut views = vec![depth_view.clone(), normal.texture.default_view.clone()];
+    // Bevy's motion vectors: current minus previous position in UV (y down); the SDK takes
+    // previous minus current in normalized device coordinates (twice UV, y down too).
+    let motion = match (prepass.motion_vectors.as_ref(), prepass.motion_vectors_view()) {
+        (Some(mv), Some(mv_view)) => {
+            let image = rt.image(&mv.texture.texture, mv_view, hybrid_rt_wgpu::SDK_READ)?;
+            textures.push((*mv.texture.texture).clone());
+            views.push(mv_view.clone());
+            MotionInput { image, motion_type: MotionType::RgClipSpace, scale: [-2.0, -2.0, 1.0] }
+        }
+        _ => MotionInput::default(),
+    };
+    let common = TraceCommon {
+        depth: DepthInput { image: depth_image, ..Default::default() },
+        normals: NormalInput { image: normal_image, normal_type: NormalType::RgbNormalizedVector, ..Default::default() },
+        viewport: Viewport::full(size.0.min(depth_image.width), size.1.min(depth_image.height)),
+        camera: sdk_camera(view),
+        use_inline_rt: rt.context().supports_inline_rt(),
+        ..Default::default()
+    };
+    Ok(Some(PrepassInputs { common, motion, textures, views }))
+}
+
+impl PrepassInputs {
+    /// The denoisers' view of the same inputs.
+    fn denoising(&self) -> DenoisingCommon {
+        let c = &self.common;
+        DenoisingCommon {
+            depth: c.depth,
+            normals: c.normals,
+            motion: self.motion,
+            viewport: c.viewport,
+            camera: c.camera,
+            ..Default::default()
+        }
+    }
+}
+
+/// The camera's denoiser for `effect` at `size` (made, or remade at a new size), marked used
+/// this frame; None where the SDK refused it (logged once).
+fn view_denoiser<'a>(
+    views: &'a mut HashMap<(RetainedViewEntity, Effect), ViewDenoiser>,
+    rt: &RtDevice,
+    key: (RetainedViewEntity, Effect),
+    size: (u32, u32),
+    frame: u64,
+    warned: &mut Warnings,
+) -> Option<&'a ViewDenoiser> {
+    if views.get(&key).is_none_or(|v| v.size != size) {
+        if let Some(old) = views.remove(&key) {
+            let _ = rt.context().destroy_denoising_context(old.context);
+        }
+        if let Some(v) = ViewDenoiser::new(rt, size, key.1, warned) {
+            views.insert(key, v);
+        }
+    }
+    views.get_mut(&key).map(|v| {
+        v.last_used = frame;
+        &*v
+    })
+}
+
+/// What one camera's effect writes and reads: the SDK's view of the output image, the prepass
+/// inputs at its size, and, denoised, the view's denoiser with its noisy image (which the trace
+/// writes then, for the denoiser to read).
+struct EffectTargets<'a> {
+    output: ImageInput,
+    inputs: PrepassInputs,
+    noisy: Option<(&'a ViewDenoiser, ImageInput)>,
+}
+
+/// The targets of `effect` for a camera writing `out` (None: nothing to trace this frame, or
+/// input the SDK refused, logged once).
+fn effect_targets<'a>(
+    rt: &RtDevice,
+    (views, warned, frame): (&'a mut HashMap<(RetainedViewEntity, Effect), ViewDenoiser>, &mut Warnings, u64),
+    (view, prepass): (&ExtractedView, &ViewPrepassTextures),
+    (out_tex, out_view): (&wgpu::Texture, &wgpu::TextureView),
+    effect: Effect,
+    denoise: bool,
+) -> Option<EffectTargets<'a>> {
+    let attempt = || -> Result<Option<(ImageInput, PrepassInputs)>, hybrid_rt_wgpu::BridgeError> {
+        let output = rt.image(out_tex, out_view, hybrid_rt_wgpu::SDK_WRITE)?;
+        Ok(prepass_inputs(rt, view, prepass, (output.width, output.height))?.map(|inputs| (output, inputs)))
+    };
+    let (output, inputs) = match attempt() {
+        Ok(Some(t)) => t,
+        Ok(None) => return None,
+        Err(e) => {
+            warned.once(&e);
+            return None;
+        }
+    };
+    let noisy = match denoise {
+        true => {
+            let size = (output.width, output.height);
+            let v = view_denoiser(views, rt, (view.retained_view_entity, effect), size, frame, warned)?;
+            match rt.image(&v.noisy, &v.noisy_view, hybrid_rt_wgpu::SDK_WRITE) {
+                Ok(i) => Some((v, i)),
+                Err(e) => {
+                    warned.once(&e);
+                    return None;
+                }
+            }
+        }
+        false => None,
+    };
+    Some(EffectTargets { output, inputs, noisy })
+}
+
+/// Records one camera's tasks into a command buffer placed among Bevy's (after the barriers
+/// that hand the textures to the SDK), and keeps the wgpu objects they use until the ticket is
+/// back.
+#[allow(clippy::too_many_arguments)]
+fn record_view(
+    rt: &RtDevice,
+    (recorded, held, warned): (&mut Vec<GpuTicket>, &mut Held, &mut Warnings),
+    ctx: &mut RenderContext,
+    tasks: &mut TaskContainer,
+    label: &str,
+    inputs: PrepassInputs,
+    writes: &[&wgpu::Texture],
+    output_view: &bevy::render::render_resource::TextureView,
+) {
+    let reads: Vec<&wgpu::Texture> = inputs.textures.iter().collect();
+    prepare(ctx.command_encoder(), &reads, writes, &[]);
+    // SAFETY: the textures and views the tasks name are kept (cloned) until the ticket is back.
+    match unsafe { rt.record(tasks, Some(label)) } {
+        Ok((commands, ticket)) => {
+            ctx.add_command_buffer(commands);
+            recorded.push(ticket);
+            held.textures.extend(inputs.textures);
+            held.textures.extend(writes.iter().map(|t| (*t).clone()));
+            held.views.extend(inputs.views);
+            held.views.push(output_view.clone());
+        }
+        Err(e) => warned.once(&e),
+    }
+}
+
+/// Per camera with [`RayTracedAo`]: AO from Bevy's prepass into the texture Bevy's PBR reads
+/// its screen-space AO from (after Bevy's SSAO wrote it, before the opaque pass reads it), or
+/// into the application's image.
+pub(super) fn trace_ao(
+    view: ViewQuery<(&ExtractedView, &ViewPrepassTextures, Option<&ScreenSpaceAmbientOcclusionResources>, &RayTracedAo)>,
+    images: Res<RenderAssets<GpuImage>>,
+    mut state: ResMut<HybridRt>,
+    mut ctx: RenderContext,
+) {
+    let (view, prepass, ssao, settings) = view.into_inner();
+    let state = &mut *state;
+    let Some(rt) = state.rt.as_ref() else { return };
+    if !settings.enabled || !state.has_instances {
+        return;
+    }
+    let (out_tex, out_view) = match &settings.output {
+        AoOutput::Pbr => match ssao {
+            Some(s) => {
+                (&s.screen_space_ambient_occlusion_texture.texture, &s.screen_space_ambient_occlusion_texture.default_view)
+            }
+            None => {
+                // Bevy makes no AO texture for cameras with MSAA (as for its SSAO).
+                state.warned.once("a camera with RayTracedAo has no AO texture: give it Msaa::Off");
+                return;
+            }
+        },
+        AoOutput::Image(handle) => match images.get(handle) {
+            Some(image) => (&image.texture, &image.texture_view),
+            None => return, // not on the GPU yet
+        },
+    };
+    let sinks = (&mut state.views, &mut state.warned, state.frame);
+    let Some(EffectTargets { output, inputs, noisy }) =
+        effect_targets(rt, sinks, (view, prepass), (out_tex, out_view), Effect::Ao, settings.denoise)
+    else {
+        return;
+    };
+    let mut tasks = rt.context().create_task_container();
+    let task = TraceAmbientOcclusionTask {
+        common: inputs.common,
+        output: noisy.as_ref().map_or(output, |(_, i)| *i),
+        ray_length: settings.ray_length,
+        rays_per_pixel: settings.rays_per_pixel,
+        ..Default::default()
+    };
+    if let Err(e) = tasks.schedule_ambient_occlusion(&task) {
+        return state.warned.once(&e);
+    }
+    let mut writes: Vec<&wgpu::Texture> = vec![out_tex];
+    if let Some((v, noisy_image)) = &noisy {
+        let denoise = DenoiseDiffuseOcclusionTask { context: v.context, common: inputs.denoising(), input: *noisy_image, output };
+        if let Err(e) = tasks.schedule_denoise_diffuse_occlusion(&denoise) {
+            return state.warned.once(&e);
+        }
+        writes.push(&v.noisy);
+    }
+    let sinks = (&mut state.recorded, &mut state.held, &mut state.warned);
+    record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt ao", inputs, &writes, out_view);
+}
+
+/// Per camera with [`RayTracedSunShadow`]: the directional light's shadow from Bevy's prepass
+/// into the application's image.
+pub(super) fn trace_sun_shadow(
+    view: ViewQuery<(&ExtractedView, &ViewPrepassTextures, &RayTracedSunShadow)>,
+    images: Res<RenderAssets<GpuImage>>,
+    suns: Res<ExtractedSuns>,
+    mut state: ResMut<HybridRt>,
+    mut ctx: RenderContext,
+) {
+    let (view, prepass, settings) = view.into_inner();
+    let state = &mut *state;
+    let Some(rt) = state.rt.as_ref() else { return };
+    if !settings.enabled || !state.has_instances {
+        return;
+    }
+    let sun = match settings.light {
+        Some(entity) => suns.0.iter().find(|(e, _)| *e == entity),
+        None => suns.0.first(),
+    };
+    let Some(&(_, direction)) = sun else {
+        return state.warned.once("a camera with RayTracedSunShadow sees no visible DirectionalLight of that entity");
+    };
+    let Some(image) = images.get(&settings.output) else { return }; // not on the GPU yet
+    let (out_tex, out_view) = (&image.texture, &image.texture_view);
+    let sinks = (&mut state.views, &mut state.warned, state.frame);
+    let Some(EffectTargets { output, inputs, noisy }) =
+        effect_targets(rt, sinks, (view, prepass), (out_tex, out_view), Effect::SunShadow, settings.denoise)
+    else {
+        return;
+    };
+    let light = LightInfo {
+        light_type: LightType::Directional,
+        direction,
+        angular_extent: settings.angular_diameter,
+        ..Default::default()
+    };
+    let mut tasks = rt.context().create_task_container();
+    let task = TraceShadowTask {
+        common: inputs.common,
+        light,
+        output: noisy.as_ref().map_or(output, |(_, i)| *i),
+        rays_per_pixel: settings.rays_per_pixel,
+        ..Default::default()
+    };
+    if let Err(e) = tasks.schedule_shadow(&task) {
+        return state.warned.once(&e);
+    }
+    let mut writes: Vec<wgpu::Texture> = vec![(**out_tex).clone()];
+    if let Some((v, noisy_image)) = &noisy {
+        let denoise = DenoiseShadowTask { context: v.context, common: inputs.denoising(), light, input: *noisy_image, output };
+        if let Err(e) = tasks.schedule_denoise_shadow(&denoise) {
+            return state.warned.once(&e);
+        }
+        writes.push(v.noisy.clone());
+    }
+    let writes: Vec<&wgpu::Texture> = writes.iter().collect();
+    let sinks = (&mut state.recorded, &mut state.held, &mut state.warned);
+    record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt sun shadow", inputs, &writes, out_view);
+}
+
+/// The view's camera as the SDK takes it: world to view, and Bevy's (unjittered) projection
+/// with y turned down (Vulkan's clip space; wgpu's points y up). Reversed-Z with an infinite
+/// far plane, as Bevy projects, the SDK detects itself.
+fn sdk_camera(view: &ExtractedView) -> hybrid_rt::Camera {
+    let world_from_view = Mat4::from_cols_array(&view.world_from_view.to_matrix().to_cols_array());
+    let clip_from_view = Mat4::from_cols_array(&view.clip_from_view.to_cols_array());
+    let flip_y = Mat4::from_scale(hybrid_rt::glam::Vec3::new(1.0, -1.0, 1.0));
+    hybrid_rt::Camera { world_to_view: world_from_view.inverse(), view_to_clip: flip_y * clip_from_view }
+}
