@@ -350,7 +350,10 @@ pub(super) fn trace_sun_shadow(
         None => suns.0.first(),
     };
     let Some(&(_, direction)) = sun else {
-        return state.warned.once("a camera with RayTracedSunShadow sees no visible DirectionalLight of that entity");
+        return state.warned.once(match settings.light {
+            Some(entity) => format!("RayTracedSunShadow.light {entity} is not a visible DirectionalLight"),
+            None => "a camera has RayTracedSunShadow, but the scene has no visible DirectionalLight".to_string(),
+        });
     };
     let Some(image) = images.get(&settings.output) else { return }; // not on the GPU yet
     let (out_tex, out_view) = (&image.texture, &image.texture_view);
