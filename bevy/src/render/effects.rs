@@ -355,6 +355,9 @@ pub(super) fn trace_sun_shadow(
             None => "a camera has RayTracedSunShadow, but the scene has no visible DirectionalLight".to_string(),
         });
     };
+    if settings.output == Handle::default() {
+        return state.warned.once("RayTracedSunShadow.output is not set: give it an image of the view's size");
+    }
     let Some(image) = images.get(&settings.output) else { return }; // not on the GPU yet
     let (out_tex, out_view) = (&image.texture, &image.texture_view);
     let sinks = (&mut state.views, &mut state.warned, state.frame);
