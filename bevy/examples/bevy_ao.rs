@@ -2,7 +2,10 @@
 //! headless to a PNG, or shown in a window (`--window`; the T key toggles the ray-traced AO,
 //! Bevy's SSAO showing while it is off). `--ssao`: Bevy's own SSAO alone, for comparison.
 //! `--shadow-out PATH` (headless): the sun's ray-traced shadow too, its visible fraction
-//! written as a grey PNG.
+//! written as a grey PNG. `--cost FRAMES` (headless): renders that many frames after a warm-up
+//! and prints Bevy's GPU time per render pass beside the plugin's (timestamp queries), with
+//! the ray-traced AO and sun shadow, with `--ssao` (Bevy's SSAO instead), or with `--plain`
+//! (neither: Bevy's frame alone).
 //!
 //! ```sh
 //! cargo run --example bevy_ao -- --out ao.png
@@ -10,18 +13,21 @@
 //! cargo run --example bevy_ao -- --ssao --out ssao.png
 //! cargo run --example bevy_ao -- --window            # until the window is closed
 //! cargo run --example bevy_ao -- --window --frames 60
+//! cargo run --example bevy_ao -- --cost 300 --width 1920 --height 1080
 //! ```
 use bevy::asset::RenderAssetUsages;
 use bevy::camera::RenderTarget;
 use bevy::core_pipeline::tonemapping::Tonemapping;
 use bevy::prelude::*;
+use bevy::render::diagnostic::RenderDiagnosticsPlugin;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
 use bevy::render::render_resource::TextureFormat;
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureUsages};
+use bevy::render::settings::{RenderCreation, WgpuFeatures};
 use bevy::render::view::screenshot::{save_to_disk, Screenshot};
 use bevy::window::ExitCondition;
-use hybrid_rt_bevy::{render_plugin, HybridRtInitPlugin, HybridRtPlugin, RayTracedAo, RayTracedSunShadow};
+use hybrid_rt_bevy::{render_plugin, HybridRtInitPlugin, HybridRtPlugin, RayTracedAo, RayTracedSunShadow, DIAGNOSTIC_PATHS};
 
 /// Frames rendered before the screenshot (the scene's BVH is built on the first; the AO
 /// denoiser's history fills over the others).
@@ -37,11 +43,24 @@ struct Args {
     frames: Option<u32>,
     /// Headless: also trace the sun's shadow and write it here.
     shadow_out: Option<String>,
+    /// Headless: measure this many frames' GPU times instead of writing images.
+    cost: Option<u32>,
+    /// No AO of either kind and no shadow: Bevy's own frame.
+    plain: bool,
 }
 
 fn args() -> Args {
-    let mut a =
-        Args { out: "bevy_ao.png".into(), ssao: false, width: 320, height: 180, window: false, frames: None, shadow_out: None };
+    let mut a = Args {
+        out: "bevy_ao.png".into(),
+        ssao: false,
+        width: 320,
+        height: 180,
+        window: false,
+        frames: None,
+        shadow_out: None,
+        cost: None,
+        plain: false,
+    };
     let mut it = std::env::args().skip(1);
     while let Some(arg) = it.next() {
         match arg.as_str() {
@@ -52,6 +71,8 @@ fn args() -> Args {
             "--window" => a.window = true,
             "--frames" => a.frames = Some(it.next().and_then(|v| v.parse().ok()).expect("--frames N")),
             "--shadow-out" => a.shadow_out = Some(it.next().expect("--shadow-out PATH")),
+            "--cost" => a.cost = Some(it.next().and_then(|v| v.parse().ok()).expect("--cost FRAMES")),
+            "--plain" => a.plain = true,
             other => panic!("unknown argument {other}"),
         }
     }
@@ -61,6 +82,8 @@ fn args() -> Args {
 #[derive(Resource)]
 struct Settings {
     ssao: bool,
+    /// Neither AO nor the sun's ray-traced shadow.
+    plain: bool,
     /// Headless: the image the camera renders to (None: the window).
     target: Option<Handle<Image>>,
     /// The image the sun's shadow is traced into (None: no shadow traced).
@@ -71,6 +94,9 @@ fn main() {
     let a = args();
     if a.window {
         return window(&a);
+    }
+    if let Some(frames) = a.cost {
+        return cost(&a, frames);
     }
     let mut app = App::new();
     app.add_plugins(HybridRtInitPlugin)
@@ -90,15 +116,9 @@ fn main() {
         let mut images = app.world_mut().resource_mut::<Assets<Image>>();
         images.add(Image::new_target_texture(a.width, a.height, TextureFormat::Rgba8UnormSrgb, None))
     };
-    let shadow = a.shadow_out.as_ref().map(|_| {
-        let extent = Extent3d { width: a.width, height: a.height, depth_or_array_layers: 1 };
-        let texel = 1f32.to_ne_bytes();
-        let mut image =
-            Image::new_fill(extent, TextureDimension::D2, &texel, TextureFormat::R32Float, RenderAssetUsages::RENDER_WORLD);
-        image.texture_descriptor.usage |= TextureUsages::STORAGE_BINDING | TextureUsages::COPY_SRC;
-        app.world_mut().resource_mut::<Assets<Image>>().add(image)
-    });
-    app.insert_resource(Settings { ssao: a.ssao, target: Some(target.clone()), shadow: shadow.clone() });
+    let shadow =
+        a.shadow_out.as_ref().map(|_| app.world_mut().resource_mut::<Assets<Image>>().add(shadow_image(a.width, a.height)));
+    app.insert_resource(Settings { ssao: a.ssao, plain: false, target: Some(target.clone()), shadow: shadow.clone() });
     app.finish();
     app.cleanup();
     for _ in 0..FRAMES {
@@ -129,6 +149,71 @@ fn main() {
     std::process::exit(1);
 }
 
+/// Headless: `frames` frames after a warm-up, then Bevy's GPU time per render pass (its render
+/// diagnostics, timestamp queries around each pass) beside the plugin's, and the wall time of
+/// an update (not paced by a display).
+fn cost(a: &Args, frames: u32) {
+    let mut render = render_plugin();
+    if let RenderCreation::Automatic(settings) = &mut render.render_creation {
+        settings.features |= WgpuFeatures::TIMESTAMP_QUERY
+            | WgpuFeatures::TIMESTAMP_QUERY_INSIDE_ENCODERS
+            | WgpuFeatures::TIMESTAMP_QUERY_INSIDE_PASSES;
+    }
+    let mut app = App::new();
+    app.add_plugins(HybridRtInitPlugin)
+        .add_plugins(
+            DefaultPlugins
+                .set(bevy::render::RenderPlugin { synchronous_pipeline_compilation: true, ..render })
+                .set(WindowPlugin { primary_window: None, exit_condition: ExitCondition::DontExit, ..default() })
+                .disable::<PipelinedRenderingPlugin>()
+                .disable::<bevy::winit::WinitPlugin>(),
+        )
+        .add_plugins((HybridRtPlugin, RenderDiagnosticsPlugin))
+        .add_systems(Startup, setup);
+    let mut images = app.world_mut().resource_mut::<Assets<Image>>();
+    let target = images.add(Image::new_target_texture(a.width, a.height, TextureFormat::Rgba8UnormSrgb, None));
+    let shadow = (!a.plain && !a.ssao).then(|| images.add(shadow_image(a.width, a.height)));
+    app.insert_resource(Settings { ssao: a.ssao, plain: a.plain, target: Some(target), shadow });
+    app.finish();
+    app.cleanup();
+    // Warm-up: pipelines, the BVH, the denoisers' histories, the GPU's clocks.
+    for _ in 0..60 {
+        app.update();
+    }
+    let start = std::time::Instant::now();
+    for _ in 0..frames {
+        app.update();
+    }
+    let update_ms = start.elapsed().as_secs_f64() * 1e3 / f64::from(frames.max(1));
+    let store = app.world().resource::<bevy::diagnostic::DiagnosticsStore>();
+    let mut bevy_total = 0.0;
+    println!("{}x{}, {frames} frames, GPU ms (mean of the last frames):", a.width, a.height);
+    for d in store.iter() {
+        let path = d.path().as_str();
+        let Some(ms) = d.average() else { continue };
+        // Bevy's passes: render/<pass>/elapsed_gpu; nested spans have more components.
+        let top_level_pass = path.starts_with("render/") && path.ends_with("/elapsed_gpu") && path.matches('/').count() == 2;
+        if top_level_pass {
+            bevy_total += ms;
+            println!("  {path}: {ms:.3}");
+        } else if path.starts_with("hybrid_rt/") && DIAGNOSTIC_PATHS.contains(&path) {
+            println!("  {path}: {ms:.3}");
+        }
+    }
+    println!("  Bevy's passes, total: {bevy_total:.3}");
+    println!("update wall time: {update_ms:.3} ms");
+}
+
+/// The image the sun's shadow is traced into: one float per pixel (its visible fraction).
+fn shadow_image(width: u32, height: u32) -> Image {
+    let extent = Extent3d { width, height, depth_or_array_layers: 1 };
+    let texel = 1f32.to_ne_bytes();
+    let mut image =
+        Image::new_fill(extent, TextureDimension::D2, &texel, TextureFormat::R32Float, RenderAssetUsages::RENDER_WORLD);
+    image.texture_descriptor.usage |= TextureUsages::STORAGE_BINDING | TextureUsages::COPY_SRC;
+    image
+}
+
 /// Writes a read-back R32Float image (rows at a 256-byte pitch) as a grey PNG.
 fn write_grey_png(bytes: &[u8], width: u32, height: u32, path: &str) {
     let pitch = bytes.len() / height as usize;
@@ -155,7 +240,7 @@ fn window(a: &Args) {
     app.add_plugins(HybridRtInitPlugin)
         .add_plugins(DefaultPlugins.set(render_plugin()).set(WindowPlugin { primary_window: Some(window), ..default() }))
         .add_plugins(HybridRtPlugin)
-        .insert_resource(Settings { ssao: a.ssao, target: None, shadow: None })
+        .insert_resource(Settings { ssao: a.ssao, plain: false, target: None, shadow: None })
         .add_systems(Startup, setup)
         .add_systems(Update, toggle_and_report);
     if let Some(frames) = a.frames {
@@ -195,7 +280,7 @@ fn toggle_and_report(
 /// The SDK's GPU times of the last frames, as the plugin publishes them (Bevy diagnostics).
 fn print_gpu_times(app: &App) {
     let store = app.world().resource::<bevy::diagnostic::DiagnosticsStore>();
-    for path in hybrid_rt_bevy::DIAGNOSTIC_PATHS {
+    for path in DIAGNOSTIC_PATHS {
         if let Some(ms) = store.get(&bevy::diagnostic::DiagnosticPath::new(path)).and_then(|d| d.average()) {
             println!("{path}: {ms:.3} ms (GPU, mean of the last frames)");
         }
@@ -228,7 +313,9 @@ fn setup(
         Tonemapping::Reinhard,
         Transform::from_xyz(2.5, 2.2, 3.5).looking_at(Vec3::new(0.3, 0.3, 0.0), Vec3::Y),
     );
-    if settings.ssao {
+    if settings.plain {
+        commands.spawn((camera, Msaa::Off, bevy::core_pipeline::prepass::MotionVectorPrepass));
+    } else if settings.ssao {
         commands.spawn((camera, bevy::pbr::ScreenSpaceAmbientOcclusion::default(), Msaa::Off));
     } else {
         // Motion vectors let the AO denoiser follow moving objects (without them it reprojects

@@ -18,7 +18,7 @@ use bevy::render::render_asset::RenderAssets;
 use bevy::render::renderer::{RenderAdapter, RenderContext, RenderDevice, RenderGraph, RenderGraphSystems, RenderQueue};
 use bevy::render::view::RetainedViewEntity;
 use bevy::render::{ExtractSchedule, RenderApp};
-use effects::{extract_suns, trace_ao, trace_sun_shadow, Effect, ExtractedSuns, ViewDenoiser};
+use effects::{extract_suns, skip_replaced_ssao, trace_ao, trace_sun_shadow, Effect, ExtractedSuns, ViewDenoiser};
 use hybrid_rt::{BvhBuildTask, CompletedTask, GpuTicket, InitSettings, TaskKind};
 use hybrid_rt_wgpu::{prepare, wgpu, RtDevice};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -88,6 +88,7 @@ pub(crate) fn build(app: &mut App, timings: HybridRtTimings) {
         .init_resource::<ExtractedSuns>()
         .add_systems(ExtractSchedule, (extract_instances, extract_suns))
         .add_systems(RenderGraph, sync_scene.in_set(RenderGraphSystems::Render).before(camera_driver))
+        .add_systems(RenderGraph, skip_replaced_ssao.in_set(RenderGraphSystems::Render).before(camera_driver))
         .add_systems(RenderGraph, track_submission.after(RenderGraphSystems::Submit))
         // After Bevy's SSAO (before MainPass), before whichever pass reads the AO texture: the
         // forward opaque pass, or the deferred lighting pass of a deferred camera.

@@ -2,9 +2,10 @@
 //! application's image) and a directional light's shadow (into the application's image) —
 //! with the denoiser each keeps per camera, and the directional lights they are traced from.
 use super::{Held, HybridRt, Warnings};
+use crate::scene::ExtractedInstances;
 use crate::{AoOutput, RayTracedAo, RayTracedSunShadow};
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
-use bevy::pbr::ScreenSpaceAmbientOcclusionResources;
+use bevy::pbr::{ScreenSpaceAmbientOcclusionResources, SsaoBindGroups};
 use bevy::platform::collections::HashMap;
 use bevy::prelude::*;
 use bevy::render::render_asset::RenderAssets;
@@ -267,6 +268,26 @@ fn record_view(
             held.views.push(output_view.clone());
         }
         Err(e) => warned.once(&e),
+    }
+}
+
+/// Before the cameras render: Bevy's SSAO is not computed for cameras whose AO the SDK will
+/// trace into Bevy's AO texture (its bind groups are taken from the view, which makes Bevy's
+/// SSAO pass skip it; the texture itself stays for the SDK to write). Cameras the SDK will not
+/// trace this frame (the effect off, nothing in the scene yet, no device) keep Bevy's SSAO.
+pub(super) fn skip_replaced_ssao(
+    mut commands: Commands,
+    state: Res<HybridRt>,
+    instances: Res<ExtractedInstances>,
+    views: Query<(Entity, &RayTracedAo), With<SsaoBindGroups>>,
+) {
+    if state.rt.is_none() || instances.0.is_empty() {
+        return;
+    }
+    for (entity, ao) in &views {
+        if ao.enabled && ao.output == AoOutput::Pbr {
+            commands.entity(entity).remove::<SsaoBindGroups>();
+        }
     }
 }
 
