@@ -27,7 +27,7 @@ use bevy::render::render_resource::{Extent3d, TextureDimension, TextureUsages};
 use bevy::render::settings::{RenderCreation, WgpuFeatures};
 use bevy::render::view::screenshot::{save_to_disk, Screenshot};
 use bevy::window::ExitCondition;
-use hybrid_rt_bevy::{render_plugin, HybridRtInitPlugin, HybridRtPlugin, RayTracedAo, RayTracedSunShadow, DIAGNOSTIC_PATHS};
+use hybrid_rt_bevy::{render_plugin, HybridRtInitPlugin, HybridRtPlugin, RayTracedAo, RayTracedShadow, DIAGNOSTIC_PATHS};
 
 /// Frames rendered before the screenshot (the scene's BVH is built on the first; the AO
 /// denoiser's history fills over the others).
@@ -323,7 +323,7 @@ fn setup(
         let mut camera =
             commands.spawn((camera, RayTracedAo::default(), Msaa::Off, bevy::core_pipeline::prepass::MotionVectorPrepass));
         if let Some(shadow) = &settings.shadow {
-            camera.insert(RayTracedSunShadow { output: shadow.clone(), ..default() });
+            camera.insert(RayTracedShadow { output: shadow.clone(), ..default() });
         }
     }
 }

@@ -1,4 +1,4 @@
-//! hybrid-rt inside Bevy: ray-traced ambient occlusion and sun shadows for Bevy's rasterized
+//! hybrid-rt inside Bevy: ray-traced ambient occlusion and shadows for Bevy's rasterized
 //! frame.
 //!
 //! Bevy keeps its renderer. Each frame the plugin
@@ -10,8 +10,8 @@
 //!   reads `Depth32Float` reversed-Z and `Rgb10a2Unorm` normals directly) into the texture
 //!   Bevy's PBR reads its screen-space AO from, after Bevy's SSAO and before the opaque pass —
 //!   so Bevy's lighting takes ray-traced occlusion where it took SSAO's;
-//! - traces the shadow of a directional light (the sun) from the same prepass into an image of
-//!   the application's, for its own compositing ([`RayTracedSunShadow`]);
+//! - traces the shadow of a light (the sun, a point or a spot light) from the same prepass into
+//!   an image of the application's, for its own compositing ([`RayTracedShadow`]);
 //! - records the SDK's work into a command buffer placed among Bevy's own, and hands each
 //!   ticket back once the queue has finished the frame, with the SDK's per-task GPU times
 //!   published as Bevy diagnostics ([`DIAGNOSTIC_PATHS`]).
@@ -29,7 +29,7 @@
 //! ```
 //! and a camera takes [`RayTracedAo`] (which brings Bevy's depth and normal prepasses and its
 //! AO texture with it; the camera needs `Msaa::Off`, as Bevy's SSAO does) and/or
-//! [`RayTracedSunShadow`] (which brings the prepasses).
+//! [`RayTracedShadow`] (which brings the prepasses).
 #![deny(missing_docs)]
 
 mod render;
@@ -88,21 +88,27 @@ pub enum AoOutput {
     Image(Handle<Image>),
 }
 
-/// A ray-traced shadow of a directional light (the sun) for a 3D camera: the fraction of the
-/// light each pixel of Bevy's prepass sees, soft as the light's apparent size makes it,
-/// written into an image of the application's for its own compositing (Bevy's PBR has no
-/// input for a screen-space sun shadow; give the light `shadow_maps_enabled: false` where this
-/// replaces its shadow map). Toggle `enabled` at run time.
+/// A ray-traced shadow for a 3D camera: the fraction of one light — the sun (a
+/// `DirectionalLight`), a `PointLight` or a `SpotLight` — that each pixel of Bevy's prepass
+/// sees, soft as the light's size makes it, written into an image of the application's for its
+/// own compositing (Bevy's PBR has no input for a screen-space shadow; give the light
+/// `shadow_maps_enabled: false` where this replaces its shadow map). Toggle `enabled` at run
+/// time.
+///
+/// A point or spot light's `radius` is the emitting sphere's (0: hard shadows) and its
+/// `range` ends its reach: beyond it, and outside a spot light's outer cone, pixels are unlit
+/// (visible fraction 0, no rays traced).
 #[derive(Component, Clone, Debug, PartialEq, ExtractComponent)]
 #[extract_app(bevy::render::RenderApp)]
 #[require(DepthPrepass, NormalPrepass)]
-pub struct RayTracedSunShadow {
+pub struct RayTracedShadow {
     /// Trace it (true) or leave the image as it is. Default true.
     pub enabled: bool,
-    /// The `DirectionalLight` entity; None (default): the scene's first visible one.
+    /// The light: a `DirectionalLight`, `PointLight` or `SpotLight` entity; None (default):
+    /// the scene's first visible `DirectionalLight`.
     pub light: Option<Entity>,
-    /// The light's apparent diameter in radians: 0 casts hard shadows. Default 0.0093 (the
-    /// sun's).
+    /// A directional light's apparent diameter in radians: 0 casts hard shadows. Default
+    /// 0.0093 (the sun's). Point and spot lights take their own `radius` instead.
     pub angular_diameter: f32,
     /// Rays per pixel (1..=64). Default 1.
     pub rays_per_pixel: u32,
@@ -118,9 +124,9 @@ pub struct RayTracedSunShadow {
     pub output: Handle<Image>,
 }
 
-impl Default for RayTracedSunShadow {
+impl Default for RayTracedShadow {
     fn default() -> Self {
-        RayTracedSunShadow {
+        RayTracedShadow {
             enabled: true,
             light: None,
             angular_diameter: 0.0093,
@@ -151,7 +157,7 @@ pub fn render_plugin() -> RenderPlugin {
     RenderPlugin { render_creation: RenderCreation::Automatic(Box::new(settings)), ..Default::default() }
 }
 
-/// The plugin: scene sync, AO and the sun's shadow traced per camera, tickets and GPU times. Add it after
+/// The plugin: scene sync, AO and a light's shadow traced per camera, tickets and GPU times. Add it after
 /// `DefaultPlugins` (and [`HybridRtInitPlugin`] before them).
 pub struct HybridRtPlugin;
 
@@ -162,29 +168,26 @@ pub struct HybridRtTimings(pub Arc<Mutex<Vec<(String, f64)>>>);
 
 /// Diagnostics the plugin publishes, in milliseconds of GPU time (the SDK's timestamp queries):
 /// the scene's sync and BVH builds (frames that change the scene), AO traced and denoised (all
-/// cameras), the sun's shadow traced and denoised (all cameras), and the SDK's whole frame.
-pub const DIAGNOSTIC_PATHS: [&str; 4] = ["hybrid_rt/scene", "hybrid_rt/ao", "hybrid_rt/sun_shadow", "hybrid_rt/frame"];
+/// cameras), the shadow traced and denoised (all cameras), and the SDK's whole frame.
+pub const DIAGNOSTIC_PATHS: [&str; 4] = ["hybrid_rt/scene", "hybrid_rt/ao", "hybrid_rt/shadow", "hybrid_rt/frame"];
 
 /// Diagnostic: how many cameras hold an AO denoiser history (about 8 bytes a pixel of the
 /// view, besides the view's shared denoising guide). A camera's history is freed a few frames after it stops
 /// being traced (despawned, `RayTracedAo` removed or disabled).
 pub const DIAGNOSTIC_AO_HISTORIES: &str = "hybrid_rt/ao_histories";
 
-/// Diagnostic: how many cameras hold a sun-shadow denoiser history, freed as the AO's are.
-pub const DIAGNOSTIC_SUN_SHADOW_HISTORIES: &str = "hybrid_rt/sun_shadow_histories";
+/// Diagnostic: how many cameras hold a shadow denoiser history, freed as the AO's are.
+pub const DIAGNOSTIC_SHADOW_HISTORIES: &str = "hybrid_rt/shadow_histories";
 
 impl Plugin for HybridRtPlugin {
     fn build(&self, app: &mut App) {
         let timings = HybridRtTimings::default();
-        app.add_plugins((
-            ExtractComponentPlugin::<RayTracedAo>::default(),
-            ExtractComponentPlugin::<RayTracedSunShadow>::default(),
-        ))
-        .insert_resource(timings.clone());
+        app.add_plugins((ExtractComponentPlugin::<RayTracedAo>::default(), ExtractComponentPlugin::<RayTracedShadow>::default()))
+            .insert_resource(timings.clone());
         for path in DIAGNOSTIC_PATHS {
             app.register_diagnostic(Diagnostic::new(DiagnosticPath::new(path)).with_suffix(" ms"));
         }
-        for path in [DIAGNOSTIC_AO_HISTORIES, DIAGNOSTIC_SUN_SHADOW_HISTORIES] {
+        for path in [DIAGNOSTIC_AO_HISTORIES, DIAGNOSTIC_SHADOW_HISTORIES] {
             app.register_diagnostic(Diagnostic::new(DiagnosticPath::new(path)));
         }
         app.add_systems(Update, publish_timings);

@@ -1,5 +1,5 @@
 //! Bevy's render world: the SDK's context on Bevy's device, the scene sync before the cameras
-//! render, AO and the sun's shadow per camera between Bevy's SSAO and its opaque pass, tickets
+//! render, AO and a light's shadow per camera between Bevy's SSAO and its opaque pass, tickets
 //! handed back once the queue has done the frame.
 mod effects;
 
@@ -18,14 +18,14 @@ use bevy::render::render_asset::RenderAssets;
 use bevy::render::renderer::{RenderAdapter, RenderContext, RenderDevice, RenderGraph, RenderGraphSystems, RenderQueue};
 use bevy::render::view::RetainedViewEntity;
 use bevy::render::{ExtractSchedule, RenderApp};
-use effects::{extract_suns, skip_replaced_ssao, trace_ao, trace_sun_shadow, Effect, ExtractedSuns, ViewDenoiser};
+use effects::{extract_lights, skip_replaced_ssao, trace_ao, trace_shadow, Effect, ExtractedLights, ViewDenoiser};
 use hybrid_rt::{BvhBuildTask, CompletedTask, GpuTicket, InitSettings, TaskKind};
 use hybrid_rt_wgpu::{prepare, wgpu, RtDevice};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 /// The SDK's working sets (tickets in flight at once): frames in flight (3) x tickets a frame
-/// (the scene's, and one camera's AO and sun shadow).
+/// (the scene's, and one camera's AO and shadow).
 const WORKING_SETS: u32 = 9;
 
 /// wgpu objects (reference-counted handles) kept until a ticket is back.
@@ -85,15 +85,15 @@ pub(crate) fn build(app: &mut App, timings: HybridRtTimings) {
         .insert_resource(timings)
         .init_resource::<HybridRt>()
         .init_resource::<ExtractedInstances>()
-        .init_resource::<ExtractedSuns>()
-        .add_systems(ExtractSchedule, (extract_instances, extract_suns))
+        .init_resource::<ExtractedLights>()
+        .add_systems(ExtractSchedule, (extract_instances, extract_lights))
         .add_systems(RenderGraph, sync_scene.in_set(RenderGraphSystems::Render).before(camera_driver))
         .add_systems(RenderGraph, skip_replaced_ssao.in_set(RenderGraphSystems::Render).before(camera_driver))
         .add_systems(RenderGraph, track_submission.after(RenderGraphSystems::Submit))
         // After Bevy's SSAO (before MainPass), before whichever pass reads the AO texture: the
         // forward opaque pass, or the deferred lighting pass of a deferred camera.
         .add_systems(Core3d, trace_ao.in_set(Core3dSystems::MainPass).before(main_opaque_pass_3d).before(deferred_lighting))
-        .add_systems(Core3d, trace_sun_shadow.in_set(Core3dSystems::MainPass).before(main_opaque_pass_3d));
+        .add_systems(Core3d, trace_shadow.in_set(Core3dSystems::MainPass).before(main_opaque_pass_3d));
 }
 
 /// Before the cameras: hand back the tickets whose frames are done, then bring the SDK's scene
@@ -157,7 +157,7 @@ fn sync_scene(
         keep
     });
     let histories = |effect: Effect| state.views.keys().filter(|(_, e)| *e == effect).count() as f64;
-    let counts = [("ao_histories", histories(Effect::Ao)), ("sun_shadow_histories", histories(Effect::SunShadow))];
+    let counts = [("ao_histories", histories(Effect::Ao)), ("shadow_histories", histories(Effect::Shadow))];
     timings.0.lock().extend(counts.map(|(name, n)| (name.to_string(), n)));
     let mut tasks = rt.context().create_task_container();
     let outcome = match state.scene.sync(rt, &mut tasks, &extracted, &allocator, &meshes) {
@@ -210,7 +210,7 @@ fn track_submission(mut state: ResMut<HybridRt>, queue: Res<RenderQueue>) {
 struct FrameTimes {
     scene: f64,
     ao: f64,
-    sun_shadow: f64,
+    shadow: f64,
     total: f64,
 }
 
@@ -220,7 +220,7 @@ impl FrameTimes {
             self.total += t.gpu_ms;
             match t.kind {
                 TaskKind::AmbientOcclusion | TaskKind::DenoiseDiffuseOcclusion => self.ao += t.gpu_ms,
-                TaskKind::Shadow | TaskKind::DenoiseShadow => self.sun_shadow += t.gpu_ms,
+                TaskKind::Shadow | TaskKind::DenoiseShadow => self.shadow += t.gpu_ms,
                 _ => self.scene += t.gpu_ms,
             }
         }
@@ -234,8 +234,8 @@ impl FrameTimes {
         if self.ao > 0.0 {
             out.push(("ao".into(), self.ao));
         }
-        if self.sun_shadow > 0.0 {
-            out.push(("sun_shadow".into(), self.sun_shadow));
+        if self.shadow > 0.0 {
+            out.push(("shadow".into(), self.shadow));
         }
         out.push(("frame".into(), self.total));
     }

@@ -11,7 +11,7 @@ use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat, TextureUsages};
 use bevy::window::ExitCondition;
-use hybrid_rt_bevy::{render_plugin, AoOutput, HybridRtInitPlugin, HybridRtPlugin, RayTracedAo, RayTracedSunShadow};
+use hybrid_rt_bevy::{render_plugin, AoOutput, HybridRtInitPlugin, HybridRtPlugin, RayTracedAo, RayTracedShadow};
 use hybrid_rt_testkit::reference::{self, AoParams, GBuffer, Mesh as RefMesh, Scene as RefScene, Tracer};
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Mutex};
@@ -124,7 +124,7 @@ fn app() -> (App, Readbacks) {
             output: AoOutput::Image(ao.clone()),
             ..default()
         },
-        RayTracedSunShadow { angular_diameter: 0.0, denoise: false, output: shadow.clone(), ..default() },
+        RayTracedShadow { angular_diameter: 0.0, denoise: false, output: shadow.clone(), ..default() },
     ));
     let l = latest.ao.clone();
     world.spawn(Readback::texture(ao)).observe(move |ev: On<ReadbackComplete>| {
@@ -153,9 +153,9 @@ fn ao_histories(app: &App) -> f64 {
 }
 
 /// The plugin's count of cameras holding a sun-shadow denoiser history.
-fn sun_shadow_histories(app: &App) -> f64 {
+fn shadow_histories(app: &App) -> f64 {
     let store = app.world().resource::<bevy::diagnostic::DiagnosticsStore>();
-    let path = bevy::diagnostic::DiagnosticPath::new(hybrid_rt_bevy::DIAGNOSTIC_SUN_SHADOW_HISTORIES);
+    let path = bevy::diagnostic::DiagnosticPath::new(hybrid_rt_bevy::DIAGNOSTIC_SHADOW_HISTORIES);
     store.get(&path).and_then(|d| d.value()).unwrap_or(-1.0)
 }
 
@@ -200,26 +200,37 @@ fn frames(app: &mut App, latest: &Latest, n: u32) -> Vec<f32> {
     ao
 }
 
-/// The CPU reference's hard sun shadow (the visible fraction, 0 or 1) on the same scene,
-/// G-buffer and camera as `reference`.
-fn reference_shadow(cube_x: Option<f32>) -> (GBuffer, Vec<f32>) {
-    reference_soft_shadow(cube_x, 0.0, 1)
+/// The sun as the SDK takes it, `angular_diameter` wide.
+fn sun(angular_diameter: f32) -> hybrid_rt::LightInfo {
+    hybrid_rt::LightInfo { direction: glam::Vec3::from(SUN), angular_extent: angular_diameter, ..Default::default() }
 }
 
-/// The same with a sun of `angular_diameter`, `strata`² samples a pixel.
-fn reference_soft_shadow(cube_x: Option<f32>, angular_diameter: f32, strata: u32) -> (GBuffer, Vec<f32>) {
+/// The CPU reference's shadow of `light` (the visible fraction; `strata`² samples a pixel, one
+/// for a hard shadow's 0 or 1) on the same scene, G-buffer and camera as `reference`. Beyond a
+/// light's range, and outside a spot light's outer cone, pixels are unlit (0), as the SDK
+/// documents.
+fn reference_shadow(cube_x: Option<f32>, light: &hybrid_rt::LightInfo, strata: u32) -> (GBuffer, Vec<f32>) {
     let (scene, camera) = reference_scene(cube_x);
     let tracer = Tracer::new(&scene);
     let g = GBuffer::render(&tracer, &camera, W, H);
-    let light = hybrid_rt::LightInfo { direction: glam::Vec3::from(SUN), angular_extent: angular_diameter, ..Default::default() };
     let offset = hybrid_rt::TraceShadowTask::default().common.ray_offset;
     let mut rng = reference::Rng::new(7);
+    let reaches = |p: glam::Vec3| {
+        if light.light_type == hybrid_rt::LightType::Directional {
+            return true;
+        }
+        let v = p - light.position;
+        let in_cone = light.light_type != hybrid_rt::LightType::Spot
+            || (v.normalize()).dot(light.direction.normalize()) > light.outer_cone.cos();
+        (light.range <= 0.0 || v.length() < light.range) && in_cone
+    };
     let vis = (0..g.hit.len())
-        .map(|i| match g.hit[i] {
-            true => {
-                reference::shadow_visibility(&tracer, g.position[i], g.normal[i], camera.eye, &light, &offset, strata, &mut rng).0
+        .map(|i| match (g.hit[i], reaches(g.position[i])) {
+            (true, true) => {
+                reference::shadow_visibility(&tracer, g.position[i], g.normal[i], camera.eye, light, &offset, strata, &mut rng).0
             }
-            false => 1.0,
+            (true, false) => 0.0,
+            (false, _) => 1.0,
         })
         .collect();
     (g, vis)
@@ -303,11 +314,11 @@ fn against_reference(ao: &[f32], cube_x: Option<f32>) -> Errors {
     Errors { rmse, pixels, contact_rmse, contact_bias, contact_pixels }
 }
 
-/// The sun shadow against the reference's with the cube at `cube_x`, over the interior pixels:
+/// A hard shadow against the reference's with the cube at `cube_x`, over the interior pixels:
 /// the fraction of them that disagree (one in shadow, the other lit), and how many each puts
 /// in shadow.
-fn shadow_against_reference(shadow: &[f32], cube_x: Option<f32>) -> (f32, usize, usize) {
-    let (g, want) = reference_shadow(cube_x);
+fn shadow_against_reference(shadow: &[f32], cube_x: Option<f32>, light: &hybrid_rt::LightInfo) -> (f32, usize, usize) {
+    let (g, want) = reference_shadow(cube_x, light, 1);
     let mask = interior(&g);
     let (mut differ, mut ours, mut theirs, mut n) = (0usize, 0usize, 0usize, 0usize);
     for i in 0..shadow.len() {
@@ -356,7 +367,7 @@ fn ray_traced_ao_in_a_bevy_frame() {
     // The sun's hard shadow (one ray is exact): it lies where the reference puts it, but for
     // pixels along its edge, where Bevy's rasterizer and the reference's primary rays hit a
     // pixel's surface at different points (an edge of ~60 pixels in ~4,000).
-    let (differ, ours, theirs) = shadow_against_reference(&latest_shadow(&latest), Some(0.0));
+    let (differ, ours, theirs) = shadow_against_reference(&latest_shadow(&latest), Some(0.0), &sun(0.0));
     eprintln!("sun shadow vs the CPU reference: {:.2}% of pixels differ; {ours} px in shadow ({theirs})", differ * 100.0);
     assert!(theirs > 200, "the view shows the cube's shadow ({theirs} px)");
     assert!(differ <= 0.02 && ours.abs_diff(theirs) * 20 <= theirs, "sun shadow: {differ} differ, {ours} vs {theirs} px");
@@ -376,7 +387,7 @@ fn ray_traced_ao_in_a_bevy_frame() {
     assert!(rmse <= 0.08 && rmse_old > 2.0 * rmse, "AO after the cube moved: RMSE {rmse} (old place {rmse_old})");
     let shadow = latest_shadow(&latest);
     let ((moved, _, _), (old, _, _)) =
-        (shadow_against_reference(&shadow, Some(1.0)), shadow_against_reference(&shadow, Some(0.0)));
+        (shadow_against_reference(&shadow, Some(1.0), &sun(0.0)), shadow_against_reference(&shadow, Some(0.0), &sun(0.0)));
     eprintln!("after the move: the shadow differs from the moved cube's in {moved:.3}, the old one's in {old:.3}");
     assert!(moved <= 0.02 && old > 4.0 * moved, "sun shadow after the cube moved: {moved} (old place {old})");
 
@@ -388,7 +399,7 @@ fn ray_traced_ao_in_a_bevy_frame() {
     let (rmse, bias, _) = compare(&ao, &want, &mask);
     eprintln!("after the despawn: RMSE {rmse:.4}, mean difference {bias:+.4}");
     assert!(rmse <= 0.01, "occlusion left after the cube was despawned: RMSE {rmse}");
-    let (_, ours, _) = shadow_against_reference(&latest_shadow(&latest), None);
+    let (_, ours, _) = shadow_against_reference(&latest_shadow(&latest), None, &sun(0.0));
     assert_eq!(ours, 0, "shadow left after the cube was despawned");
 
     // 4. Toggled off and on again, then 1 ray per pixel, denoised (the SDK's AO denoiser on
@@ -405,7 +416,7 @@ fn ray_traced_ao_in_a_bevy_frame() {
         ao.enabled = true;
         ao.rays_per_pixel = 1;
         ao.denoise = true;
-        let mut shadow = e.get_mut::<RayTracedSunShadow>().unwrap();
+        let mut shadow = e.get_mut::<RayTracedShadow>().unwrap();
         shadow.angular_diameter = SOFT_SUN;
         shadow.denoise = true;
     }
@@ -429,7 +440,7 @@ fn ray_traced_ao_in_a_bevy_frame() {
     // at most 0.125, before any spatial filtering, and the reference's own is at most 0.03:
     // the denoised penumbra within 0.15 RMSE, its mean over ~160 pixels within 0.05 (the
     // rasterizer's and the reference's surface points differ along the penumbra too).
-    let (g, want) = reference_soft_shadow(Some(0.0), SOFT_SUN, 16);
+    let (g, want) = reference_shadow(Some(0.0), &sun(SOFT_SUN), 16);
     let mask = interior(&g);
     let shadow = latest_shadow(&latest);
     let (rmse, bias, _) = compare(&shadow, &want, &mask);
@@ -438,15 +449,49 @@ fn ray_traced_ao_in_a_bevy_frame() {
     eprintln!(
         "soft sun shadow, 1 ray, denoised, 16 frames: RMSE {rmse:.3} (mean difference {bias:+.3}); penumbra ({p_pixels} px) RMSE {p_rmse:.3}, mean difference {p_bias:+.3}"
     );
-    assert_eq!(sun_shadow_histories(&app), 1.0, "the camera's sun-shadow history");
+    assert_eq!(shadow_histories(&app), 1.0, "the camera's shadow history");
     assert!(p_pixels > 100, "the view shows the soft shadow's penumbra ({p_pixels} px)");
     assert!(
         rmse <= 0.05 && p_rmse <= 0.15 && p_bias.abs() <= 0.05,
         "denoised sun shadow: RMSE {rmse}, penumbra {p_rmse}, off by {p_bias}"
     );
+
+    // 5. A point light, then a spot light, named by entity: their hard shadows (radius 0; one
+    // ray is exact) lie where the reference puts them — the spot light's cone too, outside
+    // which the ground is unlit — but for pixels along the edges, as for the sun's.
+    let at = Vec3::new(-1.2, 2.0, -0.6);
+    let towards = Transform::from_translation(at).looking_at(Vec3::new(0.6, 0.0, 0.5), Vec3::Y);
+    let point = app.world_mut().spawn((PointLight { radius: 0.0, range: 20.0, ..default() }, towards)).id();
+    let spot = SpotLight { radius: 0.0, range: 20.0, inner_angle: 0.4, outer_angle: 0.5, ..default() };
+    let spot = app.world_mut().spawn((spot, towards)).id();
+    let v = |v: Vec3| glam::Vec3::new(v.x, v.y, v.z);
+    let point_light =
+        hybrid_rt::LightInfo { light_type: hybrid_rt::LightType::Point, position: v(at), range: 20.0, ..Default::default() };
+    let spot_light = hybrid_rt::LightInfo {
+        light_type: hybrid_rt::LightType::Spot,
+        direction: v(*towards.forward()),
+        inner_cone: 0.4,
+        outer_cone: 0.5,
+        ..point_light
+    };
+    for (entity, light, name) in [(point, point_light, "point"), (spot, spot_light, "spot")] {
+        {
+            let mut shadow = app.world_mut().get_mut::<RayTracedShadow>(camera).unwrap();
+            shadow.light = Some(entity);
+            shadow.denoise = false;
+        }
+        frames(&mut app, &latest.shadow, 3);
+        let (differ, ours, theirs) = shadow_against_reference(&latest_shadow(&latest), Some(0.0), &light);
+        eprintln!(
+            "{name} light's shadow vs the CPU reference: {:.2}% of pixels differ; {ours} px unlit ({theirs})",
+            differ * 100.0
+        );
+        assert!(theirs > 200, "the view shows the {name} light's shadow ({theirs} px)");
+        assert!(differ <= 0.02 && ours.abs_diff(theirs) * 20 <= theirs, "{name} light: {differ} differ, {ours} vs {theirs} px");
+    }
     app.world_mut().despawn(cube);
 
-    // 5. The SDK's GPU times reached Bevy's diagnostics.
+    // 6. The SDK's GPU times reached Bevy's diagnostics.
     let store = app.world().resource::<bevy::diagnostic::DiagnosticsStore>();
     for path in hybrid_rt_bevy::DIAGNOSTIC_PATHS {
         let d = store.get(&bevy::diagnostic::DiagnosticPath::new(path)).expect("registered");

@@ -1,9 +1,9 @@
 //! The effects traced per camera from Bevy's prepass — AO (into Bevy's AO texture or the
-//! application's image) and a directional light's shadow (into the application's image) —
-//! with the denoiser each keeps per camera, and the directional lights they are traced from.
+//! application's image) and a light's shadow (into the application's image) — with the
+//! denoiser each keeps per camera, and the lights the shadows are traced from.
 use super::{Held, HybridRt, Warnings};
 use crate::scene::ExtractedInstances;
-use crate::{AoOutput, RayTracedAo, RayTracedSunShadow};
+use crate::{AoOutput, RayTracedAo, RayTracedShadow};
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::pbr::{ScreenSpaceAmbientOcclusionResources, SsaoBindGroups};
 use bevy::platform::collections::HashMap;
@@ -25,14 +25,14 @@ use hybrid_rt_wgpu::{prepare, wgpu, RtDevice};
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
 pub(super) enum Effect {
     Ao,
-    SunShadow,
+    Shadow,
 }
 
 impl Effect {
     fn signal(self) -> SignalType {
         match self {
             Effect::Ao => SignalType::DiffuseOcclusion,
-            Effect::SunShadow => SignalType::Shadow,
+            Effect::Shadow => SignalType::Shadow,
         }
     }
 
@@ -41,7 +41,7 @@ impl Effect {
     fn noisy_format(self) -> wgpu::TextureFormat {
         match self {
             Effect::Ao => wgpu::TextureFormat::R32Float,
-            Effect::SunShadow => wgpu::TextureFormat::Rgba16Float,
+            Effect::Shadow => wgpu::TextureFormat::Rgba16Float,
         }
     }
 }
@@ -88,20 +88,59 @@ impl ViewDenoiser {
     }
 }
 
-/// Render world, extraction: each directional light's direction (where its light travels), by
-/// its main-world entity.
+/// Render world, extraction: the main world's visible directional, point and spot lights as
+/// the SDK takes them, by main-world entity, directional lights first (in query order).
 #[derive(Resource, Default)]
-pub(super) struct ExtractedSuns(Vec<(Entity, hybrid_rt::glam::Vec3)>);
+pub(super) struct ExtractedLights(Vec<(Entity, LightInfo)>);
 
-/// The main world's directional lights, as `extract_suns` reads them.
-type Suns<'w, 's> = Query<'w, 's, (Entity, &'static GlobalTransform, &'static InheritedVisibility), With<DirectionalLight>>;
+/// The main world's lights of one kind, as `extract_lights` reads them.
+type Lights<'w, 's, L> = Query<'w, 's, (Entity, &'static L, &'static GlobalTransform, &'static InheritedVisibility)>;
 
-pub(super) fn extract_suns(mut out: ResMut<ExtractedSuns>, query: Extract<Suns>) {
+/// The largest spot cone the SDK takes (its outer half-angle must stay under pi/2; Bevy allows
+/// pi/2 itself).
+const MAX_SPOT_HALF_ANGLE: f32 = std::f32::consts::FRAC_PI_2 - 1e-3;
+
+pub(super) fn extract_lights(
+    mut out: ResMut<ExtractedLights>,
+    suns: Extract<Lights<DirectionalLight>>,
+    points: Extract<Lights<PointLight>>,
+    spots: Extract<Lights<SpotLight>>,
+) {
+    let v = |v: Vec3| hybrid_rt::glam::Vec3::new(v.x, v.y, v.z);
     out.0.clear();
-    for (entity, transform, visible) in &query {
+    for (entity, _, transform, visible) in &suns {
         if visible.get() {
-            let f = transform.forward();
-            out.0.push((entity, hybrid_rt::glam::Vec3::new(f.x, f.y, f.z)));
+            let light =
+                LightInfo { light_type: LightType::Directional, direction: v(*transform.forward()), ..Default::default() };
+            out.0.push((entity, light));
+        }
+    }
+    for (entity, point, transform, visible) in &points {
+        if visible.get() {
+            let light = LightInfo {
+                light_type: LightType::Point,
+                position: v(transform.translation()),
+                radius: point.radius.max(0.0),
+                range: point.range.max(0.0),
+                ..Default::default()
+            };
+            out.0.push((entity, light));
+        }
+    }
+    for (entity, spot, transform, visible) in &spots {
+        if visible.get() {
+            let outer = spot.outer_angle.clamp(0.0, MAX_SPOT_HALF_ANGLE);
+            let light = LightInfo {
+                light_type: LightType::Spot,
+                position: v(transform.translation()),
+                direction: v(*transform.forward()),
+                radius: spot.radius.max(0.0),
+                range: spot.range.max(0.0),
+                inner_cone: spot.inner_angle.clamp(0.0, outer),
+                outer_cone: outer,
+                ..Default::default()
+            };
+            out.0.push((entity, light));
         }
     }
 }
@@ -351,12 +390,12 @@ pub(super) fn trace_ao(
     record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt ao", inputs, &writes, out_view);
 }
 
-/// Per camera with [`RayTracedSunShadow`]: the directional light's shadow from Bevy's prepass
-/// into the application's image.
-pub(super) fn trace_sun_shadow(
-    view: ViewQuery<(&ExtractedView, &ViewPrepassTextures, &RayTracedSunShadow)>,
+/// Per camera with [`RayTracedShadow`]: a light's shadow from Bevy's prepass into the
+/// application's image.
+pub(super) fn trace_shadow(
+    view: ViewQuery<(&ExtractedView, &ViewPrepassTextures, &RayTracedShadow)>,
     images: Res<RenderAssets<GpuImage>>,
-    suns: Res<ExtractedSuns>,
+    lights: Res<ExtractedLights>,
     mut state: ResMut<HybridRt>,
     mut ctx: RenderContext,
 ) {
@@ -366,32 +405,29 @@ pub(super) fn trace_sun_shadow(
     if !settings.enabled || !state.has_instances {
         return;
     }
-    let sun = match settings.light {
-        Some(entity) => suns.0.iter().find(|(e, _)| *e == entity),
-        None => suns.0.first(),
+    let found = match settings.light {
+        Some(entity) => lights.0.iter().find(|(e, _)| *e == entity),
+        None => lights.0.first().filter(|(_, l)| l.light_type == LightType::Directional),
     };
-    let Some(&(_, direction)) = sun else {
+    let Some(&(_, mut light)) = found else {
         return state.warned.once(match settings.light {
-            Some(entity) => format!("RayTracedSunShadow.light {entity} is not a visible DirectionalLight"),
-            None => "a camera has RayTracedSunShadow, but the scene has no visible DirectionalLight".to_string(),
+            Some(entity) => format!("RayTracedShadow.light {entity} is not a visible DirectionalLight, PointLight or SpotLight"),
+            None => "a camera has RayTracedShadow without a light, and the scene has no visible DirectionalLight".to_string(),
         });
     };
+    if light.light_type == LightType::Directional {
+        light.angular_extent = settings.angular_diameter;
+    }
     if settings.output == Handle::default() {
-        return state.warned.once("RayTracedSunShadow.output is not set: give it an image of the view's size");
+        return state.warned.once("RayTracedShadow.output is not set: give it an image of the view's size");
     }
     let Some(image) = images.get(&settings.output) else { return }; // not on the GPU yet
     let (out_tex, out_view) = (&image.texture, &image.texture_view);
     let sinks = (&mut state.views, &mut state.warned, state.frame);
     let Some(EffectTargets { output, inputs, noisy }) =
-        effect_targets(rt, sinks, (view, prepass), (out_tex, out_view), Effect::SunShadow, settings.denoise)
+        effect_targets(rt, sinks, (view, prepass), (out_tex, out_view), Effect::Shadow, settings.denoise)
     else {
         return;
-    };
-    let light = LightInfo {
-        light_type: LightType::Directional,
-        direction,
-        angular_extent: settings.angular_diameter,
-        ..Default::default()
     };
     let mut tasks = rt.context().create_task_container();
     let task = TraceShadowTask {
@@ -414,7 +450,7 @@ pub(super) fn trace_sun_shadow(
     }
     let writes: Vec<&wgpu::Texture> = writes.iter().collect();
     let sinks = (&mut state.recorded, &mut state.held, &mut state.warned);
-    record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt sun shadow", inputs, &writes, out_view);
+    record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt shadow", inputs, &writes, out_view);
 }
 
 /// The view's camera as the SDK takes it: world to view, and Bevy's (unjittered) projection
