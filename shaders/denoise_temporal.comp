@@ -14,8 +14,13 @@
 // this frame's sample (denoise_moving.comp found the objects; u_pass.x is this frame's stamp).
 #include "include/denoise.glsl"
 
-// Anti-firefly threshold in standard deviations of the pixel's history (see below).
-const float FIREFLY_SIGMA = 4.0;
+// Anti-firefly threshold in standard deviations of the pixel's history (see below). A
+// two-valued signal (a bright surface seen by a fraction p of the rays, dark elsewhere) has
+// its bright samples (1 - p) / sqrt(p (1 - p)) deviations above its mean: 10 passes every
+// such signal down to p = 1% — a small window, a lamp, a sun patch seen from afar — and cuts
+// rarer ones. (4 cut everything under p = 6% and, the cut feeding the history it is measured
+// against, darkened such light by ~17%.)
+const float FIREFLY_SIGMA = 10.0;
 // Anti-lag threshold, in standard deviations of the noise of the footprint's mean against the
 // fast history (see below).
 const float ANTILAG_SIGMA = 2.5;
@@ -51,7 +56,8 @@ const float MOVING_TURN_FRAMES = 0.5;
 // A surface moves when its motion vector lands more than this many pixels from where the
 // cameras alone put it.
 const float MOVING_PIXELS = 1.0;
-// Without history: a sample this many times its brightest neighbour is a firefly.
+// Without history: a sample this many times its brightest neighbour is a firefly (none is
+// where every neighbour is black: a sparse signal's first hits look just like that).
 const float FIREFLY_NEIGHBOUR_FACTOR = 8.0;
 
 // The anti-lag test's tile: this group's 8x8 pixels, each with this frame's luminance of each
@@ -320,9 +326,10 @@ void main() {
         }
         // Anti-firefly, diffuse GI only. With a history of 4 frames or more, a sample is a
         // firefly when its luminance is more than FIREFLY_SIGMA deviations above this pixel's
-        // history mean: a plain 1-ray distribution almost never gets there, so the mean stays
-        // unbiased, while a 1-in-1000 path to a bright emitter is cut down. With less history
-        // the 8 neighbours stand in, loosely (8x their brightest), as fresh pixels have no
+        // history mean: a 1-ray distribution gets there only for light reaching fewer than 1%
+        // of the rays, so the mean stays unbiased, while a 1-in-1000 path to a bright emitter
+        // is cut down. With less history the 8 neighbours stand in, loosely (8x their
+        // brightest, and no cut where all of them are black), as fresh pixels have no
         // statistics yet. (Clamping every sample to its brightest neighbour, as the first
         // generation did, darkened GI and glossy reflections by 2-6%.) Not reflections: a glint
         // of a lamp or a sun patch is their signal, and in a moving view their history (few
@@ -345,7 +352,7 @@ void main() {
                         lmax = max(lmax, hrt_luminance(hrt_load_input(s, q).rgb));
                     }
                 }
-                limit = lmax >= 0.0 ? FIREFLY_NEIGHBOUR_FACTOR * lmax : 1e30;
+                limit = lmax > 0.0 ? FIREFLY_NEIGHBOUR_FACTOR * lmax : 1e30;
             }
             float l = hrt_luminance(cur[s].rgb);
             if (l > limit) cur[s].rgb *= limit / l;

@@ -188,10 +188,12 @@ pub struct DenoiserSettings {
     /// Plane-distance stop, relative to the view distance (> 0): also the disocclusion
     /// threshold. Default 0.02. All.
     pub plane_distance_sigma: f32,
-    /// Cut fireflies: a new diffuse sample more than 4 deviations (and 5x the mean) above its
-    /// pixel's history is brought down to that bound; without 4 frames of history, one more
-    /// than 8x its brightest neighbour. A plain 1-ray distribution stays unbiased (measured:
-    /// the same image means with and without it). Default true. Diffuse GI (AO and shadows
+    /// Cut fireflies: a new diffuse sample more than 10 deviations (and 11x the mean) above
+    /// its pixel's history is brought down to that bound; without 4 frames of history, one
+    /// more than 8x its brightest neighbour (none where all neighbours are black). Light that
+    /// reaches at least 1% of a pixel's rays — a small window, a lamp, a sun patch seen from
+    /// afar — passes uncut, so its mean stays unbiased; rarer paths to bright surfaces are
+    /// cut. Default true. Diffuse GI (AO and shadows
     /// are bounded signals; a reflection's glints are its signal, and its history is of
     /// another lobe while the view moves: cutting them darkened reflections in motion).
     pub anti_firefly: bool,
