@@ -13,7 +13,7 @@ start=$(date +%s)
 cargo fmt --check
 cargo clippy --all-targets --locked -- -D warnings
 cargo test --locked
-cargo run --locked --example bevy_ao -- --out target/bevy_ao.png --shadow-out target/bevy_sun_shadow.png
+cargo run --locked --example bevy_ao -- --out target/bevy_ao.png --shadow-out target/bevy_sun_shadow.png --gi-out target/bevy_gi.png
 # The window path, under Xvfb where it is installed (scripts/setup.sh installs it).
 if command -v xvfb-run >/dev/null 2>&1; then
   xvfb-run -a cargo run --locked --example bevy_ao -- --window --frames 30

@@ -2,14 +2,16 @@
 //! headless to a PNG, or shown in a window (`--window`; the T key toggles the ray-traced AO,
 //! Bevy's SSAO showing while it is off). `--ssao`: Bevy's own SSAO alone, for comparison.
 //! `--shadow-out PATH` (headless): the sun's ray-traced shadow too, its visible fraction
-//! written as a grey PNG. `--cost FRAMES` (headless): renders that many frames after a warm-up
+//! written as a grey PNG. `--gi-out PATH` (headless): diffuse GI from the lit frame too
+//! (the camera then renders in HDR), written as a PNG (Reinhard-mapped). `--cost FRAMES` (headless): renders that many frames after a warm-up
 //! and prints Bevy's GPU time per render pass beside the plugin's (timestamp queries), with
-//! the ray-traced AO and sun shadow, with `--ssao` (Bevy's SSAO instead), or with `--plain`
+//! the ray-traced AO, sun shadow and GI, with `--ssao` (Bevy's SSAO instead), or with `--plain`
 //! (neither: Bevy's frame alone).
 //!
 //! ```sh
 //! cargo run --example bevy_ao -- --out ao.png
 //! cargo run --example bevy_ao -- --out ao.png --shadow-out sun_shadow.png
+//! cargo run --example bevy_ao -- --out ao.png --gi-out gi.png
 //! cargo run --example bevy_ao -- --ssao --out ssao.png
 //! cargo run --example bevy_ao -- --window            # until the window is closed
 //! cargo run --example bevy_ao -- --window --frames 60
@@ -27,11 +29,17 @@ use bevy::render::render_resource::{Extent3d, TextureDimension, TextureUsages};
 use bevy::render::settings::{RenderCreation, WgpuFeatures};
 use bevy::render::view::screenshot::{save_to_disk, Screenshot};
 use bevy::window::ExitCondition;
-use hybrid_rt_bevy::{render_plugin, HybridRtInitPlugin, HybridRtPlugin, RayTracedAo, RayTracedShadow, DIAGNOSTIC_PATHS};
+use hybrid_rt_bevy::{
+    render_plugin, HybridRtInitPlugin, HybridRtPlugin, RayTracedAo, RayTracedGi, RayTracedShadow, DIAGNOSTIC_PATHS,
+};
 
 /// Frames rendered before the screenshot (the scene's BVH is built on the first; the AO
 /// denoiser's history fills over the others).
 const FRAMES: u32 = 16;
+
+/// The GI image's brightness before it is mapped to 8 bits (one bounce is dim beside the
+/// direct light).
+const GI_EXPOSURE: f32 = 4.0;
 
 struct Args {
     out: String,
@@ -43,6 +51,8 @@ struct Args {
     frames: Option<u32>,
     /// Headless: also trace the sun's shadow and write it here.
     shadow_out: Option<String>,
+    /// Headless: also trace diffuse GI and write it here.
+    gi_out: Option<String>,
     /// Headless: measure this many frames' GPU times instead of writing images.
     cost: Option<u32>,
     /// No AO of either kind and no shadow: Bevy's own frame.
@@ -58,6 +68,7 @@ fn args() -> Args {
         window: false,
         frames: None,
         shadow_out: None,
+        gi_out: None,
         cost: None,
         plain: false,
     };
@@ -71,6 +82,7 @@ fn args() -> Args {
             "--window" => a.window = true,
             "--frames" => a.frames = Some(it.next().and_then(|v| v.parse().ok()).expect("--frames N")),
             "--shadow-out" => a.shadow_out = Some(it.next().expect("--shadow-out PATH")),
+            "--gi-out" => a.gi_out = Some(it.next().expect("--gi-out PATH")),
             "--cost" => a.cost = Some(it.next().and_then(|v| v.parse().ok()).expect("--cost FRAMES")),
             "--plain" => a.plain = true,
             other => panic!("unknown argument {other}"),
@@ -88,6 +100,8 @@ struct Settings {
     target: Option<Handle<Image>>,
     /// The image the sun's shadow is traced into (None: no shadow traced).
     shadow: Option<Handle<Image>>,
+    /// The image diffuse GI is traced into (None: no GI traced).
+    gi: Option<Handle<Image>>,
 }
 
 fn main() {
@@ -118,7 +132,14 @@ fn main() {
     };
     let shadow =
         a.shadow_out.as_ref().map(|_| app.world_mut().resource_mut::<Assets<Image>>().add(shadow_image(a.width, a.height)));
-    app.insert_resource(Settings { ssao: a.ssao, plain: false, target: Some(target.clone()), shadow: shadow.clone() });
+    let gi = a.gi_out.as_ref().map(|_| app.world_mut().resource_mut::<Assets<Image>>().add(gi_image(a.width, a.height)));
+    app.insert_resource(Settings {
+        ssao: a.ssao,
+        plain: false,
+        target: Some(target.clone()),
+        shadow: shadow.clone(),
+        gi: gi.clone(),
+    });
     app.finish();
     app.cleanup();
     for _ in 0..FRAMES {
@@ -134,11 +155,19 @@ fn main() {
             commands.entity(ev.entity).despawn();
         });
     }
+    if let (Some(gi), Some(path)) = (gi, a.gi_out.clone()) {
+        let _ = std::fs::remove_file(&path);
+        let (w, h) = (a.width, a.height);
+        app.world_mut().spawn(Readback::texture(gi)).observe(move |ev: On<ReadbackComplete>, mut commands: Commands| {
+            write_radiance_png(&ev.data, w, h, GI_EXPOSURE, &path);
+            commands.entity(ev.entity).despawn();
+        });
+    }
     // The screenshot is read back and written a few updates later.
     for _ in 0..60 {
         app.update();
         let written = |p: &str| std::fs::metadata(p).is_ok_and(|m| m.len() > 0);
-        if written(&a.out) && a.shadow_out.as_deref().is_none_or(written) {
+        if written(&a.out) && a.shadow_out.as_deref().is_none_or(written) && a.gi_out.as_deref().is_none_or(written) {
             println!("wrote {}", a.out);
             print_gpu_times(&app);
             return;
@@ -173,7 +202,8 @@ fn cost(a: &Args, frames: u32) {
     let mut images = app.world_mut().resource_mut::<Assets<Image>>();
     let target = images.add(Image::new_target_texture(a.width, a.height, TextureFormat::Rgba8UnormSrgb, None));
     let shadow = (!a.plain && !a.ssao).then(|| images.add(shadow_image(a.width, a.height)));
-    app.insert_resource(Settings { ssao: a.ssao, plain: a.plain, target: Some(target), shadow });
+    let gi = (!a.plain && !a.ssao).then(|| images.add(gi_image(a.width, a.height)));
+    app.insert_resource(Settings { ssao: a.ssao, plain: a.plain, target: Some(target), shadow, gi });
     app.finish();
     app.cleanup();
     // Warm-up: pipelines, the BVH, the denoisers' histories, the GPU's clocks.
@@ -202,6 +232,38 @@ fn cost(a: &Args, frames: u32) {
     }
     println!("  Bevy's passes, total: {bevy_total:.3}");
     println!("update wall time: {update_ms:.3} ms");
+}
+
+/// The image diffuse GI is traced into: RGBA32F (radiance, hit distance).
+fn gi_image(width: u32, height: u32) -> Image {
+    let extent = Extent3d { width, height, depth_or_array_layers: 1 };
+    let mut image =
+        Image::new_fill(extent, TextureDimension::D2, &[0u8; 16], TextureFormat::Rgba32Float, RenderAssetUsages::RENDER_WORLD);
+    image.texture_descriptor.usage |= TextureUsages::STORAGE_BINDING | TextureUsages::COPY_SRC;
+    image
+}
+
+/// Writes a read-back RGBA32F radiance image (rows at a 256-byte pitch) as an sRGB PNG,
+/// Reinhard-mapped (x / (1 + x)) and scaled by `exposure` first.
+fn write_radiance_png(bytes: &[u8], width: u32, height: u32, exposure: f32, path: &str) {
+    let pitch = bytes.len() / height as usize;
+    let mut texels = Vec::with_capacity((width * height * 4) as usize);
+    for y in 0..height as usize {
+        for t in bytes[y * pitch..y * pitch + width as usize * 16].chunks_exact(16) {
+            for c in 0..3 {
+                let v = f32::from_ne_bytes([t[4 * c], t[4 * c + 1], t[4 * c + 2], t[4 * c + 3]]).max(0.0) * exposure;
+                texels.push(((v / (1.0 + v)).powf(1.0 / 2.2) * 255.0).round() as u8);
+            }
+            texels.push(255);
+        }
+    }
+    let extent = Extent3d { width, height, depth_or_array_layers: 1 };
+    let image = Image::new(extent, TextureDimension::D2, texels, TextureFormat::Rgba8UnormSrgb, RenderAssetUsages::MAIN_WORLD);
+    match image.try_into_dynamic().map(|d| d.save(path)) {
+        Ok(Ok(())) => println!("wrote {path}"),
+        Ok(Err(e)) => eprintln!("error: {path}: {e}"),
+        Err(e) => eprintln!("error: {path}: {e}"),
+    }
 }
 
 /// The image the sun's shadow is traced into: one float per pixel (its visible fraction).
@@ -240,7 +302,7 @@ fn window(a: &Args) {
     app.add_plugins(HybridRtInitPlugin)
         .add_plugins(DefaultPlugins.set(render_plugin()).set(WindowPlugin { primary_window: Some(window), ..default() }))
         .add_plugins(HybridRtPlugin)
-        .insert_resource(Settings { ssao: a.ssao, plain: false, target: None, shadow: None })
+        .insert_resource(Settings { ssao: a.ssao, plain: false, target: None, shadow: None, gi: None })
         .add_systems(Startup, setup)
         .add_systems(Update, toggle_and_report);
     if let Some(frames) = a.frames {
@@ -324,6 +386,9 @@ fn setup(
             commands.spawn((camera, RayTracedAo::default(), Msaa::Off, bevy::core_pipeline::prepass::MotionVectorPrepass));
         if let Some(shadow) = &settings.shadow {
             camera.insert(RayTracedShadow { output: shadow.clone(), ..default() });
+        }
+        if let Some(gi) = &settings.gi {
+            camera.insert(RayTracedGi { output: gi.clone(), ..default() });
         }
     }
 }

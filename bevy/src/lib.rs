@@ -35,6 +35,7 @@
 mod render;
 mod scene;
 
+use bevy::camera::Hdr;
 use bevy::core_pipeline::prepass::{DepthPrepass, NormalPrepass};
 use bevy::diagnostic::{Diagnostic, DiagnosticPath, Diagnostics, RegisterDiagnostic};
 use bevy::pbr::ScreenSpaceAmbientOcclusion;
@@ -137,6 +138,55 @@ impl Default for RayTracedShadow {
     }
 }
 
+/// Diffuse global illumination for a 3D camera: one bounce of the light Bevy's frame shows,
+/// traced from Bevy's prepass into an image of the application's, for its own compositing
+/// (multiplied by the surface's diffuse colour, added to the lit image).
+///
+/// Each frame the camera's lit frame — Bevy's HDR view target after the opaque pass — is
+/// injected into the SDK's direct-lighting cache, which remembers the lit colour of every
+/// surface a camera has shown; the GI's rays read that cache where they hit. Surfaces no
+/// camera has shown yet stay black until one does. The camera needs `Hdr` (brought along: the
+/// cache takes radiance, not tonemapped colour) and `Msaa::Off`. Toggle `enabled` at run time.
+#[derive(Component, Clone, Debug, PartialEq, ExtractComponent)]
+#[extract_app(bevy::render::RenderApp)]
+#[require(DepthPrepass, NormalPrepass, Hdr)]
+pub struct RayTracedGi {
+    /// Inject and trace (true), or leave the cache and the image as they are. Default true.
+    pub enabled: bool,
+    /// Rays per pixel (1..=64). Default 1.
+    pub rays_per_pixel: u32,
+    /// The longest ray in world units (> 0). Default 100.
+    pub ray_length: f32,
+    /// Radiance (linear RGB) of rays that hit nothing: a constant sky. Default black.
+    pub miss_radiance: [f32; 3],
+    /// Frames over which the cache averages each surface's lit colour (>= 1): longer is
+    /// steadier under a moving camera, shorter follows lights that change sooner. Default 30
+    /// (half a second at 60 frames a second).
+    pub cache_average_frames: f32,
+    /// Denoise (the SDK's diffuse denoiser: temporal, along Bevy's motion vectors where the
+    /// camera has `MotionVectorPrepass`, then spatial). Default true.
+    pub denoise: bool,
+    /// Where the GI goes: an `Rgba16Float` or `Rgba32Float` image of the view's size with
+    /// `STORAGE_BINDING` usage, created with contents. RGB: the mean radiance arriving over the
+    /// cosine-weighted hemisphere (irradiance / pi; times the diffuse albedo, the light the
+    /// surface reflects); A: the distance to the hits.
+    pub output: Handle<Image>,
+}
+
+impl Default for RayTracedGi {
+    fn default() -> Self {
+        RayTracedGi {
+            enabled: true,
+            rays_per_pixel: 1,
+            ray_length: 100.0,
+            miss_radiance: [0.0; 3],
+            cache_average_frames: 30.0,
+            denoise: true,
+            output: Handle::default(),
+        }
+    }
+}
+
 /// Adds what the SDK needs to the Vulkan device Bevy is about to create. Add it *before*
 /// `DefaultPlugins` (Bevy reads the device callbacks when its render plugin is built), with
 /// [`render_plugin`] in place of Bevy's default `RenderPlugin`.
@@ -168,8 +218,10 @@ pub struct HybridRtTimings(pub Arc<Mutex<Vec<(String, f64)>>>);
 
 /// Diagnostics the plugin publishes, in milliseconds of GPU time (the SDK's timestamp queries):
 /// the scene's sync and BVH builds (frames that change the scene), AO traced and denoised (all
-/// cameras), the shadow traced and denoised (all cameras), and the SDK's whole frame.
-pub const DIAGNOSTIC_PATHS: [&str; 4] = ["hybrid_rt/scene", "hybrid_rt/ao", "hybrid_rt/shadow", "hybrid_rt/frame"];
+/// cameras), the shadow traced and denoised (all cameras), the GI's injection, trace and
+/// denoising (all cameras), and the SDK's whole frame.
+pub const DIAGNOSTIC_PATHS: [&str; 5] =
+    ["hybrid_rt/scene", "hybrid_rt/ao", "hybrid_rt/shadow", "hybrid_rt/gi", "hybrid_rt/frame"];
 
 /// Diagnostic: how many cameras hold an AO denoiser history (about 8 bytes a pixel of the
 /// view, besides the view's shared denoising guide). A camera's history is freed a few frames after it stops
@@ -179,15 +231,22 @@ pub const DIAGNOSTIC_AO_HISTORIES: &str = "hybrid_rt/ao_histories";
 /// Diagnostic: how many cameras hold a shadow denoiser history, freed as the AO's are.
 pub const DIAGNOSTIC_SHADOW_HISTORIES: &str = "hybrid_rt/shadow_histories";
 
+/// Diagnostic: how many cameras hold a GI denoiser history, freed as the AO's are.
+pub const DIAGNOSTIC_GI_HISTORIES: &str = "hybrid_rt/gi_histories";
+
 impl Plugin for HybridRtPlugin {
     fn build(&self, app: &mut App) {
         let timings = HybridRtTimings::default();
-        app.add_plugins((ExtractComponentPlugin::<RayTracedAo>::default(), ExtractComponentPlugin::<RayTracedShadow>::default()))
-            .insert_resource(timings.clone());
+        app.add_plugins((
+            ExtractComponentPlugin::<RayTracedAo>::default(),
+            ExtractComponentPlugin::<RayTracedShadow>::default(),
+            ExtractComponentPlugin::<RayTracedGi>::default(),
+        ))
+        .insert_resource(timings.clone());
         for path in DIAGNOSTIC_PATHS {
             app.register_diagnostic(Diagnostic::new(DiagnosticPath::new(path)).with_suffix(" ms"));
         }
-        for path in [DIAGNOSTIC_AO_HISTORIES, DIAGNOSTIC_SHADOW_HISTORIES] {
+        for path in [DIAGNOSTIC_AO_HISTORIES, DIAGNOSTIC_SHADOW_HISTORIES, DIAGNOSTIC_GI_HISTORIES] {
             app.register_diagnostic(Diagnostic::new(DiagnosticPath::new(path)));
         }
         app.add_systems(Update, publish_timings);

@@ -5,7 +5,7 @@ mod effects;
 
 use crate::scene::{extract_instances, ExtractedInstances, SceneMirror};
 use crate::HybridRtTimings;
-use bevy::core_pipeline::core_3d::main_opaque_pass_3d;
+use bevy::core_pipeline::core_3d::{main_opaque_pass_3d, main_transparent_pass_3d};
 use bevy::core_pipeline::schedule::camera_driver;
 use bevy::core_pipeline::{Core3d, Core3dSystems};
 use bevy::log::{error, warn};
@@ -18,15 +18,15 @@ use bevy::render::render_asset::RenderAssets;
 use bevy::render::renderer::{RenderAdapter, RenderContext, RenderDevice, RenderGraph, RenderGraphSystems, RenderQueue};
 use bevy::render::view::RetainedViewEntity;
 use bevy::render::{ExtractSchedule, RenderApp};
-use effects::{extract_lights, skip_replaced_ssao, trace_ao, trace_shadow, Effect, ExtractedLights, ViewDenoiser};
+use effects::{extract_lights, skip_replaced_ssao, trace_ao, trace_gi, trace_shadow, Effect, ExtractedLights, ViewDenoiser};
 use hybrid_rt::{BvhBuildTask, CompletedTask, GpuTicket, InitSettings, TaskKind};
 use hybrid_rt_wgpu::{prepare, wgpu, RtDevice};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 /// The SDK's working sets (tickets in flight at once): frames in flight (3) x tickets a frame
-/// (the scene's, and one camera's AO and shadow).
-const WORKING_SETS: u32 = 9;
+/// (the scene's, and one camera's AO, shadow and GI).
+const WORKING_SETS: u32 = 12;
 
 /// wgpu objects (reference-counted handles) kept until a ticket is back.
 #[derive(Default)]
@@ -93,7 +93,13 @@ pub(crate) fn build(app: &mut App, timings: HybridRtTimings) {
         // After Bevy's SSAO (before MainPass), before whichever pass reads the AO texture: the
         // forward opaque pass, or the deferred lighting pass of a deferred camera.
         .add_systems(Core3d, trace_ao.in_set(Core3dSystems::MainPass).before(main_opaque_pass_3d).before(deferred_lighting))
-        .add_systems(Core3d, trace_shadow.in_set(Core3dSystems::MainPass).before(main_opaque_pass_3d));
+        .add_systems(Core3d, trace_shadow.in_set(Core3dSystems::MainPass).before(main_opaque_pass_3d))
+        // After the opaque pass lit the view target (forward, or deferred lighting then the
+        // forward opaque pass), before transparent surfaces are drawn over it.
+        .add_systems(
+            Core3d,
+            trace_gi.in_set(Core3dSystems::MainPass).after(main_opaque_pass_3d).before(main_transparent_pass_3d),
+        );
 }
 
 /// Before the cameras: hand back the tickets whose frames are done, then bring the SDK's scene
@@ -157,7 +163,11 @@ fn sync_scene(
         keep
     });
     let histories = |effect: Effect| state.views.keys().filter(|(_, e)| *e == effect).count() as f64;
-    let counts = [("ao_histories", histories(Effect::Ao)), ("shadow_histories", histories(Effect::Shadow))];
+    let counts = [
+        ("ao_histories", histories(Effect::Ao)),
+        ("shadow_histories", histories(Effect::Shadow)),
+        ("gi_histories", histories(Effect::Gi)),
+    ];
     timings.0.lock().extend(counts.map(|(name, n)| (name.to_string(), n)));
     let mut tasks = rt.context().create_task_container();
     let outcome = match state.scene.sync(rt, &mut tasks, &extracted, &allocator, &meshes) {
@@ -211,6 +221,7 @@ struct FrameTimes {
     scene: f64,
     ao: f64,
     shadow: f64,
+    gi: f64,
     total: f64,
 }
 
@@ -221,6 +232,7 @@ impl FrameTimes {
             match t.kind {
                 TaskKind::AmbientOcclusion | TaskKind::DenoiseDiffuseOcclusion => self.ao += t.gpu_ms,
                 TaskKind::Shadow | TaskKind::DenoiseShadow => self.shadow += t.gpu_ms,
+                TaskKind::DirectLightingInjection | TaskKind::Diffuse | TaskKind::DenoiseDiffuse => self.gi += t.gpu_ms,
                 _ => self.scene += t.gpu_ms,
             }
         }
@@ -236,6 +248,9 @@ impl FrameTimes {
         }
         if self.shadow > 0.0 {
             out.push(("shadow".into(), self.shadow));
+        }
+        if self.gi > 0.0 {
+            out.push(("gi".into(), self.gi));
         }
         out.push(("frame".into(), self.total));
     }

@@ -1,5 +1,5 @@
-//! The plugin inside a headless Bevy app on lavapipe: the AO and the sun shadow it traces from
-//! Bevy's prepass against the CPU reference renderer on the same scene and camera, an entity
+//! The plugin inside a headless Bevy app on lavapipe: the AO, the shadows and the GI it traces
+//! from Bevy's prepass against the CPU reference renderer on the same scene and camera, an entity
 //! moved and one despawned, effects toggled — with the validation layer on (wgpu enables it in debug builds
 //! where it is installed), and no validation message allowed.
 use bevy::asset::RenderAssetUsages;
@@ -11,7 +11,7 @@ use bevy::render::gpu_readback::{Readback, ReadbackComplete};
 use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat, TextureUsages};
 use bevy::window::ExitCondition;
-use hybrid_rt_bevy::{render_plugin, AoOutput, HybridRtInitPlugin, HybridRtPlugin, RayTracedAo, RayTracedShadow};
+use hybrid_rt_bevy::{render_plugin, AoOutput, HybridRtInitPlugin, HybridRtPlugin, RayTracedAo, RayTracedGi, RayTracedShadow};
 use hybrid_rt_testkit::reference::{self, AoParams, GBuffer, Mesh as RefMesh, Scene as RefScene, Tracer};
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Mutex};
@@ -62,11 +62,14 @@ fn count_validation(_: &mut App) -> Option<BoxedLayer> {
 #[derive(Resource, Clone, Default)]
 struct Latest(Arc<Mutex<(Vec<f32>, u32)>>);
 
-/// The two images read back every frame: AO and the sun shadow's visible fraction.
+/// The images read back every frame: AO, the shadow's visible fraction and the GI's red
+/// channel (and the GI's image, which the camera takes later).
 #[derive(Clone, Default)]
 struct Readbacks {
     ao: Latest,
     shadow: Latest,
+    gi: Latest,
+    gi_image: Handle<Image>,
 }
 
 #[derive(Component)]
@@ -89,7 +92,7 @@ fn app() -> (App, Readbacks) {
                 .disable::<bevy::winit::WinitPlugin>(),
         )
         .add_plugins(HybridRtPlugin);
-    let latest = Readbacks::default();
+    let mut latest = Readbacks::default();
     let storage_image = |texel: &[u8], format: TextureFormat, app: &mut App| {
         let extent = Extent3d { width: W, height: H, depth_or_array_layers: 1 };
         let mut image = Image::new_fill(extent, TextureDimension::D2, texel, format, RenderAssetUsages::RENDER_WORLD);
@@ -98,6 +101,7 @@ fn app() -> (App, Readbacks) {
     };
     let ao = storage_image(&0.5f32.to_ne_bytes(), TextureFormat::R32Float, &mut app);
     let shadow = storage_image(&[0u8; 8], TextureFormat::Rgba16Float, &mut app);
+    latest.gi_image = storage_image(&[0u8; 16], TextureFormat::Rgba32Float, &mut app);
     let world = app.world_mut();
     world.spawn((
         DirectionalLight { shadow_maps_enabled: false, ..default() },
@@ -138,31 +142,36 @@ fn app() -> (App, Readbacks) {
         g.0 = green_f16(&ev.data);
         g.1 += 1;
     });
+    let l = latest.gi.clone();
+    world.spawn(Readback::texture(latest.gi_image.clone())).observe(move |ev: On<ReadbackComplete>| {
+        let mut g = l.0.lock().unwrap();
+        g.0 = red_f32(&ev.data, 16);
+        g.1 += 1;
+    });
     app.finish();
     app.cleanup();
     (app, latest)
 }
 
+/// The plugin's count of cameras holding a denoiser history of one effect (a diagnostic of
+/// `DIAGNOSTIC_*_HISTORIES`).
+fn histories(app: &App, path: &'static str) -> f64 {
+    let store = app.world().resource::<bevy::diagnostic::DiagnosticsStore>();
+    store.get(&bevy::diagnostic::DiagnosticPath::new(path)).and_then(|d| d.value()).unwrap_or(-1.0)
+}
+
 /// The texels of a read-back R32Float image, without the rows' padding (rows are copied at a
 /// 256-byte pitch).
-/// The plugin's count of cameras holding an AO denoiser history.
-fn ao_histories(app: &App) -> f64 {
-    let store = app.world().resource::<bevy::diagnostic::DiagnosticsStore>();
-    let path = bevy::diagnostic::DiagnosticPath::new(hybrid_rt_bevy::DIAGNOSTIC_AO_HISTORIES);
-    store.get(&path).and_then(|d| d.value()).unwrap_or(-1.0)
-}
-
-/// The plugin's count of cameras holding a sun-shadow denoiser history.
-fn shadow_histories(app: &App) -> f64 {
-    let store = app.world().resource::<bevy::diagnostic::DiagnosticsStore>();
-    let path = bevy::diagnostic::DiagnosticPath::new(hybrid_rt_bevy::DIAGNOSTIC_SHADOW_HISTORIES);
-    store.get(&path).and_then(|d| d.value()).unwrap_or(-1.0)
-}
-
 fn bytemuck_f32(bytes: &[u8]) -> Vec<f32> {
+    red_f32(bytes, 4)
+}
+
+/// The R channel of a read-back 32-bit float image of `texel` bytes a texel (rows at a
+/// 256-byte pitch).
+fn red_f32(bytes: &[u8], texel: usize) -> Vec<f32> {
     let pitch = bytes.len() / H as usize;
     (0..H as usize)
-        .flat_map(|y| bytes[y * pitch..y * pitch + W as usize * 4].chunks_exact(4))
+        .flat_map(|y| bytes[y * pitch..y * pitch + W as usize * texel].chunks_exact(texel))
         .map(|c| f32::from_ne_bytes([c[0], c[1], c[2], c[3]]))
         .collect()
 }
@@ -409,7 +418,7 @@ fn ray_traced_ao_in_a_bevy_frame() {
     app.world_mut().get_mut::<RayTracedAo>(camera).unwrap().enabled = false;
     frames(&mut app, &latest.ao, 6);
     // The disabled camera's denoiser history is freed after a few frames.
-    assert_eq!(ao_histories(&app), 0.0, "a disabled camera kept its AO history");
+    assert_eq!(histories(&app, hybrid_rt_bevy::DIAGNOSTIC_AO_HISTORIES), 0.0, "a disabled camera kept its AO history");
     {
         let mut e = app.world_mut().entity_mut(camera);
         let mut ao = e.get_mut::<RayTracedAo>().unwrap();
@@ -420,9 +429,10 @@ fn ray_traced_ao_in_a_bevy_frame() {
         shadow.angular_diameter = SOFT_SUN;
         shadow.denoise = true;
     }
-    let cube = app.world_mut().spawn((Mesh3d(cube_mesh), MeshMaterial3d(material), Transform::from_xyz(0.0, 0.5, 0.0))).id();
+    let cube =
+        app.world_mut().spawn((Mesh3d(cube_mesh), MeshMaterial3d(material.clone()), Transform::from_xyz(0.0, 0.5, 0.0))).id();
     let ao = frames(&mut app, &latest.ao, 16);
-    assert_eq!(ao_histories(&app), 1.0, "the camera's AO history");
+    assert_eq!(histories(&app, hybrid_rt_bevy::DIAGNOSTIC_AO_HISTORIES), 1.0, "the camera's AO history");
     let e = against_reference(&ao, Some(0.0));
     eprintln!(
         "1 ray, denoised, 16 frames: RMSE {:.3}; contact RMSE {:.3}, mean difference {:+.3}",
@@ -449,7 +459,7 @@ fn ray_traced_ao_in_a_bevy_frame() {
     eprintln!(
         "soft sun shadow, 1 ray, denoised, 16 frames: RMSE {rmse:.3} (mean difference {bias:+.3}); penumbra ({p_pixels} px) RMSE {p_rmse:.3}, mean difference {p_bias:+.3}"
     );
-    assert_eq!(shadow_histories(&app), 1.0, "the camera's shadow history");
+    assert_eq!(histories(&app, hybrid_rt_bevy::DIAGNOSTIC_SHADOW_HISTORIES), 1.0, "the camera's shadow history");
     assert!(p_pixels > 100, "the view shows the soft shadow's penumbra ({p_pixels} px)");
     assert!(
         rmse <= 0.05 && p_rmse <= 0.15 && p_bias.abs() <= 0.05,
@@ -489,9 +499,84 @@ fn ray_traced_ao_in_a_bevy_frame() {
         assert!(theirs > 200, "the view shows the {name} light's shadow ({theirs} px)");
         assert!(differ <= 0.02 && ours.abs_diff(theirs) * 20 <= theirs, "{name} light: {differ} differ, {ours} vs {theirs} px");
     }
+
+    // 6. GI from Bevy's lit frame: with unlit materials the HDR view target holds each
+    // surface's colour as its radiance, so the cache the plugin injects it into must give the
+    // ground in front of the cube the cube's front face's light — the only face of it the
+    // camera shows, so the only one the cache knows (its sides stay black). The reference
+    // shades its hits so: a surface's colour where the camera sees it, black elsewhere. Per
+    // pixel, 64 rays against 256 stratified: at most 0.5 x sqrt(1/64 + 1/256) = 0.07 of the
+    // red channel (1.0) apart; over the ~1,000 ground pixels the means within 0.02 (the rest
+    // for the rasterizer's and the reference's surface points).
+    let colour = [1.0f32, 0.5, 0.25];
+    {
+        let mut materials = app.world_mut().resource_mut::<Assets<StandardMaterial>>();
+        let mut m = materials.get_mut(&material).unwrap();
+        m.unlit = true;
+        m.base_color = Color::linear_rgb(colour[0], colour[1], colour[2]);
+    }
+    // A one-frame cache average: the cache holds the last frame's colours, not a blend with
+    // those of the frames before the materials turned unlit.
+    let gi = RayTracedGi {
+        rays_per_pixel: RAYS,
+        cache_average_frames: 1.0,
+        denoise: false,
+        output: latest.gi_image.clone(),
+        ..default()
+    };
+    app.world_mut().entity_mut(camera).insert(gi);
+    let gi = frames(&mut app, &latest.gi, 4);
+    let (scene, eye) = reference_scene(Some(0.0));
+    let tracer = Tracer::new(&scene);
+    let g = GBuffer::render(&tracer, &eye, W, H);
+    let seen = |p: glam::Vec3| {
+        let to = p - eye.eye;
+        tracer.closest_hit(eye.eye, to.normalize(), 0.0, to.length() * 0.999).is_none()
+    };
+    let radiance = |hit: Option<(glam::Vec3, u32)>| match hit {
+        Some((p, 1)) if seen(p) => colour,
+        _ => [0.0; 3],
+    };
+    let want: Vec<f32> = reference::diffuse_reference_with(&tracer, &g, eye.eye, radiance, 100.0, 16, |_, _, _| 1.0)
+        .iter()
+        .map(|c| c[0])
+        .collect();
+    let interior = interior(&g);
+    let front: Vec<bool> = (0..g.hit.len())
+        .map(|i| {
+            let p = g.position[i];
+            interior[i] && g.normal[i].y > 0.9 && p.z > 0.55 && p.z < 1.5 && p.x.abs() < 1.0
+        })
+        .collect();
+    let (rmse, bias, pixels) = compare(&gi, &want, &front);
+    let lit = want.iter().zip(&front).filter(|(w, m)| **m && **w > 0.05).count();
+    let mean = |v: &[f32]| v.iter().zip(&front).filter(|(_, m)| **m).map(|(x, _)| *x as f64).sum::<f64>() / pixels as f64;
+    eprintln!(
+        "GI on the ground in front of the cube ({pixels} px, {lit} lit by it): RMSE {rmse:.3}, mean difference {bias:+.3} (means {:.3} / {:.3})",
+        mean(&gi),
+        mean(&want)
+    );
+    assert!(pixels > 300 && lit > 100, "the view shows the ground in front of the cube ({pixels} px, {lit} lit)");
+    assert!(rmse <= 0.1 && bias.abs() <= 0.02, "GI from Bevy's lit frame: RMSE {rmse}, off by {bias}");
+    assert_eq!(histories(&app, hybrid_rt_bevy::DIAGNOSTIC_GI_HISTORIES), 0.0, "a raw GI trace keeps no denoiser history");
+    // 1 ray a pixel, denoised, 16 frames: the temporal average alone leaves at most
+    // 0.5 / sqrt(16) = 0.125 of deviation, the spatial filter at least halves it; the means
+    // within 0.01 (sampling: 0.35 / sqrt(1,162 px x 16 frames) = 0.003, the rest for the
+    // spatial filter at the contact) — light seen by few of a pixel's rays is not cut as
+    // fireflies.
+    {
+        let mut gi = app.world_mut().get_mut::<RayTracedGi>(camera).unwrap();
+        gi.rays_per_pixel = 1;
+        gi.denoise = true;
+    }
+    let gi = frames(&mut app, &latest.gi, 16);
+    let (rmse, bias, _) = compare(&gi, &want, &front);
+    eprintln!("GI, 1 ray, denoised, 16 frames: RMSE {rmse:.3}, mean difference {bias:+.3}");
+    assert_eq!(histories(&app, hybrid_rt_bevy::DIAGNOSTIC_GI_HISTORIES), 1.0, "the camera's GI history");
+    assert!(rmse <= 0.06 && bias.abs() <= 0.01, "denoised GI: RMSE {rmse}, off by {bias}");
     app.world_mut().despawn(cube);
 
-    // 6. The SDK's GPU times reached Bevy's diagnostics.
+    // 7. The SDK's GPU times reached Bevy's diagnostics.
     let store = app.world().resource::<bevy::diagnostic::DiagnosticsStore>();
     for path in hybrid_rt_bevy::DIAGNOSTIC_PATHS {
         let d = store.get(&bevy::diagnostic::DiagnosticPath::new(path)).expect("registered");

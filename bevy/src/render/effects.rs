@@ -3,7 +3,7 @@
 //! denoiser each keeps per camera, and the lights the shadows are traced from.
 use super::{Held, HybridRt, Warnings};
 use crate::scene::ExtractedInstances;
-use crate::{AoOutput, RayTracedAo, RayTracedShadow};
+use crate::{AoOutput, RayTracedAo, RayTracedGi, RayTracedShadow};
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::pbr::{ScreenSpaceAmbientOcclusionResources, SsaoBindGroups};
 use bevy::platform::collections::HashMap;
@@ -11,13 +11,14 @@ use bevy::prelude::*;
 use bevy::render::render_asset::RenderAssets;
 use bevy::render::renderer::{RenderContext, ViewQuery};
 use bevy::render::texture::GpuImage;
-use bevy::render::view::{ExtractedView, RetainedViewEntity};
+use bevy::render::view::{ExtractedView, RetainedViewEntity, ViewTarget};
 use bevy::render::Extract;
 use hybrid_rt::glam::Mat4;
 use hybrid_rt::{
-    DenoiseDiffuseOcclusionTask, DenoiseShadowTask, DenoisingCommon, DenoisingContextHandle, DenoisingContextInput, DepthInput,
-    GpuTicket, ImageInput, LightInfo, LightType, MotionInput, MotionType, NormalInput, NormalType, SignalType, TaskContainer,
-    TraceAmbientOcclusionTask, TraceCommon, TraceShadowTask, Viewport,
+    DenoiseDiffuseOcclusionTask, DenoiseDiffuseTask, DenoiseShadowTask, DenoisingCommon, DenoisingContextHandle,
+    DenoisingContextInput, DepthInput, DirectLightingInjectionTask, GpuTicket, ImageInput, LightInfo, LightType, MotionInput,
+    MotionType, NormalInput, NormalType, SignalType, TaskContainer, TraceAmbientOcclusionTask, TraceCommon, TraceDiffuseTask,
+    TraceShadowTask, Viewport,
 };
 use hybrid_rt_wgpu::{prepare, wgpu, RtDevice};
 
@@ -26,6 +27,7 @@ use hybrid_rt_wgpu::{prepare, wgpu, RtDevice};
 pub(super) enum Effect {
     Ao,
     Shadow,
+    Gi,
 }
 
 impl Effect {
@@ -33,6 +35,7 @@ impl Effect {
         match self {
             Effect::Ao => SignalType::DiffuseOcclusion,
             Effect::Shadow => SignalType::Shadow,
+            Effect::Gi => SignalType::Diffuse,
         }
     }
 
@@ -41,7 +44,7 @@ impl Effect {
     fn noisy_format(self) -> wgpu::TextureFormat {
         match self {
             Effect::Ao => wgpu::TextureFormat::R32Float,
-            Effect::Shadow => wgpu::TextureFormat::Rgba16Float,
+            Effect::Shadow | Effect::Gi => wgpu::TextureFormat::Rgba16Float,
         }
     }
 }
@@ -461,4 +464,72 @@ fn sdk_camera(view: &ExtractedView) -> hybrid_rt::Camera {
     let clip_from_view = Mat4::from_cols_array(&view.clip_from_view.to_cols_array());
     let flip_y = Mat4::from_scale(hybrid_rt::glam::Vec3::new(1.0, -1.0, 1.0));
     hybrid_rt::Camera { world_to_view: world_from_view.inverse(), view_to_clip: flip_y * clip_from_view }
+}
+
+/// Per camera with [`RayTracedGi`]: the camera's lit frame (Bevy's view target after the
+/// opaque pass) injected into the direct-lighting cache, then diffuse GI traced from Bevy's
+/// prepass, its hits shaded from the cache, into the application's image.
+pub(super) fn trace_gi(
+    view: ViewQuery<(&ExtractedView, &ViewPrepassTextures, &ViewTarget, &RayTracedGi)>,
+    images: Res<RenderAssets<GpuImage>>,
+    mut state: ResMut<HybridRt>,
+    mut ctx: RenderContext,
+) {
+    let (view, prepass, target, settings) = view.into_inner();
+    let state = &mut *state;
+    let Some(rt) = state.rt.as_ref() else { return };
+    if !settings.enabled || !state.has_instances {
+        return;
+    }
+    if settings.output == Handle::default() {
+        return state.warned.once("RayTracedGi.output is not set: give it an image of the view's size");
+    }
+    let (lit_tex, lit_view) = (target.main_texture(), target.main_texture_view());
+    if lit_tex.sample_count() > 1 {
+        return state.warned.once("a camera with RayTracedGi renders with MSAA: give it Msaa::Off");
+    }
+    let Some(image) = images.get(&settings.output) else { return }; // not on the GPU yet
+    let (out_tex, out_view) = (&image.texture, &image.texture_view);
+    let sinks = (&mut state.views, &mut state.warned, state.frame);
+    let Some(EffectTargets { output, mut inputs, noisy }) =
+        effect_targets(rt, sinks, (view, prepass), (out_tex, out_view), Effect::Gi, settings.denoise)
+    else {
+        return;
+    };
+    let lit = match rt.image(lit_tex, lit_view, hybrid_rt_wgpu::SDK_READ) {
+        Ok(lit) => lit,
+        Err(e) => return state.warned.once(&e),
+    };
+    inputs.textures.push((**lit_tex).clone());
+    inputs.views.push(lit_view.clone());
+    let mut tasks = rt.context().create_task_container();
+    let inject = DirectLightingInjectionTask {
+        depth: inputs.common.depth,
+        lit,
+        viewport: inputs.common.viewport,
+        camera: inputs.common.camera,
+        average_window: settings.cache_average_frames,
+        ..Default::default()
+    };
+    let trace = TraceDiffuseTask {
+        common: inputs.common,
+        output: noisy.as_ref().map_or(output, |(_, i)| *i),
+        rays_per_pixel: settings.rays_per_pixel,
+        ray_length: settings.ray_length,
+        miss_radiance: settings.miss_radiance,
+        ..Default::default()
+    };
+    if let Err(e) = tasks.schedule_direct_lighting_injection(&inject).and_then(|()| tasks.schedule_diffuse(&trace)) {
+        return state.warned.once(&e);
+    }
+    let mut writes: Vec<&wgpu::Texture> = vec![out_tex];
+    if let Some((v, noisy_image)) = &noisy {
+        let denoise = DenoiseDiffuseTask { context: v.context, common: inputs.denoising(), input: *noisy_image, output };
+        if let Err(e) = tasks.schedule_denoise_diffuse(&denoise) {
+            return state.warned.once(&e);
+        }
+        writes.push(&v.noisy);
+    }
+    let sinks = (&mut state.recorded, &mut state.held, &mut state.warned);
+    record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt gi", inputs, &writes, out_view);
 }
