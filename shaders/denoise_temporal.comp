@@ -404,6 +404,14 @@ void main() {
         m1 /= k; m2 /= k; l1 /= k; l2 /= k;
         vec4 own = box_texel(s, int(gl_LocalInvocationIndex));
         vec3 sigma = sqrt(max(m2 - m1 * m1, vec3(0.0)));
+        // The box is never narrower than the noise of its own mean: k fast histories of up to
+        // the fast window's samples each, a sample's variance the slow history's. At 1 ray per
+        // pixel, light reaching few of the rays leaves most 3x3 fast windows without a hit — a
+        // box of spread 0 at 0 — and clamping the slow mean into it darkened such light by
+        // ~18%. A smooth signal's sample variance is small, so its box stays as tight.
+        float box_samples = k * clamp(own.a, 1.0, u_d.history.y);
+        float mean_noise = sqrt(max(slow_new[s].a, 0.0) / box_samples);
+        sigma = max(sigma, mean_noise * slow_new[s].rgb / max(hrt_luminance(slow_new[s].rgb), 1e-4));
         vec3 lo = min(m1 - u_d.history.z * sigma, own.rgb);
         vec3 hi = max(m1 + u_d.history.z * sigma, own.rgb);
         vec3 clamped = clamp(slow_new[s].rgb, lo, hi);

@@ -293,9 +293,20 @@ pub fn room() -> (Scene, Vec<[f32; 3]>, Camera) {
 /// the surface pixels of the coloured room, after `frames` frames; the converged reference
 /// averages `converged` raw frames.
 pub fn bias(signal: Signal, frames: u32, converged: u32, seed: u64) -> [(f64, f64); 3] {
-    const W: u32 = 48;
     let (scene, colours, camera) = room();
-    let mut st = Stage::new(&scene, Some(&colours), camera, W, signal.signal_type(), seed);
+    bias_in((&scene, &colours, camera), signal, frames, converged, seed)
+}
+
+/// `bias` on another scene: its instances' cache colours and camera.
+pub fn bias_in(
+    (scene, colours, camera): (&Scene, &[[f32; 3]], Camera),
+    signal: Signal,
+    frames: u32,
+    converged: u32,
+    seed: u64,
+) -> [(f64, f64); 3] {
+    const W: u32 = 48;
+    let mut st = Stage::new(scene, Some(colours), camera, W, signal.signal_type(), seed);
     let n = (W * W) as usize;
     let (mut all, mut first) = (vec![[0.0f32; 3]; n], vec![[0.0f32; 3]; n]);
     let mut out = Vec::new();
