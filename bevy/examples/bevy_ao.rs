@@ -3,7 +3,8 @@
 //! Bevy's SSAO showing while it is off). `--ssao`: Bevy's own SSAO alone, for comparison.
 //! `--shadow-out PATH` (headless): the sun's ray-traced shadow too, its visible fraction
 //! written as a grey PNG. `--gi-out PATH` (headless): diffuse GI from the lit frame too
-//! (the camera then renders in HDR), written as a PNG (Reinhard-mapped). `--cost FRAMES` (headless): renders that many frames after a warm-up
+//! (the camera then renders in HDR), written as a PNG (Reinhard-mapped). `--deferred`: the
+//! camera renders deferred, and the GI is added to its lit image (the screenshot shows it). `--cost FRAMES` (headless): renders that many frames after a warm-up
 //! and prints Bevy's GPU time per render pass beside the plugin's (timestamp queries), with
 //! the ray-traced AO, sun shadow and GI, with `--ssao` (Bevy's SSAO instead), or with `--plain`
 //! (neither: Bevy's frame alone).
@@ -20,6 +21,7 @@
 use bevy::asset::RenderAssetUsages;
 use bevy::camera::RenderTarget;
 use bevy::core_pipeline::tonemapping::Tonemapping;
+use bevy::material::OpaqueRendererMethod;
 use bevy::prelude::*;
 use bevy::render::diagnostic::RenderDiagnosticsPlugin;
 use bevy::render::gpu_readback::{Readback, ReadbackComplete};
@@ -53,6 +55,8 @@ struct Args {
     shadow_out: Option<String>,
     /// Headless: also trace diffuse GI and write it here.
     gi_out: Option<String>,
+    /// Deferred rendering (the GI composited into the lit image).
+    deferred: bool,
     /// Headless: measure this many frames' GPU times instead of writing images.
     cost: Option<u32>,
     /// No AO of either kind and no shadow: Bevy's own frame.
@@ -69,6 +73,7 @@ fn args() -> Args {
         frames: None,
         shadow_out: None,
         gi_out: None,
+        deferred: false,
         cost: None,
         plain: false,
     };
@@ -83,6 +88,7 @@ fn args() -> Args {
             "--frames" => a.frames = Some(it.next().and_then(|v| v.parse().ok()).expect("--frames N")),
             "--shadow-out" => a.shadow_out = Some(it.next().expect("--shadow-out PATH")),
             "--gi-out" => a.gi_out = Some(it.next().expect("--gi-out PATH")),
+            "--deferred" => a.deferred = true,
             "--cost" => a.cost = Some(it.next().and_then(|v| v.parse().ok()).expect("--cost FRAMES")),
             "--plain" => a.plain = true,
             other => panic!("unknown argument {other}"),
@@ -102,6 +108,8 @@ struct Settings {
     shadow: Option<Handle<Image>>,
     /// The image diffuse GI is traced into (None: no GI traced).
     gi: Option<Handle<Image>>,
+    /// Deferred rendering: the GI is added to the lit image.
+    deferred: bool,
 }
 
 fn main() {
@@ -139,6 +147,7 @@ fn main() {
         target: Some(target.clone()),
         shadow: shadow.clone(),
         gi: gi.clone(),
+        deferred: a.deferred,
     });
     app.finish();
     app.cleanup();
@@ -203,7 +212,7 @@ fn cost(a: &Args, frames: u32) {
     let target = images.add(Image::new_target_texture(a.width, a.height, TextureFormat::Rgba8UnormSrgb, None));
     let shadow = (!a.plain && !a.ssao).then(|| images.add(shadow_image(a.width, a.height)));
     let gi = (!a.plain && !a.ssao).then(|| images.add(gi_image(a.width, a.height)));
-    app.insert_resource(Settings { ssao: a.ssao, plain: a.plain, target: Some(target), shadow, gi });
+    app.insert_resource(Settings { ssao: a.ssao, plain: a.plain, target: Some(target), shadow, gi, deferred: false });
     app.finish();
     app.cleanup();
     // Warm-up: pipelines, the BVH, the denoisers' histories, the GPU's clocks.
@@ -302,7 +311,7 @@ fn window(a: &Args) {
     app.add_plugins(HybridRtInitPlugin)
         .add_plugins(DefaultPlugins.set(render_plugin()).set(WindowPlugin { primary_window: Some(window), ..default() }))
         .add_plugins(HybridRtPlugin)
-        .insert_resource(Settings { ssao: a.ssao, plain: false, target: None, shadow: None, gi: None })
+        .insert_resource(Settings { ssao: a.ssao, plain: false, target: None, shadow: None, gi: None, deferred: false })
         .add_systems(Startup, setup)
         .add_systems(Update, toggle_and_report);
     if let Some(frames) = a.frames {
@@ -355,8 +364,15 @@ fn setup(
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<StandardMaterial>>,
 ) {
-    let grey = materials.add(StandardMaterial { base_color: Color::srgb(0.8, 0.8, 0.8), perceptual_roughness: 0.9, ..default() });
-    let red = materials.add(StandardMaterial { base_color: Color::srgb(0.8, 0.2, 0.2), perceptual_roughness: 0.6, ..default() });
+    let method = if settings.deferred { OpaqueRendererMethod::Deferred } else { OpaqueRendererMethod::Auto };
+    let material = |base_color, perceptual_roughness| StandardMaterial {
+        base_color,
+        perceptual_roughness,
+        opaque_render_method: method,
+        ..default()
+    };
+    let grey = materials.add(material(Color::srgb(0.8, 0.8, 0.8), 0.9));
+    let red = materials.add(material(Color::srgb(0.8, 0.2, 0.2), 0.6));
     commands.spawn((Mesh3d(meshes.add(Plane3d::default().mesh().size(8.0, 8.0))), MeshMaterial3d(grey.clone())));
     commands.spawn((Mesh3d(meshes.add(Cuboid::new(1.0, 1.0, 1.0))), MeshMaterial3d(red), Transform::from_xyz(0.0, 0.5, 0.0)));
     commands.spawn((
@@ -368,7 +384,9 @@ fn setup(
         DirectionalLight { illuminance: 3000.0, shadow_maps_enabled: true, ..default() },
         Transform::from_xyz(2.0, 4.0, 1.0).looking_at(Vec3::ZERO, Vec3::Y),
     ));
-    commands.insert_resource(GlobalAmbientLight { color: Color::WHITE, brightness: 2000.0, ..default() });
+    // Deferred, the GI takes most of the ambient light's place (added to the lit image).
+    let ambient = if settings.deferred { 300.0 } else { 2000.0 };
+    commands.insert_resource(GlobalAmbientLight { color: Color::WHITE, brightness: ambient, ..default() });
     let camera = (
         Camera3d::default(),
         settings.target.clone().map_or_else(RenderTarget::default, RenderTarget::from),
@@ -389,6 +407,9 @@ fn setup(
         }
         if let Some(gi) = &settings.gi {
             camera.insert(RayTracedGi { output: gi.clone(), ..default() });
+        }
+        if settings.deferred {
+            camera.insert(bevy::core_pipeline::prepass::DeferredPrepass);
         }
     }
 }

@@ -1,5 +1,5 @@
-//! hybrid-rt inside Bevy: ray-traced ambient occlusion and shadows for Bevy's rasterized
-//! frame.
+//! hybrid-rt inside Bevy: ray-traced ambient occlusion, shadows and diffuse GI for Bevy's
+//! rasterized frame.
 //!
 //! Bevy keeps its renderer. Each frame the plugin
 //! - mirrors the scene into the SDK: every visible entity with a `Mesh3d` becomes an SDK
@@ -12,6 +12,9 @@
 //!   so Bevy's lighting takes ray-traced occlusion where it took SSAO's;
 //! - traces the shadow of a light (the sun, a point or a spot light) from the same prepass into
 //!   an image of the application's, for its own compositing ([`RayTracedShadow`]);
+//! - injects the camera's lit frame into the SDK's direct-lighting cache and traces diffuse GI
+//!   from it into an image of the application's, which for a deferred camera it also adds to
+//!   the lit image ([`RayTracedGi`]);
 //! - records the SDK's work into a command buffer placed among Bevy's own, and hands each
 //!   ticket back once the queue has finished the frame, with the SDK's per-task GPU times
 //!   published as Bevy diagnostics ([`DIAGNOSTIC_PATHS`]).
@@ -166,6 +169,12 @@ pub struct RayTracedGi {
     /// Denoise (the SDK's diffuse denoiser: temporal, along Bevy's motion vectors where the
     /// camera has `MotionVectorPrepass`, then spatial). Default true.
     pub denoise: bool,
+    /// A deferred camera (`DeferredPrepass`): add the GI, times each pixel's diffuse colour
+    /// from Bevy's deferred G-buffer (base colour x (1 - metallic)), to the lit image after
+    /// Bevy's lighting; `output` then needs `TEXTURE_BINDING` usage too. Lower Bevy's
+    /// `GlobalAmbientLight` where the GI takes its place. A forward camera's GI stays in
+    /// `output` (its surfaces' colours are not in any texture). Default true.
+    pub composite: bool,
     /// Where the GI goes: an `Rgba16Float` or `Rgba32Float` image of the view's size with
     /// `STORAGE_BINDING` usage, created with contents. RGB: the mean radiance arriving over the
     /// cosine-weighted hemisphere (irradiance / pi; times the diffuse albedo, the light the
@@ -182,6 +191,7 @@ impl Default for RayTracedGi {
             miss_radiance: [0.0; 3],
             cache_average_frames: 30.0,
             denoise: true,
+            composite: true,
             output: Handle::default(),
         }
     }

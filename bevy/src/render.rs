@@ -1,6 +1,7 @@
 //! Bevy's render world: the SDK's context on Bevy's device, the scene sync before the cameras
 //! render, AO and a light's shadow per camera between Bevy's SSAO and its opaque pass, tickets
 //! handed back once the queue has done the frame.
+mod composite;
 mod effects;
 
 use crate::scene::{extract_instances, ExtractedInstances, SceneMirror};
@@ -56,6 +57,8 @@ pub(crate) struct HybridRt {
     views: HashMap<(RetainedViewEntity, Effect), ViewDenoiser>,
     /// Frames rendered (for dropping the contexts of cameras gone).
     frame: u64,
+    /// The GI composite's pipelines (made when a deferred camera first needs them).
+    composite: Option<composite::GiComposite>,
     /// Messages already logged: a refused input is reported once, not every frame.
     warned: Warnings,
 }

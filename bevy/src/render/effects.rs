@@ -1,6 +1,7 @@
 //! The effects traced per camera from Bevy's prepass — AO (into Bevy's AO texture or the
 //! application's image) and a light's shadow (into the application's image) — with the
 //! denoiser each keeps per camera, and the lights the shadows are traced from.
+use super::composite::GiComposite;
 use super::{Held, HybridRt, Warnings};
 use crate::scene::ExtractedInstances;
 use crate::{AoOutput, RayTracedAo, RayTracedGi, RayTracedShadow};
@@ -296,7 +297,7 @@ fn record_view(
     inputs: PrepassInputs,
     writes: &[&wgpu::Texture],
     output_view: &bevy::render::render_resource::TextureView,
-) {
+) -> bool {
     let reads: Vec<&wgpu::Texture> = inputs.textures.iter().collect();
     prepare(ctx.command_encoder(), &reads, writes, &[]);
     // SAFETY: the textures and views the tasks name are kept (cloned) until the ticket is back.
@@ -308,8 +309,12 @@ fn record_view(
             held.textures.extend(writes.iter().map(|t| (*t).clone()));
             held.views.extend(inputs.views);
             held.views.push(output_view.clone());
+            true
         }
-        Err(e) => warned.once(&e),
+        Err(e) => {
+            warned.once(&e);
+            false
+        }
     }
 }
 
@@ -531,5 +536,15 @@ pub(super) fn trace_gi(
         writes.push(&v.noisy);
     }
     let sinks = (&mut state.recorded, &mut state.held, &mut state.warned);
-    record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt gi", inputs, &writes, out_view);
+    if !record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt gi", inputs, &writes, out_view) || !settings.composite {
+        return;
+    }
+    // A deferred camera: the GI times its G-buffer's diffuse colour, added to the lit image.
+    let Some(gbuffer) = prepass.deferred.as_ref() else { return };
+    if !out_tex.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
+        return state.warned.once("RayTracedGi.output needs TEXTURE_BINDING usage for the composite of a deferred camera");
+    }
+    let composite = state.composite.get_or_insert_with(|| GiComposite::new(&rt.device));
+    let views = (&*gbuffer.texture.default_view, &**out_view);
+    composite.record(&rt.device, ctx.command_encoder(), views, (lit_view, target.main_texture_format()));
 }
