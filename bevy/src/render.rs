@@ -63,6 +63,25 @@ pub(crate) struct HybridRt {
     warned: Warnings,
 }
 
+impl Drop for HybridRt {
+    /// The render world goes with the app: the queue finishes the frames still in flight and
+    /// their tickets go back, so the SDK's context is destroyed with nothing outstanding.
+    fn drop(&mut self) {
+        let Some(rt) = self.rt.as_ref() else { return };
+        if self.in_flight.is_empty() && self.recorded.is_empty() {
+            return;
+        }
+        if let Err(e) = rt.device.poll(wgpu::PollType::Wait { submission_index: None, timeout: None }) {
+            return error!("hybrid-rt: the queue did not finish at exit ({e}): the SDK keeps its frames' objects");
+        }
+        // Recorded tickets never submitted (the app stopped mid-frame) ran nothing: back too.
+        let tickets = self.in_flight.drain(..).map(|(ticket, _, _)| ticket).chain(self.recorded.drain(..));
+        for ticket in tickets {
+            let _ = rt.context().mark_gpu_task_completed(ticket);
+        }
+    }
+}
+
 /// A camera's denoiser state is dropped after this many frames without it (a camera despawned,
 /// its effect's component removed or disabled), freeing the denoiser's history.
 const VIEW_GRACE_FRAMES: u64 = 3;
