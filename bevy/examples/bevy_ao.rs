@@ -212,7 +212,7 @@ fn cost(a: &Args, frames: u32) {
     let target = images.add(Image::new_target_texture(a.width, a.height, TextureFormat::Rgba8UnormSrgb, None));
     let shadow = (!a.plain && !a.ssao).then(|| images.add(shadow_image(a.width, a.height)));
     let gi = (!a.plain && !a.ssao).then(|| images.add(gi_image(a.width, a.height)));
-    app.insert_resource(Settings { ssao: a.ssao, plain: a.plain, target: Some(target), shadow, gi, deferred: false });
+    app.insert_resource(Settings { ssao: a.ssao, plain: a.plain, target: Some(target), shadow, gi, deferred: a.deferred });
     app.finish();
     app.cleanup();
     // Warm-up: pipelines, the BVH, the denoisers' histories, the GPU's clocks.
