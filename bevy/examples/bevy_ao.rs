@@ -268,6 +268,11 @@ fn write_radiance_png(bytes: &[u8], width: u32, height: u32, exposure: f32, path
     }
     let extent = Extent3d { width, height, depth_or_array_layers: 1 };
     let image = Image::new(extent, TextureDimension::D2, texels, TextureFormat::Rgba8UnormSrgb, RenderAssetUsages::MAIN_WORLD);
+    save_png(image, path);
+}
+
+/// Writes an 8-bit image (made on the CPU) as a PNG, saying where, or why not.
+fn save_png(image: Image, path: &str) {
     match image.try_into_dynamic().map(|d| d.save(path)) {
         Ok(Ok(())) => println!("wrote {path}"),
         Ok(Err(e)) => eprintln!("error: {path}: {e}"),
@@ -297,11 +302,7 @@ fn write_grey_png(bytes: &[u8], width: u32, height: u32, path: &str) {
     }
     let extent = Extent3d { width, height, depth_or_array_layers: 1 };
     let image = Image::new(extent, TextureDimension::D2, grey, TextureFormat::R8Unorm, RenderAssetUsages::MAIN_WORLD);
-    match image.try_into_dynamic().map(|d| d.save(path)) {
-        Ok(Ok(())) => println!("wrote {path}"),
-        Ok(Err(e)) => eprintln!("error: {path}: {e}"),
-        Err(e) => eprintln!("error: {path}: {e}"),
-    }
+    save_png(image, path);
 }
 
 /// The scene in a window, the SDK's GPU times printed every second.

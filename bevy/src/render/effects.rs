@@ -284,6 +284,28 @@ fn effect_targets<'a>(
     Some(EffectTargets { output, inputs, noisy })
 }
 
+/// Schedules the effect's denoiser where it has one — `schedule(tasks, context, common, the
+/// noisy trace, the output)` — and returns the textures the container writes: the output, and
+/// the noisy trace the denoiser reads.
+fn schedule_denoiser<'a>(
+    tasks: &mut TaskContainer,
+    (noisy, inputs, output, out_tex): (&Option<(&'a ViewDenoiser, ImageInput)>, &PrepassInputs, ImageInput, &'a wgpu::Texture),
+    schedule: impl FnOnce(
+        &mut TaskContainer,
+        DenoisingContextHandle,
+        DenoisingCommon,
+        ImageInput,
+        ImageInput,
+    ) -> hybrid_rt::Result<()>,
+) -> hybrid_rt::Result<Vec<&'a wgpu::Texture>> {
+    let mut writes = vec![out_tex];
+    if let Some((v, noisy_image)) = noisy {
+        schedule(tasks, v.context, inputs.denoising(), *noisy_image, output)?;
+        writes.push(&v.noisy);
+    }
+    Ok(writes)
+}
+
 /// Records one camera's tasks into a command buffer placed among Bevy's (after the barriers
 /// that hand the textures to the SDK), and keeps the wgpu objects they use until the ticket is
 /// back.
@@ -386,14 +408,13 @@ pub(super) fn trace_ao(
     if let Err(e) = tasks.schedule_ambient_occlusion(&task) {
         return state.warned.once(&e);
     }
-    let mut writes: Vec<&wgpu::Texture> = vec![out_tex];
-    if let Some((v, noisy_image)) = &noisy {
-        let denoise = DenoiseDiffuseOcclusionTask { context: v.context, common: inputs.denoising(), input: *noisy_image, output };
-        if let Err(e) = tasks.schedule_denoise_diffuse_occlusion(&denoise) {
-            return state.warned.once(&e);
-        }
-        writes.push(&v.noisy);
-    }
+    let denoise = |t: &mut TaskContainer, context, common, input, output| {
+        t.schedule_denoise_diffuse_occlusion(&DenoiseDiffuseOcclusionTask { context, common, input, output })
+    };
+    let writes = match schedule_denoiser(&mut tasks, (&noisy, &inputs, output, out_tex), denoise) {
+        Ok(w) => w,
+        Err(e) => return state.warned.once(&e),
+    };
     let sinks = (&mut state.recorded, &mut state.held, &mut state.warned);
     record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt ao", inputs, &writes, out_view);
 }
@@ -448,15 +469,13 @@ pub(super) fn trace_shadow(
     if let Err(e) = tasks.schedule_shadow(&task) {
         return state.warned.once(&e);
     }
-    let mut writes: Vec<wgpu::Texture> = vec![(**out_tex).clone()];
-    if let Some((v, noisy_image)) = &noisy {
-        let denoise = DenoiseShadowTask { context: v.context, common: inputs.denoising(), light, input: *noisy_image, output };
-        if let Err(e) = tasks.schedule_denoise_shadow(&denoise) {
-            return state.warned.once(&e);
-        }
-        writes.push(v.noisy.clone());
-    }
-    let writes: Vec<&wgpu::Texture> = writes.iter().collect();
+    let denoise = |t: &mut TaskContainer, context, common, input, output| {
+        t.schedule_denoise_shadow(&DenoiseShadowTask { context, common, light, input, output })
+    };
+    let writes = match schedule_denoiser(&mut tasks, (&noisy, &inputs, output, out_tex), denoise) {
+        Ok(w) => w,
+        Err(e) => return state.warned.once(&e),
+    };
     let sinks = (&mut state.recorded, &mut state.held, &mut state.warned);
     record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt shadow", inputs, &writes, out_view);
 }
@@ -527,14 +546,13 @@ pub(super) fn trace_gi(
     if let Err(e) = tasks.schedule_direct_lighting_injection(&inject).and_then(|()| tasks.schedule_diffuse(&trace)) {
         return state.warned.once(&e);
     }
-    let mut writes: Vec<&wgpu::Texture> = vec![out_tex];
-    if let Some((v, noisy_image)) = &noisy {
-        let denoise = DenoiseDiffuseTask { context: v.context, common: inputs.denoising(), input: *noisy_image, output };
-        if let Err(e) = tasks.schedule_denoise_diffuse(&denoise) {
-            return state.warned.once(&e);
-        }
-        writes.push(&v.noisy);
-    }
+    let denoise = |t: &mut TaskContainer, context, common, input, output| {
+        t.schedule_denoise_diffuse(&DenoiseDiffuseTask { context, common, input, output })
+    };
+    let writes = match schedule_denoiser(&mut tasks, (&noisy, &inputs, output, out_tex), denoise) {
+        Ok(w) => w,
+        Err(e) => return state.warned.once(&e),
+    };
     let sinks = (&mut state.recorded, &mut state.held, &mut state.warned);
     if !record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt gi", inputs, &writes, out_view) || !settings.composite {
         return;
