@@ -4,15 +4,20 @@
 //! `--shadow-out PATH` (headless): the sun's ray-traced shadow too, its visible fraction
 //! written as a grey PNG. `--gi-out PATH` (headless): diffuse GI from the lit frame too
 //! (the camera then renders in HDR), written as a PNG (Reinhard-mapped). `--deferred`: the
-//! camera renders deferred, and the GI is added to its lit image (the screenshot shows it). `--cost FRAMES` (headless): renders that many frames after a warm-up
-//! and prints Bevy's GPU time per render pass beside the plugin's (timestamp queries), with
-//! the ray-traced AO, sun shadow and GI, with `--ssao` (Bevy's SSAO instead), or with `--plain`
-//! (neither: Bevy's frame alone).
+//! camera renders deferred, and the GI is added to its lit image (the screenshot shows it).
+//! `--reflections-out PATH` (headless, deferred): ray-traced reflections too, off a glossy
+//! floor and a chrome sphere, added to the lit image and written as a PNG (Reinhard-mapped);
+//! `--shiny`: the same floor and sphere without them (with `--plain --deferred`: Bevy's frame).
+//! `--cost FRAMES` (headless): renders that many frames after a warm-up and prints Bevy's GPU
+//! time per render pass beside the plugin's (timestamp queries), with the ray-traced AO, sun
+//! shadow and GI (and reflections, `--deferred`), with `--ssao` (Bevy's SSAO instead), or with
+//! `--plain` (neither: Bevy's frame alone).
 //!
 //! ```sh
 //! cargo run --example bevy_ao -- --out ao.png
 //! cargo run --example bevy_ao -- --out ao.png --shadow-out sun_shadow.png
 //! cargo run --example bevy_ao -- --out ao.png --gi-out gi.png
+//! cargo run --example bevy_ao -- --deferred --out lit.png --gi-out gi.png --reflections-out reflections.png
 //! cargo run --example bevy_ao -- --ssao --out ssao.png
 //! cargo run --example bevy_ao -- --window            # until the window is closed
 //! cargo run --example bevy_ao -- --window --frames 60
@@ -32,7 +37,8 @@ use bevy::render::settings::{RenderCreation, WgpuFeatures};
 use bevy::render::view::screenshot::{save_to_disk, Screenshot};
 use bevy::window::ExitCondition;
 use hybrid_rt_bevy::{
-    render_plugin, HybridRtInitPlugin, HybridRtPlugin, RayTracedAo, RayTracedGi, RayTracedShadow, DIAGNOSTIC_PATHS,
+    render_plugin, HybridRtInitPlugin, HybridRtPlugin, RayTracedAo, RayTracedGi, RayTracedReflections, RayTracedShadow,
+    DIAGNOSTIC_PATHS,
 };
 
 /// Frames rendered before the screenshot (the scene's BVH is built on the first; the AO
@@ -55,8 +61,12 @@ struct Args {
     shadow_out: Option<String>,
     /// Headless: also trace diffuse GI and write it here.
     gi_out: Option<String>,
+    /// Headless: also trace reflections (deferred) and write them here.
+    reflections_out: Option<String>,
     /// Deferred rendering (the GI composited into the lit image).
     deferred: bool,
+    /// A glossy floor and a chrome sphere (with reflections, or to compare without them).
+    shiny: bool,
     /// Headless: measure this many frames' GPU times instead of writing images.
     cost: Option<u32>,
     /// No AO of either kind and no shadow: Bevy's own frame.
@@ -73,7 +83,9 @@ fn args() -> Args {
         frames: None,
         shadow_out: None,
         gi_out: None,
+        reflections_out: None,
         deferred: false,
+        shiny: false,
         cost: None,
         plain: false,
     };
@@ -88,12 +100,17 @@ fn args() -> Args {
             "--frames" => a.frames = Some(it.next().and_then(|v| v.parse().ok()).expect("--frames N")),
             "--shadow-out" => a.shadow_out = Some(it.next().expect("--shadow-out PATH")),
             "--gi-out" => a.gi_out = Some(it.next().expect("--gi-out PATH")),
+            "--reflections-out" => a.reflections_out = Some(it.next().expect("--reflections-out PATH")),
             "--deferred" => a.deferred = true,
+            "--shiny" => a.shiny = true,
             "--cost" => a.cost = Some(it.next().and_then(|v| v.parse().ok()).expect("--cost FRAMES")),
             "--plain" => a.plain = true,
             other => panic!("unknown argument {other}"),
         }
     }
+    // Reflections need Bevy's deferred G-buffer (the pixels' roughness and specular colour).
+    a.deferred |= a.reflections_out.is_some();
+    a.shiny |= a.reflections_out.is_some();
     a
 }
 
@@ -108,6 +125,10 @@ struct Settings {
     shadow: Option<Handle<Image>>,
     /// The image diffuse GI is traced into (None: no GI traced).
     gi: Option<Handle<Image>>,
+    /// The image reflections are traced into (None: none traced).
+    reflections: Option<Handle<Image>>,
+    /// A glossy floor and a chrome sphere.
+    shiny: bool,
     /// Deferred rendering: the GI is added to the lit image.
     deferred: bool,
 }
@@ -140,14 +161,19 @@ fn main() {
     };
     let shadow =
         a.shadow_out.as_ref().map(|_| app.world_mut().resource_mut::<Assets<Image>>().add(shadow_image(a.width, a.height)));
-    let gi = a.gi_out.as_ref().map(|_| app.world_mut().resource_mut::<Assets<Image>>().add(gi_image(a.width, a.height)));
+    let mut radiance = |path: &Option<String>| {
+        path.as_ref().map(|_| app.world_mut().resource_mut::<Assets<Image>>().add(radiance_image(a.width, a.height)))
+    };
+    let (gi, reflections) = (radiance(&a.gi_out), radiance(&a.reflections_out));
     app.insert_resource(Settings {
         ssao: a.ssao,
         plain: false,
         target: Some(target.clone()),
         shadow: shadow.clone(),
         gi: gi.clone(),
+        reflections: reflections.clone(),
         deferred: a.deferred,
+        shiny: a.shiny,
     });
     app.finish();
     app.cleanup();
@@ -164,11 +190,12 @@ fn main() {
             commands.entity(ev.entity).despawn();
         });
     }
-    if let (Some(gi), Some(path)) = (gi, a.gi_out.clone()) {
+    for (image, path, exposure) in [(gi, a.gi_out.clone(), GI_EXPOSURE), (reflections, a.reflections_out.clone(), 1.0)] {
+        let (Some(image), Some(path)) = (image, path) else { continue };
         let _ = std::fs::remove_file(&path);
         let (w, h) = (a.width, a.height);
-        app.world_mut().spawn(Readback::texture(gi)).observe(move |ev: On<ReadbackComplete>, mut commands: Commands| {
-            write_radiance_png(&ev.data, w, h, GI_EXPOSURE, &path);
+        app.world_mut().spawn(Readback::texture(image)).observe(move |ev: On<ReadbackComplete>, mut commands: Commands| {
+            write_radiance_png(&ev.data, w, h, exposure, &path);
             commands.entity(ev.entity).despawn();
         });
     }
@@ -176,7 +203,8 @@ fn main() {
     for _ in 0..60 {
         app.update();
         let written = |p: &str| std::fs::metadata(p).is_ok_and(|m| m.len() > 0);
-        if written(&a.out) && a.shadow_out.as_deref().is_none_or(written) && a.gi_out.as_deref().is_none_or(written) {
+        let outputs = [&a.shadow_out, &a.gi_out, &a.reflections_out];
+        if written(&a.out) && outputs.iter().all(|p| p.as_deref().is_none_or(written)) {
             println!("wrote {}", a.out);
             print_gpu_times(&app);
             return;
@@ -211,8 +239,11 @@ fn cost(a: &Args, frames: u32) {
     let mut images = app.world_mut().resource_mut::<Assets<Image>>();
     let target = images.add(Image::new_target_texture(a.width, a.height, TextureFormat::Rgba8UnormSrgb, None));
     let shadow = (!a.plain && !a.ssao).then(|| images.add(shadow_image(a.width, a.height)));
-    let gi = (!a.plain && !a.ssao).then(|| images.add(gi_image(a.width, a.height)));
-    app.insert_resource(Settings { ssao: a.ssao, plain: a.plain, target: Some(target), shadow, gi, deferred: a.deferred });
+    let gi = (!a.plain && !a.ssao).then(|| images.add(radiance_image(a.width, a.height)));
+    let reflections = (!a.plain && !a.ssao && a.deferred).then(|| images.add(radiance_image(a.width, a.height)));
+    let target = Some(target);
+    let (ssao, plain, deferred, shiny) = (a.ssao, a.plain, a.deferred, a.shiny);
+    app.insert_resource(Settings { ssao, plain, target, shadow, gi, reflections, deferred, shiny });
     app.finish();
     app.cleanup();
     // Warm-up: pipelines, the BVH, the denoisers' histories, the GPU's clocks.
@@ -243,8 +274,8 @@ fn cost(a: &Args, frames: u32) {
     println!("update wall time: {update_ms:.3} ms");
 }
 
-/// The image diffuse GI is traced into: RGBA32F (radiance, hit distance).
-fn gi_image(width: u32, height: u32) -> Image {
+/// The image diffuse GI or reflections are traced into: RGBA32F (radiance, hit distance).
+fn radiance_image(width: u32, height: u32) -> Image {
     let extent = Extent3d { width, height, depth_or_array_layers: 1 };
     let mut image =
         Image::new_fill(extent, TextureDimension::D2, &[0u8; 16], TextureFormat::Rgba32Float, RenderAssetUsages::RENDER_WORLD);
@@ -312,7 +343,16 @@ fn window(a: &Args) {
     app.add_plugins(HybridRtInitPlugin)
         .add_plugins(DefaultPlugins.set(render_plugin()).set(WindowPlugin { primary_window: Some(window), ..default() }))
         .add_plugins(HybridRtPlugin)
-        .insert_resource(Settings { ssao: a.ssao, plain: false, target: None, shadow: None, gi: None, deferred: false })
+        .insert_resource(Settings {
+            ssao: a.ssao,
+            plain: false,
+            target: None,
+            shadow: None,
+            gi: None,
+            reflections: None,
+            deferred: false,
+            shiny: false,
+        })
         .add_systems(Startup, setup)
         .add_systems(Update, toggle_and_report);
     if let Some(frames) = a.frames {
@@ -366,19 +406,25 @@ fn setup(
     mut materials: ResMut<Assets<StandardMaterial>>,
 ) {
     let method = if settings.deferred { OpaqueRendererMethod::Deferred } else { OpaqueRendererMethod::Auto };
-    let material = |base_color, perceptual_roughness| StandardMaterial {
+    let material = |base_color, perceptual_roughness, metallic| StandardMaterial {
         base_color,
         perceptual_roughness,
+        metallic,
         opaque_render_method: method,
         ..default()
     };
-    let grey = materials.add(material(Color::srgb(0.8, 0.8, 0.8), 0.9));
-    let red = materials.add(material(Color::srgb(0.8, 0.2, 0.2), 0.6));
-    commands.spawn((Mesh3d(meshes.add(Plane3d::default().mesh().size(8.0, 8.0))), MeshMaterial3d(grey.clone())));
+    let shiny = settings.shiny;
+    let floor = materials.add(material(Color::srgb(0.8, 0.8, 0.8), if shiny { 0.25 } else { 0.9 }, 0.0));
+    let red = materials.add(material(Color::srgb(0.8, 0.2, 0.2), 0.6, 0.0));
+    let ball = match shiny {
+        true => materials.add(material(Color::srgb(0.95, 0.93, 0.88), 0.05, 1.0)),
+        false => floor.clone(),
+    };
+    commands.spawn((Mesh3d(meshes.add(Plane3d::default().mesh().size(8.0, 8.0))), MeshMaterial3d(floor)));
     commands.spawn((Mesh3d(meshes.add(Cuboid::new(1.0, 1.0, 1.0))), MeshMaterial3d(red), Transform::from_xyz(0.0, 0.5, 0.0)));
     commands.spawn((
         Mesh3d(meshes.add(Sphere::new(0.5).mesh().uv(32, 18))),
-        MeshMaterial3d(grey),
+        MeshMaterial3d(ball),
         Transform::from_xyz(1.3, 0.5, 0.6),
     ));
     commands.spawn((
@@ -408,6 +454,9 @@ fn setup(
         }
         if let Some(gi) = &settings.gi {
             camera.insert(RayTracedGi { output: gi.clone(), ..default() });
+        }
+        if let Some(reflections) = &settings.reflections {
+            camera.insert(RayTracedReflections { output: reflections.clone(), ..default() });
         }
         if settings.deferred {
             camera.insert(bevy::core_pipeline::prepass::DeferredPrepass);

@@ -1,5 +1,5 @@
-//! hybrid-rt inside Bevy: ray-traced ambient occlusion, shadows and diffuse GI for Bevy's
-//! rasterized frame.
+//! hybrid-rt inside Bevy: ray-traced ambient occlusion, shadows, reflections and diffuse GI
+//! for Bevy's rasterized frame.
 //!
 //! Bevy keeps its renderer. Each frame the plugin
 //! - mirrors the scene into the SDK: every visible entity with a `Mesh3d` becomes an SDK
@@ -13,8 +13,9 @@
 //! - traces the shadow of a light (the sun, a point or a spot light) from the same prepass into
 //!   an image of the application's, for its own compositing ([`RayTracedShadow`]);
 //! - injects the camera's lit frame into the SDK's direct-lighting cache and traces diffuse GI
-//!   from it into an image of the application's, which for a deferred camera it also adds to
-//!   the lit image ([`RayTracedGi`]);
+//!   ([`RayTracedGi`]) and reflections ([`RayTracedReflections`], deferred cameras) from it
+//!   into images of the application's, which for a deferred camera it also adds to the lit
+//!   image;
 //! - records the SDK's work into a command buffer placed among Bevy's own, and hands each
 //!   ticket back once the queue has finished the frame, with the SDK's per-task GPU times
 //!   published as Bevy diagnostics ([`DIAGNOSTIC_PATHS`]).
@@ -32,14 +33,15 @@
 //! ```
 //! and a camera takes [`RayTracedAo`] (which brings Bevy's depth and normal prepasses and its
 //! AO texture with it; the camera needs `Msaa::Off`, as Bevy's SSAO does) and/or
-//! [`RayTracedShadow`] (which brings the prepasses).
+//! [`RayTracedShadow`] (which brings the prepasses), [`RayTracedGi`] and
+//! [`RayTracedReflections`].
 #![deny(missing_docs)]
 
 mod render;
 mod scene;
 
 use bevy::camera::Hdr;
-use bevy::core_pipeline::prepass::{DepthPrepass, NormalPrepass};
+use bevy::core_pipeline::prepass::{DeferredPrepass, DepthPrepass, NormalPrepass};
 use bevy::diagnostic::{Diagnostic, DiagnosticPath, Diagnostics, RegisterDiagnostic};
 use bevy::pbr::ScreenSpaceAmbientOcclusion;
 use bevy::prelude::*;
@@ -197,6 +199,70 @@ impl Default for RayTracedGi {
     }
 }
 
+/// Ray-traced reflections for a deferred 3D camera: the light each pixel's specular lobe
+/// reflects — mirrors exactly, rough surfaces by sampling their GGX lobe — traced from Bevy's
+/// prepass and deferred G-buffer (roughness per pixel), denoised into an image of the
+/// application's, and added to the lit image (times each pixel's environment BRDF, as Bevy
+/// weighs its environment map's light) before transparent surfaces are drawn.
+///
+/// Reflected surfaces are shaded as the GI's rays shade theirs: from Bevy's lit frame where
+/// the camera sees them (sharp, this frame's lighting), elsewhere from the SDK's
+/// direct-lighting cache, into which the camera's lit frame is injected each frame (once, when
+/// the camera has [`RayTracedGi`] too, with the GI's `cache_average_frames`). Surfaces no
+/// camera has shown yet reflect black until one does. Like Bevy's screen-space reflections,
+/// it needs deferred rendering (the roughness and specular colour of a forward camera's pixels
+/// are in no texture) and `Msaa::Off`; it brings `DeferredPrepass` and `Hdr`. Unlit surfaces
+/// reflect nothing. Toggle `enabled` at run time.
+#[derive(Component, Clone, Debug, PartialEq, ExtractComponent)]
+#[extract_app(bevy::render::RenderApp)]
+#[require(DepthPrepass, NormalPrepass, DeferredPrepass, Hdr)]
+pub struct RayTracedReflections {
+    /// Trace (true), or leave the image and the lit image as they are. Default true.
+    pub enabled: bool,
+    /// Rays per pixel on rough surfaces (1..=64); mirrors trace one. Default 1.
+    pub rays_per_pixel: u32,
+    /// Surfaces rougher than this (Bevy's perceptual roughness, 0..=1) are not traced: they
+    /// keep the specular Bevy's lighting gives them, and cost no rays. Default 1.0 (all).
+    pub max_roughness: f32,
+    /// The longest ray in world units (> 0). Default 100.
+    pub ray_length: f32,
+    /// Radiance (linear RGB) of rays that hit nothing: a constant sky. Default black.
+    pub miss_radiance: [f32; 3],
+    /// Frames over which the cache averages each surface's lit colour (>= 1), when the camera
+    /// has no enabled [`RayTracedGi`] (whose setting governs otherwise). Default 30.
+    pub cache_average_frames: f32,
+    /// Denoise (the SDK's specular denoiser: temporal, along Bevy's motion vectors where the
+    /// camera has `MotionVectorPrepass`, then spatial, as wide as each pixel's roughness and
+    /// hit distance allow; mirrors stay sharp). Default true.
+    pub denoise: bool,
+    /// Add the reflections to the lit image, times each pixel's environment BRDF (Bevy's
+    /// split-sum terms for its specular colour, roughness and view angle); `output` then needs
+    /// `TEXTURE_BINDING` usage too. Lower the specular of Bevy's `GlobalAmbientLight` or
+    /// environment map where the reflections take its place. Default true.
+    pub composite: bool,
+    /// Where the reflections go: an `Rgba16Float` or `Rgba32Float` image of the view's size
+    /// with `STORAGE_BINDING` usage, created with contents. RGB: the reflected radiance,
+    /// weighted by the lobe's shadowing and masking but not by Fresnel (times the environment
+    /// BRDF over the lobe's albedo, the light the surface reflects); A: the distance to the hits.
+    pub output: Handle<Image>,
+}
+
+impl Default for RayTracedReflections {
+    fn default() -> Self {
+        RayTracedReflections {
+            enabled: true,
+            rays_per_pixel: 1,
+            max_roughness: 1.0,
+            ray_length: 100.0,
+            miss_radiance: [0.0; 3],
+            cache_average_frames: 30.0,
+            denoise: true,
+            composite: true,
+            output: Handle::default(),
+        }
+    }
+}
+
 /// Adds what the SDK needs to the Vulkan device Bevy is about to create. Add it *before*
 /// `DefaultPlugins` (Bevy reads the device callbacks when its render plugin is built), with
 /// [`render_plugin`] in place of Bevy's default `RenderPlugin`.
@@ -228,10 +294,12 @@ pub struct HybridRtTimings(pub Arc<Mutex<Vec<(String, f64)>>>);
 
 /// Diagnostics the plugin publishes, in milliseconds of GPU time (the SDK's timestamp queries):
 /// the scene's sync and BVH builds (frames that change the scene), AO traced and denoised (all
-/// cameras), the shadow traced and denoised (all cameras), the GI's injection, trace and
-/// denoising (all cameras), and the SDK's whole frame.
-pub const DIAGNOSTIC_PATHS: [&str; 5] =
-    ["hybrid_rt/scene", "hybrid_rt/ao", "hybrid_rt/shadow", "hybrid_rt/gi", "hybrid_rt/frame"];
+/// cameras), the shadow traced and denoised (all cameras), the GI traced and denoised with the
+/// lit frame's injection into the cache (all cameras; the reflections read the cache too, and
+/// its injection counts here where a camera traces only reflections), the reflections traced
+/// and denoised (all cameras), and the SDK's whole frame.
+pub const DIAGNOSTIC_PATHS: [&str; 6] =
+    ["hybrid_rt/scene", "hybrid_rt/ao", "hybrid_rt/shadow", "hybrid_rt/gi", "hybrid_rt/reflections", "hybrid_rt/frame"];
 
 /// Diagnostic: how many cameras hold an AO denoiser history (about 8 bytes a pixel of the
 /// view, besides the view's shared denoising guide). A camera's history is freed a few frames after it stops
@@ -244,6 +312,9 @@ pub const DIAGNOSTIC_SHADOW_HISTORIES: &str = "hybrid_rt/shadow_histories";
 /// Diagnostic: how many cameras hold a GI denoiser history, freed as the AO's are.
 pub const DIAGNOSTIC_GI_HISTORIES: &str = "hybrid_rt/gi_histories";
 
+/// Diagnostic: how many cameras hold a reflections denoiser history, freed as the AO's are.
+pub const DIAGNOSTIC_REFLECTIONS_HISTORIES: &str = "hybrid_rt/reflections_histories";
+
 impl Plugin for HybridRtPlugin {
     fn build(&self, app: &mut App) {
         let timings = HybridRtTimings::default();
@@ -251,12 +322,15 @@ impl Plugin for HybridRtPlugin {
             ExtractComponentPlugin::<RayTracedAo>::default(),
             ExtractComponentPlugin::<RayTracedShadow>::default(),
             ExtractComponentPlugin::<RayTracedGi>::default(),
+            ExtractComponentPlugin::<RayTracedReflections>::default(),
         ))
         .insert_resource(timings.clone());
         for path in DIAGNOSTIC_PATHS {
             app.register_diagnostic(Diagnostic::new(DiagnosticPath::new(path)).with_suffix(" ms"));
         }
-        for path in [DIAGNOSTIC_AO_HISTORIES, DIAGNOSTIC_SHADOW_HISTORIES, DIAGNOSTIC_GI_HISTORIES] {
+        for path in
+            [DIAGNOSTIC_AO_HISTORIES, DIAGNOSTIC_SHADOW_HISTORIES, DIAGNOSTIC_GI_HISTORIES, DIAGNOSTIC_REFLECTIONS_HISTORIES]
+        {
             app.register_diagnostic(Diagnostic::new(DiagnosticPath::new(path)));
         }
         app.add_systems(Update, publish_timings);

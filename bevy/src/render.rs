@@ -1,8 +1,9 @@
 //! Bevy's render world: the SDK's context on Bevy's device, the scene sync before the cameras
 //! render, AO and a light's shadow per camera between Bevy's SSAO and its opaque pass, tickets
 //! handed back once the queue has done the frame.
-mod composite;
+mod deferred;
 mod effects;
+mod lighting;
 
 use crate::scene::{extract_instances, ExtractedInstances, SceneMirror};
 use crate::HybridRtTimings;
@@ -19,14 +20,15 @@ use bevy::render::render_asset::RenderAssets;
 use bevy::render::renderer::{RenderAdapter, RenderContext, RenderDevice, RenderGraph, RenderGraphSystems, RenderQueue};
 use bevy::render::view::RetainedViewEntity;
 use bevy::render::{ExtractSchedule, RenderApp};
-use effects::{extract_lights, skip_replaced_ssao, trace_ao, trace_gi, trace_shadow, Effect, ExtractedLights, ViewDenoiser};
+use effects::{extract_lights, skip_replaced_ssao, trace_ao, trace_shadow, Effect, ExtractedLights, ViewDenoiser};
 use hybrid_rt::{BvhBuildTask, CompletedTask, GpuTicket, InitSettings, TaskKind};
 use hybrid_rt_wgpu::{prepare, wgpu, RtDevice};
+use lighting::{trace_lighting, ViewImage};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 /// The SDK's working sets (tickets in flight at once): frames in flight (3) x tickets a frame
-/// (the scene's, and one camera's AO, shadow and GI).
+/// (the scene's, and one camera's AO, shadow, and GI with reflections).
 const WORKING_SETS: u32 = 12;
 
 /// wgpu objects (reference-counted handles) kept until a ticket is back.
@@ -34,7 +36,7 @@ const WORKING_SETS: u32 = 12;
 struct Held {
     buffers: Vec<wgpu::Buffer>,
     textures: Vec<wgpu::Texture>,
-    views: Vec<bevy::render::render_resource::TextureView>,
+    views: Vec<wgpu::TextureView>,
 }
 
 /// The SDK in Bevy's render world.
@@ -57,8 +59,11 @@ pub(crate) struct HybridRt {
     views: HashMap<(RetainedViewEntity, Effect), ViewDenoiser>,
     /// Frames rendered (for dropping the contexts of cameras gone).
     frame: u64,
-    /// The GI composite's pipelines (made when a deferred camera first needs them).
-    composite: Option<composite::GiComposite>,
+    /// Per camera tracing reflections: its deferred G-buffer decoded for the SDK.
+    decoded: HashMap<RetainedViewEntity, ViewImage>,
+    /// The deferred G-buffer's decode and composite pipelines (made when a deferred camera
+    /// first needs them).
+    deferred: Option<deferred::DeferredPasses>,
     /// Messages already logged: a refused input is reported once, not every frame.
     warned: Warnings,
 }
@@ -120,7 +125,7 @@ pub(crate) fn build(app: &mut App, timings: HybridRtTimings) {
         // forward opaque pass), before transparent surfaces are drawn over it.
         .add_systems(
             Core3d,
-            trace_gi.in_set(Core3dSystems::MainPass).after(main_opaque_pass_3d).before(main_transparent_pass_3d),
+            trace_lighting.in_set(Core3dSystems::MainPass).after(main_opaque_pass_3d).before(main_transparent_pass_3d),
         );
 }
 
@@ -184,11 +189,13 @@ fn sync_scene(
         }
         keep
     });
+    state.decoded.retain(|_, image| frame - image.last_used <= VIEW_GRACE_FRAMES);
     let histories = |effect: Effect| state.views.keys().filter(|(_, e)| *e == effect).count() as f64;
     let counts = [
         ("ao_histories", histories(Effect::Ao)),
         ("shadow_histories", histories(Effect::Shadow)),
         ("gi_histories", histories(Effect::Gi)),
+        ("reflections_histories", histories(Effect::Reflections)),
     ];
     timings.0.lock().extend(counts.map(|(name, n)| (name.to_string(), n)));
     let mut tasks = rt.context().create_task_container();
@@ -244,6 +251,7 @@ struct FrameTimes {
     ao: f64,
     shadow: f64,
     gi: f64,
+    reflections: f64,
     total: f64,
 }
 
@@ -255,6 +263,7 @@ impl FrameTimes {
                 TaskKind::AmbientOcclusion | TaskKind::DenoiseDiffuseOcclusion => self.ao += t.gpu_ms,
                 TaskKind::Shadow | TaskKind::DenoiseShadow => self.shadow += t.gpu_ms,
                 TaskKind::DirectLightingInjection | TaskKind::Diffuse | TaskKind::DenoiseDiffuse => self.gi += t.gpu_ms,
+                TaskKind::Specular | TaskKind::DenoiseSpecular => self.reflections += t.gpu_ms,
                 _ => self.scene += t.gpu_ms,
             }
         }
@@ -273,6 +282,9 @@ impl FrameTimes {
         }
         if self.gi > 0.0 {
             out.push(("gi".into(), self.gi));
+        }
+        if self.reflections > 0.0 {
+            out.push(("reflections".into(), self.reflections));
         }
         out.push(("frame".into(), self.total));
     }

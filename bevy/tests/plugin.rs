@@ -12,7 +12,9 @@ use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat, TextureUsages};
 use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured};
 use bevy::window::ExitCondition;
-use hybrid_rt_bevy::{render_plugin, AoOutput, HybridRtInitPlugin, HybridRtPlugin, RayTracedAo, RayTracedGi, RayTracedShadow};
+use hybrid_rt_bevy::{
+    render_plugin, AoOutput, HybridRtInitPlugin, HybridRtPlugin, RayTracedAo, RayTracedGi, RayTracedReflections, RayTracedShadow,
+};
 use hybrid_rt_testkit::reference::{self, AoParams, GBuffer, Mesh as RefMesh, Scene as RefScene, Tracer};
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Mutex};
@@ -71,6 +73,9 @@ struct Readbacks {
     shadow: Latest,
     gi: Latest,
     gi_image: Handle<Image>,
+    /// The reflections' red channel (the camera takes them later).
+    reflections: Latest,
+    reflections_image: Handle<Image>,
     /// The camera's render target.
     target: Handle<Image>,
 }
@@ -105,6 +110,7 @@ fn app() -> (App, Readbacks) {
     let ao = storage_image(&0.5f32.to_ne_bytes(), TextureFormat::R32Float, &mut app);
     let shadow = storage_image(&[0u8; 8], TextureFormat::Rgba16Float, &mut app);
     latest.gi_image = storage_image(&[0u8; 16], TextureFormat::Rgba32Float, &mut app);
+    latest.reflections_image = storage_image(&[0u8; 16], TextureFormat::Rgba32Float, &mut app);
     let world = app.world_mut();
     world.spawn((
         DirectionalLight { shadow_maps_enabled: false, ..default() },
@@ -146,15 +152,43 @@ fn app() -> (App, Readbacks) {
         g.0 = green_f16(&ev.data);
         g.1 += 1;
     });
-    let l = latest.gi.clone();
-    world.spawn(Readback::texture(latest.gi_image.clone())).observe(move |ev: On<ReadbackComplete>| {
-        let mut g = l.0.lock().unwrap();
-        g.0 = red_f32(&ev.data, 16);
-        g.1 += 1;
-    });
+    for (l, image) in [(&latest.gi, &latest.gi_image), (&latest.reflections, &latest.reflections_image)] {
+        let l = l.clone();
+        world.spawn(Readback::texture(image.clone())).observe(move |ev: On<ReadbackComplete>| {
+            let mut g = l.0.lock().unwrap();
+            g.0 = red_f32(&ev.data, 16);
+            g.1 += 1;
+        });
+    }
     app.finish();
     app.cleanup();
     (app, latest)
+}
+
+/// The red channel of the camera's next frame (a screenshot of its 8-bit sRGB target), linear.
+fn screenshot_red(app: &mut App, target: &Handle<Image>) -> Vec<f32> {
+    let shot: Arc<Mutex<Option<Vec<u8>>>> = Arc::default();
+    let into = shot.clone();
+    app.world_mut().spawn(Screenshot::image(target.clone())).observe(move |ev: On<ScreenshotCaptured>| {
+        *into.lock().unwrap() = ev.image.data.clone();
+    });
+    for _ in 0..10 {
+        app.update();
+        if shot.lock().unwrap().is_some() {
+            break;
+        }
+    }
+    let shot = shot.lock().unwrap().clone().expect("the screenshot came back");
+    assert_eq!(shot.len(), (W * H * 4) as usize, "the screenshot's size");
+    let linear = |b: u8| {
+        let c = b as f32 / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    shot.chunks_exact(4).map(|t| linear(t[0])).collect()
 }
 
 /// The plugin's count of cameras holding a denoiser history of one effect (a diagnostic of
@@ -616,37 +650,125 @@ fn ray_traced_ao_in_a_bevy_frame() {
         assert!(gi.composite, "the composite is on by default");
     }
     frames(&mut app, &latest.gi, 8);
-    let shot: Arc<Mutex<Option<Vec<u8>>>> = Arc::default();
-    let into = shot.clone();
-    app.world_mut().spawn(Screenshot::image(latest.target.clone())).observe(move |ev: On<ScreenshotCaptured>| {
-        *into.lock().unwrap() = ev.image.data.clone();
-    });
-    for _ in 0..10 {
-        app.update();
-        if shot.lock().unwrap().is_some() {
-            break;
-        }
-    }
+    let floor = screenshot_red(&mut app, &latest.target);
     let gi = frames(&mut app, &latest.gi, 1);
-    let shot = shot.lock().unwrap().clone().expect("the screenshot came back");
-    assert_eq!(shot.len(), (W * H * 4) as usize, "the screenshot's size");
-    let linear = |b: u8| {
-        let c = b as f32 / 255.0;
-        if c <= 0.04045 {
-            c / 12.92
-        } else {
-            ((c + 0.055) / 1.055).powf(2.4)
-        }
-    };
-    let floor: Vec<f32> = shot.chunks_exact(4).map(|t| linear(t[0])).collect();
     let mean = |v: &[f32]| v.iter().zip(&front).filter(|(_, m)| **m).map(|(x, _)| *x as f64).sum::<f64>() / pixels as f64;
     let (lit, want) = (mean(&floor), 0.5 * mean(&gi));
     eprintln!("deferred camera, lights off: the floor's mean {lit:.4}, 0.5 x its GI {want:.4}");
     assert!(want > 0.02, "the floor receives the cube's light ({want})");
     assert!((lit / want - 1.0).abs() <= 0.03, "the composite added {lit}, not 0.5 x the GI ({want})");
+
+    // 8. Reflections: the floor turns into a mirror (white metal, roughness 0), the cube unlit
+    // again, the GI off (the reflections inject the lit frame themselves). A mirror's one ray
+    // is exact: the trace's red channel is the cube's colour where the reference's mirror ray
+    // from the floor hits the cube's front face (the only face the camera shows: the lit frame
+    // gives it), black elsewhere — but for pixels along the reflection's edges. The composite
+    // adds the reflection times the environment BRDF, 1 for a white metal, to a floor otherwise
+    // black (lights off): the final floor is the reflection.
+    {
+        let world = app.world_mut();
+        let deferred = bevy::material::OpaqueRendererMethod::Deferred;
+        let mut materials = world.resource_mut::<Assets<StandardMaterial>>();
+        let mirror = StandardMaterial {
+            base_color: Color::WHITE,
+            metallic: 1.0,
+            perceptual_roughness: 0.0,
+            opaque_render_method: deferred,
+            ..default()
+        };
+        let unlit = StandardMaterial {
+            base_color: Color::linear_rgb(colour[0], colour[1], colour[2]),
+            unlit: true,
+            opaque_render_method: deferred,
+            ..default()
+        };
+        let (mirror, unlit) = (materials.add(mirror), materials.add(unlit));
+        let ground = world.query_filtered::<Entity, With<Mesh3d>>().iter(world).find(|e| *e != cube).unwrap();
+        world.entity_mut(ground).insert(MeshMaterial3d(mirror));
+        world.entity_mut(cube).insert(MeshMaterial3d(unlit));
+        world.get_mut::<RayTracedGi>(camera).unwrap().enabled = false;
+        let reflections = RayTracedReflections {
+            cache_average_frames: 1.0,
+            denoise: false,
+            output: latest.reflections_image.clone(),
+            ..default()
+        };
+        world.entity_mut(camera).insert(reflections);
+    }
+    let reflected = frames(&mut app, &latest.reflections, 4);
+    let want: Vec<f32> = (0..g.hit.len())
+        .map(|i| {
+            let (p, n) = (g.position[i], g.normal[i]);
+            let d = (p - eye.eye).normalize();
+            let r = d - 2.0 * d.dot(n) * n;
+            match tracer.closest_hit(p + n * 1e-3, r, 0.0, 100.0) {
+                Some(hit) if hit.instance == 1 && seen(p + r * hit.t) => colour[0],
+                _ => 0.0,
+            }
+        })
+        .collect();
+    let floor_mask: Vec<bool> = (0..g.hit.len()).map(|i| interior[i] && g.normal[i].y > 0.9 && g.position[i].y < 0.01).collect();
+    let (differ, shows) =
+        floor_mask.iter().enumerate().filter(|(_, m)| **m).fold((0, 0), |(d, s), (i, _)| {
+            (d + usize::from((reflected[i] - want[i]).abs() > 0.25), s + usize::from(want[i] > 0.5))
+        });
+    let pixels = floor_mask.iter().filter(|m| **m).count();
+    eprintln!("mirror floor: {differ} of {pixels} px differ from the reference's reflection ({shows} px show the cube)");
+    assert!(shows > 100, "the mirror shows the cube ({shows} px)");
+    assert!(differ * 50 <= pixels, "reflections: {differ} of {pixels} floor pixels differ from the reference");
+    let floor = screenshot_red(&mut app, &latest.target);
+    let reflected = frames(&mut app, &latest.reflections, 1);
+    let mean =
+        |v: &[f32]| v.iter().zip(&floor_mask).filter(|(_, m)| **m).map(|(x, _)| x.min(1.0) as f64).sum::<f64>() / pixels as f64;
+    let (lit, want) = (mean(&floor), mean(&reflected));
+    eprintln!("mirror floor composited: the floor's mean {lit:.4}, its reflection's {want:.4}");
+    assert!(want > 0.05 && (lit / want - 1.0).abs() <= 0.03, "the composite added {lit}, not the reflection ({want})");
+    assert_eq!(histories(&app, hybrid_rt_bevy::DIAGNOSTIC_REFLECTIONS_HISTORIES), 0.0, "a raw trace keeps no history");
+    // A glossy floor (perceptual roughness 0.3, read from the G-buffer): the reflection's edge
+    // spreads over many pixels where the mirror's was a step.
+    let blurred = |v: &[f32]| v.iter().zip(&floor_mask).filter(|(x, m)| **m && **x > 0.1 && **x < 0.9).count();
+    let mirror_edge = blurred(&reflected);
+    let floor_material = |app: &mut App| {
+        let world = app.world_mut();
+        let ground = world.query_filtered::<Entity, With<Mesh3d>>().iter(world).find(|e| *e != cube).unwrap();
+        world.get::<MeshMaterial3d<StandardMaterial>>(ground).unwrap().0.clone()
+    };
+    let glossy_floor = floor_material(&mut app);
+    app.world_mut().resource_mut::<Assets<StandardMaterial>>().get_mut(&glossy_floor).unwrap().perceptual_roughness = 0.3;
+    app.world_mut().get_mut::<RayTracedReflections>(camera).unwrap().rays_per_pixel = RAYS;
+    let glossy = frames(&mut app, &latest.reflections, 3);
+    let glossy_edge = blurred(&glossy);
+    eprintln!("glossy floor, 64 rays: {glossy_edge} px between 0.1 and 0.9 (the mirror: {mirror_edge})");
+    assert!(
+        glossy_edge > 100 && glossy_edge > 4 * mirror_edge,
+        "the roughness blurs the reflection ({glossy_edge} px, mirror {mirror_edge})"
+    );
+    // 1 ray a pixel, denoised, 16 frames, against the 64-ray trace: the temporal average alone
+    // leaves at most 0.5 / sqrt(16) = 0.125 of deviation where the lobe straddles the cube's
+    // edge (the 64-ray trace's own: 0.06), the spatial filter at least halves it; the means
+    // within 0.01 (sampling: 0.35 / sqrt(300 edge px x 16 frames) = 0.005).
+    {
+        let mut r = app.world_mut().get_mut::<RayTracedReflections>(camera).unwrap();
+        r.rays_per_pixel = 1;
+        r.denoise = true;
+    }
+    let denoised = frames(&mut app, &latest.reflections, 16);
+    let (rmse, bias, _) = compare(&denoised, &glossy, &floor_mask);
+    eprintln!("glossy floor, 1 ray, denoised, 16 frames: RMSE {rmse:.3}, mean difference {bias:+.4} against 64 rays");
+    assert_eq!(histories(&app, hybrid_rt_bevy::DIAGNOSTIC_REFLECTIONS_HISTORIES), 1.0, "the camera's reflections history");
+    assert!(rmse <= 0.06 && bias.abs() <= 0.01, "denoised glossy reflections: RMSE {rmse}, off by {bias}");
+    // Rougher than `max_roughness`: the floor is left out (no rays, nothing reflected).
+    {
+        let mut r = app.world_mut().get_mut::<RayTracedReflections>(camera).unwrap();
+        r.max_roughness = 0.2;
+        r.denoise = false;
+    }
+    let left_out = frames(&mut app, &latest.reflections, 4);
+    let reflecting = left_out.iter().zip(&floor_mask).filter(|(x, m)| **m && **x > 0.01).count();
+    assert_eq!(reflecting, 0, "{reflecting} floor pixels rougher than max_roughness reflect");
     app.world_mut().despawn(cube);
 
-    // 8. The SDK's GPU times reached Bevy's diagnostics.
+    // 9. The SDK's GPU times reached Bevy's diagnostics.
     let store = app.world().resource::<bevy::diagnostic::DiagnosticsStore>();
     for path in hybrid_rt_bevy::DIAGNOSTIC_PATHS {
         let d = store.get(&bevy::diagnostic::DiagnosticPath::new(path)).expect("registered");

@@ -1,10 +1,11 @@
 //! The effects traced per camera from Bevy's prepass — AO (into Bevy's AO texture or the
-//! application's image) and a light's shadow (into the application's image) — with the
-//! denoiser each keeps per camera, and the lights the shadows are traced from.
-use super::composite::GiComposite;
+//! application's image) and a light's shadow (into the application's image) — with what every
+//! effect shares: the denoiser each keeps per camera, the prepass as the SDK reads it, and the
+//! recording of a camera's tasks among Bevy's commands; and the lights the shadows are traced
+//! from.
 use super::{Held, HybridRt, Warnings};
 use crate::scene::ExtractedInstances;
-use crate::{AoOutput, RayTracedAo, RayTracedGi, RayTracedShadow};
+use crate::{AoOutput, RayTracedAo, RayTracedShadow};
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::pbr::{ScreenSpaceAmbientOcclusionResources, SsaoBindGroups};
 use bevy::platform::collections::HashMap;
@@ -12,14 +13,13 @@ use bevy::prelude::*;
 use bevy::render::render_asset::RenderAssets;
 use bevy::render::renderer::{RenderContext, ViewQuery};
 use bevy::render::texture::GpuImage;
-use bevy::render::view::{ExtractedView, RetainedViewEntity, ViewTarget};
+use bevy::render::view::{ExtractedView, RetainedViewEntity};
 use bevy::render::Extract;
 use hybrid_rt::glam::Mat4;
 use hybrid_rt::{
-    DenoiseDiffuseOcclusionTask, DenoiseDiffuseTask, DenoiseShadowTask, DenoisingCommon, DenoisingContextHandle,
-    DenoisingContextInput, DepthInput, DirectLightingInjectionTask, GpuTicket, ImageInput, LightInfo, LightType, MotionInput,
-    MotionType, NormalInput, NormalType, SignalType, TaskContainer, TraceAmbientOcclusionTask, TraceCommon, TraceDiffuseTask,
-    TraceShadowTask, Viewport,
+    DenoiseDiffuseOcclusionTask, DenoiseShadowTask, DenoisingCommon, DenoisingContextHandle, DenoisingContextInput, DepthInput,
+    GpuTicket, ImageInput, LightInfo, LightType, MotionInput, MotionType, NormalInput, NormalType, SignalType, TaskContainer,
+    TraceAmbientOcclusionTask, TraceCommon, TraceShadowTask, Viewport,
 };
 use hybrid_rt_wgpu::{prepare, wgpu, RtDevice};
 
@@ -29,6 +29,7 @@ pub(super) enum Effect {
     Ao,
     Shadow,
     Gi,
+    Reflections,
 }
 
 impl Effect {
@@ -37,6 +38,7 @@ impl Effect {
             Effect::Ao => SignalType::DiffuseOcclusion,
             Effect::Shadow => SignalType::Shadow,
             Effect::Gi => SignalType::Diffuse,
+            Effect::Reflections => SignalType::Specular,
         }
     }
 
@@ -45,7 +47,7 @@ impl Effect {
     fn noisy_format(self) -> wgpu::TextureFormat {
         match self {
             Effect::Ao => wgpu::TextureFormat::R32Float,
-            Effect::Shadow | Effect::Gi => wgpu::TextureFormat::Rgba16Float,
+            Effect::Shadow | Effect::Gi | Effect::Reflections => wgpu::TextureFormat::Rgba16Float,
         }
     }
 }
@@ -151,11 +153,11 @@ pub(super) fn extract_lights(
 
 /// What a camera's traces read from Bevy's prepass (its depth and world-space normals, as they
 /// are), with the wgpu objects to keep until the ticket is back.
-struct PrepassInputs {
-    common: TraceCommon,
-    motion: MotionInput,
-    textures: Vec<wgpu::Texture>,
-    views: Vec<bevy::render::render_resource::TextureView>,
+pub(super) struct PrepassInputs {
+    pub(super) common: TraceCommon,
+    pub(super) motion: MotionInput,
+    pub(super) textures: Vec<wgpu::Texture>,
+    pub(super) views: Vec<wgpu::TextureView>,
 }
 
 /// The SDK's inputs from the view's prepass textures for an output of `size` (None: the prepass
@@ -174,14 +176,14 @@ fn prepass_inputs(
     let depth_image = rt.image(&depth.texture.texture, depth_view, hybrid_rt_wgpu::SDK_READ)?;
     let normal_image = rt.image(&normal.texture.texture, &normal.texture.default_view, hybrid_rt_wgpu::SDK_READ)?;
     let mut textures = vec![(*depth.texture.texture).clone(), (*normal.texture.texture).clone()];
-    let mut views = vec![depth_view.clone(), normal.texture.default_view.clone()];
+    let mut views = vec![(**depth_view).clone(), (*normal.texture.default_view).clone()];
     // Bevy's motion vectors: current minus previous position in UV (y down); the SDK takes
     // previous minus current in normalized device coordinates (twice UV, y down too).
     let motion = match (prepass.motion_vectors.as_ref(), prepass.motion_vectors_view()) {
         (Some(mv), Some(mv_view)) => {
             let image = rt.image(&mv.texture.texture, mv_view, hybrid_rt_wgpu::SDK_READ)?;
             textures.push((*mv.texture.texture).clone());
-            views.push(mv_view.clone());
+            views.push((**mv_view).clone());
             MotionInput { image, motion_type: MotionType::RgClipSpace, scale: [-2.0, -2.0, 1.0] }
         }
         _ => MotionInput::default(),
@@ -204,6 +206,8 @@ impl PrepassInputs {
         DenoisingCommon {
             depth: c.depth,
             normals: c.normals,
+            roughness: c.roughness,
+            input_mask: c.input_mask,
             motion: self.motion,
             viewport: c.viewport,
             camera: c.camera,
@@ -239,22 +243,30 @@ fn view_denoiser<'a>(
 /// What one camera's effect writes and reads: the SDK's view of the output image, the prepass
 /// inputs at its size, and, denoised, the view's denoiser with its noisy image (which the trace
 /// writes then, for the denoiser to read).
-struct EffectTargets<'a> {
-    output: ImageInput,
-    inputs: PrepassInputs,
-    noisy: Option<(&'a ViewDenoiser, ImageInput)>,
+pub(super) struct EffectTargets {
+    pub(super) output: ImageInput,
+    pub(super) inputs: PrepassInputs,
+    pub(super) noisy: Option<Noisy>,
+}
+
+/// A denoised effect's noisy trace: the denoiser's context, and the texture the trace writes
+/// and the denoiser reads.
+pub(super) struct Noisy {
+    pub(super) context: DenoisingContextHandle,
+    pub(super) texture: wgpu::Texture,
+    pub(super) image: ImageInput,
 }
 
 /// The targets of `effect` for a camera writing `out` (None: nothing to trace this frame, or
 /// input the SDK refused, logged once).
-fn effect_targets<'a>(
+pub(super) fn effect_targets(
     rt: &RtDevice,
-    (views, warned, frame): (&'a mut HashMap<(RetainedViewEntity, Effect), ViewDenoiser>, &mut Warnings, u64),
+    (views, warned, frame): (&mut HashMap<(RetainedViewEntity, Effect), ViewDenoiser>, &mut Warnings, u64),
     (view, prepass): (&ExtractedView, &ViewPrepassTextures),
     (out_tex, out_view): (&wgpu::Texture, &wgpu::TextureView),
     effect: Effect,
     denoise: bool,
-) -> Option<EffectTargets<'a>> {
+) -> Option<EffectTargets> {
     let attempt = || -> Result<Option<(ImageInput, PrepassInputs)>, hybrid_rt_wgpu::BridgeError> {
         let output = rt.image(out_tex, out_view, hybrid_rt_wgpu::SDK_WRITE)?;
         Ok(prepass_inputs(rt, view, prepass, (output.width, output.height))?.map(|inputs| (output, inputs)))
@@ -272,7 +284,7 @@ fn effect_targets<'a>(
             let size = (output.width, output.height);
             let v = view_denoiser(views, rt, (view.retained_view_entity, effect), size, frame, warned)?;
             match rt.image(&v.noisy, &v.noisy_view, hybrid_rt_wgpu::SDK_WRITE) {
-                Ok(i) => Some((v, i)),
+                Ok(image) => Some(Noisy { context: v.context, texture: v.noisy.clone(), image }),
                 Err(e) => {
                     warned.once(&e);
                     return None;
@@ -287,9 +299,9 @@ fn effect_targets<'a>(
 /// Schedules the effect's denoiser where it has one — `schedule(tasks, context, common, the
 /// noisy trace, the output)` — and returns the textures the container writes: the output, and
 /// the noisy trace the denoiser reads.
-fn schedule_denoiser<'a>(
+pub(super) fn schedule_denoiser(
     tasks: &mut TaskContainer,
-    (noisy, inputs, output, out_tex): (&Option<(&'a ViewDenoiser, ImageInput)>, &PrepassInputs, ImageInput, &'a wgpu::Texture),
+    (noisy, inputs, output, out_tex): (&Option<Noisy>, &PrepassInputs, ImageInput, &wgpu::Texture),
     schedule: impl FnOnce(
         &mut TaskContainer,
         DenoisingContextHandle,
@@ -297,40 +309,41 @@ fn schedule_denoiser<'a>(
         ImageInput,
         ImageInput,
     ) -> hybrid_rt::Result<()>,
-) -> hybrid_rt::Result<Vec<&'a wgpu::Texture>> {
-    let mut writes = vec![out_tex];
-    if let Some((v, noisy_image)) = noisy {
-        schedule(tasks, v.context, inputs.denoising(), *noisy_image, output)?;
-        writes.push(&v.noisy);
+) -> hybrid_rt::Result<Vec<wgpu::Texture>> {
+    let mut writes = vec![out_tex.clone()];
+    if let Some(n) = noisy {
+        schedule(tasks, n.context, inputs.denoising(), n.image, output)?;
+        writes.push(n.texture.clone());
     }
     Ok(writes)
 }
 
 /// Records one camera's tasks into a command buffer placed among Bevy's (after the barriers
-/// that hand the textures to the SDK), and keeps the wgpu objects they use until the ticket is
-/// back.
+/// that hand the textures to the SDK: `inputs`' to read, `writes` to write), and keeps the
+/// wgpu objects they use until the ticket is back (`inputs`' and the outputs' `views` too).
 #[allow(clippy::too_many_arguments)]
-fn record_view(
+pub(super) fn record_view(
     rt: &RtDevice,
     (recorded, held, warned): (&mut Vec<GpuTicket>, &mut Held, &mut Warnings),
     ctx: &mut RenderContext,
     tasks: &mut TaskContainer,
     label: &str,
     inputs: PrepassInputs,
-    writes: &[&wgpu::Texture],
-    output_view: &bevy::render::render_resource::TextureView,
+    writes: Vec<wgpu::Texture>,
+    output_views: &[&wgpu::TextureView],
 ) -> bool {
     let reads: Vec<&wgpu::Texture> = inputs.textures.iter().collect();
-    prepare(ctx.command_encoder(), &reads, writes, &[]);
+    let write_refs: Vec<&wgpu::Texture> = writes.iter().collect();
+    prepare(ctx.command_encoder(), &reads, &write_refs, &[]);
     // SAFETY: the textures and views the tasks name are kept (cloned) until the ticket is back.
     match unsafe { rt.record(tasks, Some(label)) } {
         Ok((commands, ticket)) => {
             ctx.add_command_buffer(commands);
             recorded.push(ticket);
             held.textures.extend(inputs.textures);
-            held.textures.extend(writes.iter().map(|t| (*t).clone()));
+            held.textures.extend(writes);
             held.views.extend(inputs.views);
-            held.views.push(output_view.clone());
+            held.views.extend(output_views.iter().map(|v| (*v).clone()));
             true
         }
         Err(e) => {
@@ -400,7 +413,7 @@ pub(super) fn trace_ao(
     let mut tasks = rt.context().create_task_container();
     let task = TraceAmbientOcclusionTask {
         common: inputs.common,
-        output: noisy.as_ref().map_or(output, |(_, i)| *i),
+        output: noisy.as_ref().map_or(output, |n| n.image),
         ray_length: settings.ray_length,
         rays_per_pixel: settings.rays_per_pixel,
         ..Default::default()
@@ -416,7 +429,7 @@ pub(super) fn trace_ao(
         Err(e) => return state.warned.once(&e),
     };
     let sinks = (&mut state.recorded, &mut state.held, &mut state.warned);
-    record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt ao", inputs, &writes, out_view);
+    record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt ao", inputs, writes, &[out_view]);
 }
 
 /// Per camera with [`RayTracedShadow`]: a light's shadow from Bevy's prepass into the
@@ -462,7 +475,7 @@ pub(super) fn trace_shadow(
     let task = TraceShadowTask {
         common: inputs.common,
         light,
-        output: noisy.as_ref().map_or(output, |(_, i)| *i),
+        output: noisy.as_ref().map_or(output, |n| n.image),
         rays_per_pixel: settings.rays_per_pixel,
         ..Default::default()
     };
@@ -477,7 +490,7 @@ pub(super) fn trace_shadow(
         Err(e) => return state.warned.once(&e),
     };
     let sinks = (&mut state.recorded, &mut state.held, &mut state.warned);
-    record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt shadow", inputs, &writes, out_view);
+    record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt shadow", inputs, writes, &[out_view]);
 }
 
 /// The view's camera as the SDK takes it: world to view, and Bevy's (unjittered) projection
@@ -488,81 +501,4 @@ fn sdk_camera(view: &ExtractedView) -> hybrid_rt::Camera {
     let clip_from_view = Mat4::from_cols_array(&view.clip_from_view.to_cols_array());
     let flip_y = Mat4::from_scale(hybrid_rt::glam::Vec3::new(1.0, -1.0, 1.0));
     hybrid_rt::Camera { world_to_view: world_from_view.inverse(), view_to_clip: flip_y * clip_from_view }
-}
-
-/// Per camera with [`RayTracedGi`]: the camera's lit frame (Bevy's view target after the
-/// opaque pass) injected into the direct-lighting cache, then diffuse GI traced from Bevy's
-/// prepass, its hits shaded from the cache, into the application's image.
-pub(super) fn trace_gi(
-    view: ViewQuery<(&ExtractedView, &ViewPrepassTextures, &ViewTarget, &RayTracedGi)>,
-    images: Res<RenderAssets<GpuImage>>,
-    mut state: ResMut<HybridRt>,
-    mut ctx: RenderContext,
-) {
-    let (view, prepass, target, settings) = view.into_inner();
-    let state = &mut *state;
-    let Some(rt) = state.rt.as_ref() else { return };
-    if !settings.enabled || !state.has_instances {
-        return;
-    }
-    if settings.output == Handle::default() {
-        return state.warned.once("RayTracedGi.output is not set: give it an image of the view's size");
-    }
-    let (lit_tex, lit_view) = (target.main_texture(), target.main_texture_view());
-    if lit_tex.sample_count() > 1 {
-        return state.warned.once("a camera with RayTracedGi renders with MSAA: give it Msaa::Off");
-    }
-    let Some(image) = images.get(&settings.output) else { return }; // not on the GPU yet
-    let (out_tex, out_view) = (&image.texture, &image.texture_view);
-    let sinks = (&mut state.views, &mut state.warned, state.frame);
-    let Some(EffectTargets { output, mut inputs, noisy }) =
-        effect_targets(rt, sinks, (view, prepass), (out_tex, out_view), Effect::Gi, settings.denoise)
-    else {
-        return;
-    };
-    let lit = match rt.image(lit_tex, lit_view, hybrid_rt_wgpu::SDK_READ) {
-        Ok(lit) => lit,
-        Err(e) => return state.warned.once(&e),
-    };
-    inputs.textures.push((**lit_tex).clone());
-    inputs.views.push(lit_view.clone());
-    let mut tasks = rt.context().create_task_container();
-    let inject = DirectLightingInjectionTask {
-        depth: inputs.common.depth,
-        lit,
-        viewport: inputs.common.viewport,
-        camera: inputs.common.camera,
-        average_window: settings.cache_average_frames,
-        ..Default::default()
-    };
-    let trace = TraceDiffuseTask {
-        common: inputs.common,
-        output: noisy.as_ref().map_or(output, |(_, i)| *i),
-        rays_per_pixel: settings.rays_per_pixel,
-        ray_length: settings.ray_length,
-        miss_radiance: settings.miss_radiance,
-        ..Default::default()
-    };
-    if let Err(e) = tasks.schedule_direct_lighting_injection(&inject).and_then(|()| tasks.schedule_diffuse(&trace)) {
-        return state.warned.once(&e);
-    }
-    let denoise = |t: &mut TaskContainer, context, common, input, output| {
-        t.schedule_denoise_diffuse(&DenoiseDiffuseTask { context, common, input, output })
-    };
-    let writes = match schedule_denoiser(&mut tasks, (&noisy, &inputs, output, out_tex), denoise) {
-        Ok(w) => w,
-        Err(e) => return state.warned.once(&e),
-    };
-    let sinks = (&mut state.recorded, &mut state.held, &mut state.warned);
-    if !record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt gi", inputs, &writes, out_view) || !settings.composite {
-        return;
-    }
-    // A deferred camera: the GI times its G-buffer's diffuse colour, added to the lit image.
-    let Some(gbuffer) = prepass.deferred.as_ref() else { return };
-    if !out_tex.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
-        return state.warned.once("RayTracedGi.output needs TEXTURE_BINDING usage for the composite of a deferred camera");
-    }
-    let composite = state.composite.get_or_insert_with(|| GiComposite::new(&rt.device));
-    let views = (&*gbuffer.texture.default_view, &**out_view);
-    composite.record(&rt.device, ctx.command_encoder(), views, (lit_view, target.main_texture_format()));
 }

@@ -1,0 +1,336 @@
+//! Passes over Bevy's deferred G-buffer: the decode that gives the SDK's specular trace its
+//! roughness (and the pixels it should leave out), and the composite that adds the denoised
+//! GI and reflections to the lit image after Bevy's lighting — the GI times each pixel's
+//! diffuse colour (as Bevy adds a lightmap's light), the reflections times its environment
+//! BRDF (as Bevy weighs its environment map's specular light).
+//!
+//! A forward camera has no per-pixel material in any texture, so its GI stays in the
+//! application's image and it traces no reflections.
+use bevy::platform::collections::HashMap;
+use hybrid_rt_wgpu::wgpu;
+use hybrid_rt_wgpu::wgpu::util::DeviceExt;
+
+/// Bevy's deferred G-buffer (`Rgba32Uint`), as its deferred lighting reads it: R packs the sRGB
+/// base colour (RGB, 8 bits each) and the perceptual roughness, B the reflectance, metallic,
+/// diffuse occlusion and clearcoat (8 bits each), A the octahedral normal (24 bits) and flags
+/// (bit 0: unlit; unlit materials store no base colour).
+const GBUFFER: &str = r#"
+@group(0) @binding(0) var gbuffer: texture_2d<u32>;
+
+struct Material {
+    base_color: vec3<f32>,
+    perceptual_roughness: f32,
+    reflectance: f32,
+    metallic: f32,
+    unlit: bool,
+}
+
+fn material(pixel: vec2<i32>) -> Material {
+    let g = textureLoad(gbuffer, pixel, 0);
+    let base_rough = unpack4x8unorm(g.r);
+    let props = unpack4x8unorm(g.b);
+    let unlit = ((g.a >> 24u) & 1u) != 0u;
+    return Material(pow(base_rough.rgb, vec3<f32>(2.2)), base_rough.a, props.r, props.g, unlit);
+}
+
+@vertex
+fn vertex(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    // One triangle over the whole target.
+    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
+}
+"#;
+
+/// The decode: R = left out of the specular trace (unlit, rougher than the limit, or no
+/// surface), G = perceptual roughness.
+const DECODE: &str = r#"
+@group(0) @binding(1) var<uniform> max_roughness: vec4<f32>;
+
+@fragment
+fn fragment(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
+    let m = material(vec2<i32>(position.xy));
+    let g = textureLoad(gbuffer, vec2<i32>(position.xy), 0);
+    let skip = m.unlit || m.perceptual_roughness > max_roughness.x || all(g == vec4<u32>(0u));
+    return vec4<f32>(select(0.0, 1.0, skip), m.perceptual_roughness, 0.0, 0.0);
+}
+"#;
+
+/// The composite. `terms`: x > 0 adds the GI, y > 0 the reflections.
+const COMPOSITE: &str = r#"
+@group(0) @binding(1) var gi: texture_2d<f32>;
+@group(0) @binding(2) var reflections: texture_2d<f32>;
+@group(0) @binding(3) var normals: texture_2d<f32>;
+struct Composite {
+    world_from_clip: mat4x4<f32>,
+    terms: vec4<f32>,
+}
+@group(0) @binding(4) var<uniform> u: Composite;
+
+// Bevy's split-sum environment BRDF terms without its lookup table (Karis' fit, as Bevy's
+// F_AB): the specular colour's scale and bias.
+fn f_ab(perceptual_roughness: f32, n_dot_v: f32) -> vec2<f32> {
+    let c0 = vec4<f32>(-1.0, -0.0275, -0.572, 0.022);
+    let c1 = vec4<f32>(1.0, 0.0425, 1.04, -0.04);
+    let r = perceptual_roughness * c0 + c1;
+    let a004 = min(r.x * r.x, exp2(-9.28 * n_dot_v)) * r.x + r.y;
+    return max(vec2<f32>(-1.04, 1.04) * a004 + r.zw, vec2<f32>(0.00005));
+}
+
+@fragment
+fn fragment(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
+    let pixel = vec2<i32>(position.xy);
+    let m = material(pixel);
+    if (m.unlit) {
+        return vec4<f32>(0.0);
+    }
+    var c = vec3<f32>(0.0);
+    if (u.terms.x > 0.0) {
+        c += m.base_color * (1.0 - m.metallic) * max(textureLoad(gi, pixel, 0).rgb, vec3<f32>(0.0));
+    }
+    if (u.terms.y > 0.0) {
+        // The direction to the eye from two points of the pixel's ray (perspective or
+        // orthographic; reversed-Z keeps both finite).
+        let size = vec2<f32>(textureDimensions(normals));
+        let uv = position.xy / size;
+        let ndc = vec2<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
+        let near = u.world_from_clip * vec4<f32>(ndc, 1.0, 1.0);
+        let far = u.world_from_clip * vec4<f32>(ndc, 0.5, 1.0);
+        let v = normalize(near.xyz / near.w - far.xyz / far.w);
+        let n = normalize(textureLoad(normals, pixel, 0).xyz * 2.0 - 1.0);
+        let ab = f_ab(m.perceptual_roughness, max(dot(n, v), 0.0001));
+        let f0 = mix(vec3<f32>(0.16 * m.reflectance * m.reflectance), m.base_color, m.metallic);
+        // The trace weighs by the lobe's shadowing and masking (its albedo without Fresnel,
+        // A + B): Fresnel is the environment BRDF over that.
+        let fresnel = (f0 * ab.x + ab.y) / (ab.x + ab.y);
+        c += fresnel * max(textureLoad(reflections, pixel, 0).rgb, vec3<f32>(0.0));
+    }
+    return vec4<f32>(c, 0.0);
+}
+"#;
+
+/// The decode's output format: R = left out, G = roughness.
+pub(super) const DECODED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg8Unorm;
+
+/// What the composite adds: the denoised GI and/or reflections (views of the application's
+/// images), and the view's camera for the reflections' view direction.
+pub(super) struct CompositeInputs<'a> {
+    pub(super) gi: Option<&'a wgpu::TextureView>,
+    pub(super) reflections: Option<&'a wgpu::TextureView>,
+    pub(super) normals: &'a wgpu::TextureView,
+    pub(super) world_from_clip: [f32; 16],
+}
+
+/// The decode's and the composite's pipelines (the composite's one per target format), made
+/// when a deferred camera first needs them.
+pub(super) struct DeferredPasses {
+    decode_layout: wgpu::BindGroupLayout,
+    decode: wgpu::RenderPipeline,
+    composite_shader: wgpu::ShaderModule,
+    composite_layout: wgpu::BindGroupLayout,
+    composite_pipeline_layout: wgpu::PipelineLayout,
+    composites: HashMap<wgpu::TextureFormat, wgpu::RenderPipeline>,
+    /// Bound where the composite adds no GI or no reflections.
+    blank: wgpu::TextureView,
+}
+
+fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture { sample_type, view_dimension: wgpu::TextureViewDimension::D2, multisampled: false },
+        count: None,
+    }
+}
+
+fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
+        count: None,
+    }
+}
+
+/// A full-screen triangle's pipeline into one target of `format`.
+fn fullscreen_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    (shader, layout): (&wgpu::ShaderModule, &wgpu::PipelineLayout),
+    format: wgpu::TextureFormat,
+    blend: Option<wgpu::BlendState>,
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module: shader,
+            entry_point: Some("vertex"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        fragment: Some(wgpu::FragmentState {
+            module: shader,
+            entry_point: Some("fragment"),
+            compilation_options: Default::default(),
+            targets: &[Some(wgpu::ColorTargetState { format, blend, write_mask: wgpu::ColorWrites::ALL })],
+        }),
+        primitive: Default::default(),
+        depth_stencil: None,
+        multisample: Default::default(),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// Draws the full-screen triangle into `target`, loading (`clear`: false) or clearing it.
+fn fullscreen_pass(
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    target: &wgpu::TextureView,
+    clear: bool,
+    (pipeline, bind_group): (&wgpu::RenderPipeline, &wgpu::BindGroup),
+) {
+    let load = if clear { wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT) } else { wgpu::LoadOp::Load };
+    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: target,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations { load, store: wgpu::StoreOp::Store },
+        })],
+        depth_stencil_attachment: None,
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, bind_group, &[]);
+    pass.draw(0..3, 0..1);
+}
+
+impl DeferredPasses {
+    pub(super) fn new(device: &wgpu::Device) -> DeferredPasses {
+        let module = |label, body: &str| {
+            device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(label),
+                source: wgpu::ShaderSource::Wgsl(format!("{GBUFFER}{body}").into()),
+            })
+        };
+        let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
+            let group = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries });
+            let pipeline = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: &[Some(&group)],
+                immediate_size: 0,
+            });
+            (group, pipeline)
+        };
+        let gbuffer = texture_entry(0, wgpu::TextureSampleType::Uint);
+        let float = wgpu::TextureSampleType::Float { filterable: false };
+        let (decode_layout, decode_pipeline_layout) = layout("hybrid-rt g-buffer decode", &[gbuffer, uniform_entry(1)]);
+        let decode_shader = module("hybrid-rt g-buffer decode", DECODE);
+        let decode = fullscreen_pipeline(
+            device,
+            "hybrid-rt g-buffer decode",
+            (&decode_shader, &decode_pipeline_layout),
+            DECODED_FORMAT,
+            None,
+        );
+        let (composite_layout, composite_pipeline_layout) = layout(
+            "hybrid-rt composite",
+            &[gbuffer, texture_entry(1, float), texture_entry(2, float), texture_entry(3, float), uniform_entry(4)],
+        );
+        let blank = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("hybrid-rt composite blank"),
+            size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba16Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        DeferredPasses {
+            decode_layout,
+            decode,
+            composite_shader: module("hybrid-rt composite", COMPOSITE),
+            composite_layout,
+            composite_pipeline_layout,
+            composites: HashMap::default(),
+            blank: blank.create_view(&Default::default()),
+        }
+    }
+
+    /// Decodes the G-buffer into `target` (`DECODED_FORMAT`, the G-buffer's size) for the
+    /// specular trace: pixels rougher than `max_roughness` are left out.
+    pub(super) fn decode(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        gbuffer: &wgpu::TextureView,
+        max_roughness: f32,
+        target: &wgpu::TextureView,
+    ) {
+        let limit = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("hybrid-rt g-buffer decode"),
+            contents: &uniform_bytes(&[max_roughness, 0.0, 0.0, 0.0]),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("hybrid-rt g-buffer decode"),
+            layout: &self.decode_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(gbuffer) },
+                wgpu::BindGroupEntry { binding: 1, resource: limit.as_entire_binding() },
+            ],
+        });
+        fullscreen_pass(encoder, "hybrid-rt g-buffer decode", target, true, (&self.decode, &bind_group));
+    }
+
+    /// Adds the GI and/or reflections of `inputs` to `target` (of `format`), in `encoder`.
+    pub(super) fn composite(
+        &mut self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        (gbuffer, inputs): (&wgpu::TextureView, &CompositeInputs),
+        (target, format): (&wgpu::TextureView, wgpu::TextureFormat),
+    ) {
+        let (shader, pipeline_layout) = (&self.composite_shader, &self.composite_pipeline_layout);
+        let pipeline = self.composites.entry(format).or_insert_with(|| {
+            // Added: the lit image's colour plus the composite's; its alpha kept.
+            let add = |src_factor| wgpu::BlendComponent {
+                src_factor,
+                dst_factor: wgpu::BlendFactor::One,
+                operation: wgpu::BlendOperation::Add,
+            };
+            let blend = wgpu::BlendState { color: add(wgpu::BlendFactor::One), alpha: add(wgpu::BlendFactor::Zero) };
+            fullscreen_pipeline(device, "hybrid-rt composite", (shader, pipeline_layout), format, Some(blend))
+        });
+        let mut uniform = inputs.world_from_clip.to_vec();
+        uniform.extend([inputs.gi.map_or(0.0, |_| 1.0), inputs.reflections.map_or(0.0, |_| 1.0), 0.0, 0.0]);
+        let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("hybrid-rt composite"),
+            contents: &uniform_bytes(&uniform),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let view = |binding, view| wgpu::BindGroupEntry { binding, resource: wgpu::BindingResource::TextureView(view) };
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("hybrid-rt composite"),
+            layout: &self.composite_layout,
+            entries: &[
+                view(0, gbuffer),
+                view(1, inputs.gi.unwrap_or(&self.blank)),
+                view(2, inputs.reflections.unwrap_or(&self.blank)),
+                view(3, inputs.normals),
+                wgpu::BindGroupEntry { binding: 4, resource: uniform.as_entire_binding() },
+            ],
+        });
+        fullscreen_pass(encoder, "hybrid-rt composite", target, false, (pipeline, &bind_group));
+    }
+}
+
+/// The bytes of a uniform's floats (little-endian, as the GPU reads them).
+fn uniform_bytes(floats: &[f32]) -> Vec<u8> {
+    floats.iter().flat_map(|f| f.to_le_bytes()).collect()
+}
