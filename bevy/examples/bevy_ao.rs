@@ -38,7 +38,7 @@ use bevy::render::view::screenshot::{save_to_disk, Screenshot};
 use bevy::window::ExitCondition;
 use hybrid_rt_bevy::{
     render_plugin, HybridRtInitPlugin, HybridRtPlugin, RayTracedAo, RayTracedGi, RayTracedReflections, RayTracedShadow,
-    DIAGNOSTIC_PATHS,
+    DIAGNOSTIC_PATHS, DIAGNOSTIC_TASK_PREFIX,
 };
 
 /// Frames rendered before the screenshot (the scene's BVH is built on the first; the AO
@@ -266,7 +266,7 @@ fn cost(a: &Args, frames: u32) {
         if top_level_pass {
             bevy_total += ms;
             println!("  {path}: {ms:.3}");
-        } else if path.starts_with("hybrid_rt/") && DIAGNOSTIC_PATHS.contains(&path) {
+        } else if DIAGNOSTIC_PATHS.contains(&path) || path.starts_with(DIAGNOSTIC_TASK_PREFIX) {
             println!("  {path}: {ms:.3}");
         }
     }

@@ -301,6 +301,11 @@ pub struct HybridRtTimings(pub Arc<Mutex<Vec<(String, f64)>>>);
 pub const DIAGNOSTIC_PATHS: [&str; 6] =
     ["hybrid_rt/scene", "hybrid_rt/ao", "hybrid_rt/shadow", "hybrid_rt/gi", "hybrid_rt/reflections", "hybrid_rt/frame"];
 
+/// Diagnostics of each of the SDK's tasks, in milliseconds of GPU time per frame (all cameras):
+/// this prefix and the task's name (`hybrid_rt::TaskKind::name`), e.g.
+/// `hybrid_rt/task/denoise_diffuse` — how [`DIAGNOSTIC_PATHS`]' sums split.
+pub const DIAGNOSTIC_TASK_PREFIX: &str = "hybrid_rt/task/";
+
 /// Diagnostic: how many cameras hold an AO denoiser history (about 8 bytes a pixel of the
 /// view, besides the view's shared denoising guide). A camera's history is freed a few frames after it stops
 /// being traced (despawned, `RayTracedAo` removed or disabled).
@@ -326,6 +331,10 @@ impl Plugin for HybridRtPlugin {
         ))
         .insert_resource(timings.clone());
         for path in DIAGNOSTIC_PATHS {
+            app.register_diagnostic(Diagnostic::new(DiagnosticPath::new(path)).with_suffix(" ms"));
+        }
+        for kind in hybrid_rt::TaskKind::ALL {
+            let path = format!("{DIAGNOSTIC_TASK_PREFIX}{}", kind.name());
             app.register_diagnostic(Diagnostic::new(DiagnosticPath::new(path)).with_suffix(" ms"));
         }
         for path in

@@ -253,12 +253,19 @@ struct FrameTimes {
     gi: f64,
     reflections: f64,
     total: f64,
+    /// Per task kind (`TaskKind as usize`).
+    tasks: Vec<f64>,
 }
 
 impl FrameTimes {
     fn add(&mut self, completed: &CompletedTask) {
         for t in &completed.timings {
             self.total += t.gpu_ms;
+            let at = t.kind as usize;
+            if self.tasks.len() <= at {
+                self.tasks.resize(at + 1, 0.0);
+            }
+            self.tasks[at] += t.gpu_ms;
             match t.kind {
                 TaskKind::AmbientOcclusion | TaskKind::DenoiseDiffuseOcclusion => self.ao += t.gpu_ms,
                 TaskKind::Shadow | TaskKind::DenoiseShadow => self.shadow += t.gpu_ms,
@@ -287,5 +294,10 @@ impl FrameTimes {
             out.push(("reflections".into(), self.reflections));
         }
         out.push(("frame".into(), self.total));
+        for kind in TaskKind::ALL {
+            if let Some(&ms) = self.tasks.get(*kind as usize).filter(|ms| **ms > 0.0) {
+                out.push((format!("task/{}", kind.name()), ms));
+            }
+        }
     }
 }

@@ -776,6 +776,15 @@ fn ray_traced_ao_in_a_bevy_frame() {
         eprintln!("{path}: {ms:.3} ms");
         assert!(path == "hybrid_rt/scene" || ms > 0.0, "no GPU time measured for {path}");
     }
+    // Split per task: the lighting's injection, trace and denoiser of the last frames.
+    for kind in
+        [hybrid_rt::TaskKind::DirectLightingInjection, hybrid_rt::TaskKind::Specular, hybrid_rt::TaskKind::DenoiseSpecular]
+    {
+        let path = format!("{}{}", hybrid_rt_bevy::DIAGNOSTIC_TASK_PREFIX, kind.name());
+        let ms = store.get(&bevy::diagnostic::DiagnosticPath::new(path.clone())).and_then(|d| d.value()).unwrap_or(-1.0);
+        eprintln!("{path}: {ms:.3} ms");
+        assert!(ms > 0.0, "no GPU time measured for {path}");
+    }
 
     let messages = VALIDATION.load(Ordering::Relaxed);
     eprintln!("validation layer: {} known messages about Bevy's objects, {messages} others", KNOWN.load(Ordering::Relaxed));
