@@ -14,8 +14,9 @@ cargo fmt --check
 cargo clippy --all-targets --locked -- -D warnings
 cargo test --locked
 cargo run --locked --example bevy_ao -- --out target/bevy_ao.png --shadow-out target/bevy_sun_shadow.png --gi-out target/bevy_gi.png
-# The deferred path: GI and reflections composited into the lit image.
-cargo run --locked --example bevy_ao -- --out target/bevy_shiny_rt.png --gi-out target/bevy_gi_deferred.png --reflections-out target/bevy_reflections.png
+# The deferred path: GI, reflections and the sun's shadow composited into the lit image.
+cargo run --locked --example bevy_ao -- --out target/bevy_shiny_rt.png --gi-out target/bevy_gi_deferred.png --reflections-out target/bevy_reflections.png \
+  --shadow-out target/bevy_sun_shadow_deferred.png
 # The window path, under Xvfb where it is installed (scripts/setup.sh installs it).
 if command -v xvfb-run >/dev/null 2>&1; then
   xvfb-run -a cargo run --locked --example bevy_ao -- --window --frames 30

@@ -428,7 +428,12 @@ fn setup(
         Transform::from_xyz(1.3, 0.5, 0.6),
     ));
     commands.spawn((
-        DirectionalLight { illuminance: 3000.0, shadow_maps_enabled: true, ..default() },
+        // Deferred with the ray-traced shadow, Bevy's shadow maps make way for it.
+        DirectionalLight {
+            illuminance: 3000.0,
+            shadow_maps_enabled: !(settings.deferred && settings.shadow.is_some()),
+            ..default()
+        },
         Transform::from_xyz(2.0, 4.0, 1.0).looking_at(Vec3::ZERO, Vec3::Y),
     ));
     // Deferred, the GI takes most of the ambient light's place (added to the lit image).

@@ -61,6 +61,8 @@ pub(crate) struct HybridRt {
     frame: u64,
     /// Per camera tracing reflections: its deferred G-buffer decoded for the SDK.
     decoded: HashMap<RetainedViewEntity, ViewImage>,
+    /// Per camera, what its traces left this frame for the composite (emptied each frame).
+    composites: HashMap<RetainedViewEntity, deferred::CompositeRequest>,
     /// The deferred G-buffer's decode and composite pipelines (made when a deferred camera
     /// first needs them).
     deferred: Option<deferred::DeferredPasses>,
@@ -125,7 +127,11 @@ pub(crate) fn build(app: &mut App, timings: HybridRtTimings) {
         // forward opaque pass), before transparent surfaces are drawn over it.
         .add_systems(
             Core3d,
-            trace_lighting.in_set(Core3dSystems::MainPass).after(main_opaque_pass_3d).before(main_transparent_pass_3d),
+            (trace_lighting, deferred::composite)
+                .chain()
+                .in_set(Core3dSystems::MainPass)
+                .after(main_opaque_pass_3d)
+                .before(main_transparent_pass_3d),
         );
 }
 
@@ -190,6 +196,7 @@ fn sync_scene(
         keep
     });
     state.decoded.retain(|_, image| frame - image.last_used <= VIEW_GRACE_FRAMES);
+    state.composites.clear();
     let histories = |effect: Effect| state.views.keys().filter(|(_, e)| *e == effect).count() as f64;
     let counts = [
         ("ao_histories", histories(Effect::Ao)),

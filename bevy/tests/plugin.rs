@@ -766,9 +766,64 @@ fn ray_traced_ao_in_a_bevy_frame() {
     let left_out = frames(&mut app, &latest.reflections, 4);
     let reflecting = left_out.iter().zip(&floor_mask).filter(|(x, m)| **m && **x > 0.01).count();
     assert_eq!(reflecting, 0, "{reflecting} floor pixels rougher than max_roughness reflect");
+
+    // 9. The sun's shadow in the lit image: a grey floor lit by the sun and a dim ambient
+    // light, the sun's shadow maps off (Bevy lights the floor unshadowed), the cube's hard
+    // ray-traced shadow composited — the occluded part of the sun's light, computed as Bevy's
+    // lighting computes it, taken out. Where the reference puts the shadow the floor keeps the
+    // ambient light alone, as Bevy renders it with the sun off (what differs is the mismatch
+    // of the two computations of the sun's light, either way: within 2% of the sun's light,
+    // 8-bit rounding included); elsewhere it keeps Bevy's colour (within 8-bit rounding).
+    {
+        let world = app.world_mut();
+        for mut sun in world.query::<&mut DirectionalLight>().iter_mut(world) {
+            sun.illuminance = 3000.0;
+        }
+        world.insert_resource(GlobalAmbientLight { brightness: 300.0, ..default() });
+        let deferred = bevy::material::OpaqueRendererMethod::Deferred;
+        let grey = StandardMaterial { base_color: Color::linear_rgb(0.5, 0.5, 0.5), opaque_render_method: deferred, ..default() };
+        let grey = world.resource_mut::<Assets<StandardMaterial>>().add(grey);
+        let ground = world.query_filtered::<Entity, With<Mesh3d>>().iter(world).find(|e| *e != cube).unwrap();
+        world.entity_mut(ground).insert(MeshMaterial3d(grey));
+        world.get_mut::<RayTracedReflections>(camera).unwrap().enabled = false;
+        let mut shadow = world.get_mut::<RayTracedShadow>(camera).unwrap();
+        *shadow = RayTracedShadow { angular_diameter: 0.0, denoise: false, output: shadow.output.clone(), ..default() };
+        assert!(shadow.composite, "the shadow's composite is on by default");
+    }
+    frames(&mut app, &latest.shadow, 4);
+    let shadowed = screenshot_red(&mut app, &latest.target);
+    app.world_mut().get_mut::<RayTracedShadow>(camera).unwrap().composite = false;
+    frames(&mut app, &latest.shadow, 4);
+    let unshadowed = screenshot_red(&mut app, &latest.target);
+    {
+        let world = app.world_mut();
+        for mut sun in world.query::<&mut DirectionalLight>().iter_mut(world) {
+            sun.illuminance = 0.0;
+        }
+    }
+    frames(&mut app, &latest.shadow, 2);
+    let ambient = screenshot_red(&mut app, &latest.target);
+    let (_, visible) = reference_shadow(Some(0.0), &sun(0.0), 1);
+    let mean_over = |v: &[f32], lit: bool| {
+        let pick = |i: usize| floor_mask[i] && (visible[i] > 0.5) == lit;
+        let n = (0..v.len()).filter(|i| pick(*i)).count();
+        ((0..v.len()).filter(|i| pick(*i)).map(|i| v[i] as f64).sum::<f64>() / n.max(1) as f64, n)
+    };
+    let ((in_shadow, n_shadow), (before, _)) = (mean_over(&shadowed, false), mean_over(&unshadowed, false));
+    let ((lit_after, n_lit), (lit_before, _)) = (mean_over(&shadowed, true), mean_over(&unshadowed, true));
+    let (ambient, _) = mean_over(&ambient, false);
+    eprintln!(
+        "sun shadow composited: {n_shadow} floor px in the reference's shadow {before:.4} -> {in_shadow:.4} (the ambient light alone: {ambient:.4}); {n_lit} lit px {lit_before:.4} -> {lit_after:.4}"
+    );
+    assert!(
+        n_shadow > 200 && before - ambient > 0.05 && ambient > 0.02,
+        "the floor's light: {before} with the sun, {ambient} without"
+    );
+    assert!((in_shadow - ambient).abs() <= 0.02 * (before - ambient), "the shadow leaves {in_shadow}, not the ambient {ambient}");
+    assert!((lit_after - lit_before).abs() <= 1.0 / 255.0, "lit floor changed: {lit_before} -> {lit_after}");
     app.world_mut().despawn(cube);
 
-    // 9. The SDK's GPU times reached Bevy's diagnostics.
+    // 10. The SDK's GPU times reached Bevy's diagnostics.
     let store = app.world().resource::<bevy::diagnostic::DiagnosticsStore>();
     for path in hybrid_rt_bevy::DIAGNOSTIC_PATHS {
         let d = store.get(&bevy::diagnostic::DiagnosticPath::new(path)).expect("registered");

@@ -1,12 +1,21 @@
 //! Passes over Bevy's deferred G-buffer: the decode that gives the SDK's specular trace its
-//! roughness (and the pixels it should leave out), and the composite that adds the denoised
-//! GI and reflections to the lit image after Bevy's lighting — the GI times each pixel's
-//! diffuse colour (as Bevy adds a lightmap's light), the reflections times its environment
-//! BRDF (as Bevy weighs its environment map's specular light).
+//! roughness (and the pixels it should leave out), and the composite that brings the traced
+//! effects into the lit image after Bevy's lighting — the GI times each pixel's diffuse colour
+//! (as Bevy adds a lightmap's light), the reflections times its environment BRDF (as Bevy
+//! weighs its environment map's specular light), and a sun's ray-traced shadow, by taking out
+//! the part of the sun's light (lit unshadowed by Bevy: its shadow maps off) that the shadow
+//! says is occluded — the sun's light computed as Bevy's lighting computes it.
 //!
-//! A forward camera has no per-pixel material in any texture, so its GI stays in the
-//! application's image and it traces no reflections.
+//! A forward camera has no per-pixel material in any texture, so its GI and shadow stay in
+//! the application's images and it traces no reflections.
+use super::{HybridRt, Warnings};
+use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::platform::collections::HashMap;
+use bevy::prelude::*;
+use bevy::render::renderer::{RenderContext, ViewQuery};
+use bevy::render::texture::GpuImage;
+use bevy::render::view::{ExtractedView, ViewTarget};
+use hybrid_rt::glam::Mat4;
 use hybrid_rt_wgpu::wgpu;
 use hybrid_rt_wgpu::wgpu::util::DeviceExt;
 
@@ -23,14 +32,22 @@ struct Material {
     reflectance: f32,
     metallic: f32,
     unlit: bool,
+    shadow_receiver: bool,
+    normal: vec3<f32>,
 }
 
 fn material(pixel: vec2<i32>) -> Material {
     let g = textureLoad(gbuffer, pixel, 0);
     let base_rough = unpack4x8unorm(g.r);
     let props = unpack4x8unorm(g.b);
-    let unlit = ((g.a >> 24u) & 1u) != 0u;
-    return Material(pow(base_rough.rgb, vec3<f32>(2.2)), base_rough.a, props.r, props.g, unlit);
+    let flags = (g.a >> 24u) & 0xffu;
+    // Bevy's octahedral normal, 12 bits a coordinate.
+    let oct = vec2<f32>(f32(g.a & 0xfffu), f32((g.a >> 12u) & 0xfffu)) / 4095.0 * 2.0 - 1.0;
+    var n = vec3<f32>(oct, 1.0 - abs(oct.x) - abs(oct.y));
+    let t = saturate(-n.z);
+    n = vec3<f32>(n.xy + select(vec2<f32>(t), vec2<f32>(-t), n.xy >= vec2<f32>(0.0)), n.z);
+    let base_color = pow(base_rough.rgb, vec3<f32>(2.2));
+    return Material(base_color, base_rough.a, props.r, props.g, (flags & 1u) != 0u, (flags & 4u) != 0u, normalize(n));
 }
 
 @vertex
@@ -55,16 +72,52 @@ fn fragment(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
 }
 "#;
 
-/// The composite. `terms`: x > 0 adds the GI, y > 0 the reflections.
+/// The composite. `terms`: x > 0 adds the GI, y > 0 the reflections, z > 0 takes the sun's
+/// occluded light out (its visible fraction in the shadow image's R, or G where w > 0).
 const COMPOSITE: &str = r#"
+const PI: f32 = 3.141592653589793;
+
 @group(0) @binding(1) var gi: texture_2d<f32>;
 @group(0) @binding(2) var reflections: texture_2d<f32>;
-@group(0) @binding(3) var normals: texture_2d<f32>;
+@group(0) @binding(3) var shadow: texture_2d<f32>;
 struct Composite {
     world_from_clip: mat4x4<f32>,
     terms: vec4<f32>,
+    // The direction to the sun, and its colour x illuminance x the camera's exposure.
+    sun_direction: vec4<f32>,
+    sun_radiance: vec4<f32>,
 }
 @group(0) @binding(4) var<uniform> u: Composite;
+
+fn schlick(f0: f32, f90: f32, x: f32) -> f32 {
+    return f0 + (f90 - f0) * pow(1.0 - x, 5.0);
+}
+
+// A directional light's contribution to a pixel, as Bevy's PBR lighting computes it
+// (Filament's: Burley diffuse, GGX with height-correlated Smith visibility, Schlick Fresnel
+// with Bevy's f90, multiple-scattering compensation), before its shadow.
+fn sun_light(m: Material, n: vec3<f32>, v: vec3<f32>, n_dot_v: f32, f0: vec3<f32>, ab: vec2<f32>) -> vec3<f32> {
+    let l = u.sun_direction.xyz;
+    let h = normalize(l + v);
+    let n_dot_l = saturate(dot(n, l));
+    let n_dot_h = saturate(dot(n, h));
+    let l_dot_h = saturate(dot(l, h));
+    let clamped = clamp(m.perceptual_roughness, 0.089, 1.0);
+    let roughness = clamped * clamped;
+    let f90 = 0.5 + 2.0 * roughness * l_dot_h * l_dot_h;
+    let diffuse = m.base_color * (1.0 - m.metallic) * schlick(1.0, f90, n_dot_l) * schlick(1.0, f90, n_dot_v) / PI;
+    let a = n_dot_h * roughness;
+    let k = roughness / (1.0 - n_dot_h * n_dot_h + a * a);
+    let d = k * k / PI;
+    let a2 = roughness * roughness;
+    let lambda_v = n_dot_l * sqrt((n_dot_v - a2 * n_dot_v) * n_dot_v + a2);
+    let lambda_l = n_dot_v * sqrt((n_dot_l - a2 * n_dot_l) * n_dot_l + a2);
+    let visibility = 0.5 / (lambda_v + lambda_l);
+    let spec_f90 = saturate(dot(f0, vec3<f32>(50.0 * 0.33)));
+    let fresnel = f0 + (spec_f90 - f0) * pow(1.0 - l_dot_h, 5.0);
+    let specular = d * visibility * fresnel * (1.0 + f0 * (1.0 / (ab.x + ab.y) - 1.0));
+    return (diffuse + specular) * n_dot_l * u.sun_radiance.rgb;
+}
 
 // Bevy's split-sum environment BRDF terms without its lookup table (Karis' fit, as Bevy's
 // F_AB): the specular colour's scale and bias.
@@ -83,27 +136,34 @@ fn fragment(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
     if (m.unlit) {
         return vec4<f32>(0.0);
     }
+    // The direction to the eye from two points of the pixel's ray (perspective or
+    // orthographic; reversed-Z keeps both finite).
+    let size = vec2<f32>(textureDimensions(gbuffer));
+    let uv = position.xy / size;
+    let ndc = vec2<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
+    let near = u.world_from_clip * vec4<f32>(ndc, 1.0, 1.0);
+    let far = u.world_from_clip * vec4<f32>(ndc, 0.5, 1.0);
+    let v = normalize(near.xyz / near.w - far.xyz / far.w);
+    let n = m.normal;
+    let n_dot_v = max(dot(n, v), 0.0001);
+    let ab = f_ab(m.perceptual_roughness, n_dot_v);
+    let f0 = mix(vec3<f32>(0.16 * m.reflectance * m.reflectance), m.base_color, m.metallic);
     var c = vec3<f32>(0.0);
     if (u.terms.x > 0.0) {
         c += m.base_color * (1.0 - m.metallic) * max(textureLoad(gi, pixel, 0).rgb, vec3<f32>(0.0));
     }
     if (u.terms.y > 0.0) {
-        // The direction to the eye from two points of the pixel's ray (perspective or
-        // orthographic; reversed-Z keeps both finite).
-        let size = vec2<f32>(textureDimensions(normals));
-        let uv = position.xy / size;
-        let ndc = vec2<f32>(uv.x * 2.0 - 1.0, 1.0 - uv.y * 2.0);
-        let near = u.world_from_clip * vec4<f32>(ndc, 1.0, 1.0);
-        let far = u.world_from_clip * vec4<f32>(ndc, 0.5, 1.0);
-        let v = normalize(near.xyz / near.w - far.xyz / far.w);
-        let n = normalize(textureLoad(normals, pixel, 0).xyz * 2.0 - 1.0);
-        let ab = f_ab(m.perceptual_roughness, max(dot(n, v), 0.0001));
-        let f0 = mix(vec3<f32>(0.16 * m.reflectance * m.reflectance), m.base_color, m.metallic);
         // The trace weighs by the lobe's shadowing and masking (its albedo without Fresnel,
         // A + B): Fresnel is the environment BRDF over that.
         let fresnel = (f0 * ab.x + ab.y) / (ab.x + ab.y);
         c += fresnel * max(textureLoad(reflections, pixel, 0).rgb, vec3<f32>(0.0));
     }
+    if (u.terms.z > 0.0 && m.shadow_receiver) {
+        let texel = textureLoad(shadow, pixel, 0);
+        let visible = saturate(select(texel.r, texel.g, u.terms.w > 0.0));
+        c -= (1.0 - visible) * sun_light(m, n, v, n_dot_v, f0, ab);
+    }
+    // Signed: the blend adds it to the float lit image.
     return vec4<f32>(c, 0.0);
 }
 "#;
@@ -111,13 +171,25 @@ fn fragment(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
 /// The decode's output format: R = left out, G = roughness.
 pub(super) const DECODED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg8Unorm;
 
-/// What the composite adds: the denoised GI and/or reflections (views of the application's
-/// images), and the view's camera for the reflections' view direction.
-pub(super) struct CompositeInputs<'a> {
-    pub(super) gi: Option<&'a wgpu::TextureView>,
-    pub(super) reflections: Option<&'a wgpu::TextureView>,
-    pub(super) normals: &'a wgpu::TextureView,
-    pub(super) world_from_clip: [f32; 16],
+/// What a camera's traces left this frame for the composite to bring into its lit image
+/// (views of the application's images).
+#[derive(Default)]
+pub(super) struct CompositeRequest {
+    pub(super) gi: Option<wgpu::TextureView>,
+    pub(super) reflections: Option<wgpu::TextureView>,
+    pub(super) shadow: Option<SunShadow>,
+}
+
+/// A sun's ray-traced shadow, for the composite to take the occluded part of the sun's light
+/// out of the lit image.
+pub(super) struct SunShadow {
+    pub(super) visible: wgpu::TextureView,
+    /// The visible fraction is in G (the raw trace), not R (denoised).
+    pub(super) in_green: bool,
+    /// Towards the sun.
+    pub(super) direction_to_light: [f32; 3],
+    /// The sun's colour x illuminance x the camera's exposure, as Bevy lights with it.
+    pub(super) radiance: [f32; 3],
 }
 
 /// The decode's and the composite's pipelines (the composite's one per target format), made
@@ -129,7 +201,7 @@ pub(super) struct DeferredPasses {
     composite_layout: wgpu::BindGroupLayout,
     composite_pipeline_layout: wgpu::PipelineLayout,
     composites: HashMap<wgpu::TextureFormat, wgpu::RenderPipeline>,
-    /// Bound where the composite adds no GI or no reflections.
+    /// Bound for the effects the composite does not bring.
     blank: wgpu::TextureView,
 }
 
@@ -288,12 +360,13 @@ impl DeferredPasses {
         fullscreen_pass(encoder, "hybrid-rt g-buffer decode", target, true, (&self.decode, &bind_group));
     }
 
-    /// Adds the GI and/or reflections of `inputs` to `target` (of `format`), in `encoder`.
+    /// Brings `request` into `target` (of `format`), in `encoder`, for a camera whose clip
+    /// space (wgpu's) maps to world space by `world_from_clip`.
     pub(super) fn composite(
         &mut self,
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
-        (gbuffer, inputs): (&wgpu::TextureView, &CompositeInputs),
+        (gbuffer, request, world_from_clip): (&wgpu::TextureView, &CompositeRequest, [f32; 16]),
         (target, format): (&wgpu::TextureView, wgpu::TextureFormat),
     ) {
         let (shader, pipeline_layout) = (&self.composite_shader, &self.composite_pipeline_layout);
@@ -307,8 +380,17 @@ impl DeferredPasses {
             let blend = wgpu::BlendState { color: add(wgpu::BlendFactor::One), alpha: add(wgpu::BlendFactor::Zero) };
             fullscreen_pipeline(device, "hybrid-rt composite", (shader, pipeline_layout), format, Some(blend))
         });
-        let mut uniform = inputs.world_from_clip.to_vec();
-        uniform.extend([inputs.gi.map_or(0.0, |_| 1.0), inputs.reflections.map_or(0.0, |_| 1.0), 0.0, 0.0]);
+        let on = |o: bool| if o { 1.0 } else { 0.0 };
+        let shadow = request.shadow.as_ref();
+        let mut uniform = world_from_clip.to_vec();
+        uniform.extend([
+            on(request.gi.is_some()),
+            on(request.reflections.is_some()),
+            on(shadow.is_some()),
+            on(shadow.is_some_and(|s| s.in_green)),
+        ]);
+        let (direction, radiance) = shadow.map_or(([0.0; 3], [0.0; 3]), |s| (s.direction_to_light, s.radiance));
+        uniform.extend(direction.into_iter().chain([0.0]).chain(radiance).chain([0.0]));
         let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("hybrid-rt composite"),
             contents: &uniform_bytes(&uniform),
@@ -320,9 +402,9 @@ impl DeferredPasses {
             layout: &self.composite_layout,
             entries: &[
                 view(0, gbuffer),
-                view(1, inputs.gi.unwrap_or(&self.blank)),
-                view(2, inputs.reflections.unwrap_or(&self.blank)),
-                view(3, inputs.normals),
+                view(1, request.gi.as_ref().unwrap_or(&self.blank)),
+                view(2, request.reflections.as_ref().unwrap_or(&self.blank)),
+                view(3, shadow.map_or(&self.blank, |s| &s.visible)),
                 wgpu::BindGroupEntry { binding: 4, resource: uniform.as_entire_binding() },
             ],
         });
@@ -333,4 +415,41 @@ impl DeferredPasses {
 /// The bytes of a uniform's floats (little-endian, as the GPU reads them).
 fn uniform_bytes(floats: &[f32]) -> Vec<u8> {
     floats.iter().flat_map(|f| f.to_le_bytes()).collect()
+}
+
+/// The view of an effect's output the composite reads, where it is on (None: off, or the image
+/// cannot be read by a shader, warned once).
+pub(super) fn composited(image: &GpuImage, on: bool, component: &str, warned: &mut Warnings) -> Option<wgpu::TextureView> {
+    if !on {
+        return None;
+    }
+    if !image.texture.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
+        warned.once(format!("{component}.output needs TEXTURE_BINDING usage for the composite of a deferred camera"));
+        return None;
+    }
+    Some((*image.texture_view).clone())
+}
+
+/// Per deferred camera, after its traces and before transparent surfaces: what they left for
+/// the lit image, in one full-screen pass.
+pub(super) fn composite(
+    view: ViewQuery<(&ExtractedView, &ViewPrepassTextures, &ViewTarget)>,
+    mut state: ResMut<HybridRt>,
+    mut ctx: RenderContext,
+) {
+    let (view, prepass, target) = view.into_inner();
+    let state = &mut *state;
+    let Some(request) = state.composites.remove(&view.retained_view_entity) else { return };
+    let (Some(rt), Some(gbuffer)) = (state.rt.as_ref(), prepass.deferred.as_ref()) else { return };
+    let world_from_view = Mat4::from_cols_array(&view.world_from_view.to_matrix().to_cols_array());
+    let clip_from_view = Mat4::from_cols_array(&view.clip_from_view.to_cols_array());
+    let world_from_clip = (world_from_view * clip_from_view.inverse()).to_cols_array();
+    let passes = state.deferred.get_or_insert_with(|| DeferredPasses::new(&rt.device));
+    let (lit, format) = (target.main_texture_view(), target.main_texture_format());
+    passes.composite(
+        &rt.device,
+        ctx.command_encoder(),
+        (&gbuffer.texture.default_view, &request, world_from_clip),
+        (lit, format),
+    );
 }

@@ -3,6 +3,7 @@
 //! effect shares: the denoiser each keeps per camera, the prepass as the SDK reads it, and the
 //! recording of a camera's tasks among Bevy's commands; and the lights the shadows are traced
 //! from.
+use super::deferred::{composited, SunShadow};
 use super::{Held, HybridRt, Warnings};
 use crate::scene::ExtractedInstances;
 use crate::{AoOutput, RayTracedAo, RayTracedShadow};
@@ -10,6 +11,7 @@ use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::pbr::{ScreenSpaceAmbientOcclusionResources, SsaoBindGroups};
 use bevy::platform::collections::HashMap;
 use bevy::prelude::*;
+use bevy::render::camera::ExtractedCamera;
 use bevy::render::render_asset::RenderAssets;
 use bevy::render::renderer::{RenderContext, ViewQuery};
 use bevy::render::texture::GpuImage;
@@ -97,7 +99,7 @@ impl ViewDenoiser {
 /// Render world, extraction: the main world's visible directional, point and spot lights as
 /// the SDK takes them, by main-world entity, directional lights first (in query order).
 #[derive(Resource, Default)]
-pub(super) struct ExtractedLights(Vec<(Entity, LightInfo)>);
+pub(super) struct ExtractedLights(Vec<(Entity, LightInfo, Option<[f32; 3]>)>);
 
 /// The main world's lights of one kind, as `extract_lights` reads them.
 type Lights<'w, 's, L> = Query<'w, 's, (Entity, &'static L, &'static GlobalTransform, &'static InheritedVisibility)>;
@@ -114,11 +116,14 @@ pub(super) fn extract_lights(
 ) {
     let v = |v: Vec3| hybrid_rt::glam::Vec3::new(v.x, v.y, v.z);
     out.0.clear();
-    for (entity, _, transform, visible) in &suns {
+    for (entity, sun, transform, visible) in &suns {
         if visible.get() {
             let light =
                 LightInfo { light_type: LightType::Directional, direction: v(*transform.forward()), ..Default::default() };
-            out.0.push((entity, light));
+            // A sun without shadow maps lights Bevy's frame unshadowed: the composite can
+            // take its occluded part out again (its colour times illuminance, as Bevy's).
+            let unshadowed = (!sun.shadow_maps_enabled).then(|| (sun.color.to_linear().to_vec3() * sun.illuminance).to_array());
+            out.0.push((entity, light, unshadowed));
         }
     }
     for (entity, point, transform, visible) in &points {
@@ -130,7 +135,7 @@ pub(super) fn extract_lights(
                 range: point.range.max(0.0),
                 ..Default::default()
             };
-            out.0.push((entity, light));
+            out.0.push((entity, light, None));
         }
     }
     for (entity, spot, transform, visible) in &spots {
@@ -146,7 +151,7 @@ pub(super) fn extract_lights(
                 outer_cone: outer,
                 ..Default::default()
             };
-            out.0.push((entity, light));
+            out.0.push((entity, light, None));
         }
     }
 }
@@ -435,23 +440,23 @@ pub(super) fn trace_ao(
 /// Per camera with [`RayTracedShadow`]: a light's shadow from Bevy's prepass into the
 /// application's image.
 pub(super) fn trace_shadow(
-    view: ViewQuery<(&ExtractedView, &ViewPrepassTextures, &RayTracedShadow)>,
+    view: ViewQuery<(&ExtractedView, &ExtractedCamera, &ViewPrepassTextures, &RayTracedShadow)>,
     images: Res<RenderAssets<GpuImage>>,
     lights: Res<ExtractedLights>,
     mut state: ResMut<HybridRt>,
     mut ctx: RenderContext,
 ) {
-    let (view, prepass, settings) = view.into_inner();
+    let (view, camera, prepass, settings) = view.into_inner();
     let state = &mut *state;
     let Some(rt) = state.rt.as_ref() else { return };
     if !settings.enabled || !state.has_instances {
         return;
     }
     let found = match settings.light {
-        Some(entity) => lights.0.iter().find(|(e, _)| *e == entity),
-        None => lights.0.first().filter(|(_, l)| l.light_type == LightType::Directional),
+        Some(entity) => lights.0.iter().find(|(e, _, _)| *e == entity),
+        None => lights.0.first().filter(|(_, l, _)| l.light_type == LightType::Directional),
     };
-    let Some(&(_, mut light)) = found else {
+    let Some(&(_, mut light, unshadowed)) = found else {
         return state.warned.once(match settings.light {
             Some(entity) => format!("RayTracedShadow.light {entity} is not a visible DirectionalLight, PointLight or SpotLight"),
             None => "a camera has RayTracedShadow without a light, and the scene has no visible DirectionalLight".to_string(),
@@ -490,7 +495,20 @@ pub(super) fn trace_shadow(
         Err(e) => return state.warned.once(&e),
     };
     let sinks = (&mut state.recorded, &mut state.held, &mut state.warned);
-    record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt shadow", inputs, writes, &[out_view]);
+    if !record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt shadow", inputs, writes, &[out_view]) {
+        return;
+    }
+    // A deferred camera and a sun without shadow maps: the composite takes the occluded part of
+    // its light out of the lit image.
+    let (Some(radiance), true, true) = (unshadowed, settings.composite, prepass.deferred.is_some()) else { return };
+    let Some(visible) = composited(image, true, "RayTracedShadow", &mut state.warned) else { return };
+    let d = light.direction;
+    state.composites.entry(view.retained_view_entity).or_default().shadow = Some(SunShadow {
+        visible,
+        in_green: !settings.denoise,
+        direction_to_light: [-d.x, -d.y, -d.z],
+        radiance: radiance.map(|c| c * camera.exposure),
+    });
 }
 
 /// The view's camera as the SDK takes it: world to view, and Bevy's (unjittered) projection

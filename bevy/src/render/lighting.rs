@@ -1,7 +1,7 @@
 //! The lighting traced per camera after Bevy's opaque pass, in one ticket: the lit frame
 //! injected into the SDK's direct-lighting cache, diffuse GI and reflections traced from it,
 //! denoised into the application's images and, for a deferred camera, added to the lit image.
-use super::deferred::{CompositeInputs, DeferredPasses, DECODED_FORMAT};
+use super::deferred::{composited, DeferredPasses, DECODED_FORMAT};
 use super::effects::{effect_targets, record_view, schedule_denoiser, Effect, EffectTargets, PrepassInputs};
 use super::{HybridRt, Warnings};
 use crate::{RayTracedGi, RayTracedReflections};
@@ -12,7 +12,6 @@ use bevy::render::render_asset::RenderAssets;
 use bevy::render::renderer::{RenderContext, ViewQuery};
 use bevy::render::texture::GpuImage;
 use bevy::render::view::{ExtractedView, RetainedViewEntity, ViewTarget};
-use hybrid_rt::glam::Mat4;
 use hybrid_rt::{
     DenoiseDiffuseTask, DenoiseSpecularTask, DirectLightingInjectionTask, RoughnessInput, TaskContainer, TraceDiffuseTask,
     TraceSpecularTask,
@@ -220,24 +219,15 @@ pub(super) fn trace_lighting(
     if !record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt lighting", inputs, writes, &outputs) {
         return;
     }
-    // A deferred camera: the GI times its G-buffer's diffuse colour, the reflections times its
-    // environment BRDF, added to the lit image.
-    let Some(gbuffer) = gbuffer else { return };
-    let inputs = CompositeInputs {
-        gi: gi.and_then(|(g, image)| composited(image, g.composite, "RayTracedGi", &mut state.warned)),
-        reflections: reflections.and_then(|(r, image)| composited(image, r.composite, "RayTracedReflections", &mut state.warned)),
-        normals: match prepass.normal.as_ref() {
-            Some(n) => &n.texture.default_view,
-            None => return,
-        },
-        world_from_clip: world_from_clip(view),
-    };
-    if inputs.gi.is_none() && inputs.reflections.is_none() {
+    // A deferred camera: the composite adds the GI times its G-buffer's diffuse colour, the
+    // reflections times its environment BRDF, to the lit image.
+    if gbuffer.is_none() {
         return;
     }
-    let passes = state.deferred.get_or_insert_with(|| DeferredPasses::new(&rt.device));
-    let target_format = target.main_texture_format();
-    passes.composite(&rt.device, ctx.command_encoder(), (&gbuffer.default_view, &inputs), (lit_view, target_format));
+    let request = state.composites.entry(view.retained_view_entity).or_default();
+    request.gi = gi.and_then(|(g, image)| composited(image, g.composite, "RayTracedGi", &mut state.warned));
+    request.reflections =
+        reflections.and_then(|(r, image)| composited(image, r.composite, "RayTracedReflections", &mut state.warned));
 }
 
 /// Adds an effect's inputs to the ticket's: the prepass textures are every effect's, so only
@@ -251,24 +241,4 @@ fn gather(into: &mut Option<PrepassInputs>, inputs: PrepassInputs) {
     first.textures.extend(textures);
     let views: Vec<_> = inputs.views.into_iter().filter(|v| !first.views.contains(v)).collect();
     first.views.extend(views);
-}
-
-/// The view of an effect's output the composite reads, where it is on (None: off, or the image
-/// cannot be read by a shader, warned once).
-fn composited<'a>(image: &'a GpuImage, on: bool, component: &str, warned: &mut Warnings) -> Option<&'a wgpu::TextureView> {
-    if !on {
-        return None;
-    }
-    if !image.texture.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
-        warned.once(format!("{component}.output needs TEXTURE_BINDING usage for the composite of a deferred camera"));
-        return None;
-    }
-    Some(&image.texture_view)
-}
-
-/// Clip space (wgpu's: y up) to world space, of the view's unjittered projection.
-fn world_from_clip(view: &ExtractedView) -> [f32; 16] {
-    let world_from_view = Mat4::from_cols_array(&view.world_from_view.to_matrix().to_cols_array());
-    let clip_from_view = Mat4::from_cols_array(&view.clip_from_view.to_cols_array());
-    (world_from_view * clip_from_view.inverse()).to_cols_array()
 }
