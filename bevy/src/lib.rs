@@ -237,6 +237,13 @@ pub struct RayTracedReflections {
     pub ray_length: f32,
     /// Radiance (linear RGB) of rays that hit nothing: a constant sky. Default black.
     pub miss_radiance: [f32; 3],
+    /// Surfaces up to this roughness (near-mirrors, 0..=1) shade their reflections' hits from
+    /// Bevy's lights (the first 32 visible directional, point and spot lights, one shadow ray
+    /// each; the hit's `StandardMaterial` base colour as its albedo, Lambert) plus what the
+    /// cache holds beyond those lights — sharp where the cache is a tile wide, and lit where no
+    /// camera has shown the surface. Rougher surfaces read the cache only. Negative: off.
+    /// Default 0.1.
+    pub hit_lighting_roughness: f32,
     /// Frames over which the cache averages each surface's lit colour (>= 1), when the camera
     /// has no enabled [`RayTracedGi`] (whose setting governs otherwise). Default 30.
     pub cache_average_frames: f32,
@@ -264,6 +271,7 @@ impl Default for RayTracedReflections {
             max_roughness: 1.0,
             ray_length: 100.0,
             miss_radiance: [0.0; 3],
+            hit_lighting_roughness: 0.1,
             cache_average_frames: 30.0,
             denoise: true,
             composite: true,

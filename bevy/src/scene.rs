@@ -17,18 +17,65 @@ use hybrid_rt_wgpu::{wgpu, RtDevice};
 
 /// This frame's visible mesh entities, from the main world.
 #[derive(Resource, Default)]
-pub(crate) struct ExtractedInstances(pub Vec<(MainEntity, AssetId<Mesh>, Affine3A)>);
+pub(crate) struct ExtractedInstances(pub Vec<ExtractedInstance>);
+
+/// A visible mesh entity: its mesh, placement and surface.
+pub(crate) struct ExtractedInstance {
+    entity: MainEntity,
+    mesh: AssetId<Mesh>,
+    transform: Affine3A,
+    surface: Surface,
+}
+
+/// What the SDK's hit lighting shades a surface with: its diffuse albedo (linear, 0..=1) and
+/// the light it emits (in the lit image's units).
+#[derive(Clone, Copy, PartialEq, Debug)]
+struct Surface {
+    albedo: [f32; 3],
+    emission: [f32; 3],
+}
+
+impl Surface {
+    /// A `StandardMaterial`'s: its diffuse colour (base colour x (1 - metallic), as Bevy's
+    /// lighting takes it); an unlit material shows its base colour as is, so it emits that.
+    /// Lit materials' own emission comes from the cache (their lit image, injected). Without
+    /// a `StandardMaterial`, the SDK's default grey.
+    fn of(material: Option<&StandardMaterial>) -> Surface {
+        let Some(m) = material else { return Surface { albedo: [0.5; 3], emission: [0.0; 3] } };
+        let base = m.base_color.to_linear();
+        let rgb = [base.red, base.green, base.blue].map(|c| c.clamp(0.0, 1.0));
+        match m.unlit {
+            true => Surface { albedo: [0.0; 3], emission: rgb },
+            false => Surface { albedo: rgb.map(|c| c * (1.0 - m.metallic.clamp(0.0, 1.0))), emission: [0.0; 3] },
+        }
+    }
+}
+
+/// What `extract_instances` reads of a mesh entity.
+type MeshEntity = (
+    Entity,
+    &'static Mesh3d,
+    &'static GlobalTransform,
+    &'static InheritedVisibility,
+    Option<&'static MeshMaterial3d<StandardMaterial>>,
+);
 
 /// Render world, extraction: every entity with a mesh that is visible in the hierarchy.
 /// (`InheritedVisibility`, not `ViewVisibility`: rays see what no camera frames.)
 pub(crate) fn extract_instances(
     mut out: ResMut<ExtractedInstances>,
-    query: Extract<Query<(Entity, &Mesh3d, &GlobalTransform, &InheritedVisibility)>>,
+    query: Extract<Query<MeshEntity>>,
+    materials: Extract<Res<Assets<StandardMaterial>>>,
 ) {
     out.0.clear();
-    for (entity, mesh, transform, visible) in &query {
+    for (entity, mesh, transform, visible, material) in &query {
         if visible.get() {
-            out.0.push((MainEntity::from(entity), mesh.id(), to_sdk_affine(&transform.affine())));
+            out.0.push(ExtractedInstance {
+                entity: MainEntity::from(entity),
+                mesh: mesh.id(),
+                transform: to_sdk_affine(&transform.affine()),
+                surface: Surface::of(material.and_then(|m| materials.get(&m.0))),
+            });
         }
     }
 }
@@ -58,6 +105,7 @@ struct MirroredInstance {
     handle: InstanceHandle,
     mesh: AssetId<Mesh>,
     transform: Affine3A,
+    surface: Surface,
 }
 
 /// The SDK's handles for Bevy's meshes and entities.
@@ -96,8 +144,8 @@ impl SceneMirror {
         let ctx = rt.context();
         let mut out = SyncOutcome { changed: false, copies: Vec::new() };
         let mut seen = HashSet::new();
-        let used: HashSet<AssetId<Mesh>> = extracted.0.iter().map(|(_, id, _)| *id).collect();
-        for (entity, mesh_id, transform) in &extracted.0 {
+        let used: HashSet<AssetId<Mesh>> = extracted.0.iter().map(|i| i.mesh).collect();
+        for ExtractedInstance { entity, mesh: mesh_id, transform, surface } in &extracted.0 {
             let Some(place) = self.place_of(rt, mesh_id, allocator, meshes, &mut out.copies)? else { continue };
             let geometry = match self.meshes.get_mut(mesh_id) {
                 Some(m) if m.place == place => m.handle,
@@ -125,19 +173,26 @@ impl SceneMirror {
                 }
             };
             seen.insert(*entity);
-            let input = InstanceInput { geometry, transform: *transform, ..Default::default() };
+            let input = InstanceInput {
+                geometry,
+                transform: *transform,
+                albedo: surface.albedo,
+                emission: surface.emission,
+                ..Default::default()
+            };
+            let mirrored =
+                MirroredInstance { handle: InstanceHandle::NULL, mesh: *mesh_id, transform: *transform, surface: *surface };
             match self.instances.get_mut(entity) {
-                Some(i) if i.mesh == *mesh_id && i.transform == *transform => {}
+                Some(i) if i.mesh == *mesh_id && i.transform == *transform && i.surface == *surface => {}
                 Some(i) => {
                     tasks.schedule_instance(&InstanceTask { handle: i.handle, operation: InstanceOperation::Update, input })?;
-                    i.mesh = *mesh_id;
-                    i.transform = *transform;
+                    *i = MirroredInstance { handle: i.handle, ..mirrored };
                     out.changed = true;
                 }
                 None => {
                     let handle = ctx.create_instance_handle();
                     tasks.schedule_instance(&InstanceTask { handle, input, ..Default::default() })?;
-                    self.instances.insert(*entity, MirroredInstance { handle, mesh: *mesh_id, transform: *transform });
+                    self.instances.insert(*entity, MirroredInstance { handle, ..mirrored });
                     out.changed = true;
                 }
             }

@@ -24,6 +24,7 @@ use hybrid_rt::{
     TraceAmbientOcclusionTask, TraceCommon, TraceShadowTask, Viewport,
 };
 use hybrid_rt_wgpu::{prepare, wgpu, RtDevice};
+use std::f32::consts::PI;
 
 /// The effects a camera may trace, each with a denoiser of its own.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
@@ -97,9 +98,14 @@ impl ViewDenoiser {
 }
 
 /// Render world, extraction: the main world's visible directional, point and spot lights as
-/// the SDK takes them, by main-world entity, directional lights first (in query order).
+/// the SDK takes them, by main-world entity, directional lights first (in query order). Their
+/// `intensity` x `color` is what lights Bevy's frame before the camera's exposure, in the
+/// SDK's convention (a lit image is albedo x irradiance; Bevy's diffuse is albedo / pi x
+/// irradiance): a directional light's illuminance / pi, a point or spot light's luminous
+/// intensity (lumens / 4 pi) / pi. With each sun whose shadow maps are off, its colour x
+/// illuminance (what the composite takes a shadow's part of).
 #[derive(Resource, Default)]
-pub(super) struct ExtractedLights(Vec<(Entity, LightInfo, Option<[f32; 3]>)>);
+pub(super) struct ExtractedLights(pub(super) Vec<(Entity, LightInfo, Option<[f32; 3]>)>);
 
 /// The main world's lights of one kind, as `extract_lights` reads them.
 type Lights<'w, 's, L> = Query<'w, 's, (Entity, &'static L, &'static GlobalTransform, &'static InheritedVisibility)>;
@@ -115,11 +121,20 @@ pub(super) fn extract_lights(
     spots: Extract<Lights<SpotLight>>,
 ) {
     let v = |v: Vec3| hybrid_rt::glam::Vec3::new(v.x, v.y, v.z);
+    let colour = |c: Color| {
+        let c = c.to_linear();
+        [c.red, c.green, c.blue].map(|x| x.max(0.0))
+    };
     out.0.clear();
     for (entity, sun, transform, visible) in &suns {
         if visible.get() {
-            let light =
-                LightInfo { light_type: LightType::Directional, direction: v(*transform.forward()), ..Default::default() };
+            let light = LightInfo {
+                light_type: LightType::Directional,
+                direction: v(*transform.forward()),
+                intensity: sun.illuminance.max(0.0) / PI,
+                color: colour(sun.color),
+                ..Default::default()
+            };
             // A sun without shadow maps lights Bevy's frame unshadowed: the composite can
             // take its occluded part out again (its colour times illuminance, as Bevy's).
             let unshadowed = (!sun.shadow_maps_enabled).then(|| (sun.color.to_linear().to_vec3() * sun.illuminance).to_array());
@@ -133,6 +148,8 @@ pub(super) fn extract_lights(
                 position: v(transform.translation()),
                 radius: point.radius.max(0.0),
                 range: point.range.max(0.0),
+                intensity: point.intensity.max(0.0) / (4.0 * PI * PI),
+                color: colour(point.color),
                 ..Default::default()
             };
             out.0.push((entity, light, None));
@@ -149,6 +166,8 @@ pub(super) fn extract_lights(
                 range: spot.range.max(0.0),
                 inner_cone: spot.inner_angle.clamp(0.0, outer),
                 outer_cone: outer,
+                intensity: spot.intensity.max(0.0) / (4.0 * PI * PI),
+                color: colour(spot.color),
                 ..Default::default()
             };
             out.0.push((entity, light, None));

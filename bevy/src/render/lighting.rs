@@ -2,19 +2,21 @@
 //! injected into the SDK's direct-lighting cache, diffuse GI and reflections traced from it,
 //! denoised into the application's images and, for a deferred camera, added to the lit image.
 use super::deferred::{composited, DeferredPasses, DECODED_FORMAT};
+use super::effects::ExtractedLights;
 use super::effects::{effect_targets, record_view, schedule_denoiser, Effect, EffectTargets, PrepassInputs};
 use super::{HybridRt, Warnings};
 use crate::{RayTracedGi, RayTracedReflections};
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::platform::collections::HashMap;
 use bevy::prelude::*;
+use bevy::render::camera::ExtractedCamera;
 use bevy::render::render_asset::RenderAssets;
 use bevy::render::renderer::{RenderContext, ViewQuery};
 use bevy::render::texture::GpuImage;
 use bevy::render::view::{ExtractedView, RetainedViewEntity, ViewTarget};
 use hybrid_rt::{
-    DenoiseDiffuseTask, DenoiseSpecularTask, DirectLightingInjectionTask, RoughnessInput, TaskContainer, TraceDiffuseTask,
-    TraceSpecularTask,
+    DenoiseDiffuseTask, DenoiseSpecularTask, DirectLightingInjectionTask, HitLighting, LightInfo, RoughnessInput, TaskContainer,
+    TraceDiffuseTask, TraceSpecularTask, MAX_SHADOW_LIGHTS,
 };
 use hybrid_rt_wgpu::wgpu;
 
@@ -79,6 +81,7 @@ fn app_image<'a>(
 /// What [`trace_lighting`] reads of a camera.
 type LightingView = (
     &'static ExtractedView,
+    &'static ExtractedCamera,
     &'static ViewPrepassTextures,
     &'static ViewTarget,
     Option<&'static RayTracedGi>,
@@ -94,10 +97,11 @@ type LightingView = (
 pub(super) fn trace_lighting(
     view: ViewQuery<LightingView>,
     images: Res<RenderAssets<GpuImage>>,
+    lights: Res<ExtractedLights>,
     mut state: ResMut<HybridRt>,
     mut ctx: RenderContext,
 ) {
-    let (view, prepass, target, gi, reflections) = view.into_inner();
+    let (view, camera, prepass, target, gi, reflections) = view.into_inner();
     let state = &mut *state;
     let Some(rt) = state.rt.as_ref() else { return };
     let (gi, reflections) = (gi.filter(|g| g.enabled), reflections.filter(|r| r.enabled));
@@ -199,6 +203,7 @@ pub(super) fn trace_lighting(
                 rays_per_pixel: settings.rays_per_pixel,
                 ray_length: settings.ray_length,
                 miss_radiance: settings.miss_radiance,
+                hit_lighting: hit_lighting(&lights, settings.hit_lighting_roughness, camera.exposure),
                 ..Default::default()
             };
             let denoise = |t: &mut TaskContainer, context, common, input, output| {
@@ -228,6 +233,17 @@ pub(super) fn trace_lighting(
     request.gi = gi.and_then(|(g, image)| composited(image, g.composite, "RayTracedGi", &mut state.warned));
     request.reflections =
         reflections.and_then(|(r, image)| composited(image, r.composite, "RayTracedReflections", &mut state.warned));
+}
+
+/// Bevy's lights as the SDK's hit lighting takes them (their brightness times the camera's
+/// exposure, as Bevy's lit frame has them), for pixels up to `max_roughness`; off where that
+/// is negative or the scene has no light.
+fn hit_lighting(lights: &ExtractedLights, max_roughness: f32, exposure: f32) -> HitLighting {
+    if max_roughness.is_nan() || max_roughness < 0.0 {
+        return HitLighting::default();
+    }
+    let lights = lights.0.iter().take(MAX_SHADOW_LIGHTS).map(|(_, l, _)| LightInfo { intensity: l.intensity * exposure, ..*l });
+    HitLighting { lights: lights.collect(), max_roughness: max_roughness.min(1.0), ..Default::default() }
 }
 
 /// Adds an effect's inputs to the ticket's: the prepass textures are every effect's, so only
