@@ -1,7 +1,8 @@
 //! A Bevy scene built in code with ray-traced AO from hybrid-rt in place of Bevy's SSAO: rendered
 //! headless to a PNG, or shown in a window (`--window`; the T key toggles the ray-traced AO,
-//! Bevy's SSAO showing while it is off). `--ssao`: Bevy's own SSAO alone, for comparison.
-//! `--shadow-out PATH` (headless): the sun's ray-traced shadow too, its visible fraction
+//! Bevy's SSAO showing while it is off; `--window --deferred`: AO, sun shadow, GI and
+//! reflections all in the lit image, keys 1 to 4 toggling each). `--ssao`: Bevy's own SSAO
+//! alone, for comparison. `--shadow-out PATH` (headless): the sun's ray-traced shadow too, its visible fraction
 //! written as a grey PNG. `--gi-out PATH` (headless): diffuse GI from the lit frame too
 //! (the camera then renders in HDR), written as a PNG (Reinhard-mapped). `--deferred`: the
 //! camera renders deferred, and the GI is added to its lit image (the screenshot shows it).
@@ -338,23 +339,35 @@ fn write_grey_png(bytes: &[u8], width: u32, height: u32, path: &str) {
 
 /// The scene in a window, the SDK's GPU times printed every second.
 fn window(a: &Args) {
-    let window = Window { title: "hybrid-rt in Bevy (T: ray-traced AO on / off)".into(), ..default() };
+    let title = match a.deferred {
+        true => "hybrid-rt in Bevy (keys 1-4: AO, sun shadow, GI, reflections on / off)",
+        false => "hybrid-rt in Bevy (T: ray-traced AO on / off)",
+    };
+    // The effects' images are of the window's size in pixels, whatever the display's scale.
+    let (width, height) = (1280, 720);
+    let resolution = bevy::window::WindowResolution::new(width, height).with_scale_factor_override(1.0);
+    let window = Window { title: title.into(), resolution, ..default() };
     let mut app = App::new();
     app.add_plugins(HybridRtInitPlugin)
         .add_plugins(DefaultPlugins.set(render_plugin()).set(WindowPlugin { primary_window: Some(window), ..default() }))
-        .add_plugins(HybridRtPlugin)
-        .insert_resource(Settings {
-            ssao: a.ssao,
-            plain: false,
-            target: None,
-            shadow: None,
-            gi: None,
-            reflections: None,
-            deferred: false,
-            shiny: false,
-        })
-        .add_systems(Startup, setup)
-        .add_systems(Update, toggle_and_report);
+        .add_plugins(HybridRtPlugin);
+    // Deferred, every effect reaches the lit image: all four traced, each toggled by its key.
+    let mut images = app.world_mut().resource_mut::<Assets<Image>>();
+    let mut image = |on: bool, make: fn(u32, u32) -> Image| on.then(|| images.add(make(width, height)));
+    let (shadow, gi, reflections) =
+        (image(a.deferred, shadow_image), image(a.deferred, radiance_image), image(a.deferred, radiance_image));
+    app.insert_resource(Settings {
+        ssao: a.ssao,
+        plain: false,
+        target: None,
+        shadow,
+        gi,
+        reflections,
+        deferred: a.deferred,
+        shiny: a.shiny || a.deferred,
+    })
+    .add_systems(Startup, setup)
+    .add_systems(Update, toggle_and_report);
     if let Some(frames) = a.frames {
         app.add_systems(Update, move |mut n: Local<u32>, mut exit: MessageWriter<AppExit>| {
             *n += 1;
@@ -366,25 +379,50 @@ fn window(a: &Args) {
     app.run();
 }
 
-/// T toggles the ray-traced AO; every second the SDK's GPU times are printed.
+/// A camera's effects, as the keys toggle them.
+type Effects = (
+    &'static mut RayTracedAo,
+    Option<&'static mut RayTracedShadow>,
+    Option<&'static mut RayTracedGi>,
+    Option<&'static mut RayTracedReflections>,
+);
+
+/// T or 1 toggles the ray-traced AO, 2 the sun's shadow, 3 the GI, 4 the reflections; every
+/// second the SDK's GPU times are printed.
 fn toggle_and_report(
     keys: Res<ButtonInput<KeyCode>>,
-    mut cameras: Query<&mut RayTracedAo>,
+    mut cameras: Query<Effects>,
     diagnostics: Res<bevy::diagnostic::DiagnosticsStore>,
     time: Res<Time>,
     mut last: Local<f32>,
 ) {
-    if keys.just_pressed(KeyCode::KeyT) {
-        for mut ao in &mut cameras {
-            ao.enabled = !ao.enabled;
-            println!("ray-traced AO {}", if ao.enabled { "on" } else { "off (Bevy's SSAO)" });
+    let toggle = |enabled: &mut bool, name: &str| {
+        *enabled = !*enabled;
+        println!("ray-traced {name} {}", if *enabled { "on" } else { "off" });
+    };
+    for (mut ao, shadow, gi, reflections) in &mut cameras {
+        if keys.just_pressed(KeyCode::KeyT) || keys.just_pressed(KeyCode::Digit1) {
+            toggle(&mut ao.enabled, "AO (off: Bevy's SSAO)");
+        }
+        if let (Some(mut s), true) = (shadow, keys.just_pressed(KeyCode::Digit2)) {
+            toggle(&mut s.enabled, "sun shadow");
+        }
+        if let (Some(mut g), true) = (gi, keys.just_pressed(KeyCode::Digit3)) {
+            toggle(&mut g.enabled, "GI");
+        }
+        if let (Some(mut r), true) = (reflections, keys.just_pressed(KeyCode::Digit4)) {
+            toggle(&mut r.enabled, "reflections");
         }
     }
     if time.elapsed_secs() - *last >= 1.0 {
         *last = time.elapsed_secs();
         let ms = |p: &str| diagnostics.get(&bevy::diagnostic::DiagnosticPath::new(p.to_string())).and_then(|d| d.average());
-        if let (Some(ao), Some(frame)) = (ms("hybrid_rt/ao"), ms("hybrid_rt/frame")) {
-            println!("hybrid-rt GPU time: AO {ao:.3} ms, frame {frame:.3} ms");
+        if let Some(frame) = ms("hybrid_rt/frame") {
+            let parts: Vec<String> = ["ao", "shadow", "gi", "reflections"]
+                .iter()
+                .filter_map(|p| ms(&format!("hybrid_rt/{p}")).map(|t| format!("{p} {t:.3}")))
+                .collect();
+            println!("hybrid-rt GPU time: frame {frame:.3} ms ({} ms)", parts.join(", "));
         }
     }
 }
