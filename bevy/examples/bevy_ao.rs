@@ -502,7 +502,8 @@ fn setup(
             camera.insert(RayTracedReflections { output: reflections.clone(), ..default() });
         }
         if settings.deferred {
-            camera.insert(bevy::core_pipeline::prepass::DeferredPrepass);
+            // HDR: the sun's shadow is taken out of the lit image before tonemapping.
+            camera.insert((bevy::core_pipeline::prepass::DeferredPrepass, bevy::camera::Hdr));
         }
     }
 }

@@ -125,10 +125,10 @@ pub struct RayTracedShadow {
     /// penumbrae as wide as the light's size and the occluders' distances make them). Default
     /// true.
     pub denoise: bool,
-    /// A deferred camera and a `DirectionalLight` with `shadow_maps_enabled: false` (which Bevy
-    /// then lights unshadowed): take the occluded part of its light — computed from the
-    /// deferred G-buffer as Bevy's lighting computes it — out of the lit image, after Bevy's
-    /// lighting; `output` then needs `TEXTURE_BINDING` usage too. Other cameras and lights keep
+    /// A deferred camera with `Hdr` and a `DirectionalLight` with `shadow_maps_enabled: false`
+    /// (which Bevy then lights unshadowed): take the occluded part of its light — computed from
+    /// the deferred G-buffer as Bevy's lighting computes it — out of the lit image, after
+    /// Bevy's lighting; `output` then needs `TEXTURE_BINDING` usage too. Other cameras and lights keep
     /// the shadow in `output` only. Default true.
     pub composite: bool,
     /// Where the shadow goes: an image of the view's size with `STORAGE_BINDING` usage,

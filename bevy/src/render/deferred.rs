@@ -12,6 +12,7 @@ use super::{HybridRt, Warnings};
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::platform::collections::HashMap;
 use bevy::prelude::*;
+use bevy::render::camera::ExtractedCamera;
 use bevy::render::renderer::{RenderContext, ViewQuery};
 use bevy::render::texture::GpuImage;
 use bevy::render::view::{ExtractedView, ViewTarget};
@@ -433,13 +434,17 @@ pub(super) fn composited(image: &GpuImage, on: bool, component: &str, warned: &m
 /// Per deferred camera, after its traces and before transparent surfaces: what they left for
 /// the lit image, in one full-screen pass.
 pub(super) fn composite(
-    view: ViewQuery<(&ExtractedView, &ViewPrepassTextures, &ViewTarget)>,
+    view: ViewQuery<(&ExtractedView, &ExtractedCamera, &ViewPrepassTextures, &ViewTarget)>,
     mut state: ResMut<HybridRt>,
     mut ctx: RenderContext,
 ) {
-    let (view, prepass, target) = view.into_inner();
+    let (view, camera, prepass, target) = view.into_inner();
     let state = &mut *state;
-    let Some(request) = state.composites.remove(&view.retained_view_entity) else { return };
+    let Some(mut request) = state.composites.remove(&view.retained_view_entity) else { return };
+    // Without HDR Bevy's lit image is tonemapped already: no light can be taken out of it.
+    if !camera.hdr && request.shadow.take().is_some() {
+        state.warned.once("RayTracedShadow's composite needs an Hdr camera: the shadow stays in its image");
+    }
     let (Some(rt), Some(gbuffer)) = (state.rt.as_ref(), prepass.deferred.as_ref()) else { return };
     let world_from_view = Mat4::from_cols_array(&view.world_from_view.to_matrix().to_cols_array());
     let clip_from_view = Mat4::from_cols_array(&view.clip_from_view.to_cols_array());
