@@ -97,9 +97,9 @@ pub enum AoOutput {
 /// A ray-traced shadow for a 3D camera: the fraction of one light — the sun (a
 /// `DirectionalLight`), a `PointLight` or a `SpotLight` — that each pixel of Bevy's prepass
 /// sees, soft as the light's size makes it, written into an image of the application's. For a
-/// deferred camera and a `DirectionalLight` with `shadow_maps_enabled: false` the plugin also
-/// takes the sun's occluded light out of the lit image (`composite`): the ray-traced shadow
-/// replaces the shadow map in Bevy's frame. Otherwise the image is for the application's own
+/// deferred camera and a light with `shadow_maps_enabled: false` the plugin also takes the
+/// light's occluded part out of the lit image (`composite`): the ray-traced shadow replaces
+/// the shadow map in Bevy's frame. Otherwise the image is for the application's own
 /// compositing (Bevy's forward PBR has no input for a screen-space shadow). Toggle `enabled`
 /// at run time.
 ///
@@ -125,10 +125,10 @@ pub struct RayTracedShadow {
     /// penumbrae as wide as the light's size and the occluders' distances make them). Default
     /// true.
     pub denoise: bool,
-    /// A deferred camera with `Hdr` and a `DirectionalLight` with `shadow_maps_enabled: false`
-    /// (which Bevy then lights unshadowed): take the occluded part of its light — computed from
-    /// the deferred G-buffer as Bevy's lighting computes it — out of the lit image, after
-    /// Bevy's lighting; `output` then needs `TEXTURE_BINDING` usage too. Other cameras and lights keep
+    /// A deferred camera with `Hdr` and a light with `shadow_maps_enabled: false` (which Bevy
+    /// then lights unshadowed): take the occluded part of its light — computed from the
+    /// deferred G-buffer as Bevy's lighting computes it — out of the lit image, after Bevy's
+    /// lighting; `output` then needs `TEXTURE_BINDING` usage too. Other cameras and lights keep
     /// the shadow in `output` only. Default true.
     pub composite: bool,
     /// Where the shadow goes: an image of the view's size with `STORAGE_BINDING` usage,

@@ -777,13 +777,15 @@ fn ray_traced_ao_in_a_bevy_frame() {
     let reflecting = left_out.iter().zip(&floor_mask).filter(|(x, m)| **m && **x > 0.01).count();
     assert_eq!(reflecting, 0, "{reflecting} floor pixels rougher than max_roughness reflect");
 
-    // 9. The sun's shadow in the lit image: a grey floor lit by the sun and a dim ambient
-    // light, the sun's shadow maps off (Bevy lights the floor unshadowed), the cube's hard
-    // ray-traced shadow composited — the occluded part of the sun's light, computed as Bevy's
+    // 9. A light's shadow in the lit image: a grey floor lit by a light and a dim ambient
+    // light, the light's shadow maps off (Bevy lights the floor unshadowed), the cube's hard
+    // ray-traced shadow composited — the occluded part of the light, computed as Bevy's
     // lighting computes it, taken out. Where the reference puts the shadow the floor keeps the
-    // ambient light alone, as Bevy renders it with the sun off (what differs is the mismatch
-    // of the two computations of the sun's light, either way: within 2% of the sun's light,
-    // 8-bit rounding included); elsewhere it keeps Bevy's colour (within 8-bit rounding).
+    // ambient light alone, as Bevy renders it with the light off (what differs is the mismatch
+    // of the two computations of the light, either way: within 2% of the light's part, 8-bit
+    // rounding included); elsewhere it keeps Bevy's colour (within 8-bit rounding). The sun,
+    // then a point light and a spot light (its cone: outside it Bevy gives no light, and the
+    // shadow no visibility).
     {
         let world = app.world_mut();
         for mut sun in world.query::<&mut DirectionalLight>().iter_mut(world) {
@@ -800,37 +802,76 @@ fn ray_traced_ao_in_a_bevy_frame() {
         *shadow = RayTracedShadow { angular_diameter: 0.0, denoise: false, output: shadow.output.clone(), ..default() };
         assert!(shadow.composite, "the shadow's composite is on by default");
     }
-    frames(&mut app, &latest.shadow, 4);
-    let shadowed = screenshot_red(&mut app, &latest.target);
-    app.world_mut().get_mut::<RayTracedShadow>(camera).unwrap().composite = false;
-    frames(&mut app, &latest.shadow, 4);
-    let unshadowed = screenshot_red(&mut app, &latest.target);
-    {
-        let world = app.world_mut();
-        for mut sun in world.query::<&mut DirectionalLight>().iter_mut(world) {
-            sun.illuminance = 0.0;
-        }
-    }
-    frames(&mut app, &latest.shadow, 2);
-    let ambient = screenshot_red(&mut app, &latest.target);
-    let (_, visible) = reference_shadow(Some(0.0), &sun(0.0), 1);
-    let mean_over = |v: &[f32], lit: bool| {
-        let pick = |i: usize| floor_mask[i] && (visible[i] > 0.5) == lit;
-        let n = (0..v.len()).filter(|i| pick(*i)).count();
-        ((0..v.len()).filter(|i| pick(*i)).map(|i| v[i] as f64).sum::<f64>() / n.max(1) as f64, n)
+    let sun_entity = app.world_mut().query_filtered::<Entity, With<DirectionalLight>>().single(app.world()).unwrap();
+    let lumens = 150_000.0;
+    let point = PointLight { intensity: lumens, radius: 0.0, range: 20.0, shadow_maps_enabled: false, ..default() };
+    let spot = SpotLight {
+        intensity: lumens,
+        radius: 0.0,
+        range: 20.0,
+        inner_angle: 0.4,
+        outer_angle: 0.5,
+        shadow_maps_enabled: false,
+        ..default()
     };
-    let ((in_shadow, n_shadow), (before, _)) = (mean_over(&shadowed, false), mean_over(&unshadowed, false));
-    let ((lit_after, n_lit), (lit_before, _)) = (mean_over(&shadowed, true), mean_over(&unshadowed, true));
-    let (ambient, _) = mean_over(&ambient, false);
-    eprintln!(
-        "sun shadow composited: {n_shadow} floor px in the reference's shadow {before:.4} -> {in_shadow:.4} (the ambient light alone: {ambient:.4}); {n_lit} lit px {lit_before:.4} -> {lit_after:.4}"
-    );
-    assert!(
-        n_shadow > 200 && before - ambient > 0.05 && ambient > 0.02,
-        "the floor's light: {before} with the sun, {ambient} without"
-    );
-    assert!((in_shadow - ambient).abs() <= 0.02 * (before - ambient), "the shadow leaves {in_shadow}, not the ambient {ambient}");
-    assert!((lit_after - lit_before).abs() <= 1.0 / 255.0, "lit floor changed: {lit_before} -> {lit_after}");
+    let lights = [
+        ("sun", sun_entity, sun(0.0)),
+        ("point light", app.world_mut().spawn((point, towards)).id(), point_light),
+        ("spot light", app.world_mut().spawn((spot, towards)).id(), spot_light),
+    ];
+    // Off: no light; on: each light its brightness.
+    let brightness = |app: &mut App, entity: Entity, on: bool| {
+        let mut e = app.world_mut().entity_mut(entity);
+        if let Some(mut l) = e.get_mut::<DirectionalLight>() {
+            l.illuminance = if on { 3000.0 } else { 0.0 };
+        } else if let Some(mut l) = e.get_mut::<PointLight>() {
+            l.intensity = if on { lumens } else { 0.0 };
+        } else if let Some(mut l) = e.get_mut::<SpotLight>() {
+            l.intensity = if on { lumens } else { 0.0 };
+        }
+    };
+    for (_, entity, _) in &lights[1..] {
+        brightness(&mut app, *entity, false);
+    }
+    for (name, entity, light) in lights {
+        brightness(&mut app, entity, true);
+        {
+            let mut shadow = app.world_mut().get_mut::<RayTracedShadow>(camera).unwrap();
+            shadow.light = Some(entity);
+            shadow.composite = true;
+        }
+        frames(&mut app, &latest.shadow, 4);
+        let shadowed = screenshot_red(&mut app, &latest.target);
+        app.world_mut().get_mut::<RayTracedShadow>(camera).unwrap().composite = false;
+        frames(&mut app, &latest.shadow, 4);
+        let unshadowed = screenshot_red(&mut app, &latest.target);
+        brightness(&mut app, entity, false);
+        frames(&mut app, &latest.shadow, 2);
+        let ambient = screenshot_red(&mut app, &latest.target);
+        let (_, visible) = reference_shadow(Some(0.0), &light, 1);
+        let mean_over = |v: &[f32], lit: bool| {
+            let pick = |i: usize| floor_mask[i] && (visible[i] > 0.5) == lit;
+            let n = (0..v.len()).filter(|i| pick(*i)).count();
+            ((0..v.len()).filter(|i| pick(*i)).map(|i| v[i] as f64).sum::<f64>() / n.max(1) as f64, n)
+        };
+        let ((in_shadow, n_shadow), (before, _)) = (mean_over(&shadowed, false), mean_over(&unshadowed, false));
+        let ((lit_after, n_lit), (lit_before, _)) = (mean_over(&shadowed, true), mean_over(&unshadowed, true));
+        let (ambient, _) = mean_over(&ambient, false);
+        eprintln!(
+            "{name}'s shadow composited: {n_shadow} floor px in the reference's shadow {before:.4} -> {in_shadow:.4} (the ambient light alone: {ambient:.4}); {n_lit} lit px {lit_before:.4} -> {lit_after:.4}"
+        );
+        assert!(
+            n_shadow > 200 && n_lit > 200 && before - ambient > 0.02 && ambient > 0.02,
+            "{name}: the floor's light {before} with it, {ambient} without ({n_shadow} px in its shadow, {n_lit} lit)"
+        );
+        assert!(
+            (in_shadow - ambient).abs() <= 0.02 * (before - ambient),
+            "{name}: the shadow leaves {in_shadow}, not the ambient {ambient}"
+        );
+        assert!((lit_after - lit_before).abs() <= 1.0 / 255.0, "{name}: lit floor changed: {lit_before} -> {lit_after}");
+    }
+    app.world_mut().despawn(lights[1].1);
+    app.world_mut().despawn(lights[2].1);
 
     // 10. Hit lighting: the cube floats (its bottom 0.5 m up), a point light under it, the
     // floor a mirror. The mirror shows the cube's bottom face, which the camera never sees (the

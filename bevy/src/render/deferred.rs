@@ -17,6 +17,7 @@ use bevy::render::renderer::{RenderContext, ViewQuery};
 use bevy::render::texture::GpuImage;
 use bevy::render::view::{ExtractedView, ViewTarget};
 use hybrid_rt::glam::Mat4;
+use hybrid_rt::{LightInfo, LightType};
 use hybrid_rt_wgpu::wgpu;
 use hybrid_rt_wgpu::wgpu::util::DeviceExt;
 
@@ -73,8 +74,9 @@ fn fragment(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
 }
 "#;
 
-/// The composite. `terms`: x > 0 adds the GI, y > 0 the reflections, z > 0 takes the sun's
-/// occluded light out (its visible fraction in the shadow image's R, or G where w > 0).
+/// The composite. `terms`: x > 0 adds the GI, y > 0 the reflections, z > 0 takes a light's
+/// occluded part out (z = 1: directional, 2: point, 3: spot; its visible fraction in the
+/// shadow image's R, or G where w > 0).
 const COMPOSITE: &str = r#"
 const PI: f32 = 3.141592653589793;
 
@@ -84,29 +86,37 @@ const PI: f32 = 3.141592653589793;
 struct Composite {
     world_from_clip: mat4x4<f32>,
     terms: vec4<f32>,
-    // The direction to the sun, and its colour x illuminance x the camera's exposure.
-    sun_direction: vec4<f32>,
-    sun_radiance: vec4<f32>,
+    // Directional: the direction to the light; point and spot: the light's position.
+    light_vector: vec4<f32>,
+    // Its colour x brightness x the camera's exposure, as Bevy lights with it; w: 1 / range².
+    light_radiance: vec4<f32>,
+    // Point and spot: radius; spot: Bevy's cone scale and offset.
+    light_shape: vec4<f32>,
+    // Spot: the direction it shines.
+    light_forward: vec4<f32>,
 }
 @group(0) @binding(4) var<uniform> u: Composite;
+@group(0) @binding(5) var depth: texture_depth_2d;
 
 fn schlick(f0: f32, f90: f32, x: f32) -> f32 {
     return f0 + (f90 - f0) * pow(1.0 - x, 5.0);
 }
 
-// A directional light's contribution to a pixel, as Bevy's PBR lighting computes it
-// (Filament's: Burley diffuse, GGX with height-correlated Smith visibility, Schlick Fresnel
-// with Bevy's f90, multiple-scattering compensation), before its shadow.
-fn sun_light(m: Material, n: vec3<f32>, v: vec3<f32>, n_dot_v: f32, f0: vec3<f32>, ab: vec2<f32>) -> vec3<f32> {
-    let l = u.sun_direction.xyz;
+// Bevy's lighting terms (Filament's): Burley diffuse; GGX with height-correlated Smith
+// visibility, Schlick Fresnel with Bevy's f90, and the multiple-scattering compensation.
+fn burley(m: Material, roughness: f32, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, n_dot_v: f32) -> vec3<f32> {
+    let h = normalize(l + v);
+    let l_dot_h = saturate(dot(l, h));
+    let f90 = 0.5 + 2.0 * roughness * l_dot_h * l_dot_h;
+    let n_dot_l = saturate(dot(n, l));
+    return m.base_color * (1.0 - m.metallic) * schlick(1.0, f90, n_dot_l) * schlick(1.0, f90, n_dot_v) / PI;
+}
+
+fn ggx(n: vec3<f32>, v: vec3<f32>, l: vec3<f32>, roughness: f32, intensity: f32, f0: vec3<f32>, ab: vec2<f32>, n_dot_v: f32) -> vec3<f32> {
     let h = normalize(l + v);
     let n_dot_l = saturate(dot(n, l));
     let n_dot_h = saturate(dot(n, h));
     let l_dot_h = saturate(dot(l, h));
-    let clamped = clamp(m.perceptual_roughness, 0.089, 1.0);
-    let roughness = clamped * clamped;
-    let f90 = 0.5 + 2.0 * roughness * l_dot_h * l_dot_h;
-    let diffuse = m.base_color * (1.0 - m.metallic) * schlick(1.0, f90, n_dot_l) * schlick(1.0, f90, n_dot_v) / PI;
     let a = n_dot_h * roughness;
     let k = roughness / (1.0 - n_dot_h * n_dot_h + a * a);
     let d = k * k / PI;
@@ -116,8 +126,48 @@ fn sun_light(m: Material, n: vec3<f32>, v: vec3<f32>, n_dot_v: f32, f0: vec3<f32
     let visibility = 0.5 / (lambda_v + lambda_l);
     let spec_f90 = saturate(dot(f0, vec3<f32>(50.0 * 0.33)));
     let fresnel = f0 + (spec_f90 - f0) * pow(1.0 - l_dot_h, 5.0);
-    let specular = d * visibility * fresnel * (1.0 + f0 * (1.0 / (ab.x + ab.y) - 1.0));
-    return (diffuse + specular) * n_dot_l * u.sun_radiance.rgb;
+    return intensity * d * visibility * fresnel * (1.0 + f0 * (1.0 / (ab.x + ab.y) - 1.0));
+}
+
+// The light's contribution to the pixel at `p`, as Bevy's PBR lighting computes it, before
+// its shadow: a directional light; a point light (Karis' representative point for its
+// radius, Bevy's windowed inverse-square falloff); a spot light (the point light x Bevy's
+// cone).
+fn light_contribution(m: Material, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, n_dot_v: f32, f0: vec3<f32>, ab: vec2<f32>) -> vec3<f32> {
+    let clamped = clamp(m.perceptual_roughness, 0.089, 1.0);
+    let roughness = clamped * clamped;
+    if (u.terms.z < 1.5) {
+        let l = u.light_vector.xyz;
+        let lobes = burley(m, roughness, n, v, l, n_dot_v) + ggx(n, v, l, roughness, 1.0, f0, ab, n_dot_v);
+        return lobes * saturate(dot(n, l)) * u.light_radiance.rgb;
+    }
+    let to_light = u.light_vector.xyz - p;
+    let l = normalize(to_light);
+    let d2 = dot(to_light, to_light);
+    let d = sqrt(d2);
+    let window = saturate(1.0 - d2 * u.light_radiance.w * d2 * u.light_radiance.w);
+    let falloff = window * window / max(d2, 0.0001);
+    let radius = u.light_shape.x;
+    let r = reflect(-v, n);
+    let center_to_ray = max(0.0001, dot(to_light, r)) * r - to_light;
+    let closest = to_light + center_to_ray * saturate(radius * inverseSqrt(dot(center_to_ray, center_to_ray)));
+    let l_spec = closest * inverseSqrt(dot(closest, closest));
+    let a_prime = saturate(roughness + radius / (2.0 * d));
+    let normalization = roughness / a_prime;
+    let inv = (1.0 - roughness) * (1.0 - roughness);
+    let brdf_roughness = mix(roughness, a_prime, 1.0 - inv * inv);
+    var specular = ggx(n, v, l_spec, brdf_roughness, normalization * normalization, f0, ab, n_dot_v);
+    let n_dot_l_spec = saturate(dot(n, l_spec));
+    if (radius > 0.0) {
+        specular *= saturate(n_dot_l_spec / max(n_dot_l_spec + radius * radius / d2, 1e-4));
+    }
+    let lit = burley(m, roughness, n, v, l, n_dot_v) * saturate(dot(n, l)) + specular * n_dot_l_spec;
+    var cone = 1.0;
+    if (u.terms.z > 2.5) {
+        let c = saturate(dot(u.light_forward.xyz, -l) * u.light_shape.y + u.light_shape.z);
+        cone = c * c;
+    }
+    return lit * u.light_radiance.rgb * falloff * cone;
 }
 
 // Bevy's split-sum environment BRDF terms without its lookup table (Karis' fit, as Bevy's
@@ -145,6 +195,8 @@ fn fragment(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
     let near = u.world_from_clip * vec4<f32>(ndc, 1.0, 1.0);
     let far = u.world_from_clip * vec4<f32>(ndc, 0.5, 1.0);
     let v = normalize(near.xyz / near.w - far.xyz / far.w);
+    let at = u.world_from_clip * vec4<f32>(ndc, textureLoad(depth, pixel, 0), 1.0);
+    let p = at.xyz / at.w;
     let n = m.normal;
     let n_dot_v = max(dot(n, v), 0.0001);
     let ab = f_ab(m.perceptual_roughness, n_dot_v);
@@ -162,7 +214,7 @@ fn fragment(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
     if (u.terms.z > 0.0 && m.shadow_receiver) {
         let texel = textureLoad(shadow, pixel, 0);
         let visible = saturate(select(texel.r, texel.g, u.terms.w > 0.0));
-        c -= (1.0 - visible) * sun_light(m, n, v, n_dot_v, f0, ab);
+        c -= (1.0 - visible) * light_contribution(m, p, n, v, n_dot_v, f0, ab);
     }
     // Signed: the blend adds it to the float lit image.
     return vec4<f32>(c, 0.0);
@@ -178,19 +230,52 @@ pub(super) const DECODED_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg8U
 pub(super) struct CompositeRequest {
     pub(super) gi: Option<wgpu::TextureView>,
     pub(super) reflections: Option<wgpu::TextureView>,
-    pub(super) shadow: Option<SunShadow>,
+    pub(super) shadow: Option<LightShadow>,
 }
 
-/// A sun's ray-traced shadow, for the composite to take the occluded part of the sun's light
-/// out of the lit image.
-pub(super) struct SunShadow {
+/// A light's ray-traced shadow, for the composite to take the occluded part of the light out
+/// of the lit image.
+pub(super) struct LightShadow {
     pub(super) visible: wgpu::TextureView,
     /// The visible fraction is in G (the raw trace), not R (denoised).
     pub(super) in_green: bool,
-    /// Towards the sun.
-    pub(super) direction_to_light: [f32; 3],
-    /// The sun's colour x illuminance x the camera's exposure, as Bevy lights with it.
+    /// The light: its kind, place, direction, radius, range and cone, as the SDK took it.
+    pub(super) light: LightInfo,
+    /// Its colour x brightness x the camera's exposure, as Bevy lights with it (a directional
+    /// light's illuminance, a point or spot light's lumens / 4 pi).
     pub(super) radiance: [f32; 3],
+}
+
+impl LightShadow {
+    /// The composite's light terms: its kind (`terms.z`), then `light_vector`,
+    /// `light_radiance`, `light_shape` and `light_forward`.
+    fn uniform(&self) -> (f32, [f32; 16]) {
+        let l = &self.light;
+        let forward = l.direction.normalize_or_zero();
+        let kind = match l.light_type {
+            LightType::Directional => 1.0,
+            LightType::Point => 2.0,
+            LightType::Spot => 3.0,
+            _ => 0.0,
+        };
+        let vector = match l.light_type {
+            LightType::Directional => -forward,
+            _ => l.position,
+        };
+        let inverse_range_squared = if l.range > 0.0 { 1.0 / (l.range * l.range) } else { 0.0 };
+        // Bevy's cone: saturate(cos x scale + offset)², full inside the inner cone.
+        let cos_outer = l.outer_cone.cos();
+        let scale = 1.0 / (l.inner_cone.cos() - cos_outer).max(1e-4);
+        let [r, g, b] = self.radiance;
+        #[rustfmt::skip]
+        let terms = [
+            vector.x, vector.y, vector.z, 0.0,
+            r, g, b, inverse_range_squared,
+            l.radius, scale, -cos_outer * scale, 0.0,
+            forward.x, forward.y, forward.z, 0.0,
+        ];
+        (kind, terms)
+    }
 }
 
 /// The decode's and the composite's pipelines (the composite's one per target format), made
@@ -312,7 +397,14 @@ impl DeferredPasses {
         );
         let (composite_layout, composite_pipeline_layout) = layout(
             "hybrid-rt composite",
-            &[gbuffer, texture_entry(1, float), texture_entry(2, float), texture_entry(3, float), uniform_entry(4)],
+            &[
+                gbuffer,
+                texture_entry(1, float),
+                texture_entry(2, float),
+                texture_entry(3, float),
+                uniform_entry(4),
+                texture_entry(5, wgpu::TextureSampleType::Depth),
+            ],
         );
         let blank = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("hybrid-rt composite blank"),
@@ -367,7 +459,7 @@ impl DeferredPasses {
         &mut self,
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
-        (gbuffer, request, world_from_clip): (&wgpu::TextureView, &CompositeRequest, [f32; 16]),
+        (gbuffer, depth, request, world_from_clip): (&wgpu::TextureView, &wgpu::TextureView, &CompositeRequest, [f32; 16]),
         (target, format): (&wgpu::TextureView, wgpu::TextureFormat),
     ) {
         let (shader, pipeline_layout) = (&self.composite_shader, &self.composite_pipeline_layout);
@@ -383,15 +475,15 @@ impl DeferredPasses {
         });
         let on = |o: bool| if o { 1.0 } else { 0.0 };
         let shadow = request.shadow.as_ref();
+        let (kind, light) = shadow.map_or((0.0, [0.0; 16]), LightShadow::uniform);
         let mut uniform = world_from_clip.to_vec();
         uniform.extend([
             on(request.gi.is_some()),
             on(request.reflections.is_some()),
-            on(shadow.is_some()),
+            kind,
             on(shadow.is_some_and(|s| s.in_green)),
         ]);
-        let (direction, radiance) = shadow.map_or(([0.0; 3], [0.0; 3]), |s| (s.direction_to_light, s.radiance));
-        uniform.extend(direction.into_iter().chain([0.0]).chain(radiance).chain([0.0]));
+        uniform.extend(light);
         let uniform = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("hybrid-rt composite"),
             contents: &uniform_bytes(&uniform),
@@ -407,6 +499,7 @@ impl DeferredPasses {
                 view(2, request.reflections.as_ref().unwrap_or(&self.blank)),
                 view(3, shadow.map_or(&self.blank, |s| &s.visible)),
                 wgpu::BindGroupEntry { binding: 4, resource: uniform.as_entire_binding() },
+                view(5, depth),
             ],
         });
         fullscreen_pass(encoder, "hybrid-rt composite", target, false, (pipeline, &bind_group));
@@ -445,7 +538,9 @@ pub(super) fn composite(
     if !camera.hdr && request.shadow.take().is_some() {
         state.warned.once("RayTracedShadow's composite needs an Hdr camera: the shadow stays in its image");
     }
-    let (Some(rt), Some(gbuffer)) = (state.rt.as_ref(), prepass.deferred.as_ref()) else { return };
+    let (Some(rt), Some(gbuffer), Some(depth)) = (state.rt.as_ref(), prepass.deferred.as_ref(), prepass.depth_only_view()) else {
+        return;
+    };
     let world_from_view = Mat4::from_cols_array(&view.world_from_view.to_matrix().to_cols_array());
     let clip_from_view = Mat4::from_cols_array(&view.clip_from_view.to_cols_array());
     let world_from_clip = (world_from_view * clip_from_view.inverse()).to_cols_array();
@@ -454,7 +549,7 @@ pub(super) fn composite(
     passes.composite(
         &rt.device,
         ctx.command_encoder(),
-        (&gbuffer.texture.default_view, &request, world_from_clip),
+        (&gbuffer.texture.default_view, depth, &request, world_from_clip),
         (lit, format),
     );
 }

@@ -3,7 +3,7 @@
 //! effect shares: the denoiser each keeps per camera, the prepass as the SDK reads it, and the
 //! recording of a camera's tasks among Bevy's commands; and the lights the shadows are traced
 //! from.
-use super::deferred::{composited, SunShadow};
+use super::deferred::{composited, LightShadow};
 use super::{Held, HybridRt, Warnings};
 use crate::scene::ExtractedInstances;
 use crate::{AoOutput, RayTracedAo, RayTracedShadow};
@@ -102,8 +102,9 @@ impl ViewDenoiser {
 /// `intensity` x `color` is what lights Bevy's frame before the camera's exposure, in the
 /// SDK's convention (a lit image is albedo x irradiance; Bevy's diffuse is albedo / pi x
 /// irradiance): a directional light's illuminance / pi, a point or spot light's luminous
-/// intensity (lumens / 4 pi) / pi. With each sun whose shadow maps are off, its colour x
-/// illuminance (what the composite takes a shadow's part of).
+/// intensity (lumens / 4 pi) / pi. With each light whose shadow maps are off, the colour x
+/// brightness Bevy lights with (illuminance, or lumens / 4 pi): what the composite takes a
+/// shadow's part of.
 #[derive(Resource, Default)]
 pub(super) struct ExtractedLights(pub(super) Vec<(Entity, LightInfo, Option<[f32; 3]>)>);
 
@@ -125,6 +126,8 @@ pub(super) fn extract_lights(
         let c = c.to_linear();
         [c.red, c.green, c.blue].map(|x| x.max(0.0))
     };
+    let unshadowed =
+        |shadow_maps: bool, c: Color, brightness: f32| (!shadow_maps).then(|| colour(c).map(|x| x * brightness.max(0.0)));
     out.0.clear();
     for (entity, sun, transform, visible) in &suns {
         if visible.get() {
@@ -135,10 +138,9 @@ pub(super) fn extract_lights(
                 color: colour(sun.color),
                 ..Default::default()
             };
-            // A sun without shadow maps lights Bevy's frame unshadowed: the composite can
-            // take its occluded part out again (its colour times illuminance, as Bevy's).
-            let unshadowed = (!sun.shadow_maps_enabled).then(|| (sun.color.to_linear().to_vec3() * sun.illuminance).to_array());
-            out.0.push((entity, light, unshadowed));
+            // A light without shadow maps lights Bevy's frame unshadowed: the composite can
+            // take its occluded part out again.
+            out.0.push((entity, light, unshadowed(sun.shadow_maps_enabled, sun.color, sun.illuminance)));
         }
     }
     for (entity, point, transform, visible) in &points {
@@ -152,7 +154,7 @@ pub(super) fn extract_lights(
                 color: colour(point.color),
                 ..Default::default()
             };
-            out.0.push((entity, light, None));
+            out.0.push((entity, light, unshadowed(point.shadow_maps_enabled, point.color, point.intensity / (4.0 * PI))));
         }
     }
     for (entity, spot, transform, visible) in &spots {
@@ -170,7 +172,7 @@ pub(super) fn extract_lights(
                 color: colour(spot.color),
                 ..Default::default()
             };
-            out.0.push((entity, light, None));
+            out.0.push((entity, light, unshadowed(spot.shadow_maps_enabled, spot.color, spot.intensity / (4.0 * PI))));
         }
     }
 }
@@ -517,17 +519,12 @@ pub(super) fn trace_shadow(
     if !record_view(rt, sinks, &mut ctx, &mut tasks, "hybrid-rt shadow", inputs, writes, &[out_view]) {
         return;
     }
-    // A deferred camera and a sun without shadow maps: the composite takes the occluded part of
-    // its light out of the lit image.
+    // A deferred camera and a light without shadow maps: the composite takes the occluded part
+    // of its light out of the lit image.
     let (Some(radiance), true, true) = (unshadowed, settings.composite, prepass.deferred.is_some()) else { return };
     let Some(visible) = composited(image, true, "RayTracedShadow", &mut state.warned) else { return };
-    let d = light.direction;
-    state.composites.entry(view.retained_view_entity).or_default().shadow = Some(SunShadow {
-        visible,
-        in_green: !settings.denoise,
-        direction_to_light: [-d.x, -d.y, -d.z],
-        radiance: radiance.map(|c| c * camera.exposure),
-    });
+    state.composites.entry(view.retained_view_entity).or_default().shadow =
+        Some(LightShadow { visible, in_green: !settings.denoise, light, radiance: radiance.map(|c| c * camera.exposure) });
 }
 
 /// The view's camera as the SDK takes it: world to view, and Bevy's (unjittered) projection
