@@ -521,7 +521,14 @@ pub(super) fn trace_shadow(
     }
     // A deferred camera and a light without shadow maps: the composite takes the occluded part
     // of its light out of the lit image.
-    let (Some(radiance), true, true) = (unshadowed, settings.composite, prepass.deferred.is_some()) else { return };
+    if !settings.composite || prepass.deferred.is_none() {
+        return;
+    }
+    let Some(radiance) = unshadowed else {
+        return state.warned.once(
+            "RayTracedShadow: the light's shadow maps are on, so Bevy's frame keeps them (give it shadow_maps_enabled: false for the ray-traced shadow to replace them)",
+        );
+    };
     let Some(visible) = composited(image, true, "RayTracedShadow", &mut state.warned) else { return };
     state.composites.entry(view.retained_view_entity).or_default().shadow =
         Some(LightShadow { visible, in_green: !settings.denoise, light, radiance: radiance.map(|c| c * camera.exposure) });
