@@ -322,6 +322,20 @@ pub(super) fn effect_targets(
     Some(EffectTargets { output, inputs, noisy })
 }
 
+/// The application's image an effect writes (None: not set, warned once, or not on the GPU yet).
+pub(super) fn app_image<'a>(
+    images: &'a RenderAssets<GpuImage>,
+    handle: &Handle<Image>,
+    component: &str,
+    warned: &mut Warnings,
+) -> Option<&'a GpuImage> {
+    if *handle == Handle::default() {
+        warned.once(format!("{component}.output is not set: give it an image of the view's size"));
+        return None;
+    }
+    images.get(handle)
+}
+
 /// Schedules the effect's denoiser where it has one — `schedule(tasks, context, common, the
 /// noisy trace, the output)` — and returns the textures the container writes: the output, and
 /// the noisy trace the denoiser reads.
@@ -486,10 +500,7 @@ pub(super) fn trace_shadow(
     if light.light_type == LightType::Directional {
         light.angular_extent = settings.angular_diameter;
     }
-    if settings.output == Handle::default() {
-        return state.warned.once("RayTracedShadow.output is not set: give it an image of the view's size");
-    }
-    let Some(image) = images.get(&settings.output) else { return }; // not on the GPU yet
+    let Some(image) = app_image(&images, &settings.output, "RayTracedShadow", &mut state.warned) else { return };
     let (out_tex, out_view) = (&image.texture, &image.texture_view);
     let sinks = (&mut state.views, &mut state.warned, state.frame);
     let Some(EffectTargets { output, inputs, noisy }) =

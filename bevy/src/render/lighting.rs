@@ -3,8 +3,8 @@
 //! denoised into the application's images and, for a deferred camera, added to the lit image.
 use super::deferred::{composited, DeferredPasses, DECODED_FORMAT};
 use super::effects::ExtractedLights;
-use super::effects::{effect_targets, record_view, schedule_denoiser, Effect, EffectTargets, PrepassInputs};
-use super::{HybridRt, Warnings};
+use super::effects::{app_image, effect_targets, record_view, schedule_denoiser, Effect, EffectTargets, PrepassInputs};
+use super::HybridRt;
 use crate::{RayTracedGi, RayTracedReflections};
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::platform::collections::HashMap;
@@ -62,20 +62,6 @@ impl ViewImage {
         let view = texture.create_view(&Default::default());
         ViewImage { texture, view, size, last_used: 0 }
     }
-}
-
-/// The application's image an effect writes (None: not set, warned once, or not on the GPU yet).
-fn app_image<'a>(
-    images: &'a RenderAssets<GpuImage>,
-    handle: &Handle<Image>,
-    component: &str,
-    warned: &mut Warnings,
-) -> Option<&'a GpuImage> {
-    if *handle == Handle::default() {
-        warned.once(format!("{component}.output is not set: give it an image of the view's size"));
-        return None;
-    }
-    images.get(handle)
 }
 
 /// What [`trace_lighting`] reads of a camera.
